@@ -1,0 +1,82 @@
+"""The exception tree of ppfab.
+
+Every error a user can cause derives from :class:`PpfabError`; the command
+line prints ``ppfab: error: <message>`` and exits non-zero, never a
+traceback.  Errors carry the data they talk about (key path, element,
+measured value, limit) so callers can react without parsing the message.
+"""
+
+from __future__ import annotations
+
+
+class PpfabError(Exception):
+    """Base class of every error ppfab raises on purpose."""
+
+    exit_code = 1
+
+
+class DesignError(PpfabError, ValueError):
+    """A design file (or its Python equivalent) is malformed or out of range.
+
+    ``key`` is the dotted key path at fault, e.g. ``fabrication.beam_depth``.
+    """
+
+    exit_code = 2
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        super().__init__(f"{key}: {message}" if key else message)
+
+
+class MeshFileError(PpfabError, ValueError):
+    """A mesh file cannot be read as the quad mesh it must be."""
+
+    exit_code = 2
+
+    def __init__(self, path: str, message: str):
+        self.path = str(path)
+        super().__init__(f"{path}: {message}")
+
+
+class GeometryError(PpfabError, ValueError):
+    """A construction or a mesh is geometrically invalid (degenerate, folded, NaN).
+
+    ``element`` names the offending element (e.g. ``face (3, 7)``, ``knot 2``)
+    and ``value`` the measured quantity, when there is one.
+    """
+
+    def __init__(self, message: str, element: str | None = None, value: float | None = None):
+        self.element = element
+        self.value = value
+        super().__init__(message)
+
+
+class FoldError(GeometryError):
+    """The mesh passes through a cuspidal edge: a face is flipped."""
+
+
+class FabricationError(PpfabError):
+    """Fabrication data cannot be produced without being wrong (stop before writing)."""
+
+
+class NonPlanarPanelError(FabricationError):
+    """Panels deviate from their plane by more than the tolerance (in mm)."""
+
+    def __init__(self, offenders: list[tuple[str, float]], tolerance_mm: float):
+        self.offenders = offenders
+        self.tolerance_mm = tolerance_mm
+        worst = sorted(offenders, key=lambda o: -o[1])
+        shown = ", ".join(f"{name} {dev:.3g} mm" for name, dev in worst[:8])
+        more = f" (and {len(worst) - 8} more)" if len(worst) > 8 else ""
+        super().__init__(
+            f"{len(offenders)} panel(s) deviate from their plane by more than "
+            f"{tolerance_mm:g} mm: {shown}{more}"
+        )
+
+
+class NestingError(FabricationError):
+    """A part cannot be placed on any stock sheet."""
+
+
+class VerificationError(PpfabError):
+    """An output folder does not satisfy the output contract."""
