@@ -1,0 +1,16 @@
+"""ppfab — planar panels and planar supporting beams (Jiang, Wang, Tellier, Wallner, Pottmann 2022).
+
+The geometry core: weighted planes (:mod:`ppfab.planes`), meshes
+(:mod:`ppfab.mesh`), metrics (:mod:`ppfab.metrics`), the weighted face image
+(:mod:`ppfab.faceimage`), constructions (:mod:`ppfab.constructions`),
+optimisation (:mod:`ppfab.optimize`), support structures (:mod:`ppfab.support`)
+and mesh files (:mod:`ppfab.io`).  It never imports the fabrication layer,
+build123d, ezdxf, matplotlib or a nesting library.
+"""
+
+__version__ = "0.1.0"
+
+from .errors import PpfabError  # noqa: E402
+from .mesh import QuadGrid, QuadMesh  # noqa: E402
+
+__all__ = ["QuadGrid", "QuadMesh", "PpfabError", "__version__"]
