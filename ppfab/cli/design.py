@@ -1,0 +1,178 @@
+"""The design file (TOML): what to build and how to fabricate it.
+
+Sections (every key is documented in the README, ``ppfab methods`` lists the
+construction parameters)::
+
+    [design]            name, description
+    [geometry]          method | mesh, scale, translate, rotate_z_deg, flip_orientation, planar_families
+    [geometry.params]   the parameters of the chosen construction
+    [optimize]          optional: optimise a mesh input for the P/PP property first
+    [beams]             beam plates and joints
+    [panels]            glass panels
+    [nesting]           stock sheets for the glass
+    [beam_nesting]      stock sheets for the beam plates
+    [output]            which optional files to write
+
+Every problem is a :class:`~ppfab.errors.DesignError` naming the key path,
+printed as one line and exit code 2 by the command line.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from ..errors import DesignError
+from ..schema import param, parse_params, suggest
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+DEFAULT_DESIGN = Path(__file__).resolve().parent.parent / "data" / "default.toml"
+
+
+@dataclass(frozen=True)
+class DesignInfo:
+    name: str = param("untitled", doc="name shown in the report and manifest")
+    description: str = param("", doc="free text")
+
+
+@dataclass(frozen=True)
+class GeometrySection:
+    method: str | None = param(None, doc="a registered construction (see `ppfab methods`)")
+    mesh: str | None = param(None, doc="a quad mesh file (.obj/.off) instead of a construction; "
+                                       "relative to the design file")
+    params: dict = param({}, doc="parameters of the construction ([geometry.params])")
+    scale: float = param(1.0, doc="factor from construction/mesh units to millimetres", exclusive_min=0)
+    translate: list[float] = param([0.0, 0.0, 0.0], doc="translation in mm after scaling", length=3)
+    rotate_z_deg: float = param(0.0, doc="rotation about the vertical axis after scaling, degrees")
+    flip_orientation: bool = param(False, doc="reverse the face orientation (which side is outside)")
+    planar_families: list[str] | None = param(None, doc="families the beams follow: 'rows', 'cols' "
+                                                        "(default: what the construction keeps planar)")
+    max_vertices: int = param(250_000, doc="refuse larger meshes unless --allow-large is given", min=4)
+
+    def __post_init__(self):
+        if (self.method is None) == (self.mesh is None):
+            raise DesignError("method" if self.method is None else "mesh",
+                              "give exactly one of 'method' (a construction) or 'mesh' (a file)")
+        if self.planar_families is not None:
+            for k, fam in enumerate(self.planar_families):
+                if fam not in ("rows", "cols"):
+                    raise DesignError(f"planar_families[{k}]", f"must be 'rows' or 'cols', got {fam!r}")
+
+
+@dataclass(frozen=True)
+class OutputSection:
+    panels_step: bool = param(True, doc="also write panels.step (glass as thin solids, for clash checks)")
+    report: bool = param(True, doc="write report.html")
+    per_type_dxf: bool = param(True, doc="write one flat DXF per panel type")
+
+
+def _section_types() -> dict[str, Callable[[], type]]:
+    """Section name → its parameter dataclass (imported lazily: fabrication is heavy)."""
+    def beams():
+        from fabrication.beams.params import BeamParams
+        return BeamParams
+
+    def panels():
+        from fabrication.panels import PanelParams
+        return PanelParams
+
+    def nesting():
+        from fabrication.nesting import NestingParams
+        return NestingParams
+
+    def optimize():
+        from ..optimize.params import OptimizeParams
+        return OptimizeParams
+
+    return {
+        "design": lambda: DesignInfo,
+        "geometry": lambda: GeometrySection,
+        "optimize": optimize,
+        "beams": beams,
+        "panels": panels,
+        "nesting": nesting,
+        "beam_nesting": nesting,
+        "output": lambda: OutputSection,
+    }
+
+
+@dataclass(frozen=True)
+class Design:
+    """A parsed, validated design file."""
+
+    source: str
+    sha256: str
+    base_dir: Path
+    info: DesignInfo
+    geometry: GeometrySection
+    sections: dict[str, Any] = field(default_factory=dict)
+    raw: dict = field(default_factory=dict)
+
+    def section(self, name: str) -> Any:
+        """The record of a section (defaults when absent)."""
+        return self.sections[name]
+
+    @property
+    def optimize(self) -> Any | None:
+        return self.sections.get("optimize") if "optimize" in self.raw else None
+
+    def mesh_path(self) -> Path | None:
+        if self.geometry.mesh is None:
+            return None
+        p = Path(self.geometry.mesh)
+        return p if p.is_absolute() else (self.base_dir / p)
+
+
+def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: Path | None = None,
+                 sections: tuple[str, ...] | None = None) -> Design:
+    """Validate a design document (already parsed TOML) into a :class:`Design`."""
+    types = _section_types()
+    for key, value in doc.items():
+        if key not in types:
+            raise DesignError(key, "unknown section" + suggest(key, list(types)) +
+                              f"; valid sections: {', '.join(types)}")
+        if not isinstance(value, dict):
+            raise DesignError(key, f"must be a table ([{key}]), got {type(value).__name__}")
+    if "geometry" not in doc:
+        raise DesignError("geometry", "missing required section [geometry] (with 'method' or 'mesh')")
+    wanted = sections or tuple(types)
+    records = {}
+    for name in wanted:
+        records[name] = parse_params(types[name](), doc.get(name, {}), name)
+    geometry: GeometrySection = records["geometry"]
+    if geometry.method is not None:
+        from ..constructions import get_construction
+        from ..constructions.registry import CONSTRUCTIONS
+
+        c = get_construction(geometry.method)
+        parse_params(c.params, geometry.params, "geometry.params")   # validate early
+    elif geometry.params:
+        raise DesignError("geometry.params", "only a construction ('method') takes parameters")
+    return Design(source=source, sha256=sha256, base_dir=base_dir or Path.cwd(),
+                  info=records["design"], geometry=geometry, sections=records, raw=doc)
+
+
+def load_design(path: str | Path | None, sections: tuple[str, ...] | None = None) -> Design:
+    """Read and validate a design file; ``None`` loads the bundled default example."""
+    p = DEFAULT_DESIGN if path is None else Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise DesignError("", f"{p}: cannot read design file ({exc.strerror or exc})") from None
+    try:
+        doc = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise DesignError("", f"{p}: design file is not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("", f"{p}: malformed TOML: {exc}") from None
+    try:
+        return parse_design(doc, str(p), hashlib.sha256(data).hexdigest(), p.resolve().parent, sections)
+    except DesignError as exc:
+        raise DesignError(exc.key, f"{str(exc)[len(exc.key) + 2:] if exc.key else str(exc)} (in {p})") from None
