@@ -63,45 +63,62 @@ def _plain(o: Any) -> Any:
 
 # -- stages -------------------------------------------------------------------------------------
 
-def stage_geometry(ctx: BuildContext) -> None:
+@dataclass
+class Geometry:
+    """The placed mesh (mm) with what the geometry stage learned about it."""
+
+    mesh: QuadGrid | QuadMesh
+    planar_families: tuple[str, ...]
+    source: str
+    optimize_result: Any = None
+
+
+def build_geometry(design: Design, allow_large: bool = True, progress: Progress | None = None) -> Geometry:
     """Construct the mesh (or read it, optionally optimise it) and place it in millimetres."""
     from ..constructions import build_construction, get_construction
     from ..io import load_mesh
     from ..similarity import transform
 
-    geo = ctx.design.geometry
+    geo = design.geometry
+    result = None
     if geo.method is not None:
-        ctx.progress.start("geometry", f"construction '{geo.method}'")
         mesh = build_construction(geo.method, geo.params)
         families = tuple(geo.planar_families or get_construction(geo.method).planar_families)
         source = f"method:{geo.method}"
     else:
-        path = ctx.design.mesh_path()
-        ctx.progress.start("geometry", f"mesh {path}")
-        mesh = load_mesh(path)
-        opt = ctx.design.optimize
+        mesh = load_mesh(design.mesh_path())
+        opt = design.optimize
         families = tuple(geo.planar_families or (getattr(opt, "families_list", None) or ()))
         source = f"mesh:{geo.mesh}"
         if opt is not None:
             from ..optimize import optimize
 
-            ctx.progress.note("optimising…")
+            if progress:
+                progress.note("optimising…")
             result = optimize(mesh, opt)
-            ctx.data["optimize"] = result
             if not result.targets_met:
                 log.warning("optimisation did not meet its targets: %s", result.message)
             mesh = result.mesh
     nverts = mesh.vertices.shape[0] * (mesh.vertices.shape[1] if mesh.vertices.ndim == 3 else 1)
-    if nverts > geo.max_vertices and not ctx.allow_large:
+    if nverts > geo.max_vertices and not allow_large:
         nfaces = mesh.n_faces if isinstance(mesh, QuadGrid) else len(mesh.faces)
         raise TooLargeError(
             f"the design makes {nverts} vertices / {nfaces} panels (> geometry.max_vertices = {geo.max_vertices}); "
             f"fabrication would need about {nfaces * SECONDS_PER_PANEL / 60:.0f} min and "
             f"{nverts * BYTES_PER_VERTEX / 2**30:.1f} GiB — pass --allow-large to proceed")
     mesh = transform(mesh, geo.scale, geo.rotate_z_deg, geo.translate, geo.flip_orientation)
-    ctx.data["mesh"] = mesh
-    ctx.data["planar_families"] = families
-    ctx.data["source"] = source
+    return Geometry(mesh, families, source, result)
+
+
+def stage_geometry(ctx: BuildContext) -> None:
+    """Stage 1: :func:`build_geometry`."""
+    geo = ctx.design.geometry
+    ctx.progress.start("geometry", f"construction '{geo.method}'" if geo.method else f"mesh {geo.mesh}")
+    g = build_geometry(ctx.design, ctx.allow_large, ctx.progress)
+    ctx.data.update(mesh=g.mesh, planar_families=g.planar_families, source=g.source)
+    if g.optimize_result is not None:
+        ctx.data["optimize"] = g.optimize_result
+    mesh = g.mesh
     shape = mesh.shape if isinstance(mesh, QuadGrid) else (mesh.grid.shape if mesh.grid is not None else None)
     ctx.progress.done(f"{'grid ' + 'x'.join(map(str, shape)) if shape else 'quad mesh'}")
 

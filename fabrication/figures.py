@@ -1,0 +1,132 @@
+"""Figures with matplotlib (Agg): 3D views of meshes and structures, cutting sheets, histograms.
+
+Every function writes a PNG (or returns SVG/PNG bytes) deterministically: fixed size, fixed view,
+no timestamps in the metadata.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+
+_META = {"Software": None}
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _set_equal_3d(ax, pts: np.ndarray) -> None:
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = np.maximum(hi - lo, 1e-3 * float((hi - lo).max() or 1.0))
+    ax.set_xlim(lo[0], lo[0] + span[0])
+    ax.set_ylim(lo[1], lo[1] + span[1])
+    ax.set_zlim(lo[2], lo[2] + span[2])
+    ax.set_box_aspect(tuple(span), zoom=1.0)   # true proportions
+
+
+def mesh_figure(quads: np.ndarray, title: str = "", plates: Iterable[np.ndarray] = (),
+                axes_segments: np.ndarray | None = None, elev: float = 28, azim: float = -55,
+                size: tuple[float, float] = (7.5, 5.5)):
+    """A 3D figure of quads ``(F, 4, 3)`` (shaded by their normal), optional beam plates (polygons
+    ``(k, 3)``) and node axes ``(A, 2, 3)``."""
+    plt = _plt()
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+    quads = np.asarray(quads, dtype=float)
+    fig = plt.figure(figsize=size, dpi=110)
+    ax = fig.add_subplot(projection="3d")
+    n = np.cross(quads[:, 2] - quads[:, 0], quads[:, 3] - quads[:, 1])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    light = np.array([0.3, -0.4, 0.87])
+    shade = 0.55 + 0.45 * np.abs(n @ light)
+    colours = np.column_stack([0.55 * shade, 0.72 * shade, 0.86 * shade, np.full(len(n), 0.85)])
+    ax.add_collection3d(Poly3DCollection(quads, facecolors=colours, edgecolors=(0.15, 0.2, 0.3, 0.9),
+                                         linewidths=0.4))
+    pts = [quads.reshape(-1, 3)]
+    plates = list(plates)
+    if plates:
+        ax.add_collection3d(Poly3DCollection(plates, facecolors=(0.75, 0.42, 0.2, 0.55),
+                                             edgecolors=(0.45, 0.22, 0.1, 0.9), linewidths=0.3))
+        pts.append(np.concatenate(plates))
+    if axes_segments is not None and len(axes_segments):
+        ax.add_collection3d(Line3DCollection(axes_segments, colors=(0.8, 0.1, 0.1, 0.8), linewidths=0.6))
+    _set_equal_3d(ax, np.concatenate(pts))
+    ax.view_init(elev=elev, azim=azim)
+    ax.set_axis_off()
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def save(fig, path: str | Path | None = None, fmt: str = "png") -> bytes | None:
+    """Save and close a figure; with no path return the bytes."""
+    plt = _plt()
+    buf = io.BytesIO()
+    meta = {"Software": None} if fmt == "png" else {"Date": None, "Creator": None}
+    fig.savefig(buf, format=fmt, metadata=meta)
+    plt.close(fig)
+    data = buf.getvalue()
+    if path is None:
+        return data
+    Path(path).write_bytes(data)
+    return None
+
+
+def render_mesh_png(mesh, path: str | Path, title: str = "", **kw) -> None:
+    """Render a :class:`~ppfab.mesh.QuadGrid` or :class:`~ppfab.mesh.QuadMesh` to a PNG file."""
+    from ppfab.mesh import QuadGrid
+
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    save(mesh_figure(qm.face_corners, title, **kw), path)
+
+
+def histogram(values: np.ndarray, title: str, xlabel: str, bins: int = 30):
+    """A small histogram figure."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(4.2, 2.8), dpi=100)
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    ax.hist(v, bins=bins if len(v) > 1 else 1, color=(0.3, 0.5, 0.7), edgecolor="white", linewidth=0.5)
+    ax.set_title(title, fontsize=9)
+    ax.set_xlabel(xlabel, fontsize=8)
+    ax.set_ylabel("count", fontsize=8)
+    ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def sheet_figure(sheet_size: tuple[float, float], trim: tuple[float, float, float, float],
+                 outlines: list[np.ndarray], labels: list[str], title: str = ""):
+    """A cutting sheet: stock outline, usable area, parts with labels (sheet coordinates, mm)."""
+    plt = _plt()
+    from matplotlib.patches import Polygon, Rectangle
+
+    w, h = sheet_size
+    fig, ax = plt.subplots(figsize=(6.0, 6.0 * h / w + 0.4), dpi=100)
+    ax.add_patch(Rectangle((0, 0), w, h, fill=False, edgecolor="black", linewidth=0.8))
+    x0, y0, x1, y1 = trim
+    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor="grey", linestyle="--",
+                           linewidth=0.5))
+    for poly, lab in zip(outlines, labels):
+        ax.add_patch(Polygon(poly, closed=True, facecolor=(0.75, 0.86, 0.95), edgecolor=(0.1, 0.3, 0.5),
+                             linewidth=0.5))
+        c = np.asarray(poly).mean(axis=0)
+        ax.text(c[0], c[1], lab, fontsize=4, ha="center", va="center")
+    ax.set_xlim(-0.02 * w, 1.02 * w)
+    ax.set_ylim(-0.02 * h, 1.02 * h)
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    if title:
+        ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig
