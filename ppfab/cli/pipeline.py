@@ -75,14 +75,20 @@ class Geometry:
 
 def build_geometry(design: Design, allow_large: bool = True, progress: Progress | None = None) -> Geometry:
     """Construct the mesh (or read it, optionally optimise it) and place it in millimetres."""
-    from ..constructions import build_construction, get_construction
+    from ..constructions import get_construction
+    from ..schema import parse_params
     from ..io import load_mesh
     from ..similarity import transform
 
     geo = design.geometry
     result = None
     if geo.method is not None:
-        mesh = build_construction(geo.method, geo.params)
+        construction = get_construction(geo.method)
+        record = parse_params(construction.params, geo.params, "geometry.params")
+        expected = getattr(record, "expected_vertices", None)
+        if expected is not None:
+            _check_size(int(expected()), geo.max_vertices, allow_large)
+        mesh = construction.build(record)
         families = tuple(geo.planar_families or get_construction(geo.method).planar_families)
         source = f"method:{geo.method}"
     else:
@@ -100,14 +106,18 @@ def build_geometry(design: Design, allow_large: bool = True, progress: Progress 
                 log.warning("optimisation did not meet its targets: %s", result.message)
             mesh = result.mesh
     nverts = mesh.vertices.shape[0] * (mesh.vertices.shape[1] if mesh.vertices.ndim == 3 else 1)
-    if nverts > geo.max_vertices and not allow_large:
-        nfaces = mesh.n_faces if isinstance(mesh, QuadGrid) else len(mesh.faces)
-        raise TooLargeError(
-            f"the design makes {nverts} vertices / {nfaces} panels (> geometry.max_vertices = {geo.max_vertices}); "
-            f"fabrication would need about {nfaces * SECONDS_PER_PANEL / 60:.0f} min and "
-            f"{nverts * BYTES_PER_VERTEX / 2**30:.1f} GiB — pass --allow-large to proceed")
+    _check_size(nverts, geo.max_vertices, allow_large)
     mesh = transform(mesh, geo.scale, geo.rotate_z_deg, geo.translate, geo.flip_orientation)
     return Geometry(mesh, families, source, result)
+
+
+def _check_size(nverts: int, limit: int, allow_large: bool) -> None:
+    """Refuse (before the expensive stages) a mesh above ``geometry.max_vertices`` unless allowed."""
+    if nverts > limit and not allow_large:
+        raise TooLargeError(
+            f"the design makes about {nverts} vertices (> geometry.max_vertices = {limit}); "
+            f"fabrication would need about {nverts * SECONDS_PER_PANEL / 60:.0f} min and "
+            f"{nverts * BYTES_PER_VERTEX / 2**30:.1f} GiB — pass --allow-large to proceed")
 
 
 def stage_geometry(ctx: BuildContext) -> None:

@@ -31,6 +31,10 @@ class FaceImageCurvesParams:
     faces_u: int = param(10, doc="number of faces along u (rows of faces)", min=2, max=4000)
     faces_v: int = param(10, doc="number of faces along v", min=2, max=4000)
 
+    def expected_vertices(self) -> int:
+        """Vertices of the mesh this record builds (checked before building)."""
+        return (self.faces_u + 1) * (self.faces_v + 1)
+
     def __post_init__(self):
         for name in ("g", "h"):
             if any(len(cf) == 0 for cf in getattr(self, name)):

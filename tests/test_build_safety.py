@@ -1,0 +1,101 @@
+"""Output safety: atomic output folders (a failure at any stage leaves nothing behind and never touches an
+existing folder) and determinism (same design, same bytes)."""
+
+import hashlib
+import os
+from pathlib import Path
+
+import pytest
+
+from ppfab.cli import main, pipeline
+
+SMALL = """
+[design]
+name = "small"
+[geometry]
+method = "face_image_curves"
+scale = 1000.0
+[geometry.params]
+g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
+h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
+u_range = [-4.0, 4.0]
+v_range = [-3.0, 3.0]
+faces_u = 5
+faces_v = 4
+"""
+
+
+@pytest.fixture
+def small_design(tmp_path):
+    p = tmp_path / "small.toml"
+    p.write_text(SMALL)
+    return p
+
+
+def tree(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def leftovers(parent: Path) -> list[str]:
+    return [p.name for p in parent.iterdir() if p.name.startswith(".") and ".tmp-" in p.name or ".old-" in p.name]
+
+
+@pytest.mark.parametrize("stage", [name for name, _ in pipeline.STAGES])
+def test_failure_at_any_stage_leaves_no_partial_folder(tmp_path, small_design, monkeypatch, capsys, stage):
+    out = tmp_path / "out"
+    stages = [(name, fn) for name, fn in pipeline.STAGES]
+
+    def boom(ctx):
+        raise RuntimeError(f"injected failure in {stage}")
+
+    monkeypatch.setattr(pipeline, "STAGES", [(n, boom if n == stage else f) for n, f in stages])
+    with pytest.raises(RuntimeError, match="injected"):
+        main(["build", str(small_design), "-o", str(out), "--quiet"])
+    assert not out.exists()
+    assert leftovers(tmp_path) == []
+
+
+def test_failure_never_damages_existing_folder(tmp_path, small_design, monkeypatch):
+    out = tmp_path / "out"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 0
+    before = tree(out)
+    last = pipeline.STAGES[-1][0]
+
+    def boom(ctx):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "STAGES", [(n, boom if n == last else f) for n, f in pipeline.STAGES])
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 130
+    assert tree(out) == before
+    assert leftovers(tmp_path) == []
+
+
+def test_existing_folder_needs_force(tmp_path, small_design, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert (out / "keep.txt").read_text() == "mine"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 0
+    assert not (out / "keep.txt").exists() and (out / "manifest.json").exists()
+
+
+def test_two_builds_are_byte_identical(tmp_path, small_design):
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert main(["build", str(small_design), "-o", str(a), "--quiet"]) == 0
+    assert main(["build", str(small_design), "-o", str(b), "--quiet"]) == 0
+    ta, tb = tree(a), tree(b)
+    assert ta.keys() == tb.keys()
+    differ = sorted(k for k in ta if ta[k] != tb[k] and not k.endswith(".step"))
+    assert differ == []
+
+
+def test_very_large_grid_is_refused_before_work(tmp_path, capsys):
+    p = tmp_path / "big.toml"
+    p.write_text(SMALL.replace("faces_u = 5", "faces_u = 2000").replace("faces_v = 4", "faces_v = 2000"))
+    assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "--allow-large" in err and "GiB" in err and "min" in err
+    assert not (tmp_path / "o").exists()
