@@ -1,0 +1,29 @@
+"""``ppfab verify OUT`` — re-read an output folder and check it against the output contract."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+NAME = "verify"
+HELP = "re-read a build (STEP, DXF, CSV, OBJ, manifest) and check counts, names, placements, congruence, sha256"
+ORDER = 30
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("out", help="an output folder written by ppfab build")
+    p.add_argument("--quiet", action="store_true", help="print only problems")
+
+
+def run(args: argparse.Namespace) -> int:
+    from fabrication.verify import verify
+
+    result = verify(args.out)
+    for f in result.findings[:50]:
+        print(f"ppfab: verify: {f}", file=sys.stderr)
+    if len(result.findings) > 50:
+        print(f"ppfab: verify: … and {len(result.findings) - 50} more", file=sys.stderr)
+    if not args.quiet:
+        status = "OK" if result.ok else f"FAILED ({len(result.findings)} problem(s))"
+        print(f"ppfab verify {args.out}: {status}; checked {', '.join(result.checked)}")
+    return 0 if result.ok else 1
