@@ -1,0 +1,296 @@
+"""Glass panels from the faces of a quad mesh: check, inset, flatten, identify, group.
+
+One panel per face.  For every face (vectorised over all faces):
+
+1. its least-squares plane and planarity deviation (mm); any face deviating by more than
+   ``planarity_tolerance`` stops the run with :class:`~ppfab.errors.NonPlanarPanelError`
+   listing every offender — before anything is written;
+2. the corners projected onto that plane and flattened by an exact isometry into the
+   panel's own frame (origin at the inset reference corner, ``X`` along the reference
+   edge, ``Y = N × X`` with ``N`` the outside normal), so the outline is seen from the
+   outside and is counter-clockwise;
+3. the mitred inset by ``gap / 2`` along every edge (edge lines moved inwards and
+   consecutive lines intersected); a collapsing inset is an error naming the panel;
+4. identity (``P-U07-V12`` on a regular patch, else ``P-0042``), processing flags,
+   measures, and the congruence type (``T001`` …).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ppfab.errors import FabricationError, GeometryError, NonPlanarPanelError
+from ppfab.mesh import QuadGrid, QuadMesh
+
+from ..flatpart import FlatPart
+from . import geometry as geo
+from .congruence import group_congruent
+from .params import PanelParams
+
+
+@dataclass(frozen=True, eq=False)
+class PanelFrame:
+    """Orthonormal frame of a panel: ``p3 = origin + x·x_axis + y·y_axis``; ``normal`` points outside."""
+
+    origin: np.ndarray
+    x_axis: np.ndarray
+    y_axis: np.ndarray
+    normal: np.ndarray
+
+    def to_3d(self, points: np.ndarray) -> np.ndarray:
+        """Flat points ``(k, 2)`` → 3D points ``(k, 3)`` on the panel plane (mm)."""
+        p = np.asarray(points, dtype=float)
+        return self.origin + p[..., :1] * self.x_axis + p[..., 1:2] * self.y_axis
+
+    def to_2d(self, points: np.ndarray) -> np.ndarray:
+        """3D points ``(k, 3)`` → flat coordinates ``(k, 2)`` (orthogonal projection onto the plane)."""
+        rel = np.asarray(points, dtype=float) - self.origin
+        return np.stack([rel @ self.x_axis, rel @ self.y_axis], axis=-1)
+
+    def as_dict(self) -> dict:
+        return {k: [float(x) for x in getattr(self, k)] for k in ("origin", "x_axis", "y_axis", "normal")}
+
+
+@dataclass(frozen=True, eq=False)
+class Panel:
+    """One glass panel (all lengths mm, areas mm², weights kg).
+
+    Attributes
+    ----------
+    part_id : ``P-U07-V12`` (face ``f[7, 12]`` of a regular patch) or ``P-0042`` (face 42)
+    face : 0-based index of the face in the output OBJ (row-major ``i·n' + j`` on a regular patch)
+    face_ij : ``(i, j)`` on a regular patch, else ``None``
+    mesh_face : index of the face in the mesh that was passed in
+    outline : (k, 2) inset outline in the panel frame, counter-clockwise seen from outside,
+        starting at the reference corner (corner 0, ``v[i, j]`` on a grid) at the origin; its first
+        edge, the reference edge, runs along +x (face edge ``c0 → c1``, or ``c0 → c3`` when the
+        face's normal points inside)
+    corner_index : (k,) face corner (0..3 in the face's corner order) of each outline vertex
+    corners_3d : (k, 3) the mesh face's corners (mm), in face order
+    frame : :class:`PanelFrame` mapping the flat outline back to 3D
+    deviation_mm : largest distance of a face corner from the face's least-squares plane
+    """
+
+    part_id: str
+    face: int
+    face_ij: tuple[int, int] | None
+    mesh_face: int
+    outline: np.ndarray
+    corner_index: np.ndarray
+    corners_3d: np.ndarray
+    frame: PanelFrame
+    deviation_mm: float
+    area_mm2: float
+    perimeter_mm: float
+    weight_kg: float
+    corner_angles_deg: tuple[float, ...]
+    bbox: tuple[float, float]
+    min_rect: tuple[float, float, float]
+    flags: tuple[str, ...]
+    makeup: str
+    thickness_mm: float
+    mirror_allowed: bool
+    type_id: str = ""
+    marks: tuple = ()
+    meta: dict = field(default_factory=dict)
+
+    def outline_3d(self) -> np.ndarray:
+        """The inset outline in 3D, ``(k, 3)`` mm, on the face's least-squares plane."""
+        return self.frame.to_3d(self.outline)
+
+    def flat_part(self) -> FlatPart:
+        """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF."""
+        meta = {
+            "face": self.face,
+            "material": self.makeup,
+            "thickness_mm": self.thickness_mm,
+            "width_mm": round(self.min_rect[0], 3),
+            "height_mm": round(self.min_rect[1], 3),
+            "perimeter_mm": round(self.perimeter_mm, 3),
+            "weight_kg": round(self.weight_kg, 3),
+            "planarity_dev_mm": round(self.deviation_mm, 4),
+            "min_angle_deg": round(min(self.corner_angles_deg), 3),
+            "flags": ";".join(self.flags),
+            "outside": "up",
+        }
+        if self.face_ij is not None:
+            meta["face_i"], meta["face_j"] = self.face_ij
+        meta.update(self.meta)
+        return FlatPart(part_id=self.part_id, kind="panel", outline=self.outline, marks=self.marks,
+                        label=self.part_id, type_id=self.type_id, rotations=None,
+                        mirror_allowed=self.mirror_allowed, meta=meta)
+
+
+def _outside_signs(corners: np.ndarray, planes: np.ndarray, mode: str) -> np.ndarray:
+    """``+1`` where the face normal points outside, ``−1`` where it points inside (one choice per mesh)."""
+    F = len(corners)
+    if mode == "normal":
+        return np.ones(F)
+    if mode == "reverse":
+        return -np.ones(F)
+    centre = corners.reshape(-1, 3).mean(axis=0)
+    fc = corners.mean(axis=1)
+    n = planes[:, :3]
+    away = float(np.einsum("fi,fi->", n, fc - centre))
+    spread = float(np.linalg.norm(fc - centre, axis=1).sum())
+    if abs(away) < 1e-6 * max(spread, 1e-12):      # no clear inside (flat sheet): outside is up (+z)
+        away = float(n[:, 2].sum())
+    return np.full(F, 1.0 if away >= 0 else -1.0)
+
+
+def _face_layout(mesh: QuadMesh | QuadGrid) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, list[str]]:
+    """Corners ``(F, 4, 3)``, grid indices ``(F, 2)`` or None, input-mesh face index ``(F,)``, part ids."""
+    grid: QuadGrid | None
+    qm: QuadMesh | None
+    if isinstance(mesh, QuadGrid):
+        grid, qm = mesh, None
+    elif isinstance(mesh, QuadMesh):
+        grid, qm = mesh.grid, mesh
+    else:
+        raise GeometryError(f"panels need a QuadMesh or QuadGrid, got {type(mesh).__name__}")
+    if grid is None:
+        corners = np.asarray(qm.face_corners, dtype=float)
+        F = len(corners)
+        width = max(4, len(str(F - 1)))
+        return corners, None, np.arange(F), [f"P-{f:0{width}d}" for f in range(F)]
+    fm, fn = grid.face_shape
+    corners = np.asarray(grid.face_corners, dtype=float).reshape(-1, 4, 3)
+    ij = np.stack(np.meshgrid(np.arange(fm), np.arange(fn), indexing="ij"), axis=-1).reshape(-1, 2)
+    wi, wj = max(2, len(str(fm - 1))), max(2, len(str(fn - 1)))
+    ids = [f"P-U{i:0{wi}d}-V{j:0{wj}d}" for i, j in ij]
+    mesh_face = np.arange(len(ij))
+    if qm is not None and qm.grid_ids is not None:
+        from ppfab.topology import grid_face_indices
+
+        gf = np.sort(grid_face_indices(np.asarray(qm.grid_ids), grid.closed).reshape(-1, 4), axis=1)
+        mf = np.sort(np.asarray(qm.faces), axis=1)
+        lookup = {tuple(r): k for k, r in enumerate(mf.tolist())}
+        mesh_face = np.array([lookup.get(tuple(r), -1) for r in gf.tolist()])
+    return corners, ij, mesh_face, ids
+
+
+def _mark_polylines(outline: np.ndarray, size: float) -> tuple:
+    """An L at the reference corner (long leg along the reference edge), inside the outline."""
+    if size <= 0:
+        return ()
+    e = geo.edge_vectors(outline[None])[0]
+    lengths = np.linalg.norm(e, axis=1)
+    inner, shrink = geo.inset_polygons(outline[None], 0.25 * size)
+    if not shrink[0] > 0.5:
+        return ()
+    a = inner[0, 0]
+    along = e[0] / lengths[0]
+    back = -e[-1] / lengths[-1]
+    long_leg = min(size, 0.3 * lengths[0])
+    short_leg = min(0.5 * size, 0.3 * lengths[-1])
+    return (np.array([a + long_leg * along, a, a + short_leg * back]),)
+
+
+def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *, scale: float = 1.0) -> list[Panel]:
+    """One glass panel per face of ``mesh`` (see the module docstring for the steps).
+
+    Parameters
+    ----------
+    mesh : the (planar-quad) mesh; on a regular patch faces are numbered row-major ``f[i, j]``
+    params : :class:`PanelParams` (defaults when ``None``)
+    scale : mesh units → mm (the design file's ``geometry.scale``)
+
+    Raises
+    ------
+    NonPlanarPanelError : faces deviate from their plane by more than ``planarity_tolerance`` mm
+        (all offenders listed with their deviation)
+    FabricationError : an inset by ``gap/2`` collapses (names the panel and its shortest edge)
+    GeometryError : a degenerate face (zero-length reference edge, collinear corners)
+    """
+    p = params or PanelParams()
+    if not (math.isfinite(scale) and scale > 0):
+        raise GeometryError(f"scale must be a positive number, got {scale}", element="scale", value=scale)
+    corners, ij, mesh_face, ids = _face_layout(mesh)
+    corners = corners * scale
+    if len(corners) == 0:
+        return []
+    planes, deviation = geo.oriented_planes(corners)
+    bad = np.flatnonzero(~(deviation <= p.planarity_tolerance))
+    if len(bad):
+        raise NonPlanarPanelError([(ids[f], float(deviation[f])) for f in bad], p.planarity_tolerance)
+    edges = np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)
+    if np.any(edges <= 1e-9):
+        f = int(np.argmin(edges.min(axis=1)))
+        raise GeometryError(f"panel {ids[f]}: face has a zero-length edge", element=ids[f], value=0.0)
+    outside = _outside_signs(corners, planes, p.outside)
+    # seen from N, the face's corner order is CCW when N = n, CW when N = −n: relabel to CCW from corner 0
+    corner_index = np.where((outside > 0)[:, None], np.array([0, 1, 2, 3]), np.array([0, 3, 2, 1]))
+    ordered = np.take_along_axis(corners, corner_index[:, :, None], axis=1)
+    origin, X, Y, N, flat = geo.flat_frames(ordered, planes, outside)
+    area0 = geo.polygon_area(flat)
+    if np.any(area0 <= 0):
+        f = int(np.argmin(area0))
+        raise GeometryError(f"panel {ids[f]}: face is degenerate or folded (flat area {area0[f]:.3g} mm²)",
+                            element=ids[f], value=float(area0[f]))
+    inset, shrink = geo.inset_polygons(flat, 0.5 * p.gap)
+    area = geo.polygon_area(inset)
+    collapsed = np.flatnonzero(~((shrink > 0) & (area > 0)))
+    if len(collapsed):
+        f = int(collapsed[0])
+        shortest = float(np.linalg.norm(geo.edge_vectors(flat[f:f + 1])[0], axis=1).min())
+        names = ", ".join(ids[k] for k in collapsed[:8]) + (" …" if len(collapsed) > 8 else "")
+        raise FabricationError(f"inset by gap/2 = {0.5 * p.gap:g} mm collapses {len(collapsed)} panel(s): {names} "
+                               f"({ids[f]}: shortest edge {shortest:.3g} mm)")
+    # final frame: origin at the inset reference corner, X unchanged
+    ref = inset[:, 0, :]
+    origin = origin + ref[:, :1] * X + ref[:, 1:2] * Y
+    outline = inset - ref[:, None, :]
+    perim = geo.perimeter(outline)
+    angles = np.degrees(geo.corner_angles(outline))
+    rects = geo.min_area_rectangles(outline)
+    bbox = outline.max(axis=1) - outline.min(axis=1)
+    weight = area * 1e-6 * p.thickness * 1e-3 * p.density
+    long_max, short_max = max(p.max_size), min(p.max_size)
+    long_min, short_min = max(p.min_size), min(p.min_size)
+    types = group_congruent(list(outline), p.congruence_tolerance, p.mirror_allowed)
+    wt = max(3, len(str(int(types.max()) + 1)))
+    panels: list[Panel] = []
+    for f in range(len(corners)):
+        flags = []
+        if rects[f, 0] > long_max + 1e-9 or rects[f, 1] > short_max + 1e-9:
+            flags.append("too_large")
+        if rects[f, 0] < long_min - 1e-9 or rects[f, 1] < short_min - 1e-9:
+            flags.append("too_small")
+        if angles[f].min() < p.min_corner_angle_deg:
+            flags.append("acute_corner")
+        o = outline[f]
+        panels.append(Panel(
+            part_id=ids[f],
+            face=f,
+            face_ij=None if ij is None else (int(ij[f, 0]), int(ij[f, 1])),
+            mesh_face=int(mesh_face[f]),
+            outline=o,
+            corner_index=corner_index[f],
+            corners_3d=corners[f],
+            frame=PanelFrame(origin[f], X[f], Y[f], N[f]),
+            deviation_mm=float(deviation[f]),
+            area_mm2=float(area[f]),
+            perimeter_mm=float(perim[f]),
+            weight_kg=float(weight[f]),
+            corner_angles_deg=tuple(float(a) for a in angles[f]),
+            bbox=(float(bbox[f, 0]), float(bbox[f, 1])),
+            min_rect=(float(rects[f, 0]), float(rects[f, 1]), float(rects[f, 2])),
+            flags=tuple(flags),
+            makeup=p.makeup,
+            thickness_mm=p.thickness,
+            mirror_allowed=p.mirror_allowed,
+            type_id=f"T{int(types[f]) + 1:0{wt}d}",
+            marks=_mark_polylines(o, p.mark_size),
+        ))
+    return panels
+
+
+def panel_types(panels: list[Panel]) -> dict[str, list[str]]:
+    """``type_id → part ids`` in order of first appearance (the number of types is ``len(...)``)."""
+    out: dict[str, list[str]] = {}
+    for pnl in panels:
+        out.setdefault(pnl.type_id, []).append(pnl.part_id)
+    return out

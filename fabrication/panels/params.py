@@ -1,0 +1,45 @@
+"""Parameters of glass panels (the ``[panels]`` table of a design file)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ppfab.errors import DesignError
+from ppfab.schema import param
+
+
+@dataclass(frozen=True)
+class PanelParams:
+    """Glass panels cut from the faces of a quad mesh (all lengths in mm).
+
+    Examples
+    --------
+    >>> from ppfab.schema import parse_params
+    >>> parse_params(PanelParams, {"gap": 12, "thickness": 8}, "panels").gap
+    12.0
+    """
+
+    gap: float = param(10.0, doc="joint width between neighbouring panels, mm; every panel edge is inset by gap/2", min=0)
+    thickness: float = param(10.0, doc="glass thickness, mm (weight and parts list)", exclusive_min=0)
+    makeup: str = param("toughened 10 mm", doc="glass make-up written to the parts and order lists")
+    density: float = param(2500.0, doc="glass density, kg/m³", exclusive_min=0)
+    planarity_tolerance: float = param(1.0, doc="largest allowed distance of a face corner from the face's "
+                                                "least-squares plane, mm; checked before anything is written",
+                                       exclusive_min=0)
+    min_size: list[float] = param([250.0, 250.0], doc="smallest panel [w, h] the processor accepts, mm (flag)",
+                                  length=2, min=0)
+    max_size: list[float] = param([6000.0, 3210.0], doc="largest panel [w, h] the processor accepts, mm (flag)",
+                                  length=2, exclusive_min=0)
+    min_corner_angle_deg: float = param(20.0, doc="corners more acute than this are flagged, degrees", min=0, max=90)
+    congruence_tolerance: float = param(1.0, doc="panels whose outlines match within this (mm, after a rigid "
+                                                 "motion) share a type id", min=0)
+    mirror_allowed: bool = param(False, doc="the make-up is symmetric (no coating, no print): a panel may be "
+                                            "turned over, so mirror images are the same type and may be nested mirrored")
+    outside: str = param("auto", doc="which side of a face is the outside: 'normal' (the side its corner order "
+                                     "turns counter-clockwise about), 'reverse', or 'auto' (away from the mesh centroid)",
+                         choices=("auto", "normal", "reverse"))
+    mark_size: float = param(80.0, doc="length of the reference-corner mark on layer MARK, mm", min=0)
+
+    def __post_init__(self):
+        if min(self.min_size) > 0 and (max(self.min_size) > max(self.max_size) or min(self.min_size) > min(self.max_size)):
+            raise DesignError("min_size", f"{list(self.min_size)} exceeds max_size {list(self.max_size)}")
