@@ -1,0 +1,107 @@
+"""From a support structure to checked beam plates: layout → joints → outlines → checks → report."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from ppfab.errors import DesignError
+from ppfab.support import SupportStructure
+
+from .flat import flat_parts, type_ids
+from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
+from .params import BeamParams
+from .plates import BeamPlate, layout_plates
+from .report import BeamRecord, BeamReport, Defect
+
+
+@dataclass(frozen=True, eq=False)
+class BeamSet:
+    """All beam plates of a structure with their joints and report."""
+
+    support: SupportStructure
+    params: BeamParams
+    plates: tuple[BeamPlate, ...]
+    joints: tuple[NodeJoint, ...]
+    report: BeamReport
+    types: dict
+
+    @cached_property
+    def by_id(self) -> dict[str, BeamPlate]:
+        return {p.part_id: p for p in self.plates}
+
+    @cached_property
+    def joint_at(self) -> dict[int, NodeJoint]:
+        """Vertex id → its :class:`NodeJoint`."""
+        return {j.vertex: j for j in self.joints}
+
+    def flat_parts(self) -> list:
+        """:class:`~fabrication.flatpart.FlatPart` of every plate (kind ``"beam"``)."""
+        return flat_parts(list(self.plates), self.params.material, self.params.density, self.types)
+
+    def solids(self) -> list:
+        """build123d solids, one per plate, labelled with its part id (imports build123d)."""
+        from .solids import build_solids
+
+        return build_solids(list(self.plates))
+
+    def export_step(self, path: str | Path) -> Path:
+        """Write ``beams.step`` (one solid per plate, named by part id); returns the path."""
+        from .solids import export_step
+
+        return export_step(self.solids(), path)
+
+
+def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True) -> BeamSet:
+    """Planar beam plates with joints for a mesh with a support structure.
+
+    Parameters
+    ----------
+    support : node axes and support planes (:mod:`ppfab.support`), in mm
+    params : beam parameters (defaults when omitted)
+    strict : raise :class:`~ppfab.errors.FabricationError` naming every defective plate
+        (with its measured value) instead of returning them in ``report.defects``
+
+    Returns
+    -------
+    BeamSet
+    """
+    params = params or BeamParams()
+    if not isinstance(params, BeamParams):
+        raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
+    plates, defects = layout_plates(support, params)
+    ids = [p.part_id for p in plates]
+    if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
+        raise DesignError("beams", "duplicate part ids")
+    joints, trims, slots, jdef = analyse_nodes(plates, support, params)
+    defects += jdef
+    final = [apply_joints(p, trims.get(p.part_id, []), slots.get(p.part_id, []), params, defects) for p in plates]
+    for p in final:
+        defects += plate_checks(p, params)
+    types = type_ids(final)
+    records = []
+    for p in final:
+        spread, play, extra, ok = assembly_check(p, params.clearance)
+        area = p.area
+        records.append(BeamRecord(p.part_id, p.beam_id, ("rows", "cols")[p.family], p.piece, len(p.nodes),
+                                  p.length, area, area * p.thickness * params.density * 1e-9, len(p.slots),
+                                  spread, play, extra, ok, p.plane_deviation, types[p.part_id]))
+    off = support.torsion_offset(params.depth) if len(support.edges) else np.zeros(1)
+    report = BeamReport(tuple(records), tuple(_dedupe(defects)), params.joint,
+                        float(np.degrees(support.torsion.max())) if len(support.edges) else 0.0, float(off.max()))
+    if strict:
+        report.raise_if_defects()
+    return BeamSet(support, params, tuple(final), tuple(joints), report, types)
+
+
+def _dedupe(defects: list[Defect]) -> list[Defect]:
+    seen, out = set(), []
+    for d in defects:
+        key = (d.part_id, d.kind, d.where)
+        if key not in seen:
+            seen.add(key)
+            out.append(d)
+    return out

@@ -1,0 +1,90 @@
+"""Beam plates as flat parts for nesting and DXF cutting sheets.
+
+The flat outline of a plate is its outline in its own 2D frame (slots and end
+cuts included), so placing the part on a sheet and mapping it back into the
+structure use the same coordinates; the frame (origin, x and y directions) is
+recorded in ``meta['frame']``.  Node axes are drawn as marking lines (layer
+``MARK``), clipped to the material (a half-lap slot removes half of its axis).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from shapely.geometry import LineString, Polygon
+
+from fabrication.flatpart import FlatPart
+
+from .plates import BeamPlate
+
+
+def axis_marks(plate: BeamPlate, min_length: float = 1.0) -> tuple[np.ndarray, ...]:
+    """Node axis lines ``top_k → bottom_k`` (2D) clipped to the outline, each a ``(2, 2)`` array."""
+    poly = Polygon(plate.outline)
+    out = []
+    for c in plate.chain.tolist():
+        seg = LineString([plate.top[c], plate.bottom[c]]).intersection(poly)
+        parts = getattr(seg, "geoms", [seg])
+        for g in parts:
+            if g.geom_type == "LineString" and g.length >= min_length:
+                out.append(np.asarray(g.coords, dtype=float))
+    return tuple(out)
+
+
+def _signature(q: np.ndarray, grid: float) -> tuple:
+    r = np.round(q / grid).astype(np.int64)
+    start = min(range(len(r)), key=lambda k: (r[k, 0], r[k, 1]))
+    r = np.roll(r, -start, axis=0)
+    return (len(r),) + tuple(r.ravel().tolist())
+
+
+def congruence_key(outline: np.ndarray, mirror: bool = True, grid: float = 0.1) -> tuple:
+    """A key equal for congruent outlines (rigid motions, and reflections with ``mirror``).
+
+    The outline is moved to its centroid and turned to its principal axes; of the
+    2 (or 4 with reflections) remaining poses the smallest rounded signature is kept.
+    """
+    p = np.asarray(outline, dtype=float)
+    c = p - p.mean(axis=0)
+    _, vecs = np.linalg.eigh(c.T @ c)
+    base = c @ vecs[:, ::-1]
+    keys = []
+    for sx, sy in ((1, 1), (-1, -1)) + (((-1, 1), (1, -1)) if mirror else ()):
+        q = base * np.array([sx, sy])
+        if sx * sy < 0:
+            q = q[::-1]
+        keys.append(_signature(q, grid))
+    return min(keys)
+
+
+def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
+    """``part_id → type id`` (``BT001``, …); identical plates share a type."""
+    keys: dict[tuple, str] = {}
+    out = {}
+    for p in plates:
+        k = congruence_key(p.outline, mirror)
+        if k not in keys:
+            keys[k] = f"BT{len(keys) + 1:03d}"
+        out[p.part_id] = keys[k]
+    return out
+
+
+def flat_part(plate: BeamPlate, material: str = "", density: float = 0.0, type_id: str = "") -> FlatPart:
+    """One :class:`~fabrication.flatpart.FlatPart` (kind ``"beam"``) for a plate."""
+    area = plate.area
+    mass = area * plate.thickness * density * 1e-9
+    meta = {
+        "material": material, "thickness_mm": plate.thickness, "depth_mm": plate.depth,
+        "mass_kg": mass, "length_mm": plate.length, "area_mm2": area,
+        "beam_id": plate.beam_id, "family": ("rows", "cols")[plate.family], "piece": plate.piece,
+        "pieces": plate.n_pieces, "nodes": plate.nodes.tolist(), "slots": len(plate.slots),
+        "frame": plate.frame.as_dict(), "plane": plate.plane.tolist(),
+    }
+    return FlatPart(plate.part_id, "beam", plate.outline.copy(), marks=axis_marks(plate), label=plate.part_id,
+                    type_id=type_id, rotations=None, mirror_allowed=True, meta=meta)
+
+
+def flat_parts(plates: list[BeamPlate], material: str = "", density: float = 0.0,
+               types: dict[str, str] | None = None) -> list[FlatPart]:
+    """Flat parts of all plates (type ids from :func:`type_ids` unless given)."""
+    types = types if types is not None else type_ids(plates)
+    return [flat_part(p, material, density, types.get(p.part_id, "")) for p in plates]

@@ -1,0 +1,62 @@
+"""Parameters of the beam plates (the ``[beams]`` table of a design file)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ppfab.errors import DesignError
+from ppfab.schema import param
+
+JOINTS = ("halflap", "segmented", "none")
+
+
+@dataclass(frozen=True)
+class BeamParams:
+    """Planar beam plates along the support planes, and their joints at the nodes.
+
+    Examples
+    --------
+    >>> from ppfab.schema import parse_params
+    >>> parse_params(BeamParams, {"depth": 250, "joint": "segmented"}, "beams").depth
+    250.0
+    """
+
+    depth: float = param(200.0, doc="beam depth, mm, measured along the node axes from the mesh (top edge) "
+                                    "to the bottom edge", exclusive_min=0)
+    thickness: float = param(12.0, doc="plate thickness, mm (centred on the support plane)", exclusive_min=0)
+    material: str = param("S355 steel plate", doc="material name for the parts list")
+    density: float = param(7850.0, doc="material density, kg/m³ (steel 7850, glulam 470)", exclusive_min=0)
+    joint: str = param("halflap", doc="'halflap' (PP: slots from above in rows, from below in columns), "
+                                      "'segmented' (P: one family continuous, the other cut into segments "
+                                      "between crossings), 'none' (plain intersecting plates)", choices=JOINTS)
+    clearance: float = param(1.0, doc="extra slot width, mm; ends that butt against another plate stop "
+                                      "half of it short of its face", min=0)
+    continuous: str = param("auto", doc="segmented joints: the family that runs through the nodes, 'rows', "
+                                        "'cols' or 'auto' (a planar family, rows when both are)",
+                            choices=("auto", "rows", "cols"))
+    min_angle_deg: float = param(20.0, doc="plates meeting at a node at a smaller angle are reported as "
+                                           "degenerate", min=0, exclusive_max=90)
+    min_segment: float = param(10.0, doc="shortest acceptable edge or trimmed segment, mm", min=0)
+    max_length: float = param(6000.0, doc="longest piece along its top edge, mm; longer beams (and every "
+                                          "closed one) are split at edge midpoints; 0 = never split", min=0)
+    plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
+                                            "beam that carries it; a polyline further off cannot be one "
+                                            "planar plate", exclusive_min=0)
+
+    def __post_init__(self):
+        if self.max_length and self.max_length < 2 * self.min_segment:
+            raise DesignError("max_length", f"must be 0 or at least twice min_segment ({2 * self.min_segment:g} mm), "
+                                            f"got {self.max_length:g}")
+
+    @property
+    def continuous_family(self) -> int | None:
+        """0 (rows), 1 (cols) or ``None`` (auto)."""
+        return {"rows": 0, "cols": 1}.get(self.continuous)
+
+    def manifest(self) -> dict:
+        """The entries this record contributes to ``manifest.json['fabrication']``."""
+        return {"beam_depth": self.depth, "beam_thickness": self.thickness, "beam_material": self.material,
+                "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance,
+                "beam_min_angle_deg": self.min_angle_deg, "beam_min_segment": self.min_segment,
+                "beam_max_length": self.max_length, "beam_plane_tolerance": self.plane_tolerance,
+                "beam_continuous": self.continuous}

@@ -1,0 +1,415 @@
+"""Beam plates in their support planes: frames, top/bottom edges, pieces.
+
+Each support plane carrying a mesh polyline becomes a planar plate (§3.1: the
+planes ``U_i``/``W_j`` of a P or PP mesh are part of its support structure).
+In the plate's plane the *top edge* is the polyline (projected into the plane,
+which moves it at most ``plane_tolerance``) and the *bottom edge* is the top
+edge moved by the beam depth along the node axes, each axis first brought into
+the plane (``â = (a − (a·n)n)/|…|``), so the whole plate stays in its plane:
+
+    top_k = v_k − (n·v_k + d) n,        bottom_k = top_k + depth · â_k.
+
+Everything is drawn in the plate's own 2D frame (origin at the first top point,
+``x`` along the chord, ``y`` up, away from the axes) and placed with the frame
+afterwards — a CAD kernel accepts a face only if its polygon is exactly planar.
+
+Polylines that are not planar (the transverse family of a P mesh, or with
+``joint = "segmented"``) become one plate per edge, in the edge's support plane.
+Long or closed planar polylines are split into pieces at edge midpoints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ppfab import planes as pl
+from ppfab.errors import GeometryError
+from ppfab.support import SupportStructure
+
+from .params import BeamParams
+from .report import Defect
+
+
+@dataclass(frozen=True, eq=False)
+class PlaneFrame:
+    """An orthonormal frame of a plate's plane: ``X = origin + x·ex + y·ey``, normal ``ex × ey``."""
+
+    origin: np.ndarray
+    ex: np.ndarray
+    ey: np.ndarray
+
+    @property
+    def normal(self) -> np.ndarray:
+        return np.cross(self.ex, self.ey)
+
+    @property
+    def plane(self) -> np.ndarray:
+        """The frame's plane ``(n, d)``, ``n·x + d = 0``, unit normal."""
+        n = self.normal
+        return np.r_[n, -float(n @ self.origin)]
+
+    def to2d(self, points: np.ndarray) -> np.ndarray:
+        """``(..., 3)`` points → ``(..., 2)`` plate coordinates (the normal component is dropped)."""
+        d = np.asarray(points, dtype=float) - self.origin
+        return np.stack([d @ self.ex, d @ self.ey], axis=-1)
+
+    def to3d(self, points: np.ndarray) -> np.ndarray:
+        """``(..., 2)`` plate coordinates → ``(..., 3)`` points in the plane."""
+        q = np.asarray(points, dtype=float)
+        return self.origin + q[..., 0, None] * self.ex + q[..., 1, None] * self.ey
+
+    def vec2d(self, vectors: np.ndarray) -> np.ndarray:
+        v = np.asarray(vectors, dtype=float)
+        return np.stack([v @ self.ex, v @ self.ey], axis=-1)
+
+    def vec3d(self, vectors: np.ndarray) -> np.ndarray:
+        q = np.asarray(vectors, dtype=float)
+        return q[..., 0, None] * self.ex + q[..., 1, None] * self.ey
+
+    def as_dict(self) -> dict:
+        return {"origin": self.origin.tolist(), "x_dir": self.ex.tolist(), "y_dir": self.ey.tolist(),
+                "normal": self.normal.tolist()}
+
+
+@dataclass(frozen=True, eq=False)
+class Slot:
+    """A half-lap slot in a plate's 2D frame: a strip of ``width`` centred on the line
+    ``origin + α·direction`` (``direction`` points from the top edge down), from the top
+    edge down to ``α = length`` (``from_top``) or from ``α = length`` down through the bottom edge."""
+
+    node: int
+    partner: str
+    from_top: bool
+    origin: np.ndarray
+    direction: np.ndarray
+    width: float
+    length: float
+    depth: float
+
+    def polygon(self) -> np.ndarray:
+        """``(4, 2)`` CCW rectangle, overshooting the plate edge by half the depth."""
+        s = self.direction
+        t = np.array([-s[1], s[0]])
+        a0, a1 = (-0.5 * self.depth, self.length) if self.from_top else (self.length, 1.5 * self.depth)
+        w = 0.5 * self.width
+        pts = np.array([self.origin + a0 * s - w * t, self.origin + a1 * s - w * t,
+                        self.origin + a1 * s + w * t, self.origin + a0 * s + w * t])
+        return pts if _signed_area(pts) > 0 else pts[::-1]
+
+    @property
+    def end_center(self) -> np.ndarray:
+        """Centre of the slot's closed end (on the slot line at ``α = length``)."""
+        return self.origin + self.length * self.direction
+
+
+@dataclass(frozen=True, eq=False)
+class BeamPlate:
+    """One plate to cut: its place in the structure, its 2D outline and frame.
+
+    Parameters
+    ----------
+    part_id : e.g. ``B-U03`` (row 3), ``B-W07-S03`` (segment 3 of column 7), ``B-R0012`` (polyline 12)
+    beam_id : the polyline's id (equal for all pieces of one beam)
+    polyline : index into ``support.polylines``; ``family`` 0 rows / 1 cols
+    piece, n_pieces : which piece of the beam (0-based) and how many
+    nodes : (k,) vertex ids on the plate, in order; ``through`` (k,) bool: the plate continues on both sides
+    chain : (k,) index of each node in ``top``/``bottom``
+    top, bottom : (p, 2) top edge (the polyline) and bottom edge in the frame, mm
+    plane : (4,) unit support plane the plate is centred on
+    frame : 2D ↔ 3D mapping of the plate
+    outline : (q, 2) CCW outline with end cuts and slots; ``body``: before the slots
+    slots : half-lap slots; ``trims``: ``(vertex, distance mm)`` end cuts set back from the node axis
+    plane_deviation : largest distance of the plate's mesh vertices from ``plane``, mm
+    """
+
+    part_id: str
+    beam_id: str
+    polyline: int
+    family: int
+    piece: int
+    n_pieces: int
+    nodes: np.ndarray
+    through: np.ndarray
+    chain: np.ndarray
+    top: np.ndarray
+    bottom: np.ndarray
+    plane: np.ndarray
+    frame: PlaneFrame
+    depth: float
+    thickness: float
+    plane_deviation: float
+    outline: np.ndarray
+    body: np.ndarray
+    slots: tuple[Slot, ...] = ()
+    trims: tuple[tuple[int, float], ...] = ()
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def raw_outline(self) -> np.ndarray:
+        """``(p, 2)`` CCW polygon top + reversed bottom, before joints."""
+        return _ccw(np.concatenate([self.top, self.bottom[::-1]], axis=0))
+
+    @property
+    def length(self) -> float:
+        """Length of the top edge, mm."""
+        return float(np.linalg.norm(np.diff(self.top, axis=0), axis=1).sum())
+
+    @property
+    def area(self) -> float:
+        """Area of the final outline, mm²."""
+        return _signed_area(self.outline)
+
+    def node_top(self, vertex: int) -> np.ndarray:
+        """Top point (2D) of a node of this plate."""
+        k = int(np.flatnonzero(self.nodes == vertex)[0])
+        return self.top[self.chain[k]]
+
+    def node_axis(self, vertex: int) -> np.ndarray:
+        """Unit in-plane axis direction (2D, pointing down) at a node."""
+        k = int(np.flatnonzero(self.nodes == vertex)[0])
+        c = self.chain[k]
+        d = self.bottom[c] - self.top[c]
+        return d / np.linalg.norm(d)
+
+    def body_direction(self, vertex: int) -> np.ndarray:
+        """Unit 2D direction from a node into the plate, perpendicular to the node's axis
+        (for an end node: the side the plate lies on)."""
+        k = int(np.flatnonzero(self.nodes == vertex)[0])
+        c = int(self.chain[k])
+        s = self.node_axis(vertex)
+        nb = self.top[c + 1] if c + 1 < len(self.top) else 2 * self.top[c] - self.top[c - 1]
+        b = nb - self.top[c]
+        b = b - (b @ s) * s
+        return b / np.linalg.norm(b)
+
+
+def _signed_area(p: np.ndarray) -> float:
+    x, y = np.asarray(p, dtype=float).T
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _ccw(p: np.ndarray) -> np.ndarray:
+    return p if _signed_area(p) >= 0 else p[::-1]
+
+
+# -- naming ------------------------------------------------------------------------------------------
+
+def beam_ids(support: SupportStructure) -> list[str]:
+    """Part id stem of every polyline: ``B-U03``/``B-W07`` on a regular patch, ``B-R0012`` otherwise."""
+    lines = support.polylines
+    if support.mesh.grid is not None:
+        m1, n1 = support.mesh.grid.shape
+        w = max(2, len(str(max(m1, n1) - 1)))
+        out = []
+        for k in range(len(lines)):
+            fam, idx = support.polyline_grid_index(k)
+            out.append(f"B-{'UW'[fam]}{idx:0{w}d}")
+        return out
+    w = max(4, len(str(len(lines) - 1)))
+    return [f"B-R{k:0{w}d}" for k in range(len(lines))]
+
+
+# -- splitting ---------------------------------------------------------------------------------------
+
+def split_edges(lengths: np.ndarray, closed: bool, max_length: float) -> tuple[list[int], float]:
+    """Edges at whose midpoints a polyline is cut so that no piece is longer than ``max_length``.
+
+    Parameters
+    ----------
+    lengths : (e,) edge lengths (``e = k − 1`` for an open, ``k`` for a closed polyline of ``k`` vertices)
+    closed : a closed polyline is always cut at least twice (a ring cannot be cut from flat stock)
+    max_length : 0 = no limit
+
+    Returns
+    -------
+    sorted edge indices, and the longest resulting piece (measured along the polyline)
+    """
+    lengths = np.asarray(lengths, dtype=float)
+    ne = len(lengths)
+    total = float(lengths.sum())
+    cum = np.r_[0.0, np.cumsum(lengths)]
+    mids = cum[:-1] + 0.5 * lengths
+    kmin = 2 if closed else 1
+    if max_length > 0:
+        kmin = max(kmin, int(math.ceil(total / max_length - 1e-9)))
+    best: tuple[list[int], float] | None = None
+    for k in range(kmin, ne + 1):
+        if closed:
+            targets = (mids[0] + total * np.arange(k) / k) % total
+        else:
+            targets = total * np.arange(1, k) / k
+        cuts = sorted({int(np.argmin(np.abs(mids - t) if not closed else
+                                      np.minimum(np.abs(mids - t), total - np.abs(mids - t)))) for t in targets})
+        if closed and len(cuts) < 2:
+            continue
+        longest = _longest_piece(cuts, mids, total, closed)
+        if best is None or longest < best[1]:
+            best = (cuts, longest)
+        if max_length <= 0 or longest <= max_length:
+            return cuts, longest
+    if best is None:
+        return [], total
+    return best
+
+
+def _longest_piece(cuts: list[int], mids: np.ndarray, total: float, closed: bool) -> float:
+    if not cuts:
+        return total
+    pos = np.asarray([mids[c] for c in cuts])
+    if closed:
+        gaps = np.diff(np.r_[pos, pos[0] + total])
+    else:
+        gaps = np.diff(np.r_[0.0, pos, total])
+    return float(gaps.max())
+
+
+# -- plates ------------------------------------------------------------------------------------------
+
+def _in_plane_axes(axes: np.ndarray, n: np.ndarray, where: str) -> np.ndarray:
+    a = axes - np.outer(axes @ n, n)
+    length = np.linalg.norm(a, axis=1)
+    if np.any(length < 1e-6):
+        raise GeometryError(f"{where}: a node axis is perpendicular to the beam plane "
+                            f"(in-plane length {length.min():.1e}); the beam has no depth direction",
+                            element=where, value=float(length.min()))
+    return a / length[:, None]
+
+
+def make_plate(part_id: str, beam_id: str, polyline: int, family: int, piece: int, n_pieces: int,
+               plane: np.ndarray, chain_points: np.ndarray, chain_axes: np.ndarray, nodes: np.ndarray,
+               through: np.ndarray, chain: np.ndarray, params: BeamParams, node_points: np.ndarray) -> BeamPlate:
+    """A plate from its chain of top points ``(p, 3)`` and axes ``(p, 3)`` in ``plane`` (see module doc)."""
+    pln = pl.normalize(plane)
+    n, d = pln[:3], pln[3]
+    top3 = chain_points - np.outer(chain_points @ n + d, n)
+    ahat = _in_plane_axes(chain_axes, n, part_id)
+    chord = top3[-1] - top3[0]
+    if np.linalg.norm(chord) < 1e-9 * max(1.0, float(np.abs(top3).max())):
+        chord = top3[1] - top3[0]
+    ex = chord - (chord @ n) * n
+    ex /= np.linalg.norm(ex)
+    ey = np.cross(n, ex)
+    if ahat.sum(axis=0) @ ey > 0:
+        ey = -ey
+    frame = PlaneFrame(top3[0].copy(), ex, ey)
+    top = frame.to2d(top3)
+    bottom = top + params.depth * frame.vec2d(ahat)
+    raw = _ccw(np.concatenate([top, bottom[::-1]], axis=0))
+    dev = float(np.abs(node_points @ n + d).max())
+    return BeamPlate(part_id, beam_id, polyline, family, piece, n_pieces, np.asarray(nodes, dtype=np.int64),
+                     np.asarray(through, dtype=bool), np.asarray(chain, dtype=np.int64), top, bottom,
+                     pln, frame, params.depth, params.thickness, dev, raw, raw)
+
+
+def _continuous_family(support: SupportStructure, params: BeamParams) -> int:
+    if params.continuous_family is not None:
+        return params.continuous_family
+    return support.planar_families[0] if support.planar_families else 0
+
+
+def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[BeamPlate], list[Defect]]:
+    """All plates of the structure before joints, and the problems found on the way.
+
+    A polyline becomes continuous plates when it lies in its plane within
+    ``params.plane_tolerance`` (and, with segmented joints, belongs to the continuous
+    family); otherwise one plate per edge in the edge's support plane.  With half-lap
+    joints every polyline must be planar; with segmented joints every polyline of the
+    continuous family — a polyline that is not is reported (``not_planar``) and cut
+    into edge plates so the rest can still be inspected.
+    """
+    v = support.vertices
+    axes = support.axes
+    ids = beam_ids(support)
+    epl_edges = support.edges
+    nv = len(v)
+    edge_key = epl_edges[:, 0] * nv + epl_edges[:, 1]
+    cont = _continuous_family(support, params)
+    plates: list[BeamPlate] = []
+    defects: list[Defect] = []
+    for l, line in enumerate(support.polylines):
+        vs = line.vertices
+        if len(vs) < 2:
+            continue
+        dev = float(support.polyline_deviation[l])
+        planar = dev <= params.plane_tolerance
+        segmented = params.joint == "segmented" and line.family != cont
+        if not planar and not segmented and params.joint in ("halflap", "segmented"):
+            defects.append(Defect(ids[l], "not_planar", dev, params.plane_tolerance,
+                                  f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
+                                  f"{ids[l]}: its vertices lie up to {dev:.3g} mm off the beam plane "
+                                  f"(tolerance {params.plane_tolerance:g} mm); "
+                                  + ("half-lap joints need both families planar (PP)" if params.joint == "halflap"
+                                     else "the continuous family of segmented joints must be planar")))
+        if planar and not segmented:
+            plates.extend(_continuous(support, params, l, ids[l], defects))
+        else:
+            a, b = vs[:-1], vs[1:]
+            if line.closed and len(vs) > 2:
+                a, b = np.r_[a, vs[-1]], np.r_[b, vs[0]]
+            lo, hi = np.minimum(a, b), np.maximum(a, b)
+            eids = np.searchsorted(edge_key, lo * nv + hi)
+            w = max(2, len(str(len(a) - 1)))
+            for k, (va, vb, e) in enumerate(zip(a, b, eids)):
+                pid = ids[l] if len(a) == 1 else f"{ids[l]}-S{k:0{w}d}"
+                pts = v[[va, vb]]
+                plates.append(make_plate(pid, ids[l], l, line.family, k, len(a), support.edge_planes[e], pts,
+                                         axes[[va, vb]], np.array([va, vb]), np.array([False, False]),
+                                         np.array([0, 1]), params, pts))
+    return plates, defects
+
+
+def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
+                defects: list[Defect]) -> list[BeamPlate]:
+    line = support.polylines[l]
+    vs = line.vertices
+    pts = support.vertices[vs]
+    closed = bool(line.closed and len(vs) > 2)
+    seg = np.linalg.norm(np.diff(np.concatenate([pts, pts[:1]]) if closed else pts, axis=0), axis=1)
+    cuts, longest = split_edges(seg, closed, params.max_length)
+    if params.max_length > 0 and longest > params.max_length:
+        defects.append(Defect(beam_id, "too_long", longest, params.max_length, f"polyline {l}",
+                              f"{beam_id}: cannot be cut into pieces of at most {params.max_length:g} mm at edge "
+                              f"midpoints (longest piece {longest:.0f} mm)"))
+    plane = support.polyline_planes[l]
+    axes = support.axes[vs]
+    nn = len(vs)
+    if closed:
+        bounds = [(cuts[r], cuts[(r + 1) % len(cuts)]) for r in range(len(cuts))]
+        pieces = []
+        for a, b in bounds:
+            idx = [(a + 1 + t) % nn for t in range(((b - a) % nn) or nn)]
+            pieces.append((a, idx, b))
+    else:
+        starts = [None] + cuts
+        ends = cuts + [None]
+        pieces = []
+        for s, e in zip(starts, ends):
+            lo = 0 if s is None else s + 1
+            hi = nn - 1 if e is None else e
+            pieces.append((s, list(range(lo, hi + 1)), e))
+    out = []
+    w = max(2, len(str(len(pieces) - 1)))
+    for r, (s, idx, e) in enumerate(pieces):
+        cp, ca, chain = [], [], []
+        if s is not None:
+            cp.append(0.5 * (pts[s] + pts[(s + 1) % nn]))
+            ca.append(axes[s] + axes[(s + 1) % nn])
+        for k in idx:
+            chain.append(len(cp))
+            cp.append(pts[k])
+            ca.append(axes[k])
+        if e is not None:
+            cp.append(0.5 * (pts[e] + pts[(e + 1) % nn]))
+            ca.append(axes[e] + axes[(e + 1) % nn])
+        ca = np.asarray(ca)
+        ca /= np.linalg.norm(ca, axis=1, keepdims=True)
+        nodes = vs[idx]
+        # a node is an end only where the polyline itself ends (pieces end at edge midpoints)
+        through = np.array([closed or (0 < k < nn - 1) for k in idx])
+        pid = beam_id if len(pieces) == 1 else f"{beam_id}-S{r:0{w}d}"
+        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca, nodes,
+                              through, np.asarray(chain), params, pts[idx]))
+    return out
