@@ -1,0 +1,337 @@
+"""Conical P meshes from a family of spheres — the channel-surface approach (paper §4.2.3, §4.2.4).
+
+Step 1  Control spheres ``(x, y, z, r)`` → a B-spline family ``Z(t)`` sampled uniformly in
+        tangential distance (eq. 2): spheres ``Z_0 … Z_N`` (:mod:`ppfab.spheres`).
+Step 2  The cone ``C_i`` touches ``Z_i`` and ``Z_{i+1}``; consecutive cones meet in the planes
+        ``W_i`` of eq. (16).
+Step 3  Tangent planes ``T_{s,j}`` of one cone ``C_s`` (profile angle ``θ_j``) are carried to the next
+        cone by the Minkowski reflection ``σ_i`` that fixes ``W_i`` point by point (Remark 4.4):
+        ``T_{i,j} = σ_i(T_{i−1,j})``.  The vertex ``v_ij = T_{i,j−1} ∩ T_{i,j} ∩ W_i`` is shared by the
+        strips on both sides of ``W_i``, so rows lie in ``W_i`` (P property) and all faces at ``v_ij``
+        touch ``Z_i`` (conical).
+Step 4  The circular profile in ``W_{k}`` is replaced by the polygon circumscribing a designer's
+        convex profile curve with edges parallel to the original ones (each strip plane keeps its
+        normal and moves to the profile's support line); propagated by the same ``σ_i`` the mesh
+        stays parallel to the channel mesh, hence conical and P.
+
+§4.2.4  With the sphere centres in a plane ``M`` and every sphere touching a plane ``T``, all cone
+        vertices lie on ``M ∩ T``; every transverse polyline then lies in a plane through that line
+        and the mesh is a conical PP mesh (method ``conical_spheres_pp``).
+
+Grid layout: row ``i`` (vertices ``v[i, :]``) lies in ``W_i`` (``support_u``), ``i = 0 … N``; column ``j``
+follows the spine at profile angle ``θ_j``.  With a closed profile the rows are closed loops.
+Oriented contact is ``n·c + d + r = 0`` (:mod:`ppfab.laguerre`): for positive radii the face
+normals point away from the spine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import planes as pl
+from ..errors import DesignError, GeometryError
+from ..folds import check_folds, orientation_sign
+from ..mesh import QuadGrid
+from ..schema import param
+from ..sections import PlanarCurve, support_values
+from ..spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
+from .registry import construction
+
+
+def cone_frame(Z0: np.ndarray, Z1: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """Axis ``a``, ``cos β`` and the profile frame ``b1, b2`` of the cone touching spheres ``Z0``, ``Z1``.
+
+    Tangent planes have unit normals ``n(θ) = cos β a + sin β (cos θ b1 + sin θ b2)`` with
+    ``n·(c1 − c0) = −(r1 − r0)``; ``b1`` is the direction of ``up`` orthogonal to ``a`` (``θ = 0`` is the crown).
+    """
+    dc = Z1[:3] - Z0[:3]
+    length = float(np.linalg.norm(dc))
+    a = dc / length
+    cosb = -(Z1[3] - Z0[3]) / length
+    up = np.asarray(up, dtype=float)
+    b1 = up - (up @ a) * a
+    if np.linalg.norm(b1) <= 1e-9 * np.linalg.norm(up):
+        raise GeometryError("the 'up' direction is parallel to the spine at the profile plane; choose another up",
+                            element="up")
+    b1 = b1 / np.linalg.norm(b1)
+    return a, float(cosb), b1, np.cross(a, b1)
+
+
+def profile_angles(faces: int, angle_range: tuple[float, float], closed: bool) -> np.ndarray:
+    """Face angles (radians) with ghosts: ``faces + 2`` values (open, ghosts half a step beyond the
+    ends so the boundary vertices sit at the range ends) or ``faces + 1`` (closed, column ``b`` is face
+    ``(b − 1) mod faces``)."""
+    a0, a1 = np.radians(angle_range)
+    if closed:
+        step = 2 * np.pi / faces
+        return a0 + step * ((np.arange(faces + 1) - 1) % faces)
+    return a0 + (np.arange(-1, faces + 1) + 0.5) * (a1 - a0) / faces
+
+
+@dataclass(frozen=True)
+class ProfileFrame:
+    """Local 2D frame of the profile plane ``W_k``: ``x = origin + p e1 + q e2``."""
+
+    plane: int
+    origin: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+
+    def to_3d(self, q: np.ndarray) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        return self.origin + q[..., :1] * self.e1 + q[..., 1:2] * self.e2
+
+    def to_2d(self, x: np.ndarray) -> np.ndarray:
+        y = np.asarray(x, dtype=float) - self.origin
+        return np.stack([y @ self.e1, y @ self.e2], axis=-1)
+
+
+def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
+    """Strip planes ``T_a`` for ``a = −1 … N`` from strip ``s0`` by the reflections (Step 3) → ``(N+2, k, 4)``."""
+    N = len(sigma) - 1
+    out = np.empty((N + 2,) + T0.shape)
+    out[s0 + 1] = T0
+    for a in range(s0 + 1, N + 1):                # a = N is the ghost strip beyond W_N
+        out[a + 1] = sigma[a].planes(out[a])
+    for a in range(s0 - 1, -2, -1):               # a = −1 is the ghost strip before W_0
+        out[a + 1] = sigma[a + 1].planes(out[a + 2])
+    return out
+
+
+def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
+                 angle_range: tuple[float, float] = (-90.0, 90.0), closed: bool = False,
+                 up: np.ndarray = (0.0, 0.0, 1.0), degree: int = 3, profile: PlanarCurve | None = None,
+                 profile_plane: int | None = None, check: bool = True) -> QuadGrid:
+    """A conical P mesh from control spheres (Steps 1–4 of §4.2.3).
+
+    Parameters
+    ----------
+    spheres : (k, 4) float — control spheres ``(x, y, z, r)`` (consecutive ones spacelike)
+    faces_spine : ``N``, the number of cones (face rows); ``N + 1`` spheres are sampled
+    faces_profile : faces around the profile
+    angle_range : profile angles in degrees from the crown (``θ = 0``: the normal closest to ``up``)
+    closed : the profile runs once around (``angle_range[0]`` is the start); rows become closed loops
+    up : reference direction for ``θ = 0``
+    degree : degree of the sphere B-spline
+    profile : optional convex curve in the frame of ``W_{profile_plane}`` (Step 4); the frame is
+        ``meta["profile_frame"]`` (origin at the foot of the sphere centre on the plane, ``e1`` towards the
+        crown face); the unchanged profile polygon in that frame is ``meta["profile_reference"]``
+    profile_plane : index ``k`` of the plane whose profile is designed (default ``N // 2``)
+    check : raise :class:`~ppfab.errors.FoldError` when the mesh folds
+
+    Returns
+    -------
+    QuadGrid ``(N+1, faces_profile + 1)`` (``(N+1, faces_profile)`` closed) with ``support_u = W``,
+    unit face planes as ``face_image``, ``meta["extended_face_planes"]`` (ghosts included), cone axes
+    through the sphere centres, and ``meta`` with the sampled spheres ``Z``, their parameters and ``H``.
+    """
+    if faces_spine < 1 or faces_profile < (3 if closed else 1):
+        raise GeometryError(f"need at least 1 face along the spine and {3 if closed else 1} around the profile")
+    spline = SphereSpline(spheres, degree)
+    Z, tz = spline.sample_uniform(faces_spine + 1)
+    H = bisector_normals_extended(spline, tz)
+    W = w_planes(Z, H)
+    sigma = reflections(Z, H)
+    N = faces_spine
+    k0 = N // 2 if profile_plane is None else int(profile_plane)
+    if not 0 <= k0 <= N:
+        raise GeometryError(f"profile_plane must be in 0..{N}, got {k0}", element="profile_plane", value=float(k0))
+    s0 = min(k0, N - 1)
+    a, cosb, b1, b2 = cone_frame(Z[s0], Z[s0 + 1], up)
+    sinb = np.sqrt(max(0.0, 1.0 - cosb * cosb))
+    theta = profile_angles(faces_profile, angle_range, closed)
+    grid = None
+    for attempt in range(2):
+        th = theta if attempt == 0 else (-theta if closed else theta[::-1])
+        n = cosb * a + sinb * (np.cos(th)[:, None] * b1 + np.sin(th)[:, None] * b2)
+        T0 = np.concatenate([n, (-n @ Z[s0, :3] - Z[s0, 3])[:, None]], axis=1)
+        frame = _profile_frame(W[k0], Z[k0], cosb * a + sinb * b1, k0)
+        reference = None
+        if profile is not None:
+            reference = frame.to_2d(_vertices(_propagate(T0, s0, sigma), W, closed)[k0])
+            T0 = _profile_planes(T0, frame, W[k0], profile)
+        E = _propagate(T0, s0, sigma)
+        v = _vertices(E, W, closed)
+        inner = E[1:-1, 1:] if closed else E[1:-1, 1:-1]
+        grid = QuadGrid(v, closed=closed, support_u=W, face_image=inner, meta={"extended_face_planes": E})
+        s = orientation_sign(grid, inner)
+        if (s > 0).sum() >= (s < 0).sum():
+            break
+    axes = Z[:, None, :3] - v
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    axes *= np.sign(np.einsum("ijk,ijk->ij", axes, _mean_normals(E)))[..., None] * -1.0
+    degrees = np.degrees(th[1:] if closed else th[1:-1])
+    strip_t = 0.5 * (tz[1:] + tz[:-1])
+    meta = {"extended_face_planes": E, "spheres": Z, "sphere_t": tz, "H": H, "profile_plane": k0,
+            "theta_deg": degrees, "profile_frame": frame, "profile_reference": reference,
+            "planar_families": ("rows",)}
+    grid = replace(grid, axes=axes, meta=meta)
+    if check:
+        check_folds(grid, strip_t, degrees, reference=inner, context="conical_spheres",
+                    names=("spine t", "profile angle"))
+    return grid
+
+
+def _mean_normals(E: np.ndarray) -> np.ndarray:
+    n = E[..., :3]
+    return n[:-1, :-1] + n[1:, :-1] + n[1:, 1:] + n[:-1, 1:]
+
+
+def _vertices(E: np.ndarray, W: np.ndarray, closed: bool) -> np.ndarray:
+    """``v[i, j] = T_{i, j−1} ∩ T_{i, j} ∩ W_i`` (strip ``i`` = ``E[i+1]``) → ``(N+1, cols, 3)``."""
+    strip = E[1:]
+    Wb = np.broadcast_to(W[:, None, :], strip[:, :-1].shape)
+    return pl.intersect_three(strip[:, :-1], strip[:, 1:], Wb)
+
+
+def _profile_frame(Wk: np.ndarray, Zk: np.ndarray, crown: np.ndarray, k: int) -> ProfileFrame:
+    w = pl.normalize(Wk)
+    origin = Zk[:3] - (w[:3] @ Zk[:3] + w[3]) * w[:3]
+    e1 = crown - (crown @ w[:3]) * w[:3]
+    e1 = e1 / np.linalg.norm(e1)
+    return ProfileFrame(k, origin, e1, np.cross(w[:3], e1))
+
+
+def _profile_planes(T0: np.ndarray, frame: ProfileFrame, Wk: np.ndarray, profile: PlanarCurve) -> np.ndarray:
+    """Step 4: strip planes with the normals of ``T0`` through the support lines of ``profile`` in ``W_k``."""
+    w = pl.normalize(Wk)[:3]
+    n = T0[:, :3]
+    nu = n - (n @ w)[:, None] * w
+    nu /= np.linalg.norm(nu, axis=1, keepdims=True)
+    omega = np.stack([nu @ frame.e1, nu @ frame.e2], axis=1)
+    omega /= np.linalg.norm(omega, axis=1, keepdims=True)
+    h, _ = support_values(profile, omega)
+    x = frame.origin + h[:, None] * nu
+    return np.concatenate([n, -np.einsum("ki,ki->k", n, x)[:, None]], axis=1)
+
+
+def pp_column_planes(grid: QuadGrid) -> tuple[np.ndarray, float]:
+    """Least-squares planes of the columns and the largest distance of a column vertex from its plane."""
+    P, res = pl.fit_plane(grid.cols())
+    return P, float(res.max())
+
+
+def touching_radii(centers: np.ndarray, plane: np.ndarray, key: str = "touch_plane") -> np.ndarray:
+    """Radii that make spheres with the given ``centers (k, 3)`` touch ``plane`` (oriented so that ``r > 0``)."""
+    P = np.asarray(plane, dtype=float)
+    if P.shape != (4,) or np.linalg.norm(P[:3]) == 0:
+        raise DesignError(key, "needs [nx, ny, nz, d] with a nonzero normal")
+    P = P / np.linalg.norm(P[:3])
+    s = np.asarray(centers, dtype=float) @ P[:3] + P[3]
+    size = max(float(np.ptp(centers, axis=0).max()), 1e-300)
+    if np.any(np.abs(s) <= 1e-9 * size) or (np.any(s > 0) and np.any(s < 0)):
+        k = int(np.argmin(np.abs(s))) if np.any(np.abs(s) <= 1e-9 * size) else int(np.argmax(np.sign(s) != np.sign(s[0])))
+        raise DesignError(key, f"control centre {k} lies on or across the plane (signed distance {s[k]:.6g}); "
+                               f"all centres must lie strictly on one side")
+    return np.abs(s)
+
+
+def coplanarity(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares plane of ``points (k, 3)`` and the largest distance from it."""
+    P, res = pl.fit_plane(np.asarray(points, dtype=float))
+    return P, float(res)
+
+
+# -- design-file methods ----------------------------------------------------------------------------
+
+def _check_angles(p) -> None:
+    a0, a1 = p.angle_range
+    if not p.closed and not (a0 < a1 and a1 - a0 < 360.0):
+        raise DesignError("angle_range", f"needs start < end and less than 360° apart, got [{a0}, {a1}]")
+    if p.closed and p.faces_profile < 3:
+        raise DesignError("faces_profile", "a closed profile needs at least 3 faces")
+
+
+@dataclass(frozen=True)
+class ConicalSpheresParams:
+    """Conical P mesh from a B-spline family of spheres (channel surface, §4.2.3, Steps 1–4)."""
+
+    spheres: list[list[float]] = param(doc="control spheres [x, y, z, r] of the B-spline family (Step 1)",
+                                       min_length=2)
+    degree: int = param(3, doc="degree of the sphere B-spline", min=1, max=5)
+    faces_spine: int = param(16, doc="faces along the spine (cones; faces_spine + 1 sampled spheres)", min=1, max=4000)
+    faces_profile: int = param(12, doc="faces around the profile", min=1, max=4000)
+    angle_range: list[float] = param([-90.0, 90.0], doc="profile angles in degrees, 0 = crown (normal closest to up)",
+                                     length=2)
+    closed: bool = param(False, doc="the profile runs once around (a tube); rows are closed loops")
+    up: list[float] = param([0.0, 0.0, 1.0], doc="direction of the crown (profile angle 0)", length=3)
+    profile: list[list[float]] = param([], doc="Step 4: convex profile curve [p, q] in the frame of W_profile_plane "
+                                              "(origin at the circle's centre, p towards the crown); empty: circle")
+    profile_curve: str = param("interpolate", doc="interpolate: spline through the profile points; bspline: control points",
+                               choices=("interpolate", "bspline"))
+    profile_closed: bool = param(False, doc="the profile curve is closed (defaults to true for a closed mesh)")
+    profile_plane: int = param(-1, doc="index of the plane W_k carrying the designed profile (-1: the middle one)",
+                               min=-1)
+
+    def __post_init__(self):
+        for k, s in enumerate(self.spheres):
+            if len(s) != 4:
+                raise DesignError(f"spheres[{k}]", f"needs [x, y, z, r], got {len(s)} values")
+        check_spacelike_pairs(np.asarray(self.spheres, dtype=float))
+        _check_angles(self)
+        if self.profile_plane > self.faces_spine:
+            raise DesignError("profile_plane", f"must be at most faces_spine = {self.faces_spine}")
+        for k, q in enumerate(self.profile):
+            if len(q) != 2:
+                raise DesignError(f"profile[{k}]", f"needs [p, q], got {len(q)} values")
+
+
+def _profile_curve(p: ConicalSpheresParams) -> PlanarCurve | None:
+    if not p.profile:
+        return None
+    closed = p.profile_closed or p.closed
+    if p.profile_curve == "interpolate":
+        return PlanarCurve.from_points(p.profile, closed=closed, name="profile")
+    return PlanarCurve.from_control_points(p.profile, closed=closed, name="profile")
+
+
+@construction("conical_spheres", ConicalSpheresParams,
+              "conical P mesh from a B-spline family of spheres: channel surface, propagated tangent planes, "
+              "optional designed profile", planar_families=("rows",), section="§4.2.3")
+def build_conical_spheres(p: ConicalSpheresParams) -> QuadGrid:
+    return channel_mesh(np.asarray(p.spheres, float), p.faces_spine, p.faces_profile, tuple(p.angle_range),
+                        p.closed, np.asarray(p.up, float), p.degree, _profile_curve(p),
+                        None if p.profile_plane < 0 else p.profile_plane)
+
+
+@dataclass(frozen=True)
+class ConicalSpheresPPParams:
+    """Conical PP mesh from spheres with a planar spine that all touch one plane (§4.2.4)."""
+
+    centers: list[list[float]] = param(doc="control sphere centres [x, y, z], all in one plane M", min_length=2)
+    touch_plane: list[float] = param(doc="the plane T = [nx, ny, nz, d] (n·x + d = 0) every sphere touches; "
+                                         "the radii follow from it", length=4)
+    degree: int = param(3, doc="degree of the sphere B-spline", min=1, max=5)
+    faces_spine: int = param(16, doc="faces along the spine", min=1, max=4000)
+    faces_profile: int = param(12, doc="faces around the profile", min=1, max=4000)
+    angle_range: list[float] = param([-90.0, 90.0], doc="profile angles in degrees, 0 = crown", length=2)
+    closed: bool = param(False, doc="the profile runs once around")
+    up: list[float] = param([0.0, 0.0, 1.0], doc="direction of the crown (profile angle 0)", length=3)
+
+    def __post_init__(self):
+        c = np.asarray(self.centers, dtype=float)
+        if c.ndim != 2 or c.shape[1] != 3:
+            raise DesignError("centers", "needs a list of [x, y, z] centres")
+        _check_angles(self)
+        if len(c) >= 3:
+            _, dev = coplanarity(c)
+            size = float(np.ptp(c, axis=0).max())
+            if dev > 1e-9 * max(size, 1e-300):
+                raise DesignError("centers", f"the centres are not coplanar (largest distance from their plane "
+                                             f"{dev:.3g}); the PP special case needs a planar spine (§4.2.4)")
+        r = touching_radii(c, np.asarray(self.touch_plane, dtype=float))
+        check_spacelike_pairs(np.concatenate([c, r[:, None]], axis=1), "centers")
+
+
+@construction("conical_spheres_pp", ConicalSpheresPPParams,
+              "conical PP mesh from spheres on a planar spine touching a common plane (channel surface)",
+              planar_families=("rows", "cols"), section="§4.2.4")
+def build_conical_spheres_pp(p: ConicalSpheresPPParams) -> QuadGrid:
+    c = np.asarray(p.centers, dtype=float)
+    spheres = np.concatenate([c, touching_radii(c, np.asarray(p.touch_plane, float))[:, None]], axis=1)
+    grid = channel_mesh(spheres, p.faces_spine, p.faces_profile, tuple(p.angle_range), p.closed,
+                        np.asarray(p.up, float), p.degree)
+    Wc, _ = pp_column_planes(grid)
+    return replace(grid, support_w=Wc, meta={**grid.meta, "planar_families": ("rows", "cols")})
