@@ -108,12 +108,12 @@ def cauchy_pp_mesh(U: np.ndarray, W: np.ndarray, first_col: np.ndarray, first_ro
     size = _size(np.concatenate([first_col, first_row]))
     col, dcol = _on_line(first_col, P[:, 0], D[:, 0])
     row, drow = _on_line(first_row, P[0, :], D[0, :])
-    for name, dist, fmt in (("v_{k,0}", dcol, "U_{k} ∩ W_0"), ("v_{0,k}", drow, "U_0 ∩ W_{k}")):
+    for dist, label, axis in ((dcol, "v_{k},0", "U_{k} ∩ W_0"), (drow, "v_0,{k}", "U_0 ∩ W_{k}")):
         k = int(np.argmax(dist))
         if dist[k] > snap_tolerance * size:
-            raise GeometryError(f"initial vertex {name.format(k=k)} is {dist[k]:.3g} away from its node axis "
-                                f"{fmt.format(k=k)} (allowed {snap_tolerance * size:.3g})",
-                                element=name.format(k=k), value=float(dist[k]))
+            raise GeometryError(f"initial vertex {label.format(k=k)} is {dist[k]:.3g} away from its node axis "
+                                f"{axis.format(k=k)} (allowed {snap_tolerance * size:.3g})",
+                                element=label.format(k=k), value=float(dist[k]))
     gap = float(np.linalg.norm(col[0] - row[0]))
     if gap > snap_tolerance * size:
         raise GeometryError(f"the two initial polylines must start at the same vertex v_00; they are {gap:.3g} apart",

@@ -60,7 +60,9 @@ def crossing(curve: PlanarCurve, plane_point: np.ndarray, plane_normal: np.ndarr
     roots = [float(tt[k]) for k in np.flatnonzero(s == 0)]
     for k in np.flatnonzero(s[:-1] * s[1:] < 0):
         roots.append(brentq(lambda t: float(dist(t)[0]), tt[k], tt[k + 1], xtol=1e-14 * (tt[-1] - tt[0])))
-    roots = sorted(set(roots))
+    roots = sorted(roots)
+    span = tt[-1] - tt[0]
+    roots = [r for k, r in enumerate(roots) if k == 0 or r - roots[k - 1] > 1e-6 * span]
     if not roots:
         k = int(np.argmin(np.abs(s)))
         lo, hi = tt[max(k - 1, 0)], tt[min(k + 1, len(tt) - 1)]
@@ -108,6 +110,7 @@ class ProfileSurface:
         self.const = 0.5 * (self.g(np.array([u0]))[0] + self.h(np.array([v0]))[0])
         self.c0 = 0.5 * (c.point(np.array([u0]))[0] + d.point(np.array([v0]))[0])
         self.m0 = self.const[:3] / np.linalg.norm(self.const[:3])
+        self.gap = float(np.linalg.norm(c.point(np.array([u0]))[0] - d.point(np.array([v0]))[0]))
 
     @staticmethod
     def _tangent_planes(curve: PlanarCurve, t: np.ndarray, sign: float) -> np.ndarray:
@@ -165,14 +168,14 @@ class ProfileSurface:
             ext = np.concatenate([[2 * t[0] - t[1]], t, [2 * t[-1] - t[-2]]])
             check_convex(curve, key, np.linspace(ext[0], ext[-1], 801))
         grid = pp_from_curves(self.g, self.h, u, v, self.const)
-        grid.meta.update({"u": u, "v": v, "u0": self.u0, "v0": self.v0})
+        grid.meta.update({"u": u, "v": v, "u0": self.u0, "v0": self.v0, "profile_gap": self.gap})
         return grid
 
 
 def profile_surface(c_points, d_points, fit: str = "interpolate",
                     eps_origin=(0.0, 0.0, 0.0), eps_axes=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
                     phi_origin=(0.0, 0.0, 0.0), phi_axes=((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-                    angle_tolerance_deg: float = 0.1, meet_tolerance: float = 1e-3) -> ProfileSurface:
+                    angle_tolerance_deg: float = 0.1, meet_tolerance: float = 1e-4) -> ProfileSurface:
     """Fit the two profile curves, check the preconditions of §3.2.1 and return the dual surface.
 
     Parameters
@@ -243,7 +246,8 @@ class ProfileCurvesParams:
     phi_axes: list[list[float]] = param([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], doc="two in-plane axes of phi", length=2)
     angle_tolerance_deg: float = param(0.1, doc="allowed deviation from orthogonal planes and from a common normal",
                                        exclusive_min=0, max=10)
-    meet_tolerance: float = param(1e-3, doc="allowed gap between the curves relative to their size",
+    meet_tolerance: float = param(1e-4, doc="allowed gap between the curves relative to their size (the surface "
+                                            "misses each curve by about half the gap)",
                                   exclusive_min=0, max=0.1)
 
     def __post_init__(self):
