@@ -56,7 +56,9 @@ class NodeJoint:
     """What happens at one node.
 
     ``parts``/``roles``: the plates there and whether each runs ``through`` or ``end``s;
-    ``angles``: ``(part_a, part_b, degrees, "dihedral" | "half-plane")`` for every pair;
+    ``angles``: ``(part_a, part_b, dihedral, opening, same_beam)`` for every pair — the angle of
+    the two planes (degrees, 0…90), the angle between two *ending* plates around the axis
+    (0…180, ``nan`` otherwise) and whether both are pieces of one beam;
     ``kind``: ``halflap``, ``butt``, ``plain`` or ``free`` (a single plate);
     ``slot_width``: mm (half-lap) or ``nan``; ``trims``: ``(part, setback mm)`` of ending plates;
     ``line``: point and unit direction (3D) of the crossing line of a half-lap.
@@ -72,12 +74,9 @@ class NodeJoint:
     line: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
-    def min_angle_deg(self) -> float:
-        return min((a[2] for a in self.angles), default=float("nan"))
-
-    @property
     def dihedral_min_deg(self) -> float:
-        d = [a[2] for a in self.angles if a[3] == "dihedral"]
+        """Smallest angle between the planes of two different beams meeting here (``nan`` if < 2 beams)."""
+        d = [a[2] for a in self.angles if not a[4]]
         return min(d) if d else float("nan")
 
 
@@ -113,22 +112,24 @@ def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: Be
         setback = {k: 0.0 for k in ends}
         for i in range(len(ps)):
             for j in range(i + 1, len(ps)):
+                dihedral = float(np.degrees(pl.angle_between(ps[i].plane, ps[j].plane)))
+                opening = float("nan")
                 if roles[i] == "end" and roles[j] == "end":
                     mi, mj = ends[i], ends[j]
                     cos, sin = float(mi @ mj), float(np.linalg.norm(np.cross(mi, mj)))
-                    ang = float(np.degrees(np.arctan2(sin, cos)))
-                    kind = "half-plane"
+                    opening = float(np.degrees(np.arctan2(sin, cos)))
+                    ang = opening
                     pairs = [(i, cos, sin), (j, cos, sin)]
                 else:
-                    ang = float(np.degrees(pl.angle_between(ps[i].plane, ps[j].plane)))
-                    kind = "dihedral"
+                    ang = dihedral
                     pairs = []
                     for e, o in ((i, j), (j, i)):
                         if roles[e] == "end":
                             s = abs(float(ends[e] @ ps[o].plane[:3]))
                             c = np.sqrt(max(0.0, 1.0 - s * s))
                             pairs.append((e, c, s))
-                angles.append((ps[i].part_id, ps[j].part_id, ang, kind))
+                angles.append((ps[i].part_id, ps[j].part_id, dihedral, opening,
+                               ps[i].beam_id == ps[j].beam_id))
                 if ang < min_ang:
                     defects.append(Defect(ps[i].part_id, "small_angle", ang, min_ang, f"node {v}",
                                           f"{ps[i].part_id} and {ps[j].part_id} meet at node {v} at {ang:.1f}° "

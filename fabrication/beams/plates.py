@@ -180,8 +180,7 @@ class BeamPlate:
         k = int(np.flatnonzero(self.nodes == vertex)[0])
         c = int(self.chain[k])
         s = self.node_axis(vertex)
-        nb = self.top[c + 1] if c + 1 < len(self.top) else 2 * self.top[c] - self.top[c - 1]
-        b = nb - self.top[c]
+        b = self.top[c + 1] - self.top[c] if c + 1 < len(self.top) else self.top[c - 1] - self.top[c]
         b = b - (b @ s) * s
         return b / np.linalg.norm(b)
 
