@@ -25,6 +25,18 @@ The transforms accept any open PP :class:`~ppfab.mesh.QuadGrid`: one made by
 with :func:`~ppfab.faceimage.pp_face_image` and completed by ghost faces
 (:func:`extended_face_image_of`).  Boundary vertices stay exactly where they are
 under the identity transform either way.
+
+Examples
+--------
+>>> from ppfab.faceimage import pp_from_face_image
+>>> s = np.linspace(-0.5, 0.5, 6)          # a paraboloid: g, h quadratic in the 4th coordinate
+>>> grid = pp_from_face_image(np.stack([s, 0 * s, 0.5 + 0 * s, -0.5 * s ** 2], 1),
+...                           np.stack([0 * s, s, 0.5 + 0 * s, -0.5 * s ** 2], 1))
+>>> lower = offset(grid, 0.01)             # vertical node axes: an exact 0.01 offset
+>>> bool(np.allclose(lower.vertices, grid.vertices + 0.01 * grid.axes))
+True
+>>> multinet(grid, 2, 2).face_shape, delete_face_rows(grid, [0]).shape
+((2, 2), (4, 5))
 """
 
 from __future__ import annotations

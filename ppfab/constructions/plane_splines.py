@@ -58,7 +58,15 @@ class CuspWarning(UserWarning):
 
 def plane_from_entry(entry, key: str) -> np.ndarray:
     """A design-file plane: ``[nx, ny, nz, d]`` (``n·x + d = 0``) or ``[px, py, pz, nx, ny, nz]`` (point,
-    normal); returned as a unit plane ``(4,)``."""
+    normal); returned as a unit plane ``(4,)``.
+
+    Examples
+    --------
+    >>> plane_from_entry([0, 0, 2, -4], "u_planes[0]")
+    array([ 0.,  0.,  1., -2.])
+    >>> plane_from_entry([1, 2, 3, 0, 0, 5], "u_planes[0]")        # through (1, 2, 3), normal z
+    array([ 0.,  0.,  1., -3.])
+    """
     e = np.asarray(entry, dtype=float)
     if e.shape == (4,):
         n, d = e[:3], e[3]

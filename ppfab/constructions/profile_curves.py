@@ -190,6 +190,15 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
     Raises
     ------
     DesignError naming the key (``phi_axes``, ``c_points``, ``d_points``) and the failed condition.
+
+    Examples
+    --------
+    >>> S = profile_surface([[-2, 1.6], [0, 2], [2, 1.6]], [[-1, 1.8], [0, 2], [1, 1.8]])
+    >>> S.mesh(4, 3).shape
+    (5, 4)
+    >>> u = S.u0 + 0.5                         # the limit surface contains c (eq. 9)
+    >>> bool(np.allclose(S.limit_point(u, S.v0), S.c_curve.point([u])[0]))
+    True
     """
     eps = PlaneFrame.from_axes(eps_origin, eps_axes, "eps_axes")
     phi = PlaneFrame.from_axes(phi_origin, phi_axes, "phi_axes")
