@@ -320,7 +320,9 @@ def _relative(dev: np.ndarray, mesh: QuadMesh) -> np.ndarray:
 def _span_planes(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
     """Unit plane through each edge containing the mean of its two end axes, ``(E, 4)``."""
     e, eh = _edge_frames(mesh)
-    nrm = np.cross(eh, axes[e[:, 0]]) + np.cross(eh, axes[e[:, 1]])
+    ai, aj = axes[e[:, 0]], axes[e[:, 1]]
+    aj = np.where((np.einsum("ij,ij->i", ai, aj) < 0)[:, None], -aj, aj)   # lines, not vectors
+    nrm = np.cross(eh, ai) + np.cross(eh, aj)
     length = np.linalg.norm(nrm, axis=1)
     if np.any(length < 1e-12):
         k = int(np.flatnonzero(length < 1e-12)[0])
