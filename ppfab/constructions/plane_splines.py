@@ -152,6 +152,12 @@ class PlaneSpline:
         return 2 * (1 - t) * (self.inner[seg] - self.knots[seg]) + 2 * t * (self.knots[seg + 1] - self.inner[seg])
 
 
+def _knot_planes(i: int, K: int) -> str:
+    """Names of the planes that must share the line of knot ``i`` (of ``K`` segments)."""
+    names = ([f"gamma_{i - 1}{i}"] if i > 0 else []) + [f"gamma_{i}"] + ([f"gamma_{i}{i + 1}"] if i < K else [])
+    return ", ".join(names + [f"tau_{i}"])
+
+
 def _solve_pencil(a: np.ndarray, t: np.ndarray, b: np.ndarray, what: str) -> tuple[float, float]:
     """``a + μ t = λ b`` in least squares; returns ``(μ, λ)``."""
     A = np.stack([t, -b], axis=1)
@@ -217,8 +223,8 @@ def plane_spline(control, tangents=None, side_condition: str = "project", tolera
         for kind, plane, k_ in members:
             dist = line_distance(plane, p, d, reach)
             if side_condition == "strict" and dist > tolerance * reach:
-                raise DesignError(k_, f"violates the side condition at knot {i}: the planes gamma_{i - 1}{i}, "
-                                      f"gamma_{i}, gamma_{i}{i + 1}, tau_{i} must share a line; this one is "
+                raise DesignError(k_, f"violates the side condition at knot {i}: the planes "
+                                      f"{_knot_planes(i, K)} must share a line; this one is "
                                       f"{dist:.4g} away from it (allowed {tolerance * reach:.3g})")
             try:
                 proj = project_to_pencil(plane, p, d, k_)
@@ -256,8 +262,8 @@ def plane_spline(control, tangents=None, side_condition: str = "project", tolera
             raise DesignError(key, f"segment {i} degenerates: a control point coincides with a knot point")
     cusps = [i for i in range(1, K) if nu[i - 1] * mu[i] < 0]
     for i in cusps:
-        msg = (f"plane spline {name}: cusp at knot {i} (Remark 3.3): the planes gamma_{i - 1}{i}, gamma_{i}, "
-               f"gamma_{i}{i + 1}, tau_{i} are not in that order around their common line")
+        msg = (f"plane spline {name}: cusp at knot {i} (Remark 3.3): the planes {_knot_planes(i, K)} are not in "
+               f"that order around their common line")
         log.warning(msg)
         warnings.warn(msg, CuspWarning, stacklevel=2)
     return PlaneSpline(knots, ctrl, T, mu, nu, cusps, name)
