@@ -226,7 +226,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
     closed : ``u`` runs once around (case1, rotational; ``g`` must be 2π-periodic).  The grid is then
         transposed so that its closed rows follow ``u``: ``v[i, j] ≈ x(u_j, v_i)``
     frame : ``"paper"`` keeps the paper's coordinates; ``"z_up"`` rotates so the face normal at
-        ``u = v = 0`` is ``+z`` (see :data:`FRAMES`)
+        ``u = v = 0`` is ``+z`` (rotational: the axis is ``z`` in both frames; see :data:`FRAMES`)
     check : raise :class:`~ppfab.errors.FoldError` when the mesh folds
 
     Returns
@@ -317,8 +317,10 @@ class ConicalPPParams:
     u: list[float] = param([], doc="explicit face parameters u_i (any strictly monotone sampling)")
     v: list[float] = param([], doc="explicit face parameters v_j")
     closed: bool = param(False, doc="u runs once around 2π from u_range[0] (case1, rotational; g periodic)")
-    frame: str = param("z_up", doc="z_up: face normal at u = v = 0 is +z; paper: the paper's coordinates",
-                       choices=("z_up", "paper"))
+    frame: str = param("z_up", doc="z_up: face normal at u = v = 0 is +z (rotational: axis along z); "
+                                   "paper: the paper's coordinates", choices=("z_up", "paper"))
+    translate: list[float] = param([0.0, 0.0, 0.0], doc="move the result by [x, y, z] (after the frame rotation)",
+                                   length=3)
 
     def __post_init__(self):
         if self.case == "case1" and not self.d > 1.0:
@@ -355,4 +357,5 @@ def build_conical_pp(p: ConicalPPParams) -> QuadGrid:
         raise DesignError("faces_u", "needs at least 2 faces along u")
     if len(v) < 2:
         raise DesignError("faces_v", "needs at least 2 faces along v")
-    return conical_pp_grid(p.g, p.h, u, v, case=p.case, d=p.d, closed=p.closed, frame=p.frame)
+    grid = conical_pp_grid(p.g, p.h, u, v, case=p.case, d=p.d, closed=p.closed, frame=p.frame)
+    return rigid_motion(grid, np.eye(3), np.asarray(p.translate, float)) if any(p.translate) else grid
