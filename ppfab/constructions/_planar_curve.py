@@ -80,6 +80,11 @@ class PlanarCurve:
     def length(self) -> float:
         return float(self._arc[-1])
 
+    @property
+    def extent(self) -> float:
+        """Diagonal of the bounding box of the curve over its domain (space units)."""
+        return float(np.linalg.norm(np.ptp(self.point(self._tt), axis=0)))
+
     def param_at_length(self, s: np.ndarray) -> np.ndarray:
         """Curve parameters at arc lengths ``s`` from the start (within the domain)."""
         return np.interp(s, self._arc, self._tt)

@@ -210,9 +210,7 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
     d = fit_planar_curve(d_points, phi, fit, "d_points", "d")
     check_convex(c, "c_points")
     check_convex(d, "d_points")
-    size = max(float(np.linalg.norm(np.ptp(c.point(c._tt), axis=0))),
-               float(np.linalg.norm(np.ptp(d.point(d._tt), axis=0))))
-    tol = meet_tolerance * size
+    tol = meet_tolerance * max(c.extent, d.extent)
     u0 = crossing(c, phi.origin, phi.normal, tol, "c_points", "phi")
     v0 = crossing(d, eps.origin, eps.normal, tol, "d_points", "eps")
     pc, pd = c.point(np.array([u0]))[0], d.point(np.array([v0]))[0]
