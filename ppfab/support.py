@@ -93,6 +93,8 @@ class SupportStructure:
     planar_families : families (0 rows, 1 cols) whose polylines lie in their planes with the axes
     kind : ``"pp"``, ``"p"``, ``"conical"`` or ``"parallel"``
     meta : solver record (iterations, constraint residual, …)
+    polyline_planar : (L,) bool, the polyline's plane is a support plane (its axes lie in it), so the
+        polyline can be one planar beam; default: the polylines of ``planar_families``
     """
 
     mesh: QuadMesh
@@ -103,8 +105,15 @@ class SupportStructure:
     planar_families: tuple[int, ...]
     kind: str
     meta: dict = field(default_factory=dict)
+    polyline_planar: np.ndarray | None = None
 
     def __post_init__(self):
+        if self.polyline_planar is None:
+            fam = np.array([p.family for p in self.mesh.polylines], dtype=np.int64)
+            object.__setattr__(self, "polyline_planar", np.isin(fam, list(self.planar_families)))
+        pp = np.array(self.polyline_planar, dtype=bool, copy=True)
+        pp.flags.writeable = False
+        object.__setattr__(self, "polyline_planar", pp)
         for name in ("axes", "polyline_planes", "polyline_deviation", "edge_planes"):
             a = np.array(getattr(self, name), dtype=float, copy=True)
             a.flags.writeable = False
@@ -350,7 +359,8 @@ def _assemble(mesh: QuadMesh, axes: np.ndarray, polyline_planes: np.ndarray, pla
     planes = pl.normalize(planes)
     dev = np.array([float(np.abs(pl.signed_distance(planes[k], mesh.vertices[p.vertices])).max())
                     for k, p in enumerate(mesh.polylines)])
-    return SupportStructure(mesh, axes, planes, dev, edge_planes, tuple(sorted(planar_families)), kind, meta)
+    return SupportStructure(mesh, axes, planes, dev, edge_planes, tuple(sorted(planar_families)), kind, meta,
+                            np.asarray(planar_lines, dtype=bool))
 
 
 def _orient_inward(axes: np.ndarray, normals: np.ndarray, flip: bool) -> np.ndarray:

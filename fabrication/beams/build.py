@@ -97,6 +97,10 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     return BeamSet(support, params, tuple(final), tuple(joints), report, types)
 
 
+# root causes first: a self-intersecting outline is usually the consequence of crossing axes
+_PRIORITY = {"not_planar": 0, "axis_crossing": 1, "small_angle": 2, "short_segment": 3, "too_long": 4, "outline": 5}
+
+
 def _dedupe(defects: list[Defect]) -> list[Defect]:
     seen, out = set(), []
     for d in defects:
@@ -104,4 +108,4 @@ def _dedupe(defects: list[Defect]) -> list[Defect]:
         if key not in seen:
             seen.add(key)
             out.append(d)
-    return out
+    return sorted(out, key=lambda d: _PRIORITY.get(d.kind, 9))

@@ -46,11 +46,15 @@ def congruence_key(outline: np.ndarray, mirror: bool = True, grid: float = 0.1) 
     p = np.asarray(outline, dtype=float)
     c = p - p.mean(axis=0)
     _, vecs = np.linalg.eigh(c.T @ c)
-    base = c @ vecs[:, ::-1]
+    vecs = vecs[:, ::-1]
+    if np.linalg.det(vecs) < 0:          # a rotation, so that only the reflections below mirror
+        vecs[:, 1] *= -1
+    base = c @ vecs
     keys = []
     for sx, sy in ((1, 1), (-1, -1)) + (((-1, 1), (1, -1)) if mirror else ()):
         q = base * np.array([sx, sy])
-        if sx * sy < 0:
+        x, y = q.T
+        if np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) < 0:
             q = q[::-1]
         keys.append(_signature(q, grid))
     return min(keys)

@@ -312,9 +312,10 @@ def _continuous_family(support: SupportStructure, params: BeamParams) -> int:
 def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
-    A polyline becomes continuous plates when it lies in its plane within
-    ``params.plane_tolerance`` (and, with segmented joints, belongs to the continuous
-    family); otherwise one plate per edge in the edge's support plane.  With half-lap
+    A polyline becomes continuous plates when its plane is a support plane
+    (``support.polyline_planar``), it lies in that plane within ``params.plane_tolerance``
+    and, with segmented joints, belongs to the continuous family; otherwise one plate per
+    edge in the edge's support plane.  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -333,13 +334,16 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
         if len(vs) < 2:
             continue
         dev = float(support.polyline_deviation[l])
-        planar = dev <= params.plane_tolerance
+        supported = bool(support.polyline_planar[l]) or len(vs) == 2
+        planar = supported and dev <= params.plane_tolerance
         segmented = params.joint == "segmented" and line.family != cont
         if not planar and not segmented and params.joint in ("halflap", "segmented"):
+            why = (f"its vertices lie up to {dev:.3g} mm off the beam plane (tolerance {params.plane_tolerance:g} mm)"
+                   if dev > params.plane_tolerance else
+                   f"its plane is not a support plane of the '{support.kind}' support structure (the axes leave it)")
             defects.append(Defect(ids[l], "not_planar", dev, params.plane_tolerance,
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
-                                  f"{ids[l]}: its vertices lie up to {dev:.3g} mm off the beam plane "
-                                  f"(tolerance {params.plane_tolerance:g} mm); "
+                                  f"{ids[l]}: {why}; "
                                   + ("half-lap joints need both families planar (PP)" if params.joint == "halflap"
                                      else "the continuous family of segmented joints must be planar")))
         if planar and not segmented:

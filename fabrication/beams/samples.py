@@ -88,17 +88,21 @@ def sample_conical_grid(rows: int = 8, cols: int = 12, radius: float = 6000.0, s
                         ) -> QuadGrid:
     """A surface of revolution in mm (``rows × cols`` faces): rows are parallel circles, columns
     meridians.  Every such planar-quad mesh is conical (by symmetry the four faces at a vertex touch a
-    cone whose axis lies in the meridian plane).  Face normals point away from the rotation axis."""
+    cone whose axis lies in the meridian plane).  Face normals point away from the rotation axis.
+    ``sweep_deg = 360`` gives a closed grid (rows are loops, ``cols`` columns)."""
+    closed = abs(sweep_deg - 360.0) < 1e-9
     t = np.linspace(-1.0, 1.0, rows + 1)
     r = radius * (1.0 + 0.25 * np.cos(1.3 * t))
     z = radius * (0.8 * t + 0.15 * t * t)
     phi = np.radians(np.linspace(0.0, sweep_deg, cols + 1))
+    if closed:
+        phi = phi[:-1]
     v = np.stack([r[:, None] * np.cos(phi)[None], r[:, None] * np.sin(phi)[None],
-                  np.broadcast_to(z[:, None], (rows + 1, cols + 1))], axis=-1)
-    grid = QuadGrid(v)
+                  np.broadcast_to(z[:, None], (rows + 1, len(phi)))], axis=-1)
+    grid = QuadGrid(v, closed=closed)
     c = grid.face_corners[0, 0]
     n = np.cross(c[2] - c[0], c[3] - c[1])
     centre = c.mean(axis=0)
     if n @ np.array([centre[0], centre[1], 0.0]) < 0:
-        grid = QuadGrid(v[:, ::-1].copy())
+        grid = QuadGrid(v[:, ::-1].copy(), closed=closed)
     return grid
