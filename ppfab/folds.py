@@ -122,9 +122,15 @@ def check_folds(grid: QuadGrid, u: np.ndarray | None = None, v: np.ndarray | Non
 
     where = ", ".join(x for x in (at(names[0], u, i), at(names[1], v, j)) if x)
     where = f" at {where}" if where else ""
+    def span(name, t, k0, k1, what):
+        if t is None:
+            return f"{what} {k0}..{k1 - 1}"
+        a, b = sorted((float(t[k0]), float(t[k1 - 1])))
+        return f"{name} in [{a:.6g}, {b:.6g}]"
+
     if i1 > i0:
-        ru = f"{names[0]} in [{float(u[i0]):.6g}, {float(u[i1 - 1]):.6g}]" if u is not None else f"face rows {i0}..{i1 - 1}"
-        rv = f"{names[1]} in [{float(v[j0]):.6g}, {float(v[j1 - 1]):.6g}]" if v is not None else f"face columns {j0}..{j1 - 1}"
+        ru = span(names[0], u, i0, i1, "face rows")
+        rv = span(names[1], v, j0, j1, "face columns")
         valid = f"the face parameters {ru}, {rv} stay valid (faces [{i0}:{i1}, {j0}:{j1}])"
     else:
         valid = "no block of faces stays valid"

@@ -2,7 +2,8 @@
 
 Step 1: control spheres ``(x, y, z, r)`` are the control polygon of a clamped
 B-spline curve ``Z(t)`` in R^4 (eq. 1).  It is sampled uniformly in the
-tangential (Minkowski) arclength ``∫ √<<Z', Z'>> dt`` of eq. (2); this needs
+tangential (Minkowski) distance of eq. (2): consecutive samples have equal
+``d(Z_j, Z_{j+1})`` (starting from equal arclength ``∫ √<<Z', Z'>> dt``); this needs
 ``Z'`` spacelike everywhere (consecutive spheres in spacelike position: a common
 oriented tangent cone exists, no sphere lies inside the next).
 
@@ -113,17 +114,28 @@ class SphereSpline:
         s[1::2] = s_even[:-1] + (5 * f0 + 8 * f1 - f2) * h / 12.0   # quadratic rule on the first half
         return t, s
 
-    def sample_uniform(self, count: int) -> tuple[np.ndarray, np.ndarray]:
-        """``count`` spheres ``Z_0 … Z_{count−1}`` equally spaced in tangential distance, and their ``t``."""
+    def sample_uniform(self, count: int, tol: float = 1e-12, maxiter: int = 100) -> tuple[np.ndarray, np.ndarray]:
+        """``count`` spheres ``Z_0 … Z_{count−1}`` at equal tangential distances ``d(Z_j, Z_{j+1})``, and their ``t``.
+
+        Starts from equal tangential arclength and equalises the chords by a fixed
+        point iteration (cumulative chord lengths redistributed uniformly), so the
+        Minkowski distances of consecutive spheres are equal as Remark 4.4 assumes.
+        """
         if count < 2:
             raise GeometryError(f"need at least 2 spheres, got {count}")
         t, s = self.arclength_table()
-        target = np.linspace(0.0, s[-1], count)
-        tk = np.interp(target, s, t)
-        for _ in range(3):                                         # Newton polish of s(t_k) = target
+        tk = np.interp(np.linspace(0.0, s[-1], count), s, t)
+        for _ in range(3):                                         # Newton polish of the arclength
             sk = np.interp(tk, t, s)
-            tk = np.clip(tk - (sk - target) / np.sqrt(self.speed_squared(tk)), 0.0, 1.0)
+            tk = np.clip(tk - (sk - np.linspace(0.0, s[-1], count)) / np.sqrt(self.speed_squared(tk)), 0.0, 1.0)
         tk[0], tk[-1] = 0.0, 1.0
+        for _ in range(maxiter):
+            c = tangential_distances(self(tk))
+            C = np.concatenate([[0.0], np.cumsum(c)])
+            if np.ptp(c) <= tol * c.mean():
+                break
+            tk = np.interp(np.linspace(0.0, C[-1], count), C, tk)
+            tk[0], tk[-1] = 0.0, 1.0
         return self(tk), tk
 
 

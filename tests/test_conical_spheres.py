@@ -1,0 +1,205 @@
+"""Conical P meshes from sphere families (§4.2.3 Steps 1–4) and the conical PP special case (§4.2.4)."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ppfab import planes as pl
+from ppfab.conical import cone_axes, conical_quality, offset
+from ppfab.constructions import build_construction
+from ppfab.constructions.conical_spheres import channel_mesh, pp_column_planes, touching_radii
+from ppfab.errors import DesignError, FoldError, GeometryError
+from ppfab.metrics import quality
+from ppfab.sections import PlanarCurve
+from ppfab.spheres import SphereSpline, bisector_normals, tangential_distances, w_planes
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+TOL = 1e-9
+
+WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
+ARCHED = np.array([[0, 0, 0, 7.0], [6, 2, 3, 6.0], [14, 1, 5, 6.5], [22, -3, 3, 7.5], [28, -1, 0, 7.0],
+                   [34, 2, -1, 6.0]])
+SETS = {
+    "wavy-open": dict(spheres=WAVY, faces_spine=16, faces_profile=12, angle_range=(-80, 80)),
+    "arched-open-quadratic": dict(spheres=ARCHED, faces_spine=20, faces_profile=9, angle_range=(-60, 100), degree=2),
+    "wavy-closed-tube": dict(spheres=WAVY, faces_spine=12, faces_profile=16, angle_range=(0, 0), closed=True),
+}
+
+
+def spheres_tangent(grid):
+    """Largest |n·c + d + r| of the strip planes E[a] against the spheres Z_{a−1}, Z_a they should touch."""
+    Z, E = grid.meta["spheres"], grid.meta["extended_face_planes"]
+    inner = E[1:-1]
+    lo = np.einsum("akn,an->ak", inner[..., :3], Z[:-1, :3]) + inner[..., 3] + Z[:-1, 3:4]
+    hi = np.einsum("akn,an->ak", inner[..., :3], Z[1:, :3]) + inner[..., 3] + Z[1:, 3:4]
+    return max(np.abs(lo).max(), np.abs(hi).max())
+
+
+@pytest.mark.parametrize("name", list(SETS), ids=list(SETS))
+def test_channel_mesh_is_conical_p(name):
+    grid = channel_mesh(**SETS[name])
+    q = conical_quality(grid)
+    assert q.delta_f_max <= TOL
+    assert q.delta_p_rows_max <= TOL and q.support_u_max <= TOL         # row i lies in W_i (eq. 16)
+    assert q.angle_max <= TOL and q.concyclic_max <= TOL
+    assert spheres_tangent(grid) <= 1e-9 * 30                            # faces touch Z_i, Z_{i+1}
+    assert q.delta_p_cols_max > 1e-4                                     # a P mesh, not PP
+    qq = quality(grid)
+    assert qq.flipped_edges == 0 and qq.nonconvex_faces == 0
+
+
+def test_spheres_are_sampled_uniformly_in_tangential_distance():
+    spline = SphereSpline(WAVY)
+    Z, t = spline.sample_uniform(25)
+    d = tangential_distances(Z)
+    assert np.ptp(d) / d.mean() < 1e-10                                  # equal Minkowski distances (Remark 4.4)
+    assert t[0] == 0.0 and t[-1] == 1.0 and np.all(np.diff(t) > 0)
+
+
+def test_w_planes_carry_the_intersection_of_consecutive_cones():
+    """Eq. (16): a point of W_j on a tangent plane of C_{j−1} lies on the same-ruling tangent plane of C_j."""
+    grid = channel_mesh(**SETS["wavy-open"])
+    Z = grid.meta["spheres"]
+    W = w_planes(Z, grid.meta["H"])
+    assert np.allclose(pl.normalize(W), pl.normalize(grid.support_u))
+    E = grid.meta["extended_face_planes"]
+    v = grid.vertices
+    # vertex v[i, j] is on the two planes of strip i−1 and of strip i around it, and in W_i
+    for a in (0, 1):
+        s = E[a:a + grid.shape[0]]
+        assert np.abs(pl.evaluate(s[:, :-1], v)).max() < 1e-9 and np.abs(pl.evaluate(s[:, 1:], v)).max() < 1e-9
+    H = bisector_normals(Z)
+    assert np.allclose(H[1:-1], grid.meta["H"][1:-1])                    # interior H_j = E_j + E_{j+1}
+
+
+def test_cone_axes_pass_through_the_sphere_centres():
+    grid = channel_mesh(**SETS["arched-open-quadratic"])
+    axes, _ = cone_axes(grid)
+    to_centre = grid.meta["spheres"][:, None, :3] - grid.vertices
+    to_centre /= np.linalg.norm(to_centre, axis=-1, keepdims=True)
+    assert np.abs(np.abs(np.einsum("ijk,ijk->ij", axes, to_centre)) - 1).max() < 1e-9
+    assert np.abs(np.einsum("ijk,ijk->ij", axes, grid.axes) - 1).max() < 1e-9
+
+
+def test_offset_of_channel_mesh_stays_conical_p():
+    grid = channel_mesh(**SETS["wavy-open"])
+    off = offset(grid, -0.3)
+    q = conical_quality(off)
+    assert max(q.delta_f_max, q.delta_p_rows_max, q.angle_max) <= TOL
+
+
+ELLIPSE = np.c_[6.5 * np.cos(np.linspace(0, 2 * np.pi, 24, endpoint=False)),
+                8.0 * np.sin(np.linspace(0, 2 * np.pi, 24, endpoint=False))]
+
+
+@pytest.mark.parametrize("plane", [0, 8, 16])
+def test_profile_change_keeps_the_mesh_parallel_conical_and_p(plane):
+    base = channel_mesh(**SETS["wavy-open"], profile_plane=plane)
+    prof = PlanarCurve.from_points(ELLIPSE, closed=True, name="profile")
+    grid = channel_mesh(**SETS["wavy-open"], profile=prof, profile_plane=plane)
+    q = conical_quality(grid)
+    assert max(q.delta_f_max, q.delta_p_rows_max, q.support_u_max, q.angle_max, q.concyclic_max) <= TOL
+    for e0, e1 in ((base.edges_u(), grid.edges_u()), (base.edges_v(), grid.edges_v())):
+        cross = np.linalg.norm(np.cross(e0, e1), axis=-1) / (np.linalg.norm(e0, axis=-1) * np.linalg.norm(e1, axis=-1))
+        assert cross.max() < 1e-9                                       # edgewise parallel (Step 4)
+    assert np.allclose(pl.normalize(grid.support_u), pl.normalize(base.support_u))   # same planes W_i
+    # the new profile polygon in W_plane circumscribes the ellipse: every edge line touches it
+    frame = grid.meta["profile_frame"]
+    poly = frame.to_2d(grid.vertices[plane])
+    dense = prof(np.linspace(prof.t0, prof.t1, 20001))
+    for a, b in zip(poly[:-1], poly[1:]):
+        n = np.array([b[1] - a[1], a[0] - b[0]]) / np.linalg.norm(b - a)
+        dist = (dense - a) @ n
+        assert min(abs(dist.max()), abs(dist.min())) < 1e-5 and dist.max() * dist.min() >= -1e-10
+
+
+def test_profile_must_be_convex():
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    star = np.c_[(6 + 1.5 * np.cos(5 * t)) * np.cos(t), (6 + 1.5 * np.cos(5 * t)) * np.sin(t)]
+    with pytest.raises(DesignError, match="profile: is not strictly convex"):
+        build_construction("conical_spheres", {"spheres": WAVY.tolist(), "profile": star.tolist(),
+                                               "profile_closed": True})
+
+
+def test_open_profile_must_cover_the_face_directions():
+    arc = np.c_[6 * np.cos(np.linspace(-0.5, 0.5, 12)), 6 * np.sin(np.linspace(-0.5, 0.5, 12))]
+    with pytest.raises(DesignError, match="profile: has no tangent with outward normal direction"):
+        channel_mesh(WAVY, 8, 12, (-80, 80), profile=PlanarCurve.from_points(arc, name="profile"))
+
+
+def test_spheres_not_spacelike_are_named():
+    bad = WAVY.copy()
+    bad[2, 3] = 20.0                                   # sphere 2 swallows sphere 1 and sphere 3
+    with pytest.raises(DesignError, match=r"geometry\.params\.spheres\[1\]: spheres 1 and 2 are not in spacelike "
+                                          r"position: \|Δr\| = 14 ≥ \|Δcenter\| = 9\.447"):
+        build_construction("conical_spheres", {"spheres": bad.tolist()})
+
+
+def test_family_not_spacelike_between_spacelike_controls():
+    controls = np.array([[0, 0, 0, 1.0], [1, 0, 0, 1.9], [0, 0, 0, 2.8]])       # pairs spacelike, curve is not
+    with pytest.raises(GeometryError, match=r"not spacelike at t = .*control spheres 0\.\.2"):
+        channel_mesh(controls, 8, 6)
+
+
+def test_fold_names_face_and_valid_range():
+    bend = np.array([[0, 0, 0, 6.0], [6, 0, 0, 6], [8, 2, 0, 6], [8, 8, 0, 6]])   # bend tighter than the radius
+    with pytest.raises(FoldError, match=r"conical_spheres folds over .*face \(\d+, \d+\).*stay valid"):
+        channel_mesh(bend, 16, 12, (-90, 90))
+
+
+# -- §4.2.4: the PP special case ---------------------------------------------------------------------
+
+PP_SETS = {
+    "ground-tangent": (np.array([[0, 0, 6.0], [10, 0, 8], [20, 0, 7.5], [30, 0, 6]]), np.array([0, 0, 1.0, 0]),
+                       (-80, 80)),
+    "tilted-plane": (np.array([[0, 1, 0.0], [8, 1, 2.0], [16, 1, 3.0], [26, 1, 1.0], [32, 1, -1.0]]),
+                     np.array([0.2, 0.0, 1.0, -9.0]), (-70, 50)),
+}
+
+
+@pytest.mark.parametrize("name", list(PP_SETS), ids=list(PP_SETS))
+def test_planar_spine_and_common_tangent_plane_give_pp(name):
+    centers, plane, angles = PP_SETS[name]
+    spheres = np.c_[centers, touching_radii(centers, plane)]
+    grid = channel_mesh(spheres, 16, 12, angles)
+    q = conical_quality(grid)
+    assert max(q.delta_f_max, q.delta_p_rows_max, q.delta_p_cols_max, q.angle_max, q.concyclic_max) <= TOL
+    _, res = pp_column_planes(grid)
+    assert res <= 1e-9 * np.ptp(grid.vertices.reshape(-1, 3), axis=0).max()
+    # the column planes share the line M ∩ T
+    P, _ = pp_column_planes(grid)
+    M, _ = pl.fit_plane(centers)
+    point, direction = pl.line_of_two_planes(M, pl.normalize(plane))
+    assert np.abs(pl.signed_distance(P, point)).max() < 1e-8
+    assert np.abs(P[:, :3] @ direction).max() < 1e-9
+
+
+def test_pp_method_checks_its_input():
+    base = {"centers": [[0, 0, 6.0], [10, 0, 8], [20, 0, 7.5]], "touch_plane": [0, 0, 1.0, 0]}
+    grid = build_construction("conical_spheres_pp", base)
+    assert grid.support_w is not None and grid.meta["planar_families"] == ("rows", "cols")
+    with pytest.raises(DesignError, match=r"centers: the centres are not coplanar"):
+        build_construction("conical_spheres_pp", {**base, "centers": [[0, 0, 6.0], [10, 0, 8], [20, 1, 7.5],
+                                                                        [30, -1, 6.0]]})
+    with pytest.raises(DesignError, match=r"touch_plane: control centre \d lies on or across the plane"):
+        build_construction("conical_spheres_pp", {**base, "touch_plane": [0, 0, 1.0, -7.0]})
+
+
+@pytest.mark.parametrize("path", [EXAMPLES / "conical_spheres.toml", EXAMPLES / "conical_spheres_pp.toml"],
+                         ids=["P", "PP"])
+def test_examples_build(path):
+    doc = tomllib.loads(path.read_text())
+    grid = build_construction(doc["geometry"]["method"], doc["geometry"].get("params"))
+    q = conical_quality(grid)
+    assert max(q.delta_f_max, q.delta_p_rows_max, q.support_u_max, q.angle_max, q.concyclic_max) <= TOL
+    if doc["geometry"]["method"] == "conical_spheres_pp":
+        assert q.delta_p_cols_max <= TOL and q.support_w_max <= TOL
+    else:
+        assert grid.meta["profile_reference"] is not None                # Step 4 was applied
+    edges = np.concatenate([np.linalg.norm(grid.edges_u(), axis=-1).ravel(),
+                            np.linalg.norm(grid.edges_v(), axis=-1).ravel()])
+    assert 0.8 < edges.min() and edges.max() < 2.2
