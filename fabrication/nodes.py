@@ -16,7 +16,7 @@ output contract in DESIGN.md.  Columns of ``nodes.csv``:
 ``dihedral_deg``   smallest angle between the planes of two different beams meeting
                    there (the angle of the two planes at a regular node)
 ``beam_panel_deg`` ``;``-separated, per plate: smallest angle between the plate and the
-                   panels along its edges at the node
+                   panels along its polyline's edges at the node (its own edge for a segment)
 ``torsion_deg``    largest torsion of the edges at the node (angle between the planes of
                    the edge with either end axis; 0 for a torsion-free support structure)
 ``torsion_mm``     the same as the offset of an axis at beam depth
@@ -84,8 +84,10 @@ def node_records(beams: Any) -> list[dict]:
         plates = []
         for pid, role in zip(parts, j.roles if j else ()):
             p = by_id[pid]
-            pos = int(np.flatnonzero(p.nodes == k)[0])
-            nbrs = [int(p.nodes[q]) for q in (pos - 1, pos + 1) if 0 <= q < len(p.nodes)]
+            seq = p.nodes if p.meta.get("segment") else support.polylines[p.polyline].vertices
+            pos = int(np.flatnonzero(seq == k)[0])
+            nbrs = [int(seq[q % len(seq)]) for q in (pos - 1, pos + 1)
+                    if 0 <= q < len(seq) or (support.polylines[p.polyline].closed and not p.meta.get("segment"))]
             faces = set()
             for w in nbrs:
                 e = edge_id.get((min(k, w), max(k, w)))

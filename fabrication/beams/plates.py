@@ -358,9 +358,11 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
             for k, (va, vb, e) in enumerate(zip(a, b, eids)):
                 pid = ids[l] if len(a) == 1 else f"{ids[l]}-S{k:0{w}d}"
                 pts = v[[va, vb]]
-                plates.append(make_plate(pid, ids[l], l, line.family, k, len(a), support.edge_planes[e], pts,
-                                         axes[[va, vb]], np.array([va, vb]), np.array([False, False]),
-                                         np.array([0, 1]), params, pts))
+                plate = make_plate(pid, ids[l], l, line.family, k, len(a), support.edge_planes[e], pts,
+                                   axes[[va, vb]], np.array([va, vb]), np.array([False, False]),
+                                   np.array([0, 1]), params, pts)
+                plate.meta["segment"] = True        # one edge in its own support plane
+                plates.append(plate)
     return plates, defects
 
 

@@ -1,0 +1,91 @@
+"""beams.step / panels.step: build123d solids, exported and re-imported."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fabrication.beams import BeamParams, build_beams
+from fabrication.beams.samples import sample_p_grid, sample_pp_grid
+from fabrication.beams.solids import check_step, export_panels_step, named_solids, solid_vertices
+from ppfab.support import support_p, support_pp
+
+pytest.importorskip("build123d")
+
+
+@pytest.fixture(scope="module")
+def pp_step(tmp_path_factory):
+    s = support_pp(sample_pp_grid(4, 5))
+    bs = build_beams(s, BeamParams(max_length=0, depth=250.0, thickness=15.0))
+    path = tmp_path_factory.mktemp("step") / "beams.step"
+    bs.export_step(path)
+    return s, bs, path, solid_vertices(path)
+
+
+def test_one_valid_plate_solid_per_beam_in_its_support_plane(pp_step):
+    s, bs, path, _ = pp_step
+    planes = {p.part_id: s.polyline_planes[p.polyline] for p in bs.plates}     # the support structure's own
+    res = check_step(path, bs.plates, tol=1e-6, planes=planes)
+    assert res.ok, res.problems
+    assert res.solids == len(bs.plates) == sum(s.mesh.grid.shape)
+    assert res.max_thickness_error < 1e-6
+    from build123d import import_step
+
+    pairs = named_solids(import_step(str(path)))
+    assert sorted(n for n, _ in pairs) == sorted(p.part_id for p in bs.plates)
+    for name, solid in pairs:
+        p = bs.by_id[name]
+        x = np.array([[v.X, v.Y, v.Z] for v in solid.vertices()])
+        dist = x @ planes[name][:3] + planes[name][3]
+        assert np.abs(np.abs(dist) - 7.5).max() < 1e-6                 # both faces, 15 mm apart
+        assert (dist > 0).sum() == (dist < 0).sum() == len(p.outline)   # one extrusion of the outline
+        assert solid.volume == pytest.approx(p.area * 15.0, rel=1e-9)
+
+
+def test_slots_of_crossing_beams_share_the_node_axis_in_the_step_file(pp_step):
+    s, bs, _, verts = pp_step
+    t, d = bs.params.thickness, bs.params.depth
+    n_checked = 0
+    for j in bs.joints:
+        if j.kind != "halflap":
+            continue
+        v, a = s.vertices[j.vertex], s.axes[j.vertex]
+        for pid in j.parts:
+            p = bs.by_id[pid]
+            n = p.plane[:3]
+            across = np.cross(n, a)
+            across /= np.linalg.norm(across)
+            # the closed end of the slot: four corners predicted from the node axis alone
+            pred = np.array([v + 0.5 * d * a + sw * 0.5 * j.slot_width * across + sn * 0.5 * t * n
+                             for sw in (-1, 1) for sn in (-1, 1)])
+            x = verts[pid]
+            gap = np.linalg.norm(x[None, :, :] - pred[:, None, :], axis=2).min(axis=1)
+            assert gap.max() < 1e-6, (pid, j.vertex, gap)
+            n_checked += 1
+    m1, n1 = s.mesh.grid.shape
+    assert n_checked == 2 * (m1 - 2) * (n1 - 2)
+
+
+def test_segmented_p_mesh_step(tmp_path):
+    s = support_p(sample_p_grid(3, 4), "rows")
+    bs = build_beams(s, BeamParams(joint="segmented", max_length=0))
+    path = bs.export_step(tmp_path / "beams.step")
+    res = check_step(path, bs.plates)
+    assert res.ok, res.problems
+    assert res.solids == 4 + 5 * 3
+    assert "B-W02-S01" in solid_vertices(path)
+
+
+def test_panels_step_for_clash_checks(tmp_path):
+    g = sample_pp_grid(2, 3)
+    corners = g.to_quadmesh().face_corners
+    ids = [f"P-{i}-{j}" for i in range(2) for j in range(3)]
+    path = export_panels_step(corners, tmp_path / "panels.step", thickness=10.0, ids=ids)
+    verts = solid_vertices(path)
+    assert sorted(verts) == sorted(ids)
+    planes = g.face_planes.reshape(-1, 4)
+    for k, name in enumerate(ids):
+        dist = verts[name] @ planes[k, :3] + planes[k, 3]
+        assert len(dist) == 8
+        assert np.sort(dist)[:4] == pytest.approx(np.zeros(4), abs=1e-6)    # on the mesh face …
+        assert np.sort(dist)[4:] == pytest.approx(np.full(4, 10.0), abs=1e-6)  # … and 10 mm outside
