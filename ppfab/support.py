@@ -778,23 +778,34 @@ def conical_axis_residual(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
 
 # -- dispatch -------------------------------------------------------------------------------------------
 
-def support_structure(mesh: QuadMesh | QuadGrid, params: SupportParams | None = None) -> SupportStructure:
+def support_structure(mesh: QuadMesh | QuadGrid, params: SupportParams | None = None,
+                      planar_families: tuple | list | None = None) -> SupportStructure:
     """The support structure chosen by ``params.method``.
 
-    ``auto``: a patch carrying ``U_i``/``W_j`` or with both families planar
-    (δ_P ≤ ``planar_tolerance``) → :func:`support_pp`; one family planar →
-    :func:`support_p`; a conical planar-quad mesh (residual ≤ 1e-6 rad) →
+    ``auto``: when ``planar_families`` names the families a construction keeps planar
+    (``"rows"``/``"cols"`` or 0/1) — both on a patch → :func:`support_pp`, one →
+    :func:`support_p` with that family.  Otherwise: a patch carrying ``U_i``/``W_j`` or with
+    both families planar (δ_P ≤ ``planar_tolerance``) → :func:`support_pp`; one family
+    planar → :func:`support_p`; a conical planar-quad mesh (residual ≤ 1e-6 rad) →
     :func:`support_conical`; otherwise :func:`support_parallel`.
     """
     p = params or SupportParams()
     qm = as_quadmesh(mesh)
     method = p.method
+    fam = None
+    if method == "auto" and planar_families:
+        fams = sorted({_family(f) for f in planar_families})
+        if len(fams) == 2 and qm.grid is not None:
+            method = "pp"
+        elif len(fams) == 1:
+            method, fam = "p", fams[0]
     if method == "auto":
         method = _auto_method(qm, p.planar_tolerance)
     if method == "pp":
         return support_pp(qm, flip=p.flip)
     if method == "p":
-        fam = _auto_family(qm) if p.method == "auto" else _family(p.family)
+        if fam is None:
+            fam = _auto_family(qm) if p.method == "auto" else _family(p.family)
         return support_p(qm, fam, flip=p.flip, max_normal_angle_deg=p.max_normal_angle_deg)
     if method == "conical":
         return support_conical(qm, flip=p.flip)

@@ -100,6 +100,9 @@ def test_p_mesh_axes_lie_in_the_planar_family():
     assert s.torsion.max() < 1e-9
     assert s.meta["exact"] and s.meta["normal_angle_max_deg"] < 30
     assert support_structure(g).kind == "p"
+    hinted = support_structure(g, planar_families=("rows",))
+    assert hinted.kind == "p" and np.allclose(hinted.axes, s.axes)
+    assert support_structure(sample_pp_grid(3, 4), planar_families=["rows", "cols"]).kind == "pp"
     assert support_p(g, 0, planes=g.support_u).torsion.max() < 1e-9
 
 
