@@ -43,16 +43,21 @@ def extended_planes(grid: QuadGrid) -> np.ndarray:
 
     Taken from ``meta["extended_face_planes"]`` (unit planes of a conical P
     construction) or ``meta["extended_face_image"]`` (the weighted face image of a
-    PP construction, orientation of the weights kept) when the construction stored it, otherwise the grid's corner-order
+    PP construction, orientation of the weights kept) when the construction stored it
+    and every vertex still lies on its four stored planes; otherwise the grid's corner-order
     face planes padded by repeating the boundary faces.
     """
     rows, cols = grid.shape
+    size = float(np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0))) or 1.0
     for key in ("extended_face_planes", "extended_face_image"):
         stored = grid.meta.get(key)
         if stored is not None:
             E = np.asarray(stored, dtype=float)
             if E.shape == (rows + 1, cols + 1, 4):
-                return pl.normalize(E)
+                E = pl.normalize(E)
+                # stale planes (vertices changed after construction) are ignored
+                if np.abs(pl.evaluate(vertex_planes(grid, E), grid.vertices[..., None, :])).max() <= 1e-7 * size:
+                    return E
     f = grid.face_planes
     if grid.closed:
         f = np.concatenate([f[:, -1:], f], axis=1)

@@ -41,7 +41,7 @@ from scipy.sparse.linalg import splu, spsolve
 from .conical import _refit, axis_of_normals, extended_planes
 from .errors import GeometryError
 from .folds import check_folds
-from .laguerre import J, lorentz_residual, project_lorentz
+from .laguerre import J, LaguerreMap, lorentz_residual, project_lorentz, transform_grid
 from .mesh import QuadGrid
 
 
@@ -194,14 +194,21 @@ class ConicalEditor:
         A : (4, 4) Lorentz matrix acting on ``(n : 1)`` (default identity)
         handles : ``{(i, j): (x, y, z)}`` or ``(ij (k, 2), positions (k, 3))`` — target vertex positions
         w_handles : weight of the handles relative to proximity and fairness
-        previous : (rows, cols, 3) previous state for the proximity term (default: the grid)
+        previous : (rows, cols, 3) previous state for the proximity term (default: the Laguerre image of
+            the grid under the map whose Möbius part is ``A``, i.e. the grid itself for ``A = I``)
         """
         A = np.eye(4) if A is None else np.asarray(A, dtype=float)
         if lorentz_residual(A) > 1e-8 * max(1.0, float(np.abs(A).max()) ** 2):
             raise GeometryError(f"A is not a Lorentz matrix (|AᵀJA − J| = {lorentz_residual(A):.3g}); project it first")
         nbar = _unit_normals(A, self.n0)
         Bm, K = self._position_map(nbar)
-        prev = self.grid.vertices if previous is None else np.asarray(previous, float)
+        if previous is None:
+            try:
+                prev = transform_grid(self.grid, LaguerreMap(J @ A @ J), check=False).vertices
+            except GeometryError:
+                prev = self.grid.vertices
+        else:
+            prev = np.asarray(previous, float)
         R, t = self._objective(handles, prev.reshape(-1, 3), w_handles)
         RB = (R @ Bm).tocsr()
         Q = (RB.T @ RB).tocsc()
