@@ -1,0 +1,14 @@
+"""Nesting flat parts (glass panels, beam plates) on stock sheets.
+
+>>> from fabrication.nesting import NestingParams, nest, verify_nesting   # doctest: +SKIP
+
+:func:`nest` returns a :class:`Nesting` (placements with unique nest tags ``S03-017``,
+sheets used, utilisation, area lower bound); :func:`verify_nesting` re-checks any nesting
+with shapely and raises :class:`~ppfab.errors.NestingError` naming the part at fault.
+"""
+
+from .engine import UNITS_PER_SECOND, nest
+from .params import NestingParams
+from .result import Nesting, lower_bound, placed_outline, verify_nesting
+
+__all__ = ["NestingParams", "Nesting", "nest", "verify_nesting", "placed_outline", "lower_bound", "UNITS_PER_SECOND"]

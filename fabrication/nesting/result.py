@@ -1,0 +1,133 @@
+"""The result of nesting and its independent check (shapely, exact outlines)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ppfab.errors import NestingError
+
+from ..flatpart import FlatPart, Placement, place_points
+from .params import NestingParams
+
+
+@dataclass(frozen=True)
+class Nesting:
+    """Placements of all parts on stock sheets.
+
+    Attributes
+    ----------
+    placements : one per part, in the order of the parts given
+    sheets : number of sheets used
+    utilisation : part area / area of the sheets used (whole sheets)
+    lower_bound : ``ceil(Σ part area / sheet area)``
+    mode : ``"guillotine"`` or ``"irregular"`` (the mode that produced this result)
+    sheet_fill : (sheets,) part area / sheet area per sheet
+    work_units, history : search effort and ``(work units, sheets)`` along the search
+    """
+
+    placements: list[Placement]
+    sheets: int
+    utilisation: float
+    lower_bound: int
+    mode: str
+    sheet_size: tuple[float, float]
+    usable: tuple[float, float, float, float]
+    sheet_fill: tuple[float, ...] = ()
+    work_units: float = 0.0
+    seconds: float = 0.0
+    history: tuple = field(default=(), repr=False)
+
+    def by_sheet(self) -> list[list[Placement]]:
+        """Placements grouped per sheet (sheet order), each sorted by nest tag."""
+        out: list[list[Placement]] = [[] for _ in range(self.sheets)]
+        for p in self.placements:
+            out[p.sheet].append(p)
+        return [sorted(s, key=lambda p: p.nest_tag) for s in out]
+
+    def summary(self) -> dict:
+        return {"sheets": self.sheets, "utilisation": round(self.utilisation, 4), "lower_bound": self.lower_bound,
+                "mode": self.mode, "sheet": list(self.sheet_size), "seconds": round(self.seconds, 2)}
+
+
+def placed_outline(part: FlatPart, placement: Placement) -> np.ndarray:
+    """The part's outline in sheet coordinates, ``(k, 2)`` mm."""
+    return place_points(np.asarray(part.outline, dtype=float), placement)
+
+
+def _allowed_rotation(part: FlatPart, rot: float, params: NestingParams) -> bool:
+    if params.free_rotation and part.rotations is None:
+        return True
+    allowed = list(part.rotations) if part.rotations is not None else list(params.rotations)
+    return any(abs(((rot - a) + 180.0) % 360.0 - 180.0) < 1e-6 for a in allowed)
+
+
+def verify_nesting(parts: list[FlatPart], nesting: Nesting, params: NestingParams, tol: float = 1e-6) -> None:
+    """Check a nesting independently of how it was made; raise :class:`NestingError` naming the part.
+
+    Checks: every part placed exactly once and nothing else placed; sheet indices in range;
+    nest tags unique; rotation allowed and mirroring only where the part allows it; every
+    outline inside the usable area (after trim) within ``tol``; every two outlines on a sheet at
+    least ``spacing − tol`` apart (shapely distances, exact for polygons).
+    """
+    from shapely import STRtree
+    from shapely.geometry import Polygon
+
+    by_id = {p.part_id: p for p in parts}
+    seen: dict[str, int] = {}
+    tags: dict[str, str] = {}
+    for pl in nesting.placements:
+        if pl.part_id not in by_id:
+            raise NestingError(f"placement of unknown part {pl.part_id}")
+        seen[pl.part_id] = seen.get(pl.part_id, 0) + 1
+        if pl.nest_tag in tags:
+            raise NestingError(f"nest tag {pl.nest_tag} used by {tags[pl.nest_tag]} and {pl.part_id}")
+        tags[pl.nest_tag] = pl.part_id
+        if not 0 <= pl.sheet < nesting.sheets:
+            raise NestingError(f"part {pl.part_id} is on sheet {pl.sheet}, outside 0..{nesting.sheets - 1}")
+        part = by_id[pl.part_id]
+        if not _allowed_rotation(part, pl.rotation_deg, params):
+            raise NestingError(f"part {pl.part_id} is rotated by {pl.rotation_deg:g}°, not an allowed rotation")
+        if pl.mirrored and not part.mirror_allowed:
+            raise NestingError(f"part {pl.part_id} is placed mirrored but its make-up does not allow it")
+    twice = [k for k, n in seen.items() if n > 1]
+    if twice:
+        raise NestingError(f"part {twice[0]} is placed {seen[twice[0]]} times" +
+                           (f" (and {len(twice) - 1} more parts)" if len(twice) > 1 else ""))
+    missing = [p.part_id for p in parts if p.part_id not in seen]
+    if missing:
+        raise NestingError(f"part {missing[0]} is not placed" + (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
+    x0, y0, x1, y1 = params.usable()
+    s = float(params.spacing)
+    for sheet, group in enumerate(nesting.by_sheet()):
+        polys = []
+        for pl in group:
+            pts = placed_outline(by_id[pl.part_id], pl)
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            out = max(x0 - lo[0], y0 - lo[1], hi[0] - x1, hi[1] - y1)
+            if out > tol:
+                raise NestingError(f"part {pl.part_id} ({pl.nest_tag}) leaves the usable area of sheet {sheet + 1} "
+                                   f"by {out:.4g} mm")
+            polys.append(Polygon(pts))
+        if s <= 0 and len(polys) < 2:
+            continue
+        tree = STRtree(polys)
+        left, right = tree.query(polys, predicate="dwithin", distance=max(s - tol, 0.0))
+        for a, b in zip(left.tolist(), right.tolist()):
+            if a >= b:
+                continue
+            d = polys[a].distance(polys[b])
+            if d < s - tol or (s <= 0 and polys[a].intersection(polys[b]).area > tol):
+                raise NestingError(f"parts {group[a].part_id} and {group[b].part_id} on sheet {sheet + 1} are "
+                                   f"{d:.4g} mm apart, spacing is {s:g} mm")
+
+
+def lower_bound(parts: list[FlatPart], params: NestingParams) -> int:
+    """``ceil(Σ part area / sheet area)`` — no nesting can use fewer sheets."""
+    total = float(sum(p.area for p in parts))
+    return int(math.ceil(total / (params.sheet[0] * params.sheet[1]) - 1e-12)) if total > 0 else 0
+
+
+__all__ = ["Nesting", "verify_nesting", "placed_outline", "lower_bound"]

@@ -1,0 +1,184 @@
+"""Part orientations and exact polygon sliding (the geometry of nesting).
+
+An :class:`Orient` is one allowed pose of a part: the outline rotated by ``rotation``
+(after the mirror ``x ↦ −x`` when ``mirrored``) and shifted so its bounding box starts
+at the origin.  Placing it with its box corner at ``(X, Y)`` is the placement
+``x = X + shift[0]``, ``y = Y + shift[1]`` of :func:`fabrication.flatpart.place_points`.
+
+Sliding: a polygon ``M`` moving along a unit direction ``d`` first touches a polygon
+``F`` where a vertex of one meets an edge of the other.  For a vertex ``p`` and an edge
+``a + u (b − a)``, ``p + t d = a + u e`` gives ``t = (a − p) × e / (d × e)`` and
+``u = (a − p) × d / (d × e)``; the contact distance is the least ``t >= 0`` over
+``u ∈ [0, 1]``, over the vertices of ``M`` against the edges of ``F`` and the vertices
+of ``F`` against the edges of ``M`` (moving by ``−d``).  Spacing ``s`` is kept by sliding
+against the *halo* of ``F`` (its outline offset by ``s``, mitred, which contains the true
+offset), so first contact leaves a distance of at least ``s``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+HALO_EXTRA = 1e-3   # mm added to the spacing in halos: contacts never fall below the spacing by rounding
+
+
+@dataclass(frozen=True, eq=False)
+class Orient:
+    """One pose of part ``part``: ``poly (k, 2)`` with bounding box ``[0, w] × [0, h]``."""
+
+    part: int
+    rotation: float
+    mirrored: bool
+    poly: np.ndarray
+    shift: np.ndarray
+    w: float
+    h: float
+    halo: np.ndarray
+
+
+def rotate(points: np.ndarray, degrees: float, mirrored: bool = False) -> np.ndarray:
+    """``R(degrees) · M · p`` for points ``(k, 2)`` (``M`` mirrors ``x`` when ``mirrored``)."""
+    p = np.asarray(points, dtype=float)
+    if mirrored:
+        p = p * np.array([-1.0, 1.0])
+    a = math.radians(degrees)
+    c, s = math.cos(a), math.sin(a)
+    if abs(degrees % 90.0) < 1e-12:       # exact quarter turns: no rounding noise
+        c, s = round(c), round(s)
+    return p @ np.array([[c, s], [-s, c]])
+
+
+def ccw(points: np.ndarray) -> np.ndarray:
+    """The polygon in counter-clockwise order (a mirrored outline turns clockwise)."""
+    p = np.asarray(points, dtype=float)
+    x, y = p[:, 0], p[:, 1]
+    area = 0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    return p if area >= 0 else p[::-1].copy()
+
+
+def halo(poly: np.ndarray, spacing: float) -> np.ndarray:
+    """Outline offset outwards by ``spacing`` (mitred, limit 1.1: contains the round offset), ``(b, 2)``."""
+    if spacing <= 0:
+        return ccw(poly)
+    from shapely.geometry import Polygon
+
+    g = Polygon(poly).buffer(spacing + HALO_EXTRA, join_style="mitre", mitre_limit=1.1)
+    return ccw(np.asarray(g.exterior.coords, dtype=float)[:-1])
+
+
+def free_angles(outline: np.ndarray) -> list[float]:
+    """Rotations (degrees, in [0, 360)) that lay each convex-hull edge of ``outline`` along +x."""
+    from shapely.geometry import MultiPoint
+
+    hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
+    e = np.diff(hull, axis=0)
+    ang = (-np.degrees(np.arctan2(e[:, 1], e[:, 0]))) % 360.0
+    return sorted(set(round(float(a), 9) % 360.0 for a in ang))
+
+
+def orientations(part_index: int, outline: np.ndarray, rotations: list[float], mirror: bool,
+                 spacing: float) -> list[Orient]:
+    """All poses of a part (duplicates of the same polygon removed)."""
+    out: list[Orient] = []
+    seen: set = set()
+    for mirrored in ([False, True] if mirror else [False]):
+        for rot in rotations:
+            r = float(rot) % 360.0
+            p = ccw(rotate(outline, r, mirrored))
+            lo = p.min(axis=0)
+            poly = p - lo
+            key = tuple(np.round(np.sort(poly, axis=0).ravel(), 6))
+            if key in seen:
+                continue
+            seen.add(key)
+            w, h = poly.max(axis=0)
+            out.append(Orient(part_index, r, mirrored, poly, -lo, float(w), float(h), halo(poly, spacing)))
+    return out
+
+
+def pad(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stack polygons: vertices ``(P, kmax, 2)`` and edge ends ``(P, kmax, 2)``; padding edges have length 0."""
+    kmax = max(len(p) for p in polys)
+    v = np.empty((len(polys), kmax, 2))
+    nxt = np.empty((len(polys), kmax, 2))
+    for i, p in enumerate(polys):
+        k = len(p)
+        v[i, :k] = p
+        v[i, k:] = p[-1]
+        nxt[i, :k - 1] = p[1:]
+        nxt[i, k - 1] = p[0]
+        nxt[i, k:] = p[-1]
+    return v, v, nxt
+
+
+def _ray_hits(p: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
+    """Least ``t`` at which point ``p`` moving along ``d`` enters polygon edge ``[a, b]``; inf if never.
+
+    Only edges that face the motion count (``d · n < 0`` with ``n`` the outward normal of a
+    counter-clockwise polygon's edge): a point leaving a polygon is never blocked.  A point up
+    to ``tol`` behind a facing edge is blocked at ``t = 0`` (starting positions may sit inside a
+    halo by its mitre overshoot).  Shapes broadcast ``(..., 2)``.
+    """
+    e = b - a
+    den = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]      # = d · (e_y, −e_x) = d · n
+    ap = a - p
+    t_num = ap[..., 0] * e[..., 1] - ap[..., 1] * e[..., 0]
+    u_num = ap[..., 0] * d[..., 1] - ap[..., 1] * d[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = t_num / den
+        u = u_num / den
+    ok = (den < -1e-12) & (u >= -1e-9) & (u <= 1 + 1e-9) & (t >= -tol)
+    return np.where(ok, np.maximum(t, 0.0), np.inf)
+
+
+def start_tolerance(spacing: float) -> float:
+    """How far a start position may sit inside a halo (its mitre overshoot plus rounding), mm."""
+    return 0.1 * (spacing + HALO_EXTRA) + 0.01
+
+
+def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple[float, float],
+                   tol: float = 0.01) -> float:
+    """How far polygon ``moving (k, 2)`` can travel along ``direction`` before touching any of ``fixed``.
+
+    ``fixed`` are counter-clockwise polygons (halos, to keep spacing), not overlapping ``moving``
+    at the start by more than ``tol`` (see :func:`start_tolerance`).  Returns ``inf`` when nothing
+    is in the way.
+    """
+    if not fixed:
+        return math.inf
+    d = np.asarray(direction, dtype=float)
+    m = np.asarray(moving, dtype=float)
+    fa = np.concatenate([np.asarray(f, dtype=float) for f in fixed])
+    fb = np.concatenate([np.roll(np.asarray(f, dtype=float), -1, axis=0) for f in fixed])
+    t1 = _ray_hits(m[:, None, :], d, fa[None], fb[None], tol).min(initial=math.inf)
+    t2 = _ray_hits(fa[:, None, :], -d, m[None], np.roll(m, -1, axis=0)[None], tol).min(initial=math.inf)
+    return float(min(t1, t2))
+
+
+def pair_gains(halos: list[np.ndarray], widths: np.ndarray, polys: list[np.ndarray], spacing: float) -> np.ndarray:
+    """Nestling along a row: how far piece ``b`` slides left when it follows piece ``a``.
+
+    Piece ``a`` (its halo) sits with its box at ``[0, w_a]``, piece ``b`` on the same base
+    line with its box starting at ``w_a + spacing``; entry ``[a, b]`` is the sliding distance
+    of ``b`` along ``−x`` until it meets the halo of ``a`` — the length the pair saves over
+    two boxes.  Vectorised over all pairs; returns ``(A, B)``.
+    """
+    if not halos or not polys:
+        return np.zeros((len(halos), len(polys)))
+    tol = start_tolerance(spacing)
+    _, ha, hb = pad(halos)                      # (A, h, 2)
+    _, pa, pb = pad(polys)                      # (B, k, 2)
+    off = (np.asarray(widths, dtype=float) + spacing)[:, None, None, None] * np.array([1.0, 0.0])  # (A,1,1,2)
+    d = np.array([-1.0, 0.0])
+    # vertices of b (moved by the offset of a) against edges of halo a
+    p = pa[None, :, :, None, :] + off[:, :, :, None, :]                       # (A, B, k, 1, 2)
+    t1 = _ray_hits(p, d, ha[:, None, None, :, :], hb[:, None, None, :, :], tol).min(axis=(2, 3))
+    # vertices of halo a against edges of b (moved), moving by +x
+    q = ha[:, None, :, None, :]                                               # (A, 1, h, 1, 2)
+    ea = pa[None, :, None, :, :] + off[:, :, :, None, :]                     # (A, B, 1, k, 2)
+    eb = pb[None, :, None, :, :] + off[:, :, :, None, :]
+    t2 = _ray_hits(q, -d, ea, eb, tol).min(axis=(2, 3))
+    return np.minimum(np.minimum(t1, t2), 1e9)
