@@ -99,9 +99,18 @@ class ConicalEditor:
         self.E = extended_planes(grid)
         rows, cols = grid.shape
         self.shape = (rows, cols)
-        pid = np.arange(self.E.shape[0] * self.E.shape[1]).reshape(self.E.shape[:2])
+        er, ec = self.E.shape[:2]
+        if grid.closed:
+            # column b of the extended array is face column (b − 1) mod cols: one unknown per face
+            ids = np.arange(er * (ec - 1)).reshape(er, ec - 1)
+            pid = ids[:, (np.arange(ec) - 1) % (ec - 1)]
+            unique = self.E[:, 1:].reshape(-1, 4)
+        else:
+            pid = np.arange(er * ec).reshape(er, ec)
+            unique = self.E.reshape(-1, 4)
+        self.plane_index = pid
         self.idx = np.stack([pid[:-1, :-1], pid[1:, :-1], pid[1:, 1:], pid[:-1, 1:]], axis=-1).reshape(-1, 4)
-        self.n0 = self.E.reshape(-1, 4)[:, :3]
+        self.n0 = unique[:, :3]
         self.n_planes = len(self.n0)
         self.n_vertices = rows * cols
         self.proximity = float(proximity)
@@ -216,17 +225,7 @@ class ConicalEditor:
         n = self.n_planes
         kkt = sp.bmat([[Q, K.T], [K, None]], format="csc")
         rhs = np.concatenate([c, np.zeros(K.shape[0])])
-        lu = None
-        try:
-            lu = splu(kkt)
-        except RuntimeError:
-            # redundant constraints: least squares on the null space of K via a tiny regularisation
-            reg = 1e-12 * float(abs(Q.diagonal()).max() or 1.0)
-            kkt = sp.bmat([[Q + reg * sp.identity(n), K.T], [K, -reg * sp.identity(K.shape[0])]], format="csc")
-            lu = splu(kkt)
-        sol = lu.solve(rhs)
-        for _ in range(3):                                     # iterative refinement
-            sol = sol + lu.solve(rhs - kkt @ sol)
+        sol = _solve_kkt(Q, K, kkt, rhs)
         d = sol[:n]
         x = (Bm @ d).reshape(self.shape + (3,))
         return self._result(A, nbar, d, x, handles, True, 1, [], "exact solve of eq. (17) for fixed A")
@@ -244,7 +243,8 @@ class ConicalEditor:
         A = np.eye(4) if A0 is None else np.asarray(A0, float)
         start = self.solve_fixed(A, handles, w_handles)
         x = start.grid.vertices.reshape(-1, 3).copy()
-        d = start.grid.meta["extended_face_planes"].reshape(-1, 4)[:, 3].copy()
+        Eext = start.grid.meta["extended_face_planes"]
+        d = (Eext[:, 1:] if self.grid.closed else Eext).reshape(-1, 4)[:, 3].copy()
         V, P = self.n_vertices, self.n_planes
         N = np.concatenate([self.n0, np.ones((P, 1))], axis=1)                    # (P, 4) homogeneous normals
         f = self.idx.ravel()                                                       # plane of each incidence
@@ -312,7 +312,7 @@ class ConicalEditor:
         cres = float(np.abs(np.einsum("vki,vi->vk", Pv[..., :3], xv) + Pv[..., 3]).max())
         hid, hpos = self._targets(handles)
         hres = float(np.linalg.norm(xv[hid] - hpos, axis=1).max()) if len(hid) else 0.0
-        E = planes.reshape(self.E.shape)
+        E = planes[self.plane_index]
         g = self.grid
         meta = {k: v for k, v in g.meta.items() if k not in ("extended_face_image",)}
         meta["extended_face_planes"] = E
@@ -321,6 +321,35 @@ class ConicalEditor:
         out = QuadGrid(x, closed=g.closed, support_u=_refit(x, g.support_u, True), support_w=_refit(x, g.support_w, False),
                        face_image=inner, axes=-a, vertex_ids=g.vertex_ids, meta=meta)
         return EditResult(out, A, converged, iterations, history, message, cres, hres, lorentz_residual(A))
+
+
+def _solve_kkt(Q: sp.spmatrix, K: sp.spmatrix, kkt: sp.spmatrix, rhs: np.ndarray) -> np.ndarray:
+    """Solve the KKT system ``[[Q, Kᵀ], [K, 0]]``: a direct LU with iterative refinement; when that
+    fails or leaves the constraints unmet (redundant concurrency constraints, e.g. on closed grids) a
+    quasi-definite regularisation ``[[Q + εI, Kᵀ], [K, −εI]]`` refined against the exact system."""
+    n, m = Q.shape[0], K.shape[0]
+
+    def refine(lu, sol, steps):
+        for _ in range(steps):
+            sol = sol + lu.solve(rhs - kkt @ sol)
+        return sol
+
+    def good(sol):
+        d = sol[:n]
+        return np.all(np.isfinite(sol)) and np.abs(K @ d).max() <= 1e-12 * max(1.0, np.abs(d).max()) and \
+            np.abs(kkt @ sol - rhs).max() <= 1e-8 * max(1.0, np.abs(rhs).max())
+
+    try:
+        with np.errstate(all="ignore"):
+            lu = splu(kkt)
+            sol = refine(lu, lu.solve(rhs), 3)
+        if good(sol):
+            return sol
+    except RuntimeError:
+        pass
+    reg = 1e-10 * float(abs(Q.diagonal()).max() or 1.0)
+    lu = splu(sp.bmat([[Q + reg * sp.identity(n), K.T], [K, -reg * sp.identity(m)]], format="csc"))
+    return refine(lu, lu.solve(rhs), 20)
 
 
 def edit_conical(grid: QuadGrid, handles=None, A: np.ndarray | None = None, fit_A: bool = False,

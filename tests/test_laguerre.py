@@ -215,6 +215,21 @@ def test_fit_with_few_handles_stays_conical_p():
     assert_conical_planar(res.grid, families)
 
 
+def test_closed_grids_transform_and_edit():
+    tube = channel_mesh(WAVY, 10, 16, (0, 0), closed=True)
+    dome = conical_pp_grid(Series(), Series(cosh=[-12.0], poly=[0, 0, 1.5]), np.zeros(24), np.linspace(.2, 1.2, 7),
+                           case="rotational", closed=True)
+    L = LaguerreMap(boost([1.0, 0.0, 0.3], 0.2))
+    for grid, families in ((tube, ("rows",)), (dome, ("rows", "cols"))):
+        assert_conical_planar(transform_grid(grid, L), families)
+        image = transform_grid(grid, L)
+        res = edit_conical(grid, A=mobius_of_laguerre(L.A), fairness=0.0)
+        assert np.abs(res.grid.vertices - image.vertices).max() < 1e-8
+        res = edit_conical(grid, handles={(2, 3): grid.vertices[2, 3] + 0.3})
+        assert res.constraint_residual < 1e-9 and quality(res.grid).flipped_edges == 0
+        assert_conical_planar(res.grid, families)
+
+
 def test_fit_lorentz_from_normals():
     grid, _ = MESHES["PP-eq11"]
     L = random_map(4)

@@ -250,9 +250,9 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
         if len(u) < 3:
             raise GeometryError(f"a closed mesh needs at least 3 faces around, got {len(u)}", element="u")
         m = len(u)
-        ue = u[0] + 2.0 * np.pi * np.arange(-1, m + 1) / m
+        ue = u[0] + 2.0 * np.pi * np.arange(-1, m + 1) / m           # u_{−1} … u_m, periodic ghosts
         Gs = G(ue)
-        if not np.allclose(Gs[0], G(ue[-2:-1] )[0], rtol=1e-9, atol=1e-9 * max(1.0, float(np.abs(Gs).max()))):
+        if not np.allclose(Gs[0], Gs[-2], rtol=1e-9, atol=1e-9 * max(1.0, float(np.abs(Gs).max()))):
             raise GeometryError("closed = true needs a 2π-periodic g(u)", element="g")
         faces_u, faces_v = ue[1:-1], v
     else:
@@ -263,7 +263,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
         vv = faces_v if attempt == 0 else faces_v[::-1]
         Hs = sample_extended(H, vv)
         if closed:
-            built = _close_columns(pp_from_face_image(Hs, Gs, np.roll(c, 0)))
+            built = _close_columns(pp_from_face_image(Hs, Gs, c))
             ref = built.face_image
         else:
             built = pp_from_face_image(sample_extended(G, faces_u), Hs, c)
