@@ -54,6 +54,8 @@ def _type_name(tp: Any) -> str:
         return f"list of {_type_name(args[0])}" if args else "list"
     if origin in (typing.Union, types.UnionType):
         return " or ".join(_type_name(a) for a in typing.get_args(tp) if a is not type(None))
+    if dataclasses.is_dataclass(tp):
+        return "table"
     return {float: "number", int: "integer", str: "string", bool: "true/false", dict: "table"}.get(tp, str(tp))
 
 

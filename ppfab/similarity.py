@@ -15,6 +15,10 @@ import numpy as np
 from .mesh import QuadGrid, QuadMesh
 
 
+PLANE_META = ("extended_face_image", "extended_face_planes")
+"""Grid ``meta`` entries that hold weighted planes ``(..., 4)`` and move with the mesh."""
+
+
 def rotation_z(deg: float) -> np.ndarray:
     a = np.radians(deg)
     c, s = np.cos(a), np.sin(a)
@@ -53,8 +57,9 @@ def transform(mesh: QuadGrid | QuadMesh, scale: float = 1.0, rotate_z_deg: float
     v = g.vertices @ rot.T * scale + t
     axes = None if g.axes is None else g.axes @ rot.T
     meta = dict(g.meta)
-    if "extended_face_image" in meta:
-        meta["extended_face_image"] = _planes(meta["extended_face_image"], m)
+    for key in PLANE_META:
+        if key in meta:
+            meta[key] = _planes(meta[key], m)
     out = replace(g, vertices=v, support_u=_planes(g.support_u, m), support_w=_planes(g.support_w, m),
                   face_image=_planes(g.face_image, m), axes=axes, meta=meta)
     return flip_grid(out) if flip else out
@@ -67,11 +72,11 @@ def flip_grid(g: QuadGrid) -> QuadGrid:
             return None
         a = np.flip(a, axis=axis)
         return np.roll(a, 1, axis=axis) if g.closed else a
-    meta = dict(g.meta)
-    if "extended_face_image" in meta:
-        meta["extended_face_image"] = np.flip(meta["extended_face_image"], axis=1)
-    face_image = None if g.face_image is None else (
-        np.flip(g.face_image, axis=1) if not g.closed else np.flip(g.face_image, axis=1))
+    meta = {k: v for k, v in g.meta.items() if k not in PLANE_META}
+    for key in PLANE_META:
+        if key in g.meta and not g.closed:
+            meta[key] = np.flip(g.meta[key], axis=1)
+    face_image = None if g.face_image is None else np.flip(g.face_image, axis=1)
     return replace(g, vertices=rev(g.vertices), support_w=None if g.support_w is None else g.support_w[::-1],
                    face_image=face_image, axes=None if g.axes is None else -rev(g.axes),
                    vertex_ids=rev(g.vertex_ids), meta=meta)
