@@ -16,8 +16,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 
 def boolean_plate(plate):
     """Baseline: the plate without slots, extruded, then one boolean cut per slot."""

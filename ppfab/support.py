@@ -493,37 +493,50 @@ def _axes_from_offsets(mesh: QuadMesh, u: np.ndarray, normals: np.ndarray, flip:
     return _orient_inward(u, normals, flip)
 
 
-def _project_into_planes(axes: np.ndarray, vertex_planes: dict[int, list[np.ndarray]]) -> np.ndarray:
-    """Put each constrained axis exactly into its plane (or the line of its first two planes)."""
-    out = axes.copy()
-    for k, normals in vertex_planes.items():
-        a = out[k]
-        if len(normals) == 1:
-            nrm = normals[0]
-            b = a - (a @ nrm) * nrm
-        else:
-            b = np.cross(normals[0], normals[1])
-            if np.linalg.norm(b) < 1e-9:
-                b = a - (a @ normals[0]) * normals[0]
-            b = b if b @ a >= 0 else -b
-        out[k] = b / np.linalg.norm(b)
-    return out
+@dataclass(frozen=True)
+class _VertexPlanes:
+    """The (up to two) planes each vertex's axis is kept in: ``count (N,)``, unit normals ``n1, n2 (N, 3)``."""
+
+    count: np.ndarray
+    n1: np.ndarray
+    n2: np.ndarray
+
+
+def _project_into_planes(axes: np.ndarray, vp: _VertexPlanes) -> np.ndarray:
+    """Put each constrained axis exactly into its plane, or along the line of its first two planes."""
+    a = axes.copy()
+    one = vp.count == 1
+    a[one] -= np.einsum("ij,ij->i", a[one], vp.n1[one])[:, None] * vp.n1[one]
+    two = vp.count >= 2
+    line = np.cross(vp.n1[two], vp.n2[two])
+    ok = np.linalg.norm(line, axis=1) >= 1e-9
+    flat = a[two] - np.einsum("ij,ij->i", a[two], vp.n1[two])[:, None] * vp.n1[two]
+    line = np.where(ok[:, None], line, flat)
+    line *= np.where(np.einsum("ij,ij->i", line, a[two]) < 0, -1.0, 1.0)[:, None]
+    a[two] = line
+    return a / np.linalg.norm(a, axis=1, keepdims=True)
 
 
 def _planar_constraints(mesh: QuadMesh, lines: np.ndarray, planes: np.ndarray
-                        ) -> tuple[list[tuple[np.ndarray, np.ndarray]], dict[int, list[np.ndarray]]]:
-    ids, nrm = [], []
-    per_vertex: dict[int, list[np.ndarray]] = {}
-    unit = pl.normalize(planes[lines])[:, :3] if len(lines) else np.zeros((0, 3))
-    for k, nvec in zip(lines, unit):
-        vs = mesh.polylines[k].vertices
-        ids.append(vs)
-        nrm.append(np.repeat(nvec[None], len(vs), axis=0))
-        for v in vs.tolist():
-            per_vertex.setdefault(v, []).append(nvec)
-    if not ids:
-        return [], per_vertex
-    return [(np.concatenate(ids), np.concatenate(nrm))], per_vertex
+                        ) -> tuple[list[tuple[np.ndarray, np.ndarray]], _VertexPlanes]:
+    """Rows ``n·u_i = 0`` for every vertex of the given polylines, and the planes per vertex."""
+    nv = len(mesh.vertices)
+    count = np.zeros(nv, dtype=np.int64)
+    n1 = np.zeros((nv, 3))
+    n2 = np.zeros((nv, 3))
+    if len(lines) == 0:
+        return [], _VertexPlanes(count, n1, n2)
+    unit = pl.normalize(planes[lines])[:, :3]
+    ids = np.concatenate([mesh.polylines[k].vertices for k in lines])
+    nrm = np.concatenate([np.repeat(nvec[None], len(mesh.polylines[k]), axis=0) for k, nvec in zip(lines, unit)])
+    order = np.argsort(ids, kind="stable")
+    ids_s, nrm_s = ids[order], nrm[order]
+    first = np.r_[True, ids_s[1:] != ids_s[:-1]]
+    count[:] = np.bincount(ids, minlength=nv)
+    n1[ids_s[first]] = nrm_s[first]
+    rank = np.arange(len(ids_s)) - np.flatnonzero(first)[np.cumsum(first) - 1]
+    n2[ids_s[rank == 1]] = nrm_s[rank == 1]
+    return [(ids, nrm)], _VertexPlanes(count, n1, n2)
 
 
 def support_parallel(mesh: QuadMesh | QuadGrid, planar_tolerance: float = 1e-6, flip: bool = False,
@@ -583,7 +596,7 @@ def _planar_lines(mesh: QuadMesh, planes: np.ndarray, dev: np.ndarray, normals: 
     return out
 
 
-def _solve_axes(mesh: QuadMesh, normals: np.ndarray, constraints: list, per_vertex: dict, flip: bool,
+def _solve_axes(mesh: QuadMesh, normals: np.ndarray, constraints: list, per_vertex: _VertexPlanes, flip: bool,
                 max_normal_angle_deg: float) -> tuple[np.ndarray, dict]:
     """Axes of the exact least-squares parallel mesh; if that is unusable (an offset collapses or an axis
     leaves its normal by more than ``max_normal_angle_deg``, which happens when the faces are far from
@@ -605,7 +618,7 @@ def _solve_axes(mesh: QuadMesh, normals: np.ndarray, constraints: list, per_vert
     return axes, meta
 
 
-def _usable_axes(mesh: QuadMesh, u: np.ndarray, normals: np.ndarray, per_vertex: dict, flip: bool,
+def _usable_axes(mesh: QuadMesh, u: np.ndarray, normals: np.ndarray, per_vertex: _VertexPlanes, flip: bool,
                  max_angle: float) -> np.ndarray | None:
     """The axes, or ``None`` when an offset collapses or an axis is further than ``max_angle`` from the
     inward normal brought into the axis's planes (the closest the constraints allow)."""
@@ -745,11 +758,13 @@ def support_conical(mesh: QuadMesh | QuadGrid, flip: bool = False) -> SupportStr
     fn, mask = _vertex_face_normals(qm)
     target = np.zeros_like(qm.vertices)
     target[determined] = a[determined] / cos[determined, None]
-    # boundary: minimum-norm offset that moves each of its faces inward by 1 (n_k · u = −1)
-    bnd = np.flatnonzero(~determined)
-    for k in bnd:
-        nk = fn[k][mask[k]]
-        target[k] = np.linalg.lstsq(nk, -np.ones(len(nk)), rcond=None)[0]
+    # boundary: the minimum-norm offset moving each of its faces inward by 1 (n_k · u = −1):
+    # −n_1 at a corner, −(n_1 + n_2)/(1 + n_1·n_2) between two faces
+    one = mask.sum(axis=1) == 1
+    two = mask.sum(axis=1) == 2
+    target[one] = -fn[one, 0]
+    s2 = fn[two, 0] + fn[two, 1]
+    target[two] = -s2 / (1.0 + np.einsum("ij,ij->i", fn[two, 0], fn[two, 1]))[:, None]
     u, info = parallel_offsets(qm, target, fixed=determined)
     axes = _axes_from_offsets(qm, u, normals, False)
     axes[determined] = a[determined]
