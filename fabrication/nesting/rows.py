@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .catalog import Catalog
-from .shapes import pair_gains, slide_distance, start_tolerance
+from .shapes import pair_gains, slide_distance
 
 # work units (≈ 5 µs each on the reference machine) charged per operation: see Work
 COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 30, 1.0, 80, 200, 60
@@ -85,7 +85,7 @@ class SheetFiller:
         self.cat = cat
         self.irregular = irregular
         self.work = work
-        self.tol = start_tolerance(cat.spacing)
+        self.tol = 0.01
         self._gains: dict[tuple[int, int], float] = {}
 
     # -- knapsack rows ------------------------------------------------------------------------
@@ -154,7 +154,7 @@ class SheetFiller:
         """Rows of poses for one sheet (bottom to top) of largest total value."""
         c = self.cat
         live = rem[c.o_part]
-        heights = np.unique(np.round(c.o_h[live], 6))[::-1]
+        heights = np.unique(c.o_h[live])[::-1]
         if len(heights) == 0:
             return []
         if len(heights) > cfg.n_heights:
@@ -251,6 +251,22 @@ class SheetFiller:
         out = [pool[k] for k in best_seq]
         return out[1:] if last is not None else out
 
+    def _slide_left(self, o: int, x_box: float, y: float, halos: list[np.ndarray]) -> float:
+        """Where pose ``o`` on base ``y`` comes to rest sliding left towards ``halos``.
+
+        It starts right of every halo in its band (a valid start), slides until contact or the
+        left edge, and never ends right of its box position ``x_box`` (always allowed).
+        """
+        c = self.cat
+        h = c.orients[o].h
+        band = [g for g in halos if g[:, 1].min() < y + h and g[:, 1].max() > y]
+        if not band:
+            return 0.0
+        start = max(x_box, max(float(g[:, 0].max()) for g in band) + 1e-3)
+        t = slide_distance(c.orients[o].poly + np.array([start, y]), band, (-1.0, 0.0), self.tol)
+        self.work.add(COST_SLIDE)
+        return min(max(start - t, 0.0), x_box)
+
     def _nestle_row(self, sheet: Sheet, y: float, height: float, rem: np.ndarray, cfg: PlanConfig,
                     values: np.ndarray) -> None:
         """Fill one irregular row of height ``height`` at base ``y`` (see the module docstring)."""
@@ -271,11 +287,7 @@ class SheetFiller:
                 seq = self._order(poses, last)
                 trial, trial_halos, xe = [], list(halos), x_end
                 for o in seq:
-                    x = 0.0
-                    if trial_halos:
-                        poly = c.orients[o].poly + np.array([xe, y])
-                        x = xe - min(slide_distance(poly, trial_halos, (-1.0, 0.0), self.tol), xe)
-                        self.work.add(COST_SLIDE)
+                    x = self._slide_left(o, xe, y, trial_halos)
                     if x + c.o_w[o] > c.L + 1e-9:
                         trial = None
                         break

@@ -119,8 +119,7 @@ def _ray_hits(p: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tol: f
 
     Only edges that face the motion count (``d · n < 0`` with ``n`` the outward normal of a
     counter-clockwise polygon's edge): a point leaving a polygon is never blocked.  A point up
-    to ``tol`` behind a facing edge is blocked at ``t = 0`` (starting positions may sit inside a
-    halo by its mitre overshoot).  Shapes broadcast ``(..., 2)``.
+    to ``tol`` behind a facing edge (rounding) is blocked at ``t = 0``.  Shapes broadcast ``(..., 2)``.
     """
     e = b - a
     den = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]      # = d · (e_y, −e_x) = d · n
@@ -134,18 +133,13 @@ def _ray_hits(p: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tol: f
     return np.where(ok, np.maximum(t, 0.0), np.inf)
 
 
-def start_tolerance(spacing: float) -> float:
-    """How far a start position may sit inside a halo (its mitre overshoot plus rounding), mm."""
-    return 0.1 * (spacing + HALO_EXTRA) + 0.01
-
-
 def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple[float, float],
                    tol: float = 0.01) -> float:
     """How far polygon ``moving (k, 2)`` can travel along ``direction`` before touching any of ``fixed``.
 
     ``fixed`` are counter-clockwise polygons (halos, to keep spacing), not overlapping ``moving``
-    at the start by more than ``tol`` (see :func:`start_tolerance`).  Returns ``inf`` when nothing
-    is in the way.
+    at the start (callers start beyond the halos' extent).  Returns ``inf`` when nothing is in
+    the way.
     """
     if not fixed:
         return math.inf
@@ -159,26 +153,29 @@ def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple
 
 
 def pair_gains(halos: list[np.ndarray], widths: np.ndarray, polys: list[np.ndarray], spacing: float) -> np.ndarray:
-    """Nestling along a row: how far piece ``b`` slides left when it follows piece ``a``.
+    """Nestling along a row: how much closer than their boxes allow piece ``b`` can follow piece ``a``.
 
-    Piece ``a`` (its halo) sits with its box at ``[0, w_a]``, piece ``b`` on the same base
-    line with its box starting at ``w_a + spacing``; entry ``[a, b]`` is the sliding distance
-    of ``b`` along ``−x`` until it meets the halo of ``a`` — the length the pair saves over
-    two boxes.  Vectorised over all pairs; returns ``(A, B)``.
+    Piece ``a`` (its halo) sits with its box at ``[0, w_a]``; piece ``b`` starts on the same base
+    line right of the halo and slides along ``−x`` until it meets it.  Entry ``[a, b]`` is how far
+    left of the box position ``w_a + spacing`` it ends (at least 0: the box position is always
+    allowed) — the length the pair saves over two boxes.  Vectorised over all pairs; ``(A, B)``.
     """
     if not halos or not polys:
         return np.zeros((len(halos), len(polys)))
-    tol = start_tolerance(spacing)
     _, ha, hb = pad(halos)                      # (A, h, 2)
     _, pa, pb = pad(polys)                      # (B, k, 2)
-    off = (np.asarray(widths, dtype=float) + spacing)[:, None, None, None] * np.array([1.0, 0.0])  # (A,1,1,2)
+    box = np.asarray(widths, dtype=float) + spacing
+    start = np.maximum(box, ha[..., 0].max(axis=1) + 1e-3)                                  # (A,)
+    off = start[:, None, None, None] * np.array([1.0, 0.0])                                 # (A,1,1,2)
     d = np.array([-1.0, 0.0])
-    # vertices of b (moved by the offset of a) against edges of halo a
-    p = pa[None, :, :, None, :] + off[:, :, :, None, :]                       # (A, B, k, 1, 2)
+    tol = 0.01
+    # vertices of b (at the start offset of a) against edges of halo a
+    p = pa[None, :, :, None, :] + off[:, :, :, None, :]                                    # (A, B, k, 1, 2)
     t1 = _ray_hits(p, d, ha[:, None, None, :, :], hb[:, None, None, :, :], tol).min(axis=(2, 3))
-    # vertices of halo a against edges of b (moved), moving by +x
-    q = ha[:, None, :, None, :]                                               # (A, 1, h, 1, 2)
-    ea = pa[None, :, None, :, :] + off[:, :, :, None, :]                     # (A, B, 1, k, 2)
+    # vertices of halo a against edges of b, moving by +x
+    q = ha[:, None, :, None, :]                                                            # (A, 1, h, 1, 2)
+    ea = pa[None, :, None, :, :] + off[:, :, :, None, :]                                  # (A, B, 1, k, 2)
     eb = pb[None, :, None, :, :] + off[:, :, :, None, :]
     t2 = _ray_hits(q, -d, ea, eb, tol).min(axis=(2, 3))
-    return np.minimum(np.minimum(t1, t2), 1e9)
+    t = np.minimum(np.minimum(t1, t2), start[:, None])
+    return np.maximum(box[:, None] - (start[:, None] - t), 0.0)
