@@ -1,0 +1,274 @@
+"""P / PP / planar-quad optimisation of quad meshes (paper §3.3).
+
+:func:`optimize` takes any all-quad mesh (:class:`~ppfab.mesh.QuadMesh`, e.g.
+from :func:`ppfab.io.load_mesh`, or a :class:`~ppfab.mesh.QuadGrid`) and moves
+its vertices so that faces become planar (``E_f``) and the selected polylines
+lie in planes (``E_P``), with unit-normal (``E_1``), fairness (``E_fair``) and
+closeness terms, by a sparse Levenberg–Marquardt method with an analytic
+Jacobian (:mod:`.residuals`, :mod:`.linsolve`, :mod:`.solver`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from ppfab.mesh import QuadGrid
+>>> i, j = np.meshgrid(np.arange(8.0), np.arange(8.0), indexing="ij")
+>>> v = np.stack([i, j, 0.05 * (i - 3.5) ** 2 + 0.03 * (j - 3.5) ** 2], axis=-1)
+>>> v = v + np.random.default_rng(1).normal(scale=0.01, size=v.shape)
+>>> res = optimize(QuadGrid(v), families="both")
+>>> res.targets_met, res.history[-1].delta_p_max < 1e-6
+(True, True)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .. import planes as pl
+from ..errors import GeometryError
+from ..mesh import QuadGrid, QuadMesh
+from ..metrics import Quality, quality
+from ..schema import as_plain, parse_params
+from .guard import StepGuard
+from .params import OptimizeParams
+from .reference import ReferenceSurface
+from .residuals import Residuals, Weights
+from .selection import Selection, free_vertices, select_polylines
+from .solver import IterationRecord, LevenbergMarquardt, PlanarityMetrics, SolverControl
+
+__all__ = ["optimize", "OptimizeParams", "OptimizeResult", "IterationRecord", "Problem", "build_problem"]
+
+log = logging.getLogger("ppfab")
+
+EXACT_PLANES_LIMIT = 500_000
+"""``plane_solver = "auto"`` keeps support normals as unknowns while Σ (polyline length)² is at most this."""
+
+
+@dataclass
+class OptimizeResult:
+    """What :func:`optimize` returns.
+
+    mesh : the optimised mesh, same type, vertex and face order as the input (a grid gets its support planes)
+    converged : the solver stopped at the targets or at a stationary point (not by the iteration limit)
+    targets_met : max δ_f <= target_delta_f and max δ_P (selected polylines) <= target_delta_p
+    iterations : LM iterations (linear solves, rejected steps included)
+    history : one :class:`IterationRecord` per iteration
+    message : one line saying how the run ended
+    displacement_mean : mean vertex displacement from the input, mesh units
+    displacement_rel : ``displacement_mean`` / bounding-box diagonal of the input
+    displacement_max : largest vertex displacement, mesh units
+    planes : (S, 4) unit support planes ``n·x + d = 0`` of the selected polylines (mesh units)
+    polylines : (S,) indices into ``mesh.polylines`` of the polylines made planar
+    skipped : requested polylines with fewer than 3 vertices (planar anyway)
+    quality : :class:`~ppfab.metrics.Quality` of the result
+    time : wall time in seconds
+    """
+
+    mesh: QuadMesh | QuadGrid
+    converged: bool
+    targets_met: bool
+    iterations: int
+    history: list[IterationRecord]
+    message: str
+    displacement_mean: float
+    displacement_rel: float
+    displacement_max: float
+    planes: np.ndarray
+    polylines: np.ndarray
+    skipped: int
+    quality: Quality
+    time: float
+    params: OptimizeParams = field(default_factory=OptimizeParams)
+
+    @property
+    def delta_f_max(self) -> float:
+        return self.history[-1].delta_f_max if self.history else self._initial[0]
+
+    def summary(self) -> dict:
+        """Plain-data summary (for ``--json`` and reports)."""
+        last = self.history[-1] if self.history else None
+        return {
+            "converged": self.converged, "targets_met": self.targets_met, "iterations": self.iterations,
+            "message": self.message, "time_s": self.time,
+            "displacement_mean": self.displacement_mean, "displacement_rel": self.displacement_rel,
+            "displacement_max": self.displacement_max,
+            "planar_polylines": int(len(self.polylines)), "skipped_polylines": self.skipped,
+            "final_energy": last.energy if last else None,
+            "quality": self.quality.as_dict(), "params": as_plain(self.params),
+        }
+
+
+def _params(params: OptimizeParams | dict | None, kw: dict) -> OptimizeParams:
+    if isinstance(params, OptimizeParams):
+        base = as_plain(params)
+    else:
+        base = dict(params or {})
+    base.update(kw)
+    return parse_params(OptimizeParams, base, "optimize")
+
+
+@dataclass
+class Problem:
+    """An optimisation problem in normalised coordinates (mean edge length 1, centroid at 0).
+
+    ``to_mesh_units(v) = v · scale + center``.
+    """
+
+    mesh: QuadMesh
+    params: OptimizeParams
+    selection: Selection
+    free: np.ndarray
+    center: np.ndarray
+    scale: float
+    residuals: Residuals
+    z0: np.ndarray
+    metrics: PlanarityMetrics
+    guard: StepGuard
+    reference: ReferenceSurface | None
+
+    def on_stage(self, z: np.ndarray) -> None:
+        """A stage begins: update the shape barrier's face normals and the surface foot points."""
+        v = self.residuals.unpack(z)[0]
+        self.residuals.set_shape_reference(v)
+        if self.reference is not None:
+            self.residuals.set_reference(*self.reference.closest(v))
+
+
+def _initial_normals(v: np.ndarray, faces: np.ndarray, lines) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals of least-squares planes of the faces ``(F, 3)`` and polylines ``(S, 3)``."""
+    nf, _ = pl.fit_plane(v[faces])
+    if lines:
+        from ..metrics import pad_polylines
+
+        pts, w = pad_polylines(v, lines)
+        ns, _ = pl.fit_plane(pts, w)
+    else:
+        ns = np.zeros((0, 4))
+    return nf[:, :3], ns[:, :3]
+
+
+def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, **kw) -> Problem:
+    """Set up (but do not solve) the problem of :func:`optimize`; used by benchmarks and tests."""
+    p = _params(params, kw)
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    if not isinstance(qm, QuadMesh):
+        raise GeometryError(f"optimize needs a QuadMesh or QuadGrid, got {type(mesh).__name__}")
+    v = np.asarray(qm.vertices, dtype=float)
+    lengths = qm.edge_lengths()
+    scale = float(lengths.mean()) if len(lengths) else 0.0
+    if not scale > 0:
+        raise GeometryError("the mesh has no edge of positive length", element="edges", value=scale)
+    short = np.flatnonzero(lengths <= 1e-9 * scale)
+    if len(short):
+        e = qm.edges[short[0]]
+        raise GeometryError(f"edge ({int(e[0])}, {int(e[1])}) has zero length ({lengths[short[0]]:.3g}); "
+                            f"{len(short)} degenerate edge(s)", element=f"edge ({int(e[0])}, {int(e[1])})",
+                            value=float(lengths[short[0]]))
+    center = v.mean(axis=0)
+    vn = (v - center) / scale
+    sel = select_polylines(qm, p.families, p.polylines, p.fair_families)
+    free = free_vertices(qm, p.fix_boundary, p.fixed_vertices)
+    weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
+                      p.weight_shape, p.shape_ratio)
+    exact = p.plane_solver == "exact" or (
+        p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
+    res = Residuals(vn, qm.faces, qm.edges, sel.planar, sel.fair, free, weights, p.fairness, p.closeness,
+                    p.planar_faces, plane_unknowns=exact)
+    nf, ns = _initial_normals(vn, qm.faces, sel.planar)
+    z0 = res.pack(vn, ns, nf)
+    metrics = PlanarityMetrics(qm.faces, sel.planar, len(vn))
+    guard = StepGuard(qm.faces, qm.edges, vn, p.min_edge_ratio)
+    ref = ReferenceSurface(vn, qm.faces) if p.closeness == "surface" else None
+    return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref)
+
+
+def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
+             callback: Callable[[IterationRecord], None] | None = None, **kw) -> OptimizeResult:
+    """Make faces planar and polylines planar (P or PP) by the optimisation of §3.3.
+
+    Parameters
+    ----------
+    mesh : :class:`QuadMesh` (any all-quad mesh) or :class:`QuadGrid`
+    params : :class:`OptimizeParams` or a dict of its fields (the design file's ``[optimize]`` table)
+    callback : called with each :class:`IterationRecord` (progress display)
+    **kw : fields of :class:`OptimizeParams` overriding ``params``
+
+    Returns
+    -------
+    :class:`OptimizeResult`; ``targets_met`` says whether max δ_f and max δ_P reached their targets.
+
+    Raises
+    ------
+    DesignError : a parameter is out of range or names a polyline / vertex that does not exist
+    GeometryError : degenerate input (zero-length edges)
+    """
+    t0 = time.perf_counter()
+    prob = build_problem(mesh, params, **kw)
+    p = prob.params
+    control = SolverControl(p.target_delta_f, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall)
+    lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
+    state = lm.run()
+    v_n, ns, _ = prob.residuals.unpack(state.z)
+    v = v_n * prob.scale + prob.center
+    v0 = np.asarray(prob.mesh.vertices)
+    v[~prob.free] = v0[~prob.free]
+    out_qm = prob.mesh.with_vertices(v)
+    planes = _support_planes(v, prob.selection.planar)
+    out = _as_input_type(mesh, out_qm, prob.selection, planes)
+    disp = np.linalg.norm(v - v0, axis=1)
+    diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
+    dfm, _, dpm, _ = prob.metrics((v - prob.center) / prob.scale)
+    met = dfm <= p.target_delta_f and dpm <= p.target_delta_p
+    msg = _message(state.stopped_by, met, dfm, dpm, p, prob)
+    log.info(msg)
+    return OptimizeResult(
+        mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=bool(met),
+        iterations=state.iterations, history=state.history, message=msg,
+        displacement_mean=float(disp.mean()), displacement_rel=float(disp.mean() / diag) if diag > 0 else 0.0,
+        displacement_max=float(disp.max()), planes=planes, polylines=prob.selection.planar_index,
+        skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0, params=p)
+
+
+def _support_planes(v: np.ndarray, lines) -> np.ndarray:
+    """Least-squares unit planes ``(S, 4)`` of the planar polylines in mesh units."""
+    if not lines:
+        return np.zeros((0, 4))
+    from ..metrics import pad_polylines
+
+    pts, w = pad_polylines(v, lines)
+    planes, _ = pl.fit_plane(pts, w)
+    return planes
+
+
+def _as_input_type(mesh, out_qm: QuadMesh, sel: Selection, planes: np.ndarray):
+    if not isinstance(mesh, QuadGrid):
+        return out_qm
+    m1, n1 = mesh.shape
+    fam = np.array([ln.family for ln in sel.planar], dtype=np.int64)
+    support = {}
+    if np.count_nonzero(fam == 0) == m1:
+        support["support_u"] = planes[fam == 0]
+    if np.count_nonzero(fam == 1) == n1:
+        support["support_w"] = planes[fam == 1]
+    return mesh.with_vertices(np.asarray(out_qm.vertices).reshape(m1, n1, 3), **support)
+
+
+def _message(stopped_by: str, met: bool, dfm: float, dpm: float, p: OptimizeParams, prob: Problem) -> str:
+    what = {"targets": "targets met", "stationary": "stationary point reached",
+            "max_iterations": f"iteration limit {p.max_iterations} reached",
+            "stuck": "no step lowers the energy without folding the mesh"}[stopped_by]
+    tail = "" if met else (f"; targets NOT met: max δ_f {dfm:.2e} (target {p.target_delta_f:.0e}), "
+                           f"max δ_P {dpm:.2e} (target {p.target_delta_p:.0e})")
+    note = ""
+    if not prob.mesh.topology.families_consistent and p.families != "none" and prob.mesh.grid is None:
+        note = " (polyline families are not consistent on this mesh: family labels are per polyline)"
+    if len(prob.selection.crossing):
+        note += (f"; left out {len(prob.selection.crossing)} polyline(s) that pass twice through a vertex: "
+                 f"{', '.join(map(str, prob.selection.crossing.tolist()))} (list them in 'polylines' to force)")
+    return (f"{what}: max δ_f {dfm:.2e}, max δ_P {dpm:.2e} over {len(prob.selection.planar)} polylines"
+            f"{tail}{note}")

@@ -1,0 +1,75 @@
+"""Parameters of the P / PP / planar-quad optimisation (§3.3): the ``[optimize]`` table of a design file.
+
+All weights act on a copy of the mesh scaled so that its mean edge length is 1
+and centred at its centroid, so their meaning does not depend on the mesh's units.
+
+Examples
+--------
+>>> from ppfab.schema import parse_params
+>>> p = parse_params(OptimizeParams, {"families": "both", "max_iterations": 50}, "optimize")
+>>> p.families, p.max_iterations, p.weight_fair
+('both', 50, 0.01)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import DesignError
+from ..schema import param
+
+FAMILIES = ("rows", "cols", "both", "none")
+
+
+@dataclass(frozen=True)
+class OptimizeParams:
+    """What to make planar, the weights of the energies of §3.3, and when to stop."""
+
+    families: str = param("rows", doc="polyline families to make planar: rows (family 0, P), cols (family 1, P), "
+                                      "both (PP attempt) or none (planar faces only)", choices=FAMILIES)
+    polylines: list[int] = param([], doc="indices into mesh.polylines that must also become planar "
+                                         "(polylines with fewer than 3 vertices are skipped)", min=0)
+    planar_faces: bool = param(True, doc="make the quads planar (energy E_f); false leaves faces free")
+    weight_planarity: float = param(1.0, doc="λ_P: weight of E_P (vertices of a polyline in its support plane)",
+                                    min=0.0)
+    weight_faces: float = param(1.0, doc="λ_f: weight of E_f (vertices of a face in its plane)", min=0.0)
+    weight_unit: float = param(1.0, doc="λ_1: weight of E_1 (unit normals)", exclusive_min=0.0)
+    weight_fair: float = param(0.01, doc="λ_fair: weight of E_fair (second differences along polylines)", min=0.0)
+    weight_close: float = param(0.01, doc="λ_close: weight of the closeness term to the input", min=0.0)
+    fair_families: str = param("both", doc="polyline families that carry the fairness energy", choices=FAMILIES)
+    fairness: str = param("relative", doc="E_fair on absolute second differences (paper: smooths the mesh) or "
+                                          "relative to the input's (keeps its shape, smooths only the change)",
+                          choices=("absolute", "relative"))
+    closeness: str = param("vertices", doc="closeness to the input vertices, to the input surface "
+                                           "(distance to its tangent planes, foot points updated each stage), "
+                                           "or none", choices=("vertices", "surface", "none"))
+    weight_shape: float = param(1.0, doc="weight of the one-sided barrier that keeps every face corner at "
+                                         "least shape_ratio of its input area (0 switches it off)", min=0.0)
+    shape_ratio: float = param(0.25, doc="fraction of its input area a face corner triangle may shrink to "
+                                         "before the shape barrier acts", min=0.0, exclusive_max=1.0)
+    fix_boundary: bool = param(False, doc="keep boundary vertices where they are")
+    fixed_vertices: list[int] = param([], doc="indices of vertices that must not move", min=0)
+    plane_solver: str = param("auto", doc="support normals in the linear system (exact: best steps, but a "
+                                          "normal couples all vertices of its polyline, so the factorisation "
+                                          "grows with polyline length²), eliminated by variable projection "
+                                          "(projected: as sparse as the mesh), or auto (exact while "
+                                          "Σ (polyline length)² <= 5e5)", choices=("auto", "exact", "projected"))
+    target_delta_f: float = param(1e-6, doc="stop when max δ_f (face planarity, §3.3) is at most this",
+                                  exclusive_min=0.0)
+    target_delta_p: float = param(1e-6, doc="stop when max δ_P of the selected polylines is at most this",
+                                  exclusive_min=0.0)
+    max_iterations: int = param(200, doc="maximum number of Levenberg–Marquardt iterations "
+                                         "(linear solves, rejected steps included)", min=1, max=100000)
+    reg_decay: float = param(0.1, doc="factor applied to the fairness and closeness weights when progress stalls "
+                                      "(1 keeps the paper's energy fixed)", exclusive_min=0.0, max=1.0)
+    reg_min: float = param(1e-6, doc="smallest factor the regularisation weights are reduced to",
+                           exclusive_min=0.0, max=1.0)
+    stall: float = param(0.05, doc="a stage ends when an accepted step lowers the energy by less than "
+                                   "this fraction", exclusive_min=0.0, exclusive_max=1.0)
+    min_edge_ratio: float = param(0.2, doc="reject a step that shortens an edge below this fraction of its "
+                                           "input length (collapse guard)", exclusive_min=0.0, exclusive_max=1.0)
+
+    def __post_init__(self):
+        if self.families == "none" and not self.polylines and not self.planar_faces:
+            raise DesignError("families", "nothing to optimise: families = 'none', no polylines and "
+                                          "planar_faces = false")

@@ -1,0 +1,235 @@
+"""Levenberg–Marquardt for the energies of §3.3, with regularisation continuation.
+
+The loop is Madsen, Nielsen & Tingleff, *Methods for non-linear least squares
+problems* (2004), Algorithm 3.16: solve ``(JᵀJ + μI) h = −Jᵀr``
+(:class:`~ppfab.optimize.linsolve.DampedSystem`), accept the step when the
+gain ratio ``ρ = (E(x) − E(x + h)) / (L(0) − L(h))`` is positive and the
+:class:`~ppfab.optimize.guard.StepGuard` finds no fold or collapse, then
+``μ ← μ·max(1/3, 1 − (2ρ − 1)³)``; otherwise the step is undone and
+``μ ← μν, ν ← 2ν``.  Within a stage the energy therefore never increases.
+
+Stages: the paper's energy (stage 0, regularisation factor ``s = 1``) has its
+minimum where the fairness and closeness terms still pull the vertices a
+little off the constraints.  When an accepted step lowers the energy by less
+than ``stall`` (relative), the fairness and closeness weights are multiplied by
+``reg_decay`` (down to ``reg_min``) and a new stage starts from the current
+state, so the constraints E_P, E_f, E_1 are driven to zero while the mesh stays
+where the regularised problem put it.  The run stops when the targets on
+``max δ_f`` and ``max δ_P`` are met (measured with :mod:`ppfab.metrics` after
+every accepted step), at a stationary point, or after ``max_iterations`` solves.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..metrics import face_planarity, pad_polylines, polyline_planarity
+from ..topology import Polyline
+from .guard import StepGuard
+from .linsolve import BlockOrdering, DampedSystem
+from .residuals import Residuals
+
+
+@dataclass(frozen=True)
+class IterationRecord:
+    """One Levenberg–Marquardt iteration (one linear solve).
+
+    Energies are of the state after the iteration (unchanged when the step was
+    rejected); ``energy`` is the weighted total at the stage's regularisation
+    factor ``reg``; δ values are of the current state (§3.3 metrics).
+    """
+
+    iteration: int
+    stage: int
+    reg: float
+    accepted: bool
+    rejected_by: str
+    mu: float
+    step: float
+    energy: float
+    E_P: float
+    E_f: float
+    E_1: float
+    E_fair: float
+    E_close: float
+    delta_f_max: float
+    delta_f_mean: float
+    delta_p_max: float
+    delta_p_mean: float
+    time: float
+
+    def line(self) -> str:
+        """One line for progress output."""
+        mark = "+" if self.accepted else f"x {self.rejected_by}"
+        return (f"it {self.iteration:4d} st {self.stage} s={self.reg:.0e} E={self.energy:.3e} "
+                f"E_P={self.E_P:.2e} E_f={self.E_f:.2e} dF={self.delta_f_max:.2e}/{self.delta_f_mean:.2e} "
+                f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e} mu={self.mu:.1e} {mark}")
+
+
+class PlanarityMetrics:
+    """``δ_f`` of all faces and ``δ_P`` of the selected polylines (§3.3), from vertices ``(N, 3)``."""
+
+    def __init__(self, faces: np.ndarray, polylines: list[Polyline], n_vertices: int):
+        self.faces = np.asarray(faces, dtype=np.int64)
+        self.has_lines = bool(polylines)
+        if polylines:
+            idx, self.weights = pad_polylines(np.arange(n_vertices, dtype=float)[:, None], polylines)
+            self.index = idx[..., 0].astype(np.int64)
+
+    def __call__(self, vertices: np.ndarray) -> tuple[float, float, float, float]:
+        """``(δ_f max, δ_f mean, δ_P max, δ_P mean)``."""
+        df = face_planarity(vertices[self.faces]) if len(self.faces) else np.zeros(1)
+        dp = polyline_planarity(vertices[self.index], self.weights) if self.has_lines else np.zeros(1)
+        return float(df.max()), float(df.mean()), float(dp.max()), float(dp.mean())
+
+
+@dataclass
+class SolverControl:
+    """Stopping and continuation settings (see module docstring)."""
+
+    target_delta_f: float = 1e-6
+    target_delta_p: float = 1e-6
+    max_iterations: int = 200
+    reg_decay: float = 0.1
+    reg_min: float = 1e-6
+    stall: float = 0.05
+    tau: float = 1e-4
+    max_rejections: int = 40
+
+
+@dataclass
+class SolverState:
+    """What a run ended with."""
+
+    z: np.ndarray
+    iterations: int
+    stopped_by: str           # "targets", "stationary", "max_iterations", "stuck"
+    history: list[IterationRecord] = field(default_factory=list)
+
+
+class LevenbergMarquardt:
+    """Stateful LM solver over a :class:`Residuals` problem (call :meth:`step` or :meth:`run`).
+
+    Parameters
+    ----------
+    problem : the residuals and Jacobian
+    z0 : (n_full,) initial state
+    metrics : maps vertices ``(N, 3)`` to ``(δ_f max, δ_f mean, δ_P max, δ_P mean)``
+    guard : step guard, or ``None``
+    control : :class:`SolverControl`
+    on_stage : called with the state ``z`` when a new stage begins (e.g. to update foot points)
+    callback : called with every :class:`IterationRecord`
+    """
+
+    def __init__(self, problem: Residuals, z0: np.ndarray, metrics: Callable[[np.ndarray], tuple],
+                 guard: StepGuard | None = None, control: SolverControl | None = None,
+                 on_stage: Callable[[np.ndarray], None] | None = None,
+                 callback: Callable[[IterationRecord], None] | None = None):
+        self.p = problem
+        self.z = problem.project_normals(np.array(z0, dtype=float))
+        self.metrics = metrics
+        self.guard = guard
+        self.c = control or SolverControl()
+        self.on_stage = on_stage
+        self.callback = callback
+        self.reg = 1.0
+        self.stage = 0
+        self.mu: float | None = None
+        self.nu = 2.0
+        self.rejections = 0
+        self.iteration = 0
+        self.history: list[IterationRecord] = []
+        self.t0 = time.perf_counter()
+        self.ordering = BlockOrdering()
+        if on_stage is not None:
+            on_stage(self.z)
+        self._linearise()
+        self.current_metrics = metrics(self.vertices)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return self.p.unpack(self.z)[0]
+
+    def _linearise(self) -> None:
+        self.r = self.p.residual(self.z, self.reg)
+        self.energy = float(self.r @ self.r)
+        self.system = DampedSystem(self.p.jacobian(self.z, self.reg), self.r, self.p.n_face_unknowns,
+                                   self.ordering)
+        if self.mu is None:
+            self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
+
+    def targets_met(self) -> bool:
+        dfm, _, dpm, _ = self.current_metrics
+        return dfm <= self.c.target_delta_f and dpm <= self.c.target_delta_p
+
+    def _record(self, accepted: bool, reason: str, step: float) -> IterationRecord:
+        e = self.p.energies(self.z, self.reg)
+        m = self.current_metrics
+        rec = IterationRecord(self.iteration, self.stage, self.reg, accepted, reason, float(self.mu), step,
+                              e["total"], e["E_P"], e["E_f"], e["E_1"], e["E_fair"], e["E_close"],
+                              m[0], m[1], m[2], m[3], time.perf_counter() - self.t0)
+        self.history.append(rec)
+        if self.callback is not None:
+            self.callback(rec)
+        return rec
+
+    def step(self) -> str:
+        """One LM iteration; returns ``''`` to go on or the reason to stop."""
+        self.iteration += 1
+        h = self.system.solve(self.mu)
+        z_new = self.z.copy()
+        z_new[self.p.free_index] += h
+        z_new = self.p.project_normals(z_new)
+        v_old, v_new = self.vertices, self.p.unpack(z_new)[0]
+        reason = self.guard.check(v_old, v_new) if self.guard is not None else ""
+        step_norm = float(np.linalg.norm(h))
+        if not reason:
+            r_new = self.p.residual(z_new, self.reg)
+            e_new = float(r_new @ r_new)
+            pred = self.system.predicted_decrease(h, self.mu)
+            rho = (self.energy - e_new) / pred if pred > 0 else -1.0
+            if not (rho > 0 and np.isfinite(e_new)):
+                reason = "energy"
+        if reason:                       # undo: state, energy and linearisation stay as they were
+            self.mu *= self.nu
+            self.nu *= 2.0
+            self.rejections += 1
+            self._record(False, reason, step_norm)
+            if self.rejections >= self.c.max_rejections:
+                return "stuck"
+            return "max_iterations" if self.iteration >= self.c.max_iterations else ""
+        self.rejections = 0
+        old_energy = self.energy
+        self.z = z_new
+        self.mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+        self.nu = 2.0
+        self.current_metrics = self.metrics(self.vertices)
+        self._record(True, "", step_norm)
+        if self.targets_met():
+            return "targets"
+        decrease = (old_energy - e_new) / old_energy if old_energy > 0 else 0.0
+        tiny = step_norm <= 1e-13 * (np.linalg.norm(self.z) + 1e-13) or decrease < 1e-13
+        if decrease < self.c.stall and self.reg > self.c.reg_min and self.c.reg_decay < 1.0:
+            self.reg = max(self.reg * self.c.reg_decay, self.c.reg_min)
+            self.stage += 1
+            if self.on_stage is not None:
+                self.on_stage(self.z)
+        elif tiny:
+            return "stationary"
+        if self.iteration >= self.c.max_iterations:
+            return "max_iterations"
+        self._linearise()
+        return ""
+
+    def run(self) -> SolverState:
+        """Iterate until a stop criterion (see module docstring)."""
+        if self.targets_met():
+            return SolverState(self.z, 0, "targets", self.history)
+        reason = ""
+        while not reason:
+            reason = self.step()
+        return SolverState(self.z, self.iteration, reason, self.history)
