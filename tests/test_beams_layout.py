@@ -209,7 +209,7 @@ def test_long_beams_are_split_into_pieces():
     bs = build_beams(s, BeamParams(max_length=5000.0))
     for beam in {p.beam_id for p in bs.plates}:
         pieces = sorted((p for p in bs.plates if p.beam_id == beam), key=lambda p: p.piece)
-        assert all(p.length <= 5000.0 for p in pieces)
+        assert all(np.ptp(p.outline[:, 0]) <= 5000.0 for p in pieces)      # the flat part fits 5 m
         line = s.polylines[pieces[0].polyline]
         if sum(np.linalg.norm(np.diff(s.vertices[line.vertices], axis=0), axis=1)) > 5000:
             assert len(pieces) > 1 and pieces[0].part_id == f"{beam}-S00"
@@ -217,6 +217,16 @@ def test_long_beams_are_split_into_pieces():
         for a, b in zip(pieces[:-1], pieces[1:]):      # neighbouring pieces share their cut
             assert np.abs(a.frame.to3d(a.top[-1]) - b.frame.to3d(b.top[0])).max() < 1e-8
             assert np.abs(a.frame.to3d(a.bottom[-1]) - b.frame.to3d(b.bottom[0])).max() < 1e-8
+
+
+def test_beams_that_cannot_be_split_short_enough_are_reported():
+    s = support_pp(sample_pp_grid(3, 4))
+    bs = build_beams(s, BeamParams(max_length=1000.0), strict=False)
+    long = [d for d in bs.report.defects if d.kind == "too_long"]
+    assert sorted(d.part_id for d in long) == sorted({p.beam_id for p in bs.plates})   # edges > 1 m
+    for d in long:
+        assert d.value > 1000.0 and d.value == pytest.approx(
+            max(np.ptp(p.raw_outline[:, 0]) for p in bs.plates if p.beam_id == d.part_id), abs=1e-6)
 
 
 def test_closed_rows_are_cut_into_pieces():

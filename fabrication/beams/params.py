@@ -37,8 +37,9 @@ class BeamParams:
     min_angle_deg: float = param(20.0, doc="plates meeting at a node at a smaller angle are reported as "
                                            "degenerate", min=0, exclusive_max=90)
     min_segment: float = param(10.0, doc="shortest acceptable edge or trimmed segment, mm", min=0)
-    max_length: float = param(6000.0, doc="longest piece along its top edge, mm; longer beams (and every "
-                                          "closed one) are split at edge midpoints; 0 = never split", min=0)
+    max_length: float = param(6000.0, doc="longest flat piece, mm (its extent along its chord); longer beams "
+                                          "(and every closed one) are split at edge midpoints; 0 = never split",
+                              min=0)
     plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)

@@ -368,30 +368,44 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
 
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
                 defects: list[Defect]) -> list[BeamPlate]:
+    """The pieces of a planar polyline.  Cut points are chosen along the polyline
+    (:func:`split_edges`); a piece whose flat length (extent along its chord, bottom-edge
+    overhang at the ends included) still exceeds ``max_length`` makes the split tighter."""
+    line = support.polylines[l]
+    pts = support.vertices[line.vertices]
+    closed = bool(line.closed and len(line.vertices) > 2)
+    seg = np.linalg.norm(np.diff(np.concatenate([pts, pts[:1]]) if closed else pts, axis=0), axis=1)
+    limit = params.max_length
+    for _ in range(8):
+        cuts, longest = split_edges(seg, closed, limit)
+        pieces = _pieces(support, params, l, beam_id, cuts, closed)
+        extent = max(float(np.ptp(p.raw_outline[:, 0])) for p in pieces)
+        if params.max_length <= 0 or extent <= params.max_length or longest > limit:
+            break
+        limit -= extent - params.max_length + 1e-6
+    if params.max_length > 0 and (longest > limit or extent > params.max_length):
+        defects.append(Defect(beam_id, "too_long", extent, params.max_length, f"polyline {l}",
+                              f"{beam_id}: cannot be cut into pieces of at most {params.max_length:g} mm at edge "
+                              f"midpoints (longest piece {extent:.0f} mm)"))
+    return pieces
+
+
+def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str, cuts: list[int],
+            closed: bool) -> list[BeamPlate]:
     line = support.polylines[l]
     vs = line.vertices
     pts = support.vertices[vs]
-    closed = bool(line.closed and len(vs) > 2)
-    seg = np.linalg.norm(np.diff(np.concatenate([pts, pts[:1]]) if closed else pts, axis=0), axis=1)
-    cuts, longest = split_edges(seg, closed, params.max_length)
-    if params.max_length > 0 and longest > params.max_length:
-        defects.append(Defect(beam_id, "too_long", longest, params.max_length, f"polyline {l}",
-                              f"{beam_id}: cannot be cut into pieces of at most {params.max_length:g} mm at edge "
-                              f"midpoints (longest piece {longest:.0f} mm)"))
     plane = support.polyline_planes[l]
     axes = support.axes[vs]
     nn = len(vs)
     if closed:
-        bounds = [(cuts[r], cuts[(r + 1) % len(cuts)]) for r in range(len(cuts))]
         pieces = []
-        for a, b in bounds:
-            idx = [(a + 1 + t) % nn for t in range(((b - a) % nn) or nn)]
-            pieces.append((a, idx, b))
+        for r in range(len(cuts)):
+            a, b = cuts[r], cuts[(r + 1) % len(cuts)]
+            pieces.append((a, [(a + 1 + t) % nn for t in range(((b - a) % nn) or nn)], b))
     else:
-        starts = [None] + cuts
-        ends = cuts + [None]
         pieces = []
-        for s, e in zip(starts, ends):
+        for s, e in zip([None] + cuts, cuts + [None]):
             lo = 0 if s is None else s + 1
             hi = nn - 1 if e is None else e
             pieces.append((s, list(range(lo, hi + 1)), e))
@@ -411,10 +425,9 @@ def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: 
             ca.append(axes[e] + axes[(e + 1) % nn])
         ca = np.asarray(ca)
         ca /= np.linalg.norm(ca, axis=1, keepdims=True)
-        nodes = vs[idx]
         # a node is an end only where the polyline itself ends (pieces end at edge midpoints)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
         pid = beam_id if len(pieces) == 1 else f"{beam_id}-S{r:0{w}d}"
-        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca, nodes,
+        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca, vs[idx],
                               through, np.asarray(chain), params, pts[idx]))
     return out
