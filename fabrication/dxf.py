@@ -138,6 +138,13 @@ class CuttingSheet:
     def write(self, path: str | os.PathLike) -> Path:
         """Save (deterministic bytes)."""
         path = Path(path)
+        # ezdxf adds a CLASS per entity type in use in set order (varies with the hash seed): add them
+        # now and sort them, so the CLASSES section is the same in every process
+        classes = self.doc.classes
+        classes.add_required_classes(self.doc.dxfversion)
+        ordered = sorted(classes.classes.items())
+        classes.classes.clear()
+        classes.classes.update(ordered)
         with _fixed_metadata():
             self.doc.saveas(path)
         return path
