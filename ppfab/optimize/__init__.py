@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from .. import planes as pl
-from ..errors import GeometryError
+from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid, QuadMesh
 from ..metrics import Quality, quality
 from ..schema import as_plain, parse_params
@@ -171,8 +171,11 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                             value=float(lengths[short[0]]))
     center = v.mean(axis=0)
     vn = (v - center) / scale
-    sel = select_polylines(qm, p.families, p.polylines, p.fair_families)
-    free = free_vertices(qm, p.fix_boundary, p.fixed_vertices)
+    try:
+        sel = select_polylines(qm, p.families, p.polylines, p.fair_families)
+        free = free_vertices(qm, p.fix_boundary, p.fixed_vertices)
+    except DesignError as exc:
+        raise DesignError(f"optimize.{exc.key}", str(exc).split(": ", 1)[-1]) from None
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
                       p.weight_shape, p.shape_ratio)
     exact = p.plane_solver == "exact" or (
