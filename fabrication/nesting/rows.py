@@ -31,7 +31,7 @@ from .catalog import Catalog
 from .shapes import pair_gains, slide_distance
 
 # work units (≈ 5 µs each on the reference machine) charged per operation: see Work
-COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 30, 1.0, 80, 200, 60
+COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 30, 1.0, 60, 150, 40
 
 
 @dataclass

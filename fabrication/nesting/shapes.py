@@ -90,7 +90,7 @@ def orientations(part_index: int, outline: np.ndarray, rotations: list[float], m
             p = ccw(rotate(outline, r, mirrored))
             lo = p.min(axis=0)
             poly = p - lo
-            key = tuple(np.round(np.sort(poly, axis=0).ravel(), 6))
+            key = tuple(sorted(map(tuple, np.round(poly, 6).tolist())))    # the same point set = the same pose
             if key in seen:
                 continue
             seen.add(key)
@@ -99,8 +99,8 @@ def orientations(part_index: int, outline: np.ndarray, rotations: list[float], m
     return out
 
 
-def pad(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stack polygons: vertices ``(P, kmax, 2)`` and edge ends ``(P, kmax, 2)``; padding edges have length 0."""
+def pad(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Stack polygons: edge starts (= vertices) and edge ends, each ``(P, kmax, 2)``; padding edges have length 0."""
     kmax = max(len(p) for p in polys)
     v = np.empty((len(polys), kmax, 2))
     nxt = np.empty((len(polys), kmax, 2))
@@ -111,7 +111,7 @@ def pad(polys: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         nxt[i, :k - 1] = p[1:]
         nxt[i, k - 1] = p[0]
         nxt[i, k:] = p[-1]
-    return v, v, nxt
+    return v, nxt
 
 
 def _ray_hits(p: np.ndarray, d: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
@@ -162,8 +162,8 @@ def pair_gains(halos: list[np.ndarray], widths: np.ndarray, polys: list[np.ndarr
     """
     if not halos or not polys:
         return np.zeros((len(halos), len(polys)))
-    _, ha, hb = pad(halos)                      # (A, h, 2)
-    _, pa, pb = pad(polys)                      # (B, k, 2)
+    ha, hb = pad(halos)                         # (A, h, 2)
+    pa, pb = pad(polys)                         # (B, k, 2)
     box = np.asarray(widths, dtype=float) + spacing
     start = np.maximum(box, ha[..., 0].max(axis=1) + 1e-3)                                  # (A,)
     off = start[:, None, None, None] * np.array([1.0, 0.0])                                 # (A,1,1,2)
