@@ -67,6 +67,9 @@ class OptimizeResult:
     skipped : requested polylines with fewer than 3 vertices (planar anyway)
     quality : :class:`~ppfab.metrics.Quality` of the result
     time : wall time in seconds
+    delta_f_max, delta_f_mean : face planarity δ_f of the result (§3.3)
+    delta_p_max, delta_p_mean : δ_P of the result over the polylines made planar
+    excluded : polylines of the requested families left out because they pass twice through a vertex
     """
 
     mesh: QuadMesh | QuadGrid
@@ -83,11 +86,12 @@ class OptimizeResult:
     skipped: int
     quality: Quality
     time: float
+    delta_f_max: float = 0.0
+    delta_f_mean: float = 0.0
+    delta_p_max: float = 0.0
+    delta_p_mean: float = 0.0
+    excluded: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     params: OptimizeParams = field(default_factory=OptimizeParams)
-
-    @property
-    def delta_f_max(self) -> float:
-        return self.history[-1].delta_f_max if self.history else self._initial[0]
 
     def summary(self) -> dict:
         """Plain-data summary (for ``--json`` and reports)."""
@@ -99,6 +103,9 @@ class OptimizeResult:
             "displacement_max": self.displacement_max,
             "planar_polylines": int(len(self.polylines)), "skipped_polylines": self.skipped,
             "final_energy": last.energy if last else None,
+            "delta_f_max": self.delta_f_max, "delta_f_mean": self.delta_f_mean,
+            "delta_p_max": self.delta_p_max, "delta_p_mean": self.delta_p_mean,
+            "excluded_polylines": self.excluded.tolist(),
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
         }
 
@@ -216,16 +223,16 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     control = SolverControl(p.target_delta_f, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall)
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
-    v_n, ns, _ = prob.residuals.unpack(state.z)
-    v = v_n * prob.scale + prob.center
+    v_n = prob.residuals.unpack(state.z)[0]
     v0 = np.asarray(prob.mesh.vertices)
+    v = v0 + (v_n - prob.residuals.vertices0) * prob.scale         # unmoved vertices stay bit-identical
     v[~prob.free] = v0[~prob.free]
     out_qm = prob.mesh.with_vertices(v)
     planes = _support_planes(v, prob.selection.planar)
     out = _as_input_type(mesh, out_qm, prob.selection, planes)
     disp = np.linalg.norm(v - v0, axis=1)
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
-    dfm, _, dpm, _ = prob.metrics((v - prob.center) / prob.scale)
+    dfm, dfa, dpm, dpa = prob.metrics(v)
     met = dfm <= p.target_delta_f and dpm <= p.target_delta_p
     msg = _message(state.stopped_by, met, dfm, dpm, p, prob)
     log.info(msg)
@@ -234,7 +241,9 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         iterations=state.iterations, history=state.history, message=msg,
         displacement_mean=float(disp.mean()), displacement_rel=float(disp.mean() / diag) if diag > 0 else 0.0,
         displacement_max=float(disp.max()), planes=planes, polylines=prob.selection.planar_index,
-        skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0, params=p)
+        skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0,
+        delta_f_max=dfm, delta_f_mean=dfa, delta_p_max=dpm, delta_p_mean=dpa,
+        excluded=prob.selection.crossing, params=p)
 
 
 def _support_planes(v: np.ndarray, lines) -> np.ndarray:
