@@ -17,7 +17,7 @@ def render(path: Path) -> Path:
     from ppfab.cli.design import load_design
     from ppfab.cli.pipeline import build_geometry
 
-    design = load_design(path, sections=("design", "geometry", "output"))  # TODO(integration)
+    design = load_design(path)
     mesh = build_geometry(design).mesh
     OUT.mkdir(parents=True, exist_ok=True)
     target = OUT / f"{path.stem}.png"

@@ -27,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     from .output import AtomicFolder, Progress
     from .pipeline import BuildContext, run_stages
 
-    design = load_design(args.design, sections=("design", "geometry", "output"))  # TODO(integration)
+    design = load_design(args.design)
     progress = Progress(quiet=args.quiet or args.json)
     with AtomicFolder(args.out, force=args.force) as tmp:
         ctx = BuildContext(design=design, out=tmp, progress=progress, allow_large=args.allow_large)

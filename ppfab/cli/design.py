@@ -7,6 +7,7 @@ construction parameters)::
     [geometry]          method | mesh, scale, translate, rotate_z_deg, flip_orientation, planar_families
     [geometry.params]   the parameters of the chosen construction
     [optimize]          optional: optimise a mesh input for the P/PP property first
+    [support]           how the node axes / support planes are found
     [beams]             beam plates and joints
     [panels]            glass panels
     [nesting]           stock sheets for the glass
@@ -91,16 +92,28 @@ def _section_types() -> dict[str, Callable[[], type]]:
         from ..optimize.params import OptimizeParams
         return OptimizeParams
 
+    def support():
+        from ..support import SupportParams
+        return SupportParams
+
     return {
         "design": lambda: DesignInfo,
         "geometry": lambda: GeometrySection,
         "optimize": optimize,
+        "support": support,
         "beams": beams,
         "panels": panels,
         "nesting": nesting,
         "beam_nesting": nesting,
         "output": lambda: OutputSection,
     }
+
+
+SECTION_DEFAULTS: dict[str, dict[str, Any]] = {
+    # plate stock for the beams differs from glass stock: 6 m x 2 m steel plate
+    "beam_nesting": {"sheet": [6000.0, 2000.0], "time_budget": 5.0},
+}
+"""Defaults that differ between sections sharing one parameter record."""
 
 
 @dataclass(frozen=True)
@@ -145,7 +158,10 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
     wanted = sections or tuple(types)
     records = {}
     for name in wanted:
-        records[name] = parse_params(types[name](), doc.get(name, {}), name)
+        table = dict(doc.get(name, {}))
+        for key, value in SECTION_DEFAULTS.get(name, {}).items():
+            table.setdefault(key, value)
+        records[name] = parse_params(types[name](), table, name)
     geometry: GeometrySection = records["geometry"]
     if geometry.method is not None:
         from ..constructions import get_construction

@@ -164,10 +164,17 @@ def stage_mesh_files(ctx: BuildContext) -> None:
     ctx.progress.done("mesh.obj")
 
 
+from . import stages as _fab  # noqa: E402
+
 STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("geometry", stage_geometry),
     ("quality", stage_quality),
+    ("support", _fab.stage_support),
+    ("beams", _fab.stage_beams),
+    ("panels", _fab.stage_panels),
+    ("nesting", _fab.stage_nesting),
     ("mesh_files", stage_mesh_files),
+    ("files", _fab.stage_files),
 ]
 
 
@@ -213,7 +220,8 @@ def stage_manifest(ctx: BuildContext) -> None:
         mesh_entry.update(rows=int(grid.shape[0]), cols=int(grid.shape[1]), closed=bool(grid.closed))
     qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
     mesh_entry.update(vertices=int(len(qm.vertices)), faces=int(len(qm.faces)))
-    fabrication = dict(ctx.data.get("fabrication_params", {}))
+    fabrication = _fab.fabrication_params(ctx)
+    ctx.data["summary"] = _fab.summary(ctx)
     design = ctx.design
     manifest = {
         "generator": f"ppfab {__version__}",
