@@ -55,7 +55,7 @@ def _placements(cat: Catalog, sheets: list[Sheet], params: NestingParams) -> lis
             part = cat.parts[o.part]
             out[o.part] = Placement(part_id=part.part_id, sheet=rank, x=float(x0 + pc.X + o.shift[0]),
                                     y=float(y0 + pc.Y + o.shift[1]), rotation_deg=float(o.rotation),
-                                    mirrored=bool(o.mirrored), nest_tag=f"S{rank + 1:0{wsheet}d}-{k + 1:0{wpart}d}")
+                                    mirrored=bool(o.mirrored), nest_tag=f"{params.tag_prefix}{rank + 1:0{wsheet}d}-{k + 1:0{wpart}d}")
     return [out[i] for i in range(cat.n_parts)]
 
 

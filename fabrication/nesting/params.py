@@ -35,6 +35,8 @@ class NestingParams:
     time_budget: float = param(20.0, doc="search budget, seconds of nominal work (the result depends only on "
                                          "the budget and the seed, never on the machine's speed)", min=0)
     seed: int = param(0, doc="seed of the randomised search", min=0)
+    tag_prefix: str = param("S", doc="first letters of the nest tags (``S03-017`` = sheet 3, part 17); glass and "
+                                     "beam plates use different prefixes so every tag is unique")
 
     def __post_init__(self):
         m = self.margins()
@@ -44,6 +46,12 @@ class NestingParams:
         if left + right >= self.sheet[0] or bottom + top >= self.sheet[1]:
             raise DesignError("margin", f"trim {list(m)} leaves no usable area on a {self.sheet[0]:g} x "
                                         f"{self.sheet[1]:g} mm sheet")
+        x0, y0, x1, y1 = self.usable()
+        if self.spacing >= min(x1 - x0, y1 - y0):
+            raise DesignError("spacing", f"part spacing {self.spacing:g} mm is not smaller than the usable "
+                                         f"sheet ({x1 - x0:g} x {y1 - y0:g} mm)")
+        if not self.tag_prefix.isalnum():
+            raise DesignError("tag_prefix", f"must be letters or digits, got {self.tag_prefix!r}")
 
     def margins(self) -> tuple[float, float, float, float] | None:
         """Edge trim ``(left, right, bottom, top)`` in mm (``None`` if malformed)."""

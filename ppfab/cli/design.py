@@ -111,7 +111,8 @@ def _section_types() -> dict[str, Callable[[], type]]:
 
 SECTION_DEFAULTS: dict[str, dict[str, Any]] = {
     # plate stock for the beams differs from glass stock: 6 m x 2 m steel plate
-    "beam_nesting": {"sheet": [6000.0, 2000.0], "time_budget": 5.0},
+    "nesting": {"tag_prefix": "G"},
+    "beam_nesting": {"sheet": [6000.0, 2000.0], "time_budget": 5.0, "tag_prefix": "B"},
 }
 """Defaults that differ between sections sharing one parameter record."""
 
