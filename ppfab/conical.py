@@ -20,8 +20,9 @@ one step beyond each side that the constructions keep in
 shape ``(rows + 1, cols + 1, 4)`` for a grid of ``rows × cols`` vertices and
 vertex ``v[i, j]`` is surrounded by ``E[i, j], E[i+1, j], E[i+1, j+1], E[i, j+1]``
 (for a closed grid ``E[:, b]`` is face column ``(b − 1) mod cols``).  Without
-stored ghosts a boundary face is repeated as its own ghost, which makes the
-boundary axis the bisector of its faces.
+stored ghosts (a grid read from a file) :func:`ghost_planes` builds them so that
+every boundary vertex is conical and planar boundary polylines stay planar under
+Laguerre maps and offsets (Minkowski reflections in the polyline's plane).
 """
 
 from __future__ import annotations
@@ -38,17 +39,21 @@ from .metrics import face_planarity, grid_conical_residual, plane_residual, poly
 
 # -- extended face planes -----------------------------------------------------------------
 
+PLANAR_BOUNDARY_TOL = 1e-7
+"""A boundary polyline within this distance of a plane (relative to the bounding-box diagonal) counts as planar."""
+
+
 def extended_planes(grid: QuadGrid) -> np.ndarray:
     """Unit face planes with one ghost face beyond each side, ``(rows + 1, cols + 1, 4)``.
 
     Taken from ``meta["extended_face_planes"]`` (unit planes of a conical P
     construction) or ``meta["extended_face_image"]`` (the weighted face image of a
     PP construction, orientation of the weights kept) when the construction stored it
-    and every vertex still lies on its four stored planes; otherwise the grid's corner-order
-    face planes padded by repeating the boundary faces.
+    and every vertex still lies on its four stored planes; otherwise built by
+    :func:`ghost_planes`.
     """
     rows, cols = grid.shape
-    size = float(np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0))) or 1.0
+    size = _size(grid)
     for key in ("extended_face_planes", "extended_face_image"):
         stored = grid.meta.get(key)
         if stored is not None:
@@ -58,12 +63,200 @@ def extended_planes(grid: QuadGrid) -> np.ndarray:
                 # stale planes (vertices changed after construction) are ignored
                 if np.abs(pl.evaluate(vertex_planes(grid, E), grid.vertices[..., None, :])).max() <= 1e-7 * size:
                     return E
-    f = grid.face_planes
+    return ghost_planes(grid)
+
+
+def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray:
+    """The unit face planes padded with conical ghost faces, ``(rows + 1, cols + 1, 4)``.
+
+    A ghost face lies beyond a boundary face and passes through its boundary
+    edge.  The ghosts are chosen so that the four planes around a boundary vertex
+    touch one cone of revolution (concyclic normals): the vertex gets a cone
+    axis, and its four planes meet in exactly that vertex.
+
+    * **Planar boundary polyline** (within ``tol`` × bounding-box diagonal of its
+      support plane, or else of its least-squares plane) ``W = (w, w₄)``, ``|w| = 1``:
+      the ghosts are the Minkowski reflection (§2.1.1,
+      :meth:`ppfab.laguerre.LaguerreMap.reflection`) of the boundary faces in
+      ``H = (w, h₄)`` through a point ``Z = (p, 0)`` of ``W``.  It fixes every sphere
+      with ``<<X − Z, H>> = 0``, among them the points of ``W``; the cone of a boundary
+      vertex is the one in that hyperplane (direction ``(a, −c)`` with
+      ``a·w + c h₄ = 0``), mapped to itself.  All cones of the polyline then lie in
+      one hyperplane, so Laguerre maps and offsets keep the polyline planar
+      (Prop. 2.1).  ``h₄`` is the median of ``−(a·w)/c`` over the bisector axes
+      ``a ∝ n_k + n_{k+1}`` of consecutive boundary faces, which keeps the boundary
+      cones near the bisectors (``h₄ = 0``, a Euclidean mirror, folds meshes that
+      meet ``W`` obliquely).  Corner ghosts are reflected in the column and then the
+      row hyperplane.
+    * **Non-planar open boundary polyline**: the ghosts are propagated.  At the
+      middle boundary vertex the cone touching its two faces whose axis is nearest
+      to the axis of the neighbouring interior vertex is chosen; vertex by vertex
+      the circle through the three known normals then gives the next ghost, the
+      second plane through the next boundary edge tangent to that cone.  A corner
+      ghost is the reflection of the row ghost in the column hyperplane when the
+      column is planar, else the tangent plane whose normal is opposite the
+      face's normal on the corner cone's circle.
+    * Otherwise (closed non-planar boundary, a single boundary face, degenerate
+      cones) each boundary face is its own ghost: the boundary cones are the
+      bisectors of two faces, which Laguerre maps and offsets handle, but the
+      four planes of such a vertex meet in a line, not a point.
+
+    Parameters
+    ----------
+    grid : a quad grid with planar faces
+    tol : planarity tolerance of a boundary polyline, relative to the bounding-box diagonal
+    """
+    v = grid.vertices
+    rows, cols = grid.shape
+    f = pl.normalize(grid.face_planes)                          # (m, n', 4)
+    m, size = rows - 1, _size(grid)
+    col_maps = [None, None]
     if grid.closed:
-        f = np.concatenate([f[:, -1:], f], axis=1)
+        pad = np.concatenate([f[:, -1:], f], axis=1)            # E[:, b] is face column (b − 1) mod cols
     else:
-        f = np.concatenate([f[:, :1], f, f[:, -1:]], axis=1)
-    return np.concatenate([f[:1], f, f[-1:]], axis=0)
+        sides = []
+        for k, (j, inner) in enumerate(((0, 1), (-1, -2))):
+            support = None if grid.support_w is None else grid.support_w[j]
+            W = _boundary_plane(v[:, j], support, size, tol)
+            col_maps[k] = None if W is None else _reflection(f[:, j, :3], W, closed=False)
+            if col_maps[k] is not None:
+                ghosts = col_maps[k].planes(f[:, j])
+            else:
+                ghosts = _propagated(v[:, j], f[:, j], f[:, inner] if cols > 2 else None)
+            sides.append(f[:, j] if ghosts is None else ghosts)
+        pad = np.concatenate([sides[0][:, None], f, sides[1][:, None]], axis=1)   # (m, n + 2, 4)
+    out = []
+    for i, fi, inner in ((0, 0, 1), (m, m - 1, m - 2)):
+        support = None if grid.support_u is None else grid.support_u[i]
+        U = _boundary_plane(v[i], support, size, tol)
+        umap = None if U is None else _reflection(f[fi, :, :3], U, closed=grid.closed)
+        if umap is not None:
+            out.append(umap.planes(pad[fi]))                   # corners: column ghosts reflected in turn
+            continue
+        ghosts = None if grid.closed else _propagated(v[i], f[fi], f[inner] if m >= 2 else None)
+        if ghosts is None:
+            out.append(pad[fi])
+            continue
+        corners = [_corner_ghost(v[i, c], f[fi, c], ghosts[c], pad[fi, c], col_maps[k])
+                   for k, c in enumerate((0, -1))]
+        out.append(np.concatenate([corners[0][None], ghosts, corners[1][None]], axis=0))
+    return np.concatenate([out[0][None], pad, out[1][None]], axis=0)
+
+
+def _size(grid: QuadGrid) -> float:
+    return float(np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0))) or 1.0
+
+
+def _boundary_plane(points: np.ndarray, support: np.ndarray | None, size: float, tol: float) -> np.ndarray | None:
+    """The unit plane of a boundary polyline ``(k, 3)``: its support plane if the points lie in it, else the
+    least-squares plane if they lie in that (within ``tol · size``), else ``None``."""
+    if len(points) < 3:
+        return None
+    if support is not None and np.all(np.isfinite(support)) and np.linalg.norm(support[:3]) > 0:
+        W = pl.normalize(support)
+        if np.abs(pl.evaluate(W, points)).max() <= tol * size:
+            return W
+    W, res = pl.fit_plane(points)
+    return W if res <= tol * size else None
+
+
+def _reflection(n: np.ndarray, W: np.ndarray, closed: bool):
+    """The Minkowski reflection fixing the plane ``W`` whose hyperplane ``(w, h₄)`` holds the bisector cones of
+    consecutive boundary normals ``n (k, 3)`` (median ``h₄``); ``None`` when ``H`` is (nearly) null."""
+    from .laguerre import LaguerreMap                           # laguerre imports this module
+
+    w = W[:3]
+    n1, n2 = (n, np.roll(n, -1, axis=0)) if closed else (n[:-1], n[1:])
+    a = n1 + n2 if len(n1) else n
+    length = np.linalg.norm(a, axis=-1)
+    ok = length > 1e-9
+    if not np.any(ok):
+        return None
+    a = a[ok] / length[ok, None]
+    c = np.einsum("ki,ki->k", a, (n1 if len(n1) else n)[ok])
+    h4 = float(np.median(-(a @ w) / c))
+    if 1.0 - h4 * h4 <= 1e-6:
+        return None
+    return LaguerreMap.reflection(np.r_[w, h4], np.r_[-W[3] * w, 0.0])
+
+
+def _second_tangent(axis: np.ndarray, face: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray | None:
+    """The plane through the line ``pq`` other than ``face`` that touches the cone with unit ``axis`` (apex on
+    the line) touched by ``face``: its normal is the mirror image of the face normal in the projection of the
+    axis onto the plane normal to ``pq``."""
+    t = q - p
+    t = t / np.linalg.norm(t)
+    ap = axis - (axis @ t) * t
+    length = np.linalg.norm(ap)
+    if length <= 1e-9:
+        return None
+    ap = ap / length
+    n = 2.0 * (face[:3] @ ap) * ap - face[:3]
+    return np.r_[n, -(n @ p)]
+
+
+def _circle_axis(n1: np.ndarray, n2: np.ndarray, n3: np.ndarray) -> np.ndarray | None:
+    """Axis of the circle through three unit normals, turned towards them (``None`` if they are collinear)."""
+    a = np.cross(n2 - n1, n3 - n1)
+    length = np.linalg.norm(a)
+    if length <= 1e-14:
+        return None
+    a = a / length
+    return a if a @ n1 > 0 else -a
+
+
+def _propagated(points: np.ndarray, faces: np.ndarray, inner: np.ndarray | None) -> np.ndarray | None:
+    """Conical ghosts ``(k, 4)`` beyond the boundary faces ``faces (k, 4)`` of an open polyline ``points
+    (k + 1, 3)`` (``faces[i]`` holds the edge ``points[i], points[i+1]``); ``inner (k, 4)`` are the next faces
+    inwards.  Sequential along the boundary (each cone needs the previous ghost)."""
+    k = len(faces)
+    if k < 2:
+        return None
+    n = faces[:, :3]
+    mid = k // 2                                                # vertex between faces mid − 1 and mid
+    if inner is not None:
+        a, _, _ = axis_of_normals(np.stack([n[mid - 1], n[mid], inner[mid, :3], inner[mid - 1, :3]]))
+    else:
+        a = n[mid - 1] + n[mid]
+    u = n[mid - 1] - n[mid]
+    if np.linalg.norm(u) > 1e-12:                               # touch both faces: a·n_{mid−1} = a·n_mid
+        u = u / np.linalg.norm(u)
+        a = a - (a @ u) * u
+    if np.linalg.norm(a) <= 1e-9:
+        return None
+    a = a / np.linalg.norm(a)
+    g = np.empty_like(faces)
+    first = (_second_tangent(a, faces[mid - 1], points[mid], points[mid - 1]),
+             _second_tangent(a, faces[mid], points[mid], points[mid + 1]))
+    if first[0] is None or first[1] is None:
+        return None
+    g[mid - 1], g[mid] = first
+    for i in range(mid + 1, k):                                 # forward: vertex i knows g[i − 1]
+        a = _circle_axis(n[i - 1], n[i], g[i - 1, :3])
+        nxt = None if a is None else _second_tangent(a, faces[i], points[i], points[i + 1])
+        if nxt is None:
+            return None
+        g[i] = nxt
+    for i in range(mid - 1, 0, -1):                             # backward: vertex i knows g[i]
+        a = _circle_axis(n[i - 1], n[i], g[i, :3])
+        nxt = None if a is None else _second_tangent(a, faces[i - 1], points[i], points[i - 1])
+        if nxt is None:
+            return None
+        g[i - 1] = nxt
+    if not np.all(np.isfinite(g)) or np.any(np.einsum("ki,ki->k", g[:, :3], n) <= 0.0):
+        return None                                             # a ghost turned away: the extension folds
+    return g
+
+
+def _corner_ghost(p: np.ndarray, face: np.ndarray, row_ghost: np.ndarray, col_ghost: np.ndarray, col_map) -> np.ndarray:
+    """The ghost diagonally beyond a corner face at vertex ``p`` (see :func:`ghost_planes`)."""
+    if col_map is not None:
+        return col_map.planes(row_ghost)
+    a = _circle_axis(face[:3], row_ghost[:3], col_ghost[:3])
+    if a is None:
+        return row_ghost
+    n = 2.0 * (a @ face[:3]) * a - face[:3]
+    return np.r_[n, -(n @ p)]
 
 
 def vertex_planes(grid: QuadGrid, E: np.ndarray | None = None) -> np.ndarray:
@@ -166,6 +359,7 @@ def offset(grid: QuadGrid, distance: float) -> QuadGrid:
     for key in ("extended_face_image", "extended_face_planes"):
         if key in meta:
             meta[key] = _shift_planes(np.asarray(meta[key], dtype=float), d)
+    meta["extended_face_planes"] = _shift_planes(E, d)         # the planes used, through the new vertices
     meta["offset_distance"] = meta.get("offset_distance", 0.0) + d
     out = replace(grid, vertices=v, face_image=None if grid.face_image is None else _shift_planes(grid.face_image, d),
                   support_u=_refit(v, grid.support_u, rows=True), support_w=_refit(v, grid.support_w, rows=False),

@@ -185,7 +185,8 @@ def quad_circularity(F: np.ndarray) -> np.ndarray:
     return s[..., 3] / np.maximum(s[..., 0], 1e-300)
 
 
-def transform_grid(grid: QuadGrid, T: IsotropicMobius, check: bool = True, max_residual: float = 1e-7) -> QuadGrid:
+def transform_grid(grid: QuadGrid, T: IsotropicMobius, check: bool = True, max_residual: float = 1e-7,
+                   min_span: float = 1e-9) -> QuadGrid:
     """Apply an isotropic Möbius transformation to the conical face image ``M°_F`` of a grid (Remark 2.2).
 
     The unit face planes (ghosts included, :func:`ppfab.conical.extended_planes`) are mapped; each
@@ -194,12 +195,22 @@ def transform_grid(grid: QuadGrid, T: IsotropicMobius, check: bool = True, max_r
 
     Returns a grid with the weighted image in ``face_image`` and ``meta["isotropic_face_image"]``
     (extended), and ``meta["extended_face_planes"]`` (unit).  Raises :class:`GeometryError` when the
-    four planes of a vertex do not meet (the input had no orthogonal-node structure) and
-    :class:`~ppfab.errors.FoldError` (with ``check``) when the image folds.
+    four mapped planes of a vertex do not determine one point — their unit normals span only a plane
+    (smallest/largest singular value of the 4×3 normal matrix ``≤ min_span``: the planes share a line) —
+    or do not meet (relative residual ``s₃/s₀`` of the 4×4 plane matrix above ``max_residual``: the
+    input had no orthogonal-node structure), and :class:`~ppfab.errors.FoldError` (with ``check``)
+    when the image folds.
     """
     E = extended_planes(grid)
     F = T(E)
     P = vertex_planes(grid, F)                                  # (rows, cols, 4, 4) weighted
+    sn = np.linalg.svd(pl.normalize(P)[..., :3], compute_uv=False)
+    span = sn[..., 2] / np.maximum(sn[..., 0], 1e-300)          # 0: the normals span a plane, the planes a line
+    if np.min(span) <= min_span:
+        idx = tuple(int(k) for k in np.argwhere(span == span.min())[0])
+        raise GeometryError(f"the four face planes at vertex {idx} do not meet in a single point (their normals span "
+                            f"only a plane, s₂/s₀ = {span.min():.3g}; repeated ghost faces at a boundary?)",
+                            element=f"vertex {idx}", value=float(span.min()))
     U, s, Vt = np.linalg.svd(P)
     h = Vt[..., 3, :]                                           # null vector (x, w) of the four planes
     rel = s[..., 3] / np.maximum(s[..., 0], 1e-300)

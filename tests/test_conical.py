@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ppfab.conical import (axis_of_normals, concyclic_residual, conical_quality, extended_planes, offset,
-                           rigid_motion)
+                           rigid_motion, vertex_planes)
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
 from ppfab.errors import GeometryError
 from ppfab.folds import folded_faces, largest_valid_block
@@ -55,7 +55,12 @@ def test_stale_ghost_planes_are_not_used():
                        np.linalg.norm(grid.meta["extended_face_image"][0, :, :3], axis=-1, keepdims=True))
     moved = grid.with_vertices(grid.vertices * 1.1)
     padded = extended_planes(moved)
-    assert np.allclose(padded[0], padded[1]) and np.allclose(padded[1:-1, 1:-1], moved.face_planes)
+    assert np.allclose(padded[1:-1, 1:-1], moved.face_planes)
+    P = vertex_planes(moved, padded)                                       # rebuilt ghosts: through the vertices
+    assert np.abs(np.einsum("ijkl,ijl->ijk", P[..., :3], moved.vertices) + P[..., 3]).max() < 1e-12
+    assert axis_of_normals(P[..., :3])[2].max() < 1e-12                  # and conical at the boundary
+    P_stale = vertex_planes(moved, stored)
+    assert np.abs(np.einsum("ijkl,ijl->ijk", P_stale[..., :3], moved.vertices) + P_stale[..., 3]).max() > 1e-3
 
 
 def test_rigid_motion_keeps_planes_consistent():
