@@ -175,6 +175,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("nesting", _fab.stage_nesting),
     ("mesh_files", stage_mesh_files),
     ("files", _fab.stage_files),
+    ("report", _fab.stage_report),
 ]
 
 

@@ -163,3 +163,17 @@ def summary(ctx: "BuildContext") -> dict:
         "plate_sheets": bn.sheets, "plate_utilisation": bn.utilisation, "plate_lower_bound": bn.lower_bound,
         "torsion_max_deg": float(np.degrees(d["support"].torsion.max())) if len(d["support"].edges) else 0.0,
     }
+
+
+def stage_report(ctx: "BuildContext") -> None:
+    """``report.html`` (self-contained: inline CSS, figures as data URIs, sheets as inline SVG)."""
+    if not ctx.design.section("output").report:
+        return
+    from fabrication.report import build_report
+
+    ctx.progress.start("report")
+    ctx.data["summary"] = summary(ctx)
+    html = build_report(ctx.data, ctx.design, ctx.files)
+    (ctx.out / "report.html").write_text(html, encoding="utf-8")
+    ctx.files["report_html"] = "report.html"
+    ctx.progress.done(f"{len(html) / 1e6:.1f} MB")

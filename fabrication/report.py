@@ -1,0 +1,172 @@
+"""``report.html``: one self-contained page a fabricator can read offline.
+
+Sections: summary (size, counts, areas, weights, lengths, sheets and
+utilisation against the area lower bound), quality (δ_f, δ_P, panel
+deviation in mm, torsion, conical residual, panels above tolerance), figures
+(3D structure, histograms), cutting sheets (inline SVG with part labels), and
+the parts and node tables with nest tags.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .flatpart import place_points
+from .htmlreport import HtmlReport, esc, fmt
+
+
+def sheet_svg(sheet_size: tuple[float, float], usable: tuple[float, float, float, float],
+              outlines: list[np.ndarray], labels: list[str], width_px: int = 520) -> str:
+    """One cutting sheet as inline SVG (y up as in the DXF; labels are the nest tags / part ids)."""
+    w, h = (float(x) for x in sheet_size)
+    s = width_px / w
+    hp = h * s
+
+    def pts(p: np.ndarray) -> str:
+        return " ".join(f"{x * s:.1f},{hp - y * s:.1f}" for x, y in p)
+
+    x0, y0, x1, y1 = usable
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width_px}" height="{hp:.0f}" '
+           f'viewBox="0 0 {width_px} {hp:.0f}" style="background:#fafbfc;border:1px solid #999">',
+           f'<rect x="{x0 * s:.1f}" y="{hp - y1 * s:.1f}" width="{(x1 - x0) * s:.1f}" height="{(y1 - y0) * s:.1f}" '
+           'fill="none" stroke="#aaa" stroke-dasharray="4 3"/>']
+    font = max(5.0, min(9.0, 0.6 * s * 200))
+    for poly, lab in zip(outlines, labels):
+        c = np.asarray(poly).mean(axis=0)
+        out.append(f'<polygon points="{pts(poly)}" fill="#cfe3f3" stroke="#1f4e79" stroke-width="0.6"/>')
+        out.append(f'<text x="{c[0] * s:.1f}" y="{hp - c[1] * s:.1f}" font-size="{font:.1f}" '
+                   f'text-anchor="middle" dominant-baseline="middle" fill="#102a43">{esc(lab)}</text>')
+    out.append("</svg>")
+    return "".join(out)
+
+
+def _sheets(parts: list, nesting: Any) -> list[str]:
+    by_id = {p.part_id: p for p in parts}
+    svgs = []
+    for k, group in enumerate(nesting.by_sheet()):
+        outlines = [place_points(by_id[pl.part_id].outline, pl) for pl in group]
+        labels = [pl.part_id for pl in group]
+        fill = nesting.sheet_fill[k] if getattr(nesting, "sheet_fill", None) is not None else float("nan")
+        svgs.append(f'<figure>{sheet_svg(nesting.sheet_size, nesting.usable, outlines, labels)}'
+                    f"<figcaption>sheet {k + 1}/{nesting.sheets} — {len(group)} parts, "
+                    f"fill {100 * fill:.1f} %</figcaption></figure>")
+    return svgs
+
+
+def structure_png(mesh_corners: np.ndarray, plates: list, title: str) -> bytes:
+    """3D view of panels and beam plates."""
+    from .figures import mesh_figure, save
+
+    polys = [p.frame.to3d(p.outline) for p in plates]
+    return save(mesh_figure(mesh_corners, title, plates=polys, size=(9.0, 6.0)))
+
+
+def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[tuple[bytes, str]]:
+    from .figures import histogram, save
+
+    figs = [
+        (np.array([p.area_mm2 for p in panels]) / 1e6, "Panel areas", "area [m²]"),
+        (np.concatenate([np.asarray(p.corner_angles_deg) for p in panels]), "Panel corner angles", "angle [°]"),
+        (np.array([r.length_mm for r in beam_records]) / 1000, "Beam plate lengths", "length [m]"),
+        (np.array([float(r["dihedral_deg"]) for r in node_rows if r.get("dihedral_deg") is not None]),
+         "Node dihedral angles (between the two beam planes)", "angle [°]"),
+    ]
+    return [(save(histogram(v, t, x)), t) for v, t, x in figs]
+
+
+def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> str:
+    """The report page from the pipeline's data (mesh, quality, support, beams, panels, nestings, summary)."""
+    from fabrication.nodes import node_records
+
+    s = data["summary"]
+    q = data["quality"]
+    panels = data["panels"]
+    beams = data["beams"]
+    rep = HtmlReport(f"ppfab fabrication report — {design.info.name}")
+    if design.info.description:
+        rep.paragraph(design.info.description, "muted")
+
+    rep.heading("Summary")
+    ext = s["extent_mm"]
+    rep.key_values([
+        ("structure size (x × y × z)", f"{ext[0] / 1000:.2f} m × {ext[1] / 1000:.2f} m × {ext[2] / 1000:.2f} m"),
+        ("construction", data.get("source", "")),
+        ("planar beam families", ", ".join(data.get("planar_families", ())) or "—"),
+        ("panels / panel types", f"{s['panels']} / {s['panel_types']}"),
+        ("beams / plates / plate types", f"{s['beams']} / {s['beam_plates']} / {s['beam_types']}"),
+        ("nodes", s["nodes"]),
+        ("glass area", f"{s['glass_area_m2']:.1f} m²"),
+        ("glass weight", f"{s['glass_weight_kg'] / 1000:.2f} t"),
+        ("total beam length", f"{s['beam_length_m']:.1f} m"),
+        ("plate area / weight", f"{s['plate_area_m2']:.1f} m² / {s['beam_mass_kg'] / 1000:.2f} t"),
+        ("glass sheets (utilisation; area lower bound)",
+         f"{s['glass_sheets']} ({100 * s['glass_utilisation']:.1f} %; ≥ {s['glass_lower_bound']})"),
+        ("plate sheets (utilisation; area lower bound)",
+         f"{s['plate_sheets']} ({100 * s['plate_utilisation']:.1f} %; ≥ {s['plate_lower_bound']})"),
+    ])
+
+    rep.heading("Quality")
+    tol = design.section("panels").planarity_tolerance
+    over = [p for p in panels if p.deviation_mm > tol]
+    rows = [
+        ("δ_f (face planarity) max / mean", f"{q.delta_f_max:.2e} / {q.delta_f_mean:.2e}"),
+        ("δ_P rows max / mean", f"{q.delta_p_rows_max:.2e} / {q.delta_p_rows_mean:.2e}"),
+        ("δ_P columns max / mean", f"{q.delta_p_cols_max:.2e} / {q.delta_p_cols_mean:.2e}"),
+        ("panel deviation from plane, max", f"{q.deviation_abs_max:.3g} mm (tolerance {tol:g} mm)"),
+        ("support structure torsion, max", f"{s['torsion_max_deg']:.3g}°"),
+        ("torsion offset at beam depth, max", f"{beams.report.torsion_offset_max_mm:.3g} mm"),
+        ("conical residual max / mean", f"{q.conical_max:.2e} / {q.conical_mean:.2e} rad"),
+        ("panels above tolerance", len(over)),
+        ("beam plates not slidable through their slots", beams.report.totals()["not_slidable"]),
+    ]
+    rep.key_values(rows)
+    if over:
+        rep.table(["panel", "deviation [mm]"], [(p.part_id, p.deviation_mm) for p in over])
+    flagged = [p for p in panels if p.flags]
+    if flagged:
+        rep.heading("Panels outside processing limits", 3)
+        rep.table(["panel", "flags", "min corner [°]", "bbox [mm]"],
+                  [(p.part_id, ", ".join(p.flags), min(p.corner_angles_deg), f"{p.bbox[0]:.0f} × {p.bbox[1]:.0f}")
+                   for p in flagged])
+
+    rep.heading("Figures")
+    mesh = data["mesh"]
+    qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
+    figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure")]
+    node_rows = node_records(beams)
+    figs += histograms(panels, list(beams.report.records), node_rows)
+    rep.figures(figs)
+
+    rep.heading("Cutting sheets — glass")
+    rep.raw('<div class="figs">' + "".join(_sheets(data["glass_parts"], data["glass_nesting"])) + "</div>")
+    rep.heading("Cutting sheets — beam plates")
+    rep.raw('<div class="figs">' + "".join(_sheets(data["beam_parts"], data["beam_nesting"])) + "</div>")
+
+    place = {r["part_id"]: r for r in data.get("parts_rows", [])}
+    rep.heading("Panels")
+    rep.table(["panel", "type", "face", "area [m²]", "weight [kg]", "min/max corner [°]", "deviation [mm]",
+               "sheet", "nest tag", "flags"],
+              [(p.part_id, p.type_id, p.face, p.area_mm2 / 1e6, p.weight_kg,
+                f"{min(p.corner_angles_deg):.1f} / {max(p.corner_angles_deg):.1f}", p.deviation_mm,
+                place.get(p.part_id, {}).get("sheet", ""), place.get(p.part_id, {}).get("nest_tag", ""),
+                ", ".join(p.flags)) for p in panels], left=(0, 1, 9))
+    rep.heading("Beam plates")
+    rep.table(["plate", "beam", "family", "length [m]", "mass [kg]", "slots", "slidable", "extra clearance [mm]",
+               "sheet", "nest tag"],
+              [(r.part_id, r.beam_id, r.family, r.length_mm / 1000, r.mass_kg, r.slots, r.slidable,
+                r.extra_clearance_mm, place.get(r.part_id, {}).get("sheet", ""),
+                place.get(r.part_id, {}).get("nest_tag", "")) for r in beams.report.records], left=(0, 1, 2))
+    rep.heading("Nodes")
+    rep.table(["node", "vertex", "grid", "x [mm]", "y [mm]", "z [mm]", "beams", "joint", "dihedral [°]",
+               "torsion [°]"],
+              [(r["node_id"], r["vertex"], "" if r["grid"] is None else f"{r['grid'][0]},{r['grid'][1]}",
+                *(round(c, 1) for c in r["position"]), "; ".join(b["part_id"] for b in r["beams"]), r["joint"],
+                "" if r["dihedral_deg"] is None else r["dihedral_deg"], r["torsion_deg"]) for r in node_rows],
+              left=(0, 2, 6, 7))
+    listed = sorted(k for k in files)
+    rep.heading("Files")
+    rep.paragraph("This folder holds: " + ", ".join(listed) + ". See manifest.json for every file and its sha256.",
+                  "muted")
+    return rep.html()
