@@ -174,7 +174,154 @@ def check_nodes(v: Verification) -> None:
     v.checked.append("nodes")
 
 
-CHECKS: list[Callable[[Verification], None]] = [check_manifest, check_mesh, check_parts, check_nodes]
+def _inset_face_2d(corners: np.ndarray, delta: float) -> np.ndarray:
+    """Independent reference for a panel: the face ``(4, 3)`` in its own plane, counter-clockwise,
+    every edge line moved inward by ``delta``, consecutive lines intersected → ``(4, 2)``."""
+    c = corners - corners.mean(axis=0)
+    _, _, vt = np.linalg.svd(c)
+    p = c @ vt[:2].T
+    x, y = p[:, 0], p[:, 1]
+    if np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) < 0:
+        p = p[::-1]
+    e = np.roll(p, -1, axis=0) - p
+    n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1)[:, None]
+    b = np.einsum("ki,ki->k", n, p) + delta
+    out = []
+    for k in range(len(p)):
+        a = np.array([n[k - 1], n[k]])
+        out.append(np.linalg.solve(a, [b[k - 1], b[k]]))
+    return np.array(out)
+
+
+def _shape_signature(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Edge lengths and interior angles of a polygon, in order (orientation-independent angles)."""
+    p = np.asarray(poly, dtype=float)
+    e = np.roll(p, -1, axis=0) - p
+    lengths = np.linalg.norm(e, axis=1)
+    e_in = p - np.roll(p, 1, axis=0)
+    cross = e_in[:, 0] * e[:, 1] - e_in[:, 1] * e[:, 0]
+    ang = np.abs(np.arctan2(cross, np.einsum("ki,ki->k", e_in, e)))
+    return lengths, ang
+
+
+def congruence_error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """Smallest (max edge-length difference, max angle difference) over cyclic shifts and reversal."""
+    la, aa = _shape_signature(a)
+    best = (np.inf, np.inf)
+    for poly in (np.asarray(b, dtype=float), np.asarray(b, dtype=float)[::-1]):
+        lb, ab = _shape_signature(poly)
+        if len(lb) != len(la):
+            continue
+        for k in range(len(lb)):
+            dl = float(np.abs(np.roll(lb, k) - la).max())
+            da = float(np.abs(np.roll(ab, k) - aa).max())
+            if dl + da < best[0] + best[1]:
+                best = (dl, da)
+    return best
+
+
+def check_dxf(v: Verification) -> None:
+    """Every cutting sheet: ezdxf audit, contract layers/entities, parts once, inside TRIM, spacing,
+    agreement with parts.csv, and (glass) congruence with the 3D face inset by half the gap."""
+    from shapely import Polygon, STRtree
+
+    from .dxf import check_sheet_dxf
+
+    m = v.data.get("manifest", {})
+    files = m.get("files", {})
+    fab = m.get("fabrication", {})
+    parts = {r["part_id"]: r for r in v.data.get("parts", [])}
+    mesh = v.data.get("mesh")
+    seen: dict[str, str] = {}
+    for key, spacing_key in (("glass_sheets", "nesting"), ("beam_sheets", "beam_nesting")):
+        spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
+        for sheet_no, rel in enumerate(files.get(key, []), start=1):
+            try:
+                content = check_sheet_dxf(v.folder / rel)
+            except Exception as exc:  # noqa: BLE001 - reported as a finding
+                v.error(rel, "", str(exc))
+                continue
+            polys = []
+            trim = Polygon(content.trim_outline).buffer(1e-6)
+            for part in content.parts:
+                pid = part.part_id
+                if pid in seen:
+                    v.error(rel, pid, f"part is also cut on {seen[pid]}")
+                seen[pid] = rel
+                row = parts.get(pid)
+                if row is None:
+                    v.error(rel, pid, "part is not in parts.csv")
+                elif str(row.get("sheet")) != str(sheet_no) or row.get("nest_tag") != part.nest_tag:
+                    v.error(rel, pid, f"sheet/nest tag ({sheet_no}, {part.nest_tag}) differ from parts.csv "
+                                      f"({row.get('sheet')}, {row.get('nest_tag')})")
+                poly = Polygon(part.points)
+                if not poly.is_valid:
+                    v.error(rel, pid, "outline intersects itself")
+                if not trim.contains(poly):
+                    v.error(rel, pid, "outline leaves the usable (TRIM) area")
+                polys.append((pid, poly))
+                if key == "glass_sheets" and mesh is not None and row is not None and row.get("face", "") != "":
+                    face = int(row["face"])
+                    ref = _inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))
+                    dl, da = congruence_error(ref, part.points)
+                    if dl > 1e-6 or da > 1e-6:
+                        v.error(rel, pid, f"outline is not the face {face} inset by half the gap "
+                                          f"(edge lengths differ by {dl:.3g} mm, angles by {da:.3g} rad)")
+            tree = STRtree([p for _, p in polys])
+            for i, (pid, poly) in enumerate(polys):
+                for j in tree.query(poly, predicate="dwithin", distance=max(spacing - 1e-6, 0.0)):
+                    if j > i:
+                        d = poly.distance(polys[j][1])
+                        what = "overlaps" if d == 0 else f"is {d:.3g} mm from"
+                        v.error(rel, pid, f"{what} {polys[j][0]} (spacing {spacing:g} mm)")
+    for pid, row in parts.items():
+        if pid not in seen and (files.get("glass_sheets") or files.get("beam_sheets")):
+            v.error("parts.csv", pid, "part is on no cutting sheet")
+    v.checked.append("dxf")
+
+
+def check_step(v: Verification) -> None:
+    """beams.step: one valid solid per beam part, named by its part id, a plate of the beam thickness."""
+    files = v.data.get("manifest", {}).get("files", {})
+    rel = files.get("beams_step")
+    if rel is None:
+        return
+    from build123d import import_step
+
+    from .beams.solids import named_solids
+
+    try:
+        pairs = named_solids(import_step(str(v.folder / rel)))
+    except Exception as exc:  # noqa: BLE001
+        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+        return
+    beams = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "beam"}
+    t = float(v.data["manifest"].get("fabrication", {}).get("beam_thickness", 0.0))
+    names = [n for n, _ in pairs]
+    for name in sorted(set(beams) - set(names)):
+        v.error(rel, name, "beam part has no solid")
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        v.error(rel, name, "more than one solid carries this name")
+    for name, solid in pairs:
+        if name not in beams:
+            v.error(rel, name or "(unnamed)", "solid is not a beam part in parts.csv")
+            continue
+        if not solid.is_valid:
+            v.error(rel, name, "solid is not valid (BRepCheck)")
+        pts = np.array([tuple(p) for p in solid.vertices()])
+        c = pts - pts.mean(axis=0)
+        normal = np.linalg.svd(c)[2][2]
+        spread = float(np.ptp(c @ normal))
+        if t and abs(spread - t) > 1e-6 * max(1.0, t):
+            v.error(rel, name, f"solid is {spread:.6g} mm thick, expected {t:g} mm")
+        area = float(beams[name].get("area_mm2") or 0.0)
+        if t and area and abs(solid.volume - area * t) > 1e-4 * area * t:
+            v.error(rel, name, f"volume {solid.volume:.6g} mm³ ≠ outline area × thickness {area * t:.6g} mm³")
+    v.checked.append("step")
+
+
+CHECKS: list[Callable[[Verification], None]] = [check_manifest, check_mesh, check_parts, check_nodes, check_dxf,
+                                                 check_step]
 
 
 def verify(folder: str | Path) -> Verification:
