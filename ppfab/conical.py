@@ -83,19 +83,22 @@ def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray
       vertex is the one in that hyperplane (direction ``(a, −c)`` with
       ``a·w + c h₄ = 0``), mapped to itself.  All cones of the polyline then lie in
       one hyperplane, so Laguerre maps and offsets keep the polyline planar
-      (Prop. 2.1).  ``h₄`` is the median of ``−(a·w)/c`` over the bisector axes
-      ``a ∝ n_k + n_{k+1}`` of consecutive boundary faces, which keeps the boundary
-      cones near the bisectors (``h₄ = 0``, a Euclidean mirror, folds meshes that
-      meet ``W`` obliquely).  Corner ghosts are reflected in the column and then the
-      row hyperplane.
+      (Prop. 2.1).  ``h₄`` is extrapolated from the interior: with
+      ``h(a, c) = −(a·w)/c``, the bisector axis ``b ∝ n_k + n_{k+1}`` of the two faces
+      at a boundary vertex and the axis ``a'`` of its interior neighbour,
+      ``h₄ = median(2 h(b) − h(a'))`` (the bisector cone sits half a step inside;
+      taking it itself makes a ghost coincide with its face where the net is
+      principal, and ``h₄ = 0``, a Euclidean mirror, folds meshes that meet ``W``
+      obliquely).  Corner ghosts are reflected in the column and then the row
+      hyperplane.
     * **Non-planar open boundary polyline**: the ghosts are propagated.  At the
       middle boundary vertex the cone touching its two faces whose axis is nearest
-      to the axis of the neighbouring interior vertex is chosen; vertex by vertex
-      the circle through the three known normals then gives the next ghost, the
-      second plane through the next boundary edge tangent to that cone.  A corner
-      ghost is the reflection of the row ghost in the column hyperplane when the
-      column is planar, else the tangent plane whose normal is opposite the
-      face's normal on the corner cone's circle.
+      to the axis of the interior neighbour is chosen; vertex by vertex the circle
+      through the three known normals then gives the next ghost, the second plane
+      through the next boundary edge tangent to that cone.  A corner ghost is the
+      reflection of the row ghost in the column hyperplane when the column is
+      planar, else the tangent plane whose normal is opposite the face's normal on
+      the corner cone's circle.
     * Otherwise (closed non-planar boundary, a single boundary face, degenerate
       cones) each boundary face is its own ghost: the boundary cones are the
       bisectors of two faces, which Laguerre maps and offsets handle, but the
@@ -110,30 +113,34 @@ def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray
     rows, cols = grid.shape
     f = pl.normalize(grid.face_planes)                          # (m, n', 4)
     m, size = rows - 1, _size(grid)
+    fc = np.concatenate([f[:, -1:], f], axis=1) if grid.closed else f
+    inner = _interior_cones(fc)                                 # interior vertices v[1:-1, 1:-1] (closed: v[1:-1])
     col_maps = [None, None]
     if grid.closed:
-        pad = np.concatenate([f[:, -1:], f], axis=1)            # E[:, b] is face column (b − 1) mod cols
+        pad = fc                                                # E[:, b] is face column (b − 1) mod cols
     else:
         sides = []
-        for k, (j, inner) in enumerate(((0, 1), (-1, -2))):
+        for k, j in enumerate((0, -1)):
             support = None if grid.support_w is None else grid.support_w[j]
             W = _boundary_plane(v[:, j], support, size, tol)
-            col_maps[k] = None if W is None else _reflection(f[:, j, :3], W, closed=False)
+            nb = None if inner is None else (inner[0][:, j], inner[1][:, j])
+            col_maps[k] = None if W is None else _reflection(W, f[:-1, j, :3], f[1:, j, :3], nb)
             if col_maps[k] is not None:
                 ghosts = col_maps[k].planes(f[:, j])
             else:
-                ghosts = _propagated(v[:, j], f[:, j], f[:, inner] if cols > 2 else None)
+                ghosts = _propagated(v[:, j], f[:, j], None if nb is None else nb[0])
             sides.append(f[:, j] if ghosts is None else ghosts)
         pad = np.concatenate([sides[0][:, None], f, sides[1][:, None]], axis=1)   # (m, n + 2, 4)
     out = []
-    for i, fi, inner in ((0, 0, 1), (m, m - 1, m - 2)):
+    for i, fi in ((0, 0), (m, m - 1)):
         support = None if grid.support_u is None else grid.support_u[i]
         U = _boundary_plane(v[i], support, size, tol)
-        umap = None if U is None else _reflection(f[fi, :, :3], U, closed=grid.closed)
+        nb = None if inner is None else (inner[0][fi - (fi > 0)], inner[1][fi - (fi > 0)])
+        umap = None if U is None else _reflection(U, fc[fi, :-1, :3], fc[fi, 1:, :3], nb)
         if umap is not None:
             out.append(umap.planes(pad[fi]))                   # corners: column ghosts reflected in turn
             continue
-        ghosts = None if grid.closed else _propagated(v[i], f[fi], f[inner] if m >= 2 else None)
+        ghosts = None if grid.closed else _propagated(v[i], f[fi], None if nb is None else nb[0])
         if ghosts is None:
             out.append(pad[fi])
             continue
@@ -145,6 +152,20 @@ def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray
 
 def _size(grid: QuadGrid) -> float:
     return float(np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0))) or 1.0
+
+
+def _interior_cones(fc: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Axes ``(m − 1, k, 3)`` and ``a·n`` ``(m − 1, k)`` of the cones at the vertices surrounded by four faces of
+    ``fc (m, k + 1, 4)`` (for a closed grid ``fc`` starts with the last face column); ``None`` if there are none
+    or they are degenerate."""
+    if fc.shape[0] < 2 or fc.shape[1] < 2:
+        return None
+    P = np.stack([fc[:-1, :-1], fc[1:, :-1], fc[1:, 1:], fc[:-1, 1:]], axis=-2)
+    try:
+        a, c, _ = axis_of_normals(P[..., :3])
+    except GeometryError:
+        return None
+    return a, c
 
 
 def _boundary_plane(points: np.ndarray, support: np.ndarray | None, size: float, tol: float) -> np.ndarray | None:
@@ -160,22 +181,27 @@ def _boundary_plane(points: np.ndarray, support: np.ndarray | None, size: float,
     return W if res <= tol * size else None
 
 
-def _reflection(n: np.ndarray, W: np.ndarray, closed: bool):
-    """The Minkowski reflection fixing the plane ``W`` whose hyperplane ``(w, h₄)`` holds the bisector cones of
-    consecutive boundary normals ``n (k, 3)`` (median ``h₄``); ``None`` when ``H`` is (nearly) null."""
+def _reflection(W: np.ndarray, n1: np.ndarray, n2: np.ndarray, neighbours: tuple[np.ndarray, np.ndarray] | None):
+    """The Minkowski reflection in ``H = (w, h₄)`` through a point of the plane ``W`` (see :func:`ghost_planes`).
+
+    ``n1, n2 (k, 3)`` are the unit normals of the two faces at each of the ``k`` boundary vertices between
+    corners, ``neighbours`` the axes ``(k, 3)`` and cosines ``(k,)`` of their interior neighbours.  ``None``
+    when ``H`` is (nearly) null.
+    """
     from .laguerre import LaguerreMap                           # laguerre imports this module
 
     w = W[:3]
-    n1, n2 = (n, np.roll(n, -1, axis=0)) if closed else (n[:-1], n[1:])
-    a = n1 + n2 if len(n1) else n
-    length = np.linalg.norm(a, axis=-1)
+    b = n1 + n2
+    length = np.linalg.norm(b, axis=-1)
     ok = length > 1e-9
     if not np.any(ok):
         return None
-    a = a[ok] / length[ok, None]
-    c = np.einsum("ki,ki->k", a, (n1 if len(n1) else n)[ok])
-    h4 = float(np.median(-(a @ w) / c))
-    if 1.0 - h4 * h4 <= 1e-6:
+    b = b / np.where(ok, length, 1.0)[:, None]
+    h = -(b @ w) / np.einsum("ki,ki->k", b, n1)
+    if neighbours is not None and len(neighbours[0]) == len(h):
+        h = 2.0 * h + (neighbours[0] @ w) / neighbours[1]
+    h4 = float(np.median(h[ok]))
+    if not np.isfinite(h4) or 1.0 - h4 * h4 <= 1e-6:
         return None
     return LaguerreMap.reflection(np.r_[w, h4], np.r_[-W[3] * w, 0.0])
 
@@ -185,6 +211,8 @@ def _second_tangent(axis: np.ndarray, face: np.ndarray, p: np.ndarray, q: np.nda
     the line) touched by ``face``: its normal is the mirror image of the face normal in the projection of the
     axis onto the plane normal to ``pq``."""
     t = q - p
+    if np.linalg.norm(t) <= 0.0:
+        return None
     t = t / np.linalg.norm(t)
     ap = axis - (axis @ t) * t
     length = np.linalg.norm(ap)
@@ -205,19 +233,17 @@ def _circle_axis(n1: np.ndarray, n2: np.ndarray, n3: np.ndarray) -> np.ndarray |
     return a if a @ n1 > 0 else -a
 
 
-def _propagated(points: np.ndarray, faces: np.ndarray, inner: np.ndarray | None) -> np.ndarray | None:
+def _propagated(points: np.ndarray, faces: np.ndarray, axes: np.ndarray | None) -> np.ndarray | None:
     """Conical ghosts ``(k, 4)`` beyond the boundary faces ``faces (k, 4)`` of an open polyline ``points
-    (k + 1, 3)`` (``faces[i]`` holds the edge ``points[i], points[i+1]``); ``inner (k, 4)`` are the next faces
-    inwards.  Sequential along the boundary (each cone needs the previous ghost)."""
+    (k + 1, 3)`` (``faces[i]`` holds the edge ``points[i], points[i+1]``); ``axes (k − 1, 3)`` are the cone axes
+    of the interior neighbours of ``points[1:-1]``.  Sequential along the boundary (each cone needs the
+    previous ghost); ``None`` when the extension degenerates or folds."""
     k = len(faces)
     if k < 2:
         return None
     n = faces[:, :3]
     mid = k // 2                                                # vertex between faces mid − 1 and mid
-    if inner is not None:
-        a, _, _ = axis_of_normals(np.stack([n[mid - 1], n[mid], inner[mid, :3], inner[mid - 1, :3]]))
-    else:
-        a = n[mid - 1] + n[mid]
+    a = axes[mid - 1] if axes is not None and len(axes) == k - 1 else n[mid - 1] + n[mid]
     u = n[mid - 1] - n[mid]
     if np.linalg.norm(u) > 1e-12:                               # touch both faces: a·n_{mid−1} = a·n_mid
         u = u / np.linalg.norm(u)
@@ -342,6 +368,9 @@ def offset(grid: QuadGrid, distance: float) -> QuadGrid:
     is parallel to the input (same face normals), hence conical with the same
     planar polyline families; weighted face images are shifted with their
     weights (``F − |F_n| δ e4``), so a PP face image stays a translation net.
+
+    The extended planes used (stored or built by :func:`ghost_planes`) are shifted too and kept in
+    ``meta["extended_face_planes"]``; they pass through the new vertices.
 
     Raises :class:`GeometryError` when a cone degenerates (``a·n ≤ 0.05``) or the
     offset planes do not meet at a vertex (the input is not conical).

@@ -19,7 +19,7 @@ from ppfab.isotropic import IsotropicMobius, quad_circularity, quad_planarity_4d
 from ppfab.laguerre import (J, LaguerreMap, boost, is_lorentz, lorentz_residual, minkowski_polar, project_lorentz,
                             spatial, transform_grid)
 from ppfab.metrics import quality
-from ppfab.spheres import SphereSpline, reflections
+from ppfab.spheres import SphereSpline, bisector_normals, reflections, w_planes
 
 TOL = 1e-9
 WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
@@ -131,9 +131,27 @@ def test_reflection_fixes_w_plane_and_maps_neighbour_spheres():
     """Remark 4.4: with equal tangential distances σ_j(Z_{j−1}) = Z_{j+1}, and σ_j fixes W_j point by point."""
     Z, _ = SphereSpline(WAVY).sample_uniform(12)
     sig = reflections(Z)
+    W = w_planes(Z)
+    H = bisector_normals(Z)
+    rng = np.random.default_rng(7)
     for j in range(1, 11):
         assert np.allclose(sig[j].spheres(Z[j - 1]), Z[j + 1], atol=1e-9)
         assert np.allclose(sig[j].spheres(Z[j]), Z[j])
+        # random points of W_j (radius-0 spheres) are fixed, points off W_j are not
+        x = rng.normal(scale=20.0, size=(50, 3)) + Z[j, :3]
+        x = x - pl.signed_distance(W[j], x)[:, None] * W[j, :3]
+        assert np.abs(pl.signed_distance(W[j], x)).max() < 1e-12
+        X = np.c_[x, np.zeros(50)]
+        assert np.abs(sig[j].spheres(X) - X).max() < 1e-9
+        off = X + np.r_[W[j, :3], 0.0]
+        assert np.abs(sig[j].spheres(off) - off).max() > 1e-3
+        # and so is every sphere of the hyperplane <<X − Z_j, H_j>> = 0 (a random one: radius solved for)
+        c = rng.normal(scale=5.0, size=(50, 3)) + Z[j, :3]
+        h, h4 = H[j, :3], H[j, 3]
+        r = Z[j, 3] + ((c - Z[j, :3]) @ h) / h4
+        S = np.c_[c, r]
+        assert np.abs(pl.minkowski_inner(S - Z[j], H[j])).max() < 1e-9
+        assert np.abs(sig[j].spheres(S) - S).max() < 1e-8
 
 
 def test_offset_map_is_the_conical_offset():
