@@ -22,6 +22,10 @@ u_range = [-4.0, 4.0]
 v_range = [-3.0, 3.0]
 faces_u = 5
 faces_v = 4
+[nesting]
+time_budget = 0.3
+[beam_nesting]
+time_budget = 0.3
 """
 
 
@@ -88,8 +92,9 @@ def test_two_builds_are_byte_identical(tmp_path, small_design):
     assert main(["build", str(small_design), "-o", str(b), "--quiet"]) == 0
     ta, tb = tree(a), tree(b)
     assert ta.keys() == tb.keys()
-    differ = sorted(k for k in ta if ta[k] != tb[k] and not k.endswith(".step"))
+    differ = sorted(k for k in ta if ta[k] != tb[k])
     assert differ == []
+    assert any(k.endswith(".dxf") for k in ta) and "beams.step" in ta and "parts.csv" in ta
 
 
 def test_very_large_grid_is_refused_before_work(tmp_path, capsys):

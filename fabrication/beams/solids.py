@@ -66,7 +66,24 @@ def export_step(solids: Sequence, path: str | os.PathLike) -> Path:
     compound = Compound(children=list(solids))
     if not _export(compound, str(path), unit=Unit.MM, write_pcurves=False):
         raise FabricationError(f"{path}: writing the STEP file failed")
+    _fix_timestamp(path)
     return path
+
+
+STEP_TIMESTAMP = "2000-01-01T00:00:00"
+"""The time stamp written into the STEP header (FILE_NAME).  The kernel writes the wall-clock time,
+which is the only thing that differs between two exports of the same solids; a fixed value makes
+builds reproducible byte for byte (as ``SOURCE_DATE_EPOCH`` does for other build tools)."""
+
+
+def _fix_timestamp(path: Path) -> None:
+    import re
+
+    data = path.read_bytes()
+    head, sep, rest = data.partition(b"ENDSEC;")
+    head = re.sub(rb"(FILE_NAME\('[^']*',')[0-9T:\-]+(')", rb"\g<1>" + STEP_TIMESTAMP.encode() + rb"\2", head,
+                  count=1)
+    path.write_bytes(head + sep + rest)
 
 
 @dataclass
