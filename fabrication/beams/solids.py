@@ -66,23 +66,32 @@ def export_step(solids: Sequence, path: str | os.PathLike) -> Path:
     compound = Compound(children=list(solids))
     if not _export(compound, str(path), unit=Unit.MM, write_pcurves=False):
         raise FabricationError(f"{path}: writing the STEP file failed")
-    _fix_timestamp(path)
+    _make_reproducible(path)
     return path
 
 
 STEP_TIMESTAMP = "2000-01-01T00:00:00"
-"""The time stamp written into the STEP header (FILE_NAME).  The kernel writes the wall-clock time,
-which is the only thing that differs between two exports of the same solids; a fixed value makes
-builds reproducible byte for byte (as ``SOURCE_DATE_EPOCH`` does for other build tools)."""
+"""The time stamp written into the STEP header (FILE_NAME)."""
 
 
-def _fix_timestamp(path: Path) -> None:
+def _make_reproducible(path: Path) -> None:
+    """Make two exports of the same solids byte-identical.
+
+    The kernel writes the wall-clock time into the header and numbers assembly occurrences
+    (``NEXT_ASSEMBLY_USAGE_OCCURRENCE('43', …)``) with a counter that runs on across exports in one
+    process; a fixed time stamp (as ``SOURCE_DATE_EPOCH`` does for other build tools) and occurrence
+    ids renumbered 1, 2, … in file order change nothing else.
+    """
+    import itertools
     import re
 
     data = path.read_bytes()
     head, sep, rest = data.partition(b"ENDSEC;")
     head = re.sub(rb"(FILE_NAME\('[^']*',')[0-9T:\-]+(')", rb"\g<1>" + STEP_TIMESTAMP.encode() + rb"\2", head,
                   count=1)
+    counter = itertools.count(1)
+    rest = re.sub(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')[0-9]+(')",
+                  lambda m: m.group(1) + str(next(counter)).encode() + m.group(2), rest)
     path.write_bytes(head + sep + rest)
 
 
