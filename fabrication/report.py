@@ -60,7 +60,15 @@ def structure_png(mesh_corners: np.ndarray, plates: list, title: str) -> bytes:
     from .figures import mesh_figure, save
 
     polys = [p.frame.to3d(p.outline) for p in plates]
-    return save(mesh_figure(mesh_corners, title, plates=polys, size=(9.0, 6.0)))
+    return save(mesh_figure(mesh_corners, title, plates=polys, size=(6.4, 4.2)))
+
+
+def structure_below_png(mesh_corners: np.ndarray, plates: list, title: str) -> bytes:
+    """The same seen from below, where the beam plates and their joints show."""
+    from .figures import mesh_figure, save
+
+    polys = [p.frame.to3d(p.outline) for p in plates]
+    return save(mesh_figure(mesh_corners, title, plates=polys, size=(6.4, 4.2), elev=-32, azim=-60))
 
 
 def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[tuple[bytes, str]]:
@@ -134,7 +142,9 @@ def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> st
     rep.heading("Figures")
     mesh = data["mesh"]
     qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
-    figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure")]
+    figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure, above"),
+            (structure_below_png(qm.face_corners, list(beams.plates), "beam plates from below"),
+             "3D structure, below")]
     node_rows = node_records(beams)
     figs += histograms(panels, list(beams.report.records), node_rows)
     rep.figures(figs)
