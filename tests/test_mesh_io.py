@@ -142,6 +142,9 @@ BAD = {
     "flipped": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3 4\nf 2 3 6 5\n",
                 "inconsistent orientation"),
     "not-numbers": ("v 0 0 zero\n", "not numbers"),
+    "duplicate-vertices": ("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\nv 0 2 0\nv 1 2 0\nv 2 2 0\nv 1 1 0\nv 1 1 1\nv 2 1 1\nv 2 1 0.5\n"
+                           "f 1 2 5 4\nf 2 3 6 5\nf 4 5 8 7\nf 5 6 9 8\nf 10 11 12 13\n", "coincide"),
+    "zero-area": ("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nv 0 1 0\nf 1 2 3 4\n", "zero area"),
     "empty": ("# nothing\n", "no vertices"),
 }
 

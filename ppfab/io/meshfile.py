@@ -2,9 +2,9 @@
 
 Reading validates what a fabrication tool relies on and names the first
 offence: non-quad faces (with their line), indices out of range, NaN/inf
-coordinates, repeated corners, duplicate faces, non-manifold edges (used by
-more than two faces) and inconsistent orientation (an edge used twice in the
-same direction).  Writing a :class:`QuadGrid` uses row-major order:
+coordinates, repeated corners, duplicate faces, coincident (unwelded)
+vertices, zero-area faces, non-manifold edges (used by more than two faces)
+and inconsistent orientation (an edge used twice in the same direction).  Writing a :class:`QuadGrid` uses row-major order:
 vertex ``v[i, j]`` is line ``i·(n+1) + j``, face ``f[i, j]`` row-major.
 """
 
@@ -15,9 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+import logging
+
 from ..errors import MeshFileError
 from ..mesh import QuadGrid, QuadMesh
 from ..topology import grid_face_indices
+
+log = logging.getLogger("ppfab")
 
 
 def _parse_obj(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[int]]:
@@ -108,6 +112,15 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
     _, first, counts = np.unique(srt, axis=0, return_index=True, return_counts=True)
     if np.any(counts > 1):
         raise MeshFileError(path, f"face {int(first[counts > 1][0])} appears more than once")
+    used = np.unique(f)
+    size = float(np.ptp(v[used], axis=0).max()) or 1.0
+    _check_coincident(path, v, f, used, size)
+    c = v[f]
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=1)
+    tiny = area <= 1e-12 * size * size
+    if np.any(tiny):
+        k = int(np.flatnonzero(tiny)[0])
+        raise MeshFileError(path, f"face {k} (line {lines[k]}) has zero area ({int(tiny.sum())} such face(s))")
     he = np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1)
     und = np.sort(he, axis=1)
     uniq, inv, cnt = np.unique(und, axis=0, return_inverse=True, return_counts=True)
@@ -121,6 +134,27 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
         raise MeshFileError(path, f"faces {int(faces_at[0])} and {int(faces_at[1])} run through edge "
                                   f"({int(e[0])}, {int(e[1])}) in the same direction (inconsistent orientation)")
     return f
+
+
+def _check_coincident(path: str, v: np.ndarray, f: np.ndarray, used: np.ndarray, size: float) -> None:
+    """Coincident vertices are an error unless both lie on the boundary (a seam where a closed
+    surface was cut open, as in surfaces of revolution) — those are kept and logged."""
+    key = np.round(v[used] / (1e-9 * size)).astype(np.int64)
+    _, first, inverse, counts = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    dup = np.flatnonzero(counts[inverse] > 1)
+    if not len(dup):
+        return
+    he = np.sort(np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1), axis=1)
+    e, cnt = np.unique(he, axis=0, return_counts=True)
+    boundary = np.zeros(len(v), dtype=bool)
+    boundary[e[cnt == 1].ravel()] = True
+    for k in dup:
+        a, b = int(used[first[inverse[k]]]), int(used[k])
+        if a != b and not (boundary[a] and boundary[b]):
+            raise MeshFileError(path, f"vertices {a} and {b} coincide at {v[a].tolist()} (duplicate vertices "
+                                      "inside the mesh: weld them before use)")
+    log.info("%s: %d boundary vertices coincide with others (a seam; kept)", path, len(dup) - len(set(inverse[dup])))
 
 
 def read_mesh(path: str | os.PathLike) -> QuadMesh:
