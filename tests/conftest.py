@@ -13,7 +13,7 @@ SHARED_DATA = REPO.parent / "shared" / "data"
 FULL = bool(os.environ.get("PPFAB_FULL"))
 
 
-def smooth_face_image(m: int, n: int, seed: int = 0, amplitude: float = 0.15) -> tuple[np.ndarray, np.ndarray]:
+def smooth_face_image(m: int, n: int, seed: int = 0, amplitude: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
     """Generators ``g (m+2, 4)``, ``h (n+2, 4)`` of a fair PP face image: a dome-like patch with a
     seeded smooth perturbation (the face normals turn gently, no folds)."""
     rng = np.random.default_rng(seed)

@@ -118,3 +118,9 @@ def test_random_face_images_give_small_pp_residual(m, n, seed):
     scale = max(1.0, float(np.abs(grid.vertices).max()))
     assert np.abs(pl.signed_distance(grid.support_u[:, None], grid.vertices)).max() <= 1e-7 * scale
     assert np.abs(pl.signed_distance(grid.support_w[None, :], grid.vertices)).max() <= 1e-7 * scale
+
+
+def test_zoo_meshes_are_fair(pp_grid):
+    """The shared test meshes are what they claim: no folds, convex faces."""
+    q = quality(pp_grid)
+    assert q.flipped_edges == 0 and q.nonconvex_faces == 0
