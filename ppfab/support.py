@@ -385,7 +385,12 @@ def support_pp(mesh: QuadMesh | QuadGrid, flip: bool = False) -> SupportStructur
     qm = as_quadmesh(mesh)
     grid = qm.grid
     if grid is None:
-        raise GeometryError("method 'pp' needs a regular patch (rows v[i, :] and columns v[:, j])")
+        from .topology import recover_grid
+
+        why = recover_grid(qm.topology)
+        reason = why if isinstance(why, str) else "no grid recorded"
+        raise GeometryError(f"support method 'pp' needs a regular patch (rows v[i, :] and columns v[:, j]); "
+                            f"this mesh is not a regular grid: {reason}")
     U = grid.support_u if grid.support_u is not None else pl.fit_plane(grid.rows())[0]
     W = grid.support_w if grid.support_w is not None else pl.fit_plane(grid.cols())[0]
     U, W = pl.normalize(U), pl.normalize(W)

@@ -170,8 +170,8 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("geometry", stage_geometry),
     ("quality", stage_quality),
     ("support", _fab.stage_support),
+    ("panels", _fab.stage_panels),      # panel planarity (mm) is the root cause of most beam defects: check it first
     ("beams", _fab.stage_beams),
-    ("panels", _fab.stage_panels),
     ("nesting", _fab.stage_nesting),
     ("mesh_files", stage_mesh_files),
     ("files", _fab.stage_files),
