@@ -45,7 +45,7 @@ __all__ = ["optimize", "OptimizeParams", "OptimizeResult", "IterationRecord", "P
 
 log = logging.getLogger("ppfab")
 
-EXACT_PLANES_LIMIT = 500_000
+EXACT_PLANES_LIMIT = 150_000
 """``plane_solver = "auto"`` keeps support normals as unknowns while Σ (polyline length)² is at most this."""
 
 
@@ -70,6 +70,7 @@ class OptimizeResult:
     delta_f_max, delta_f_mean : face planarity δ_f of the result (§3.3)
     delta_p_max, delta_p_mean : δ_P of the result over the polylines made planar
     excluded : polylines of the requested families left out because they pass twice through a vertex
+    polyline_delta_p : (S,) δ_P of each polyline made planar (same order as ``polylines``)
     """
 
     mesh: QuadMesh | QuadGrid
@@ -91,6 +92,7 @@ class OptimizeResult:
     delta_p_max: float = 0.0
     delta_p_mean: float = 0.0
     excluded: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    polyline_delta_p: np.ndarray = field(default_factory=lambda: np.zeros(0))
     params: OptimizeParams = field(default_factory=OptimizeParams)
 
     def summary(self) -> dict:
@@ -106,6 +108,7 @@ class OptimizeResult:
             "delta_f_max": self.delta_f_max, "delta_f_mean": self.delta_f_mean,
             "delta_p_max": self.delta_p_max, "delta_p_mean": self.delta_p_mean,
             "excluded_polylines": self.excluded.tolist(),
+            "polylines": self.polylines.tolist(), "polyline_delta_p": self.polyline_delta_p.tolist(),
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
         }
 
@@ -234,7 +237,8 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
     dfm, dfa, dpm, dpa = prob.metrics(v)
     met = dfm <= p.target_delta_f and dpm <= p.target_delta_p
-    msg = _message(state.stopped_by, met, dfm, dpm, p, prob)
+    per_line = prob.metrics.per_polyline(v)
+    msg = _message(state.stopped_by, met, dfm, dpm, p, prob, per_line)
     log.info(msg)
     return OptimizeResult(
         mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=bool(met),
@@ -243,7 +247,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         displacement_max=float(disp.max()), planes=planes, polylines=prob.selection.planar_index,
         skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0,
         delta_f_max=dfm, delta_f_mean=dfa, delta_p_max=dpm, delta_p_mean=dpa,
-        excluded=prob.selection.crossing, params=p)
+        excluded=prob.selection.crossing, polyline_delta_p=per_line, params=p)
 
 
 def _support_planes(v: np.ndarray, lines) -> np.ndarray:
@@ -270,12 +274,18 @@ def _as_input_type(mesh, out_qm: QuadMesh, sel: Selection, planes: np.ndarray):
     return mesh.with_vertices(np.asarray(out_qm.vertices).reshape(m1, n1, 3), **support)
 
 
-def _message(stopped_by: str, met: bool, dfm: float, dpm: float, p: OptimizeParams, prob: Problem) -> str:
+def _message(stopped_by: str, met: bool, dfm: float, dpm: float, p: OptimizeParams, prob: Problem,
+             per_line: np.ndarray) -> str:
     what = {"targets": "targets met", "stationary": "stationary point reached",
             "max_iterations": f"iteration limit {p.max_iterations} reached",
             "stuck": "no step lowers the energy without folding the mesh"}[stopped_by]
     tail = "" if met else (f"; targets NOT met: max δ_f {dfm:.2e} (target {p.target_delta_f:.0e}), "
                            f"max δ_P {dpm:.2e} (target {p.target_delta_p:.0e})")
+    bad = np.flatnonzero(per_line > p.target_delta_p)
+    if len(bad):
+        worst = bad[np.argsort(-per_line[bad])][:5]
+        tail += (f"; {len(bad)} polyline(s) above the δ_P target, worst: "
+                 + ", ".join(f"{int(prob.selection.planar_index[k])} ({per_line[k]:.1e})" for k in worst))
     note = ""
     if not prob.mesh.topology.families_consistent and p.families != "none" and prob.mesh.grid is None:
         note = " (polyline families are not consistent on this mesh: family labels are per polyline)"

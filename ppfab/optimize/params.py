@@ -53,7 +53,7 @@ class OptimizeParams:
                                           "normal couples all vertices of its polyline, so the factorisation "
                                           "grows with polyline length²), eliminated by variable projection "
                                           "(projected: as sparse as the mesh), or auto (exact while "
-                                          "Σ (polyline length)² <= 5e5)", choices=("auto", "exact", "projected"))
+                                          "Σ (polyline length)² <= 1.5e5)", choices=("auto", "exact", "projected"))
     target_delta_f: float = param(1e-6, doc="stop when max δ_f (face planarity, §3.3) is at most this",
                                   exclusive_min=0.0)
     target_delta_p: float = param(1e-6, doc="stop when max δ_P of the selected polylines is at most this",

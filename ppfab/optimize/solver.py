@@ -80,6 +80,12 @@ class PlanarityMetrics:
             idx, self.weights = pad_polylines(np.arange(n_vertices, dtype=float)[:, None], polylines)
             self.index = idx[..., 0].astype(np.int64)
 
+    def per_polyline(self, vertices: np.ndarray) -> np.ndarray:
+        """``δ_P (S,)`` of every selected polyline."""
+        if not self.has_lines:
+            return np.zeros(0)
+        return polyline_planarity(vertices[self.index], self.weights)
+
     def __call__(self, vertices: np.ndarray) -> tuple[float, float, float, float]:
         """``(δ_f max, δ_f mean, δ_P max, δ_P mean)``."""
         df = face_planarity(vertices[self.faces]) if len(self.faces) else np.zeros(1)
