@@ -366,3 +366,22 @@ def test_doctests():
 
     assert doctest.testmod(ppfab.optimize).failed == 0
     assert doctest.testmod(ppfab.optimize.params).failed == 0
+
+
+def test_free_faces_ignore_the_face_target_and_all_fixed_is_an_error():
+    g = noisy_translational_grid(5, 5, noise=0.2, seed=5)
+    res = optimize(g, families="rows", planar_faces=False)
+    assert res.targets_met and res.delta_p_max <= 1e-6
+    assert res.delta_f_max > 1e-4                                    # faces were not asked to be planar
+    with pytest.raises(DesignError, match="optimize.fix_boundary: all 4 vertices are fixed"):
+        optimize(QuadGrid(g.vertices[:2, :2]), fix_boundary=True)
+
+
+def test_absolute_fairness_would_move_a_finished_mesh_relative_does_not():
+    """Why ``fairness = "relative"`` is the default: the paper's absolute E_fair smooths (moves) a mesh
+    that only needs a touch; relative fairness leaves it in place."""
+    g = noisy_translational_grid(10, 10, noise=0.002, seed=6)
+    rel = optimize(g, families="both")
+    ab = optimize(g, families="both", fairness="absolute")
+    assert rel.targets_met and ab.targets_met
+    assert ab.displacement_mean > 3 * rel.displacement_mean

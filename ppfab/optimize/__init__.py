@@ -186,6 +186,9 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
         free = free_vertices(qm, p.fix_boundary, p.fixed_vertices)
     except DesignError as exc:
         raise DesignError(f"optimize.{exc.key}", str(exc).split(": ", 1)[-1]) from None
+    if not free.any():
+        raise DesignError("optimize.fixed_vertices" if p.fixed_vertices else "optimize.fix_boundary",
+                          f"all {len(free)} vertices are fixed: nothing can move")
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
                       p.weight_shape, p.shape_ratio)
     exact = p.plane_solver == "exact" or (
@@ -223,7 +226,8 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     t0 = time.perf_counter()
     prob = build_problem(mesh, params, **kw)
     p = prob.params
-    control = SolverControl(p.target_delta_f, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall)
+    target_df = p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf   # faces left free
+    control = SolverControl(target_df, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall)
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
     v_n = prob.residuals.unpack(state.z)[0]
@@ -236,9 +240,9 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     disp = np.linalg.norm(v - v0, axis=1)
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
     dfm, dfa, dpm, dpa = prob.metrics(v)
-    met = dfm <= p.target_delta_f and dpm <= p.target_delta_p
+    met = dfm <= target_df and dpm <= p.target_delta_p
     per_line = prob.metrics.per_polyline(v)
-    msg = _message(state.stopped_by, met, dfm, dpm, p, prob, per_line)
+    msg = _message(state.stopped_by, met, dfm, dpm, p, prob, per_line, target_df)
     log.info(msg)
     return OptimizeResult(
         mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=bool(met),
@@ -275,11 +279,11 @@ def _as_input_type(mesh, out_qm: QuadMesh, sel: Selection, planes: np.ndarray):
 
 
 def _message(stopped_by: str, met: bool, dfm: float, dpm: float, p: OptimizeParams, prob: Problem,
-             per_line: np.ndarray) -> str:
+             per_line: np.ndarray, target_df: float) -> str:
     what = {"targets": "targets met", "stationary": "stationary point reached",
             "max_iterations": f"iteration limit {p.max_iterations} reached",
             "stuck": "no step lowers the energy without folding the mesh"}[stopped_by]
-    tail = "" if met else (f"; targets NOT met: max δ_f {dfm:.2e} (target {p.target_delta_f:.0e}), "
+    tail = "" if met else (f"; targets NOT met: max δ_f {dfm:.2e} (target {target_df:.0e}), "
                            f"max δ_P {dpm:.2e} (target {p.target_delta_p:.0e})")
     bad = np.flatnonzero(per_line > p.target_delta_p)
     if len(bad):
