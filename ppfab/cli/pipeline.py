@@ -94,7 +94,9 @@ def build_geometry(design: Design, allow_large: bool = True, progress: Progress 
     else:
         mesh = load_mesh(design.mesh_path())
         opt = design.optimize
-        families = tuple(geo.planar_families or (getattr(opt, "families_list", None) or ()))
+        optimised = {"rows": ("rows",), "cols": ("cols",), "both": ("rows", "cols")}.get(
+            getattr(opt, "families", ""), ()) if opt is not None else ()
+        families = tuple(geo.planar_families or optimised)
         source = f"mesh:{geo.mesh}"
         if opt is not None:
             from ..optimize import optimize
