@@ -70,10 +70,15 @@ def mesh_figure(quads: np.ndarray, title: str = "", plates: Iterable[np.ndarray]
 
 def save(fig, path: str | Path | None = None, fmt: str = "png") -> bytes | None:
     """Save and close a figure; with no path return the bytes."""
+    import warnings
+
     plt = _plt()
     buf = io.BytesIO()
     meta = {"Software": None} if fmt == "png" else {"Date": None, "Creator": None}
-    fig.savefig(buf, format=fmt, metadata=meta)
+    with warnings.catch_warnings():
+        # mplot3d's auto-margins overflow in a float subtraction on some views; harmless for the image
+        warnings.simplefilter("ignore", RuntimeWarning)
+        fig.savefig(buf, format=fmt, metadata=meta)
     plt.close(fig)
     data = buf.getvalue()
     if path is None:
