@@ -31,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
     p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
     p.add_argument("--target-dp", type=float, default=None, help="target max δ_P (default 1e-6)")
-    p.add_argument("--max-iter", type=int, default=None, help="maximum Levenberg–Marquardt iterations (default 200)")
+    p.add_argument("--max-iter", type=int, default=None, help="maximum Levenberg–Marquardt iterations (default 500)")
     p.add_argument("--design", default=None, help="take parameters from the [optimize] table of this TOML file")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="set any optimisation parameter (TOML value syntax), repeatable")

@@ -243,7 +243,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     met = dfm <= target_df and dpm <= p.target_delta_p
     per_line = prob.metrics.per_polyline(v)
     msg = _message(state.stopped_by, met, dfm, dpm, p, prob, per_line, target_df)
-    log.info(msg)
+    log.debug(msg)
     return OptimizeResult(
         mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=bool(met),
         iterations=state.iterations, history=state.history, message=msg,

@@ -58,7 +58,7 @@ class OptimizeParams:
                                   exclusive_min=0.0)
     target_delta_p: float = param(1e-6, doc="stop when max δ_P of the selected polylines is at most this",
                                   exclusive_min=0.0)
-    max_iterations: int = param(200, doc="maximum number of Levenberg–Marquardt iterations "
+    max_iterations: int = param(500, doc="maximum number of Levenberg–Marquardt iterations "
                                          "(linear solves, rejected steps included)", min=1, max=100000)
     reg_decay: float = param(0.1, doc="factor applied to the fairness and closeness weights when progress stalls "
                                       "(1 keeps the paper's energy fixed)", exclusive_min=0.0, max=1.0)

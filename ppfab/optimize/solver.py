@@ -99,7 +99,7 @@ class SolverControl:
 
     target_delta_f: float = 1e-6
     target_delta_p: float = 1e-6
-    max_iterations: int = 200
+    max_iterations: int = 500
     reg_decay: float = 0.1
     reg_min: float = 1e-6
     stall: float = 0.05
