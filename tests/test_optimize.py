@@ -409,3 +409,24 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
             assert b.energy <= a.energy * (1 + 1e-12)
     if full:
         assert res.targets_met
+
+
+@pytest.mark.parametrize("exact", [True, False], ids=["planes-exact", "planes-projected"])
+def test_schur_solve_equals_dense_damped_solve(exact):
+    """The block elimination of the face normals and the block ordering give the exact LM step."""
+    from ppfab.optimize.linsolve import DampedSystem
+
+    rng = np.random.default_rng(3)
+    mesh = noisy_translational_grid(6, 5, noise=0.2, seed=4).to_quadmesh()
+    sel = select_polylines(mesh, "both")
+    res = Residuals(mesh.vertices, mesh.faces, mesh.edges, sel.planar, sel.fair,
+                    np.ones(len(mesh.vertices), bool), Weights(), plane_unknowns=exact)
+    z = res.pack(mesh.vertices, rng.normal(size=(res.n_planes, 3)), rng.normal(size=(res.n_faces, 3)))
+    jac, r = res.jacobian(z, 0.5), res.residual(z, 0.5)
+    system = DampedSystem(jac, r, res.n_face_unknowns)
+    dense = jac.toarray()
+    for mu in (1e-6, 1e-2, 10.0):
+        h = system.solve(mu)
+        ref = np.linalg.solve(dense.T @ dense + mu * np.eye(dense.shape[1]), -dense.T @ r)
+        assert np.allclose(h, ref, rtol=1e-7, atol=1e-9 * np.abs(ref).max())
+        assert system.predicted_decrease(h, mu) == pytest.approx(r @ r - np.sum((r + dense @ h) ** 2), rel=1e-6)
