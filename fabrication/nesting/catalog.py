@@ -57,6 +57,12 @@ def _check_outline(part: FlatPart) -> np.ndarray:
     if part.area <= 0:
         raise NestingError(f"part {part.part_id}: outline is not counter-clockwise or has no area "
                            f"(area {part.area:.3g} mm²)")
+    from shapely.geometry import Polygon
+    from shapely.validation import explain_validity
+
+    poly = Polygon(outline)
+    if not poly.is_valid:      # a self-crossing outline has no well-defined halo: spacing could not be kept
+        raise NestingError(f"part {part.part_id}: outline is not a simple polygon ({explain_validity(poly)})")
     return outline
 
 

@@ -6,7 +6,9 @@ Modes (``NestingParams.mode``):
   edge to edge (rows, then parts within a row, then the trims of each part), as glass is
   scored and broken.
 * ``irregular`` — the same rows, but the outlines nestle: neighbours are turned (e.g. 180°)
-  and slid together along the row, and the length saved is filled again.
+  and slid together along the row, and the length saved is filled again.  When the parts are
+  mostly strips (long and thin, like beam plates), they are stacked instead, each dropped onto
+  the ones below and nestling into them (:mod:`.stack`); see :func:`strategies`.
 * ``auto`` — both, each with its share of the budget; fewer sheets wins, a tie goes to
   guillotine (cheaper to cut).
 
@@ -26,20 +28,48 @@ from ..flatpart import FlatPart, Placement
 from .catalog import Catalog, build_catalog
 from .params import NestingParams
 from .result import Nesting
-from .rows import PlanConfig, Sheet, SheetFiller, Work
+from .rows import Sheet, SheetFiller, Work
 from .search import fill_all, improve
+from .stack import StackFiller, strip_parts
 
 UNITS_PER_SECOND = 215_000.0    # work units per second of budget (measured on a 2-core reference machine)
+STRIP_SHARE = 0.9               # irregular mode stacks strips alone when they hold this share of the part area
 
 
-def _solve(cat: Catalog, irregular: bool, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
+def _filler(cat: Catalog, kind: str, work: Work) -> SheetFiller | StackFiller:
+    return StackFiller(cat, work) if kind == "stack" else SheetFiller(cat, kind == "rows", work)
+
+
+def _solve(cat: Catalog, kind: str, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
     work = Work()
-    filler = SheetFiller(cat, irregular, work)
-    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), PlanConfig(), None)
+    filler = _filler(cat, kind, work)
+    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None)
     history = [(work.units, len(sheets))]
     rng = np.random.default_rng([seed, stream])
     sheets = improve(filler, sheets, units, rng, history=history, target=lb)
     return sheets, work, history
+
+
+def strategies(cat: Catalog, mode: str) -> list[tuple[str, str, float]]:
+    """The sheet fillers a mode runs: ``(filler, reported mode, share of the budget)``.
+
+    ``guillotine`` runs the box rows; ``irregular`` runs the nestled rows when no part is a strip,
+    the strip stacks (:mod:`.stack`) when strips hold at least :data:`STRIP_SHARE` of the part
+    area, and both (half the budget each) in between; ``auto`` runs guillotine on a quarter of
+    the budget and irregular on the rest.
+    """
+    frac = float(cat.part_area[strip_parts(cat)].sum() / cat.part_area.sum())
+    if frac <= 0.0:
+        irregular = [("rows", "irregular", 1.0)]
+    elif frac >= STRIP_SHARE:
+        irregular = [("stack", "irregular", 1.0)]
+    else:
+        irregular = [("rows", "irregular", 0.5), ("stack", "irregular", 0.5)]
+    if mode == "guillotine":
+        return [("guillotine", "guillotine", 1.0)]
+    if mode == "irregular":
+        return irregular
+    return [("guillotine", "guillotine", 0.25)] + [(k, m, 0.75 * f) for k, m, f in irregular]
 
 
 def _placements(cat: Catalog, sheets: list[Sheet], params: NestingParams) -> list[Placement]:
@@ -87,12 +117,10 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     total = float(cat.part_area.sum())
     x0, y0, x1, y1 = p.usable()
     lb_usable = int(math.ceil(total / ((x1 - x0) * (y1 - y0)) - 1e-12))
-    modes = ["guillotine", "irregular"] if p.mode == "auto" else [p.mode]
     budget = float(p.time_budget) * UNITS_PER_SECOND
-    shares = {"guillotine": 0.25, "irregular": 0.75} if len(modes) == 2 else {modes[0]: 1.0}
     best = None
-    for stream, mode in enumerate(modes):
-        sheets, work, history = _solve(cat, mode == "irregular", shares[mode] * budget, p.seed, stream, lb_usable)
+    for stream, (kind, mode, share) in enumerate(strategies(cat, p.mode)):
+        sheets, work, history = _solve(cat, kind, share * budget, p.seed, stream, lb_usable)
         if best is None or len(sheets) < len(best[1]):
             best = (mode, sheets, work, history)
     mode, sheets, work, history = best

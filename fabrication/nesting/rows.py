@@ -186,6 +186,21 @@ class SheetFiller:
                 best_value, best_rows = total, rows
         return best_rows
 
+    # -- search interface --------------------------------------------------------------------------
+    def fill_sheet(self, rem: np.ndarray, cfg: PlanConfig, values: np.ndarray,
+                   rng: np.random.Generator | None) -> Sheet | None:
+        """Plan and realise one sheet from the parts in ``rem`` (updated); ``None`` if no row fits."""
+        rows = self.plan(rem, cfg, values, rng)
+        return self.realise(rows, rem, cfg, values) if rows else None
+
+    def initial_config(self) -> PlanConfig:
+        return PlanConfig()
+
+    def random_config(self, rng: np.random.Generator) -> PlanConfig:
+        """Randomised knobs for one ruin-and-recreate step."""
+        return PlanConfig(alpha=float(rng.uniform(0.8, 1.8)), n_heights=int(rng.choice([10, 16, 24])),
+                          top_k=int(rng.choice([48, 64, 96])), jitter=float(rng.choice([0.0, 0.05, 0.15, 0.3])))
+
     # -- realisation -------------------------------------------------------------------------------
     def realise(self, rows: list[list[int]], rem: np.ndarray, cfg: PlanConfig, values: np.ndarray) -> Sheet:
         """Place planned rows (``rem`` is updated in place)."""
@@ -293,7 +308,7 @@ class SheetFiller:
                         break
                     trial.append(Piece(int(o), float(x), y))
                     trial_halos.append(c.orients[o].halo + np.array([x, y]))
-                    xe = float(x + c.o_w[o])
+                    xe = max(xe, float(x + c.o_w[o]))      # a piece nestled deep into the one before ends left of it
                 if trial is not None:
                     placed = (trial, trial_halos, xe)
                     break

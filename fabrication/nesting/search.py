@@ -1,10 +1,12 @@
 """Sheet-level search: a greedy first solution, then ruin and recreate within a work budget.
 
-The first solution fills sheet after sheet, each as full as the row planner can make it.
+The first solution fills sheet after sheet, each as full as the sheet filler can make it
+(rows of :mod:`.rows` or the strip stacks of :mod:`.stack`: both offer ``fill_sheet``,
+``part_values`` and ``random_config``).
 Then, repeatedly, the emptiest sheet and one to three others (drawn with a preference for
 sheets with room) are emptied and their parts
-re-planned with randomised planner knobs (value exponent, perturbed values, row heights
-tried); the new sheets replace the old ones when
+re-planned with randomised filler knobs (for rows: value exponent, perturbed values, row
+heights tried; for stacks: score bonus and jitter, first part); the new sheets replace the old ones when
 they are fewer, or as many with a larger sum of squared fills (which drains the emptiest
 sheet until it disappears).  Randomness comes from one seeded generator and the loop stops
 on a count of work units, so a run depends only on the seed and the budget, never on the
@@ -19,21 +21,21 @@ from ppfab.errors import NestingError
 
 from .catalog import Catalog
 from .rows import PlanConfig, Sheet, SheetFiller
+from .stack import StackConfig, StackFiller
 
 
-def fill_all(filler: SheetFiller, rem: np.ndarray, cfg: PlanConfig,
+def fill_all(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
              rng: np.random.Generator | None) -> list[Sheet]:
     """Fill sheets one after another until every part in ``rem`` is placed (``rem`` is consumed)."""
     cat = filler.cat
     values = filler.part_values(cfg, rng)
     sheets: list[Sheet] = []
     while rem.any():
-        rows = filler.plan(rem, cfg, values, rng)
-        if not rows:
+        before = int(rem.sum())
+        sheet = filler.fill_sheet(rem, cfg, values, rng)
+        if sheet is None:
             left = [cat.parts[p].part_id for p in np.flatnonzero(rem)[:5]]
             raise NestingError(f"parts {', '.join(left)} could not be placed on an empty sheet")
-        before = int(rem.sum())
-        sheet = filler.realise(rows, rem, cfg, values)
         if int(rem.sum()) >= before or not sheet.pieces:
             raise NestingError("nesting made no progress on an empty sheet (internal error)")
         sheets.append(sheet)
@@ -44,12 +46,7 @@ def _score(sheets: list[Sheet], norm: float) -> float:
     return float(sum((s.area / norm) ** 2 for s in sheets))
 
 
-def random_config(rng: np.random.Generator) -> PlanConfig:
-    return PlanConfig(alpha=float(rng.uniform(0.8, 1.8)), n_heights=int(rng.choice([10, 16, 24])),
-                      top_k=int(rng.choice([48, 64, 96])), jitter=float(rng.choice([0.0, 0.05, 0.15, 0.3])))
-
-
-def improve(filler: SheetFiller, sheets: list[Sheet], budget_units: float, rng: np.random.Generator,
+def improve(filler: SheetFiller | StackFiller, sheets: list[Sheet], budget_units: float, rng: np.random.Generator,
             history: list[tuple[float, int]] | None = None, target: int = 1) -> list[Sheet]:
     """Ruin and recreate until ``filler.work.units`` reaches ``budget_units`` or the sheets reach ``target``."""
     cat: Catalog = filler.cat
@@ -66,7 +63,7 @@ def improve(filler: SheetFiller, sheets: list[Sheet], budget_units: float, rng: 
         for i in sel:
             for p in sheets[i].pieces:
                 rem[cat.o_part[p.orient]] = True
-        cfg = random_config(rng)
+        cfg = filler.random_config(rng)
         new = fill_all(filler, rem, cfg, rng)
         old = [sheets[i] for i in sel]
         if len(new) < len(old) or (len(new) == len(old) and _score(new, norm) > _score(old, norm) + 1e-12):
