@@ -10,20 +10,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from conftest import small_design
+
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
-GEOMETRY = """
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-u_range = [-4.0, 4.0]
-v_range = [-3.0, 3.0]
-faces_u = 5
-faces_v = 4
-"""
+GEOMETRY = small_design(fast=False)
 FAST = "\n[nesting]\ntime_budget = 0.3\n[beam_nesting]\ntime_budget = 0.3\n"
 
 GRID_OBJ = "".join(f"v {x} {y} 0\n" for y in range(3) for x in range(3)) + \

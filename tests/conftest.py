@@ -43,3 +43,31 @@ def pp_grid(request):
     m, n, seed = ZOO_SHAPES[request.param]
     g, h = smooth_face_image(m, n, seed)
     return pp_from_face_image(g, h)
+
+
+def small_design(faces_u: int = 5, faces_v: int = 4, u_range=(-4.0, 4.0), v_range=(-3.0, 3.0),
+                 name: str = "small", extra: str = "", fast: bool = True) -> str:
+    """A small PP vault (the default's face image, fewer faces) as design-file text, with optional extra
+    sections and, when ``fast``, small nesting budgets."""
+    text = f"""
+[design]
+name = "{name}"
+[geometry]
+method = "face_image_curves"
+scale = 1000.0
+[geometry.params]
+g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
+h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
+u_range = [{u_range[0]}, {u_range[1]}]
+v_range = [{v_range[0]}, {v_range[1]}]
+faces_u = {faces_u}
+faces_v = {faces_v}
+"""
+    text += extra
+    if fast:
+        for section in ("nesting", "beam_nesting"):
+            if f"[{section}]" in text:
+                text = text.replace(f"[{section}]", f"[{section}]\ntime_budget = 0.5", 1)
+            else:
+                text += f"\n[{section}]\ntime_budget = 0.5\n"
+    return text

@@ -11,19 +11,9 @@ import pytest
 from ppfab.cli import main
 from ppfab.io import load_mesh
 
-SMALL = """
-[design]
-name = "e2e"
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-u_range = [-4.5, 4.5]
-v_range = [-3.0, 3.0]
-faces_u = 6
-faces_v = 4
+from conftest import small_design
+
+SMALL = small_design(6, 4, u_range=(-4.5, 4.5), name="e2e", extra="""
 [beams]
 depth = 150.0
 thickness = 12.0
@@ -31,11 +21,7 @@ joint = "halflap"
 max_length = 5000.0
 [panels]
 gap = 16.0
-[nesting]
-time_budget = 0.5
-[beam_nesting]
-time_budget = 0.5
-"""
+""")
 
 
 @pytest.fixture(scope="module")

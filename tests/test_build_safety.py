@@ -9,24 +9,9 @@ import pytest
 
 from ppfab.cli import main, pipeline
 
-SMALL = """
-[design]
-name = "small"
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-u_range = [-4.0, 4.0]
-v_range = [-3.0, 3.0]
-faces_u = 5
-faces_v = 4
-[nesting]
-time_budget = 0.3
-[beam_nesting]
-time_budget = 0.3
-"""
+from conftest import small_design
+
+SMALL = small_design()
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ import pytest
 from ppfab.cli import main
 from ppfab.io import load_mesh
 
-from conftest import SHARED_DATA
+from conftest import SHARED_DATA, small_design
 
 
 def run(capsys, *argv):
@@ -36,20 +36,7 @@ def test_check_bad_file_is_one_line_exit_2(capsys, tmp_path):
     assert err.startswith("ppfab: error:") and err.count("\n") == 1 and "Traceback" not in err
 
 
-GEOMETRY = """
-[design]
-name = "t"
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-u_range = [-6.0, 6.0]
-v_range = [-4.0, 4.0]
-faces_u = 7
-faces_v = 5
-"""
+GEOMETRY = small_design(7, 5, u_range=(-6.0, 6.0), v_range=(-4.0, 4.0), fast=False)
 
 
 def test_check_on_built_obj_reports_pp(capsys, tmp_path):

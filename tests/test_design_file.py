@@ -8,18 +8,9 @@ from ppfab.cli import main
 from ppfab.cli.design import load_design, parse_design
 from ppfab.errors import DesignError
 
-GOOD = """
-[design]
-name = "t"
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-faces_u = 4
-faces_v = 3
-"""
+from conftest import small_design
+
+GOOD = small_design(4, 3, name="t", fast=False)
 
 SECTIONS = ("design", "geometry", "output")
 
