@@ -3,6 +3,7 @@
 For each mesh and each of ``rows`` (P) and ``both`` (PP attempt) it prints, in the form of the paper's
 §3.3 table, max/avg δ_P (over the polylines made planar) and max/avg δ_f before and after, the time,
 the LM iterations, whether the targets (1e-6) were met, how many of the polylines reached δ_P <= 1e-6,
+the folds of the result (flipped edges / non-convex faces, ``ppfab.metrics``),
 and the mean vertex displacement from the
 input in mesh units and relative to the bounding-box diagonal.  Default parameters otherwise.
 
@@ -49,9 +50,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-iter", type=int, default=500)
     args = ap.parse_args(argv)
     print("| mesh | V / F | planar | δ_P max / avg before | **δ_P max** | **δ_P avg** | **δ_f max** | "
-          "**δ_f avg** | δ_f max before | time s | iter | met | polylines ≤ 1e-6 | "
+          "**δ_f avg** | δ_f max before | time s | iter | met | polylines ≤ 1e-6 | folds | "
           "displacement mean (rel. bbox diag) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, mesh in meshes():
         qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
         for fam in args.families.split(","):
@@ -65,7 +66,8 @@ def main(argv: list[str] | None = None) -> int:
                   f"{dp0:.1e} / {dpa0:.1e} | {res.delta_p_max:.1e} | {res.delta_p_mean:.1e} | "
                   f"{res.delta_f_max:.1e} | {res.delta_f_mean:.1e} | {df0:.1e} | {dt:.1f} | {res.iterations} | "
                   f"{'yes' if res.targets_met else 'no'} | "
-                  f"{int((res.polyline_delta_p <= 1e-6).sum())} / {len(res.polylines)} | {res.displacement_mean:.2e} "
+                  f"{int((res.polyline_delta_p <= 1e-6).sum())} / {len(res.polylines)} | "
+                  f"{res.quality.flipped_edges} / {res.quality.nonconvex_faces} | {res.displacement_mean:.2e} "
                   f"({res.displacement_rel:.1e}) |", flush=True)
     return 0
 

@@ -108,14 +108,14 @@ def test_rejected_steps_are_undone():
         rec = lm.history[-1]
         if not rec.accepted:
             rejected += 1
-            assert rec.rejected_by in ("energy", "flip", "nonconvex", "collapse", "nan")
+            assert rec.rejected_by in ("energy", "flip", "fold", "nonconvex", "collapse", "nan")
             assert np.array_equal(lm.z, z_before) and lm.energy == e_before
         elif lm.stage == stage:
             assert lm.energy <= e_before
         if reason:
             break
     reasons = {h.rejected_by for h in lm.history if not h.accepted}
-    assert rejected >= 3 and "energy" in reasons and reasons & {"flip", "nonconvex", "collapse"}
+    assert rejected >= 3 and "energy" in reasons and reasons & {"flip", "fold", "nonconvex", "collapse"}
 
 
 def test_guard_refuses_a_flipping_step():
@@ -125,7 +125,7 @@ def test_guard_refuses_a_flipping_step():
     v = np.array(mesh.vertices)
     w = v.copy()
     w[5] += 3.0 * (v[10] - v[5])                                     # push an interior vertex across its faces
-    assert prob.guard.check(v, w) in ("flip", "nonconvex")
+    assert prob.guard.check(v, w) in ("flip", "fold", "nonconvex")
     w = v.copy()
     w[5] = v[6] + 1e-3 * (v[5] - v[6])                               # collapse an edge
     assert prob.guard.check(v, w) in ("collapse", "nonconvex", "flip")
@@ -381,10 +381,19 @@ def test_absolute_fairness_would_move_a_finished_mesh_relative_does_not():
     """Why ``fairness = "relative"`` is the default: the paper's absolute E_fair smooths (moves) a mesh
     that only needs a touch; relative fairness leaves it in place."""
     g = noisy_translational_grid(10, 10, noise=0.002, seed=6)
-    rel = optimize(g, families="both")
+    rel = optimize(g, families="both", fairness="relative")
     ab = optimize(g, families="both", fairness="absolute")
     assert rel.targets_met and ab.targets_met
     assert ab.displacement_mean > 3 * rel.displacement_mean
+
+
+def test_auto_fairness_keeps_nearly_planar_meshes_and_smooths_rough_ones():
+    fine = noisy_translational_grid(10, 10, noise=1e-5, seed=6)
+    rough = noisy_translational_grid(10, 10, noise=0.05, seed=6)
+    assert quality(fine).delta_f_max < 1e-3 < quality(rough).delta_f_max
+    assert optimize(fine, families="both").fairness == "relative"
+    assert optimize(rough, families="both").fairness == "absolute"
+    assert optimize(rough, families="both", fairness="relative").fairness == "relative"
 
 
 @pytest.mark.slow
@@ -392,7 +401,9 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
     """``DOI__rot4_def1_sparse.obj`` (δ_f 5e-2, δ_P 0.19; a published planariser diverged on it).
 
     Small form (CI): 25 iterations of the PP attempt lower mean δ_f and δ_P by large factors without a
-    single flipped or non-convex face.  Full form (PPFAB_FULL=1): the PP attempt meets 1e-6.
+    single flipped edge or non-convex face.  Full form (PPFAB_FULL=1): the run to its end stays fold-free
+    and lowers max δ_f and max δ_P too (the targets are out of reach without folding this mesh: the fold
+    guard refuses the steps that would get there).
     """
     import os
 
@@ -408,7 +419,9 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
         if a.stage == b.stage:
             assert b.energy <= a.energy * (1 + 1e-12)
     if full:
-        assert res.targets_met
+        assert q.delta_f_max < 0.5 * q0.delta_f_max
+        assert max(q.delta_p_rows_max, q.delta_p_cols_max) < 0.1 * max(q0.delta_p_rows_max, q0.delta_p_cols_max)
+        assert any(h.rejected_by == "fold" for h in res.history)
 
 
 @pytest.mark.parametrize("exact", [True, False], ids=["planes-exact", "planes-projected"])
@@ -430,3 +443,19 @@ def test_schur_solve_equals_dense_damped_solve(exact):
         ref = np.linalg.solve(dense.T @ dense + mu * np.eye(dense.shape[1]), -dense.T @ r)
         assert np.allclose(h, ref, rtol=1e-7, atol=1e-9 * np.abs(ref).max())
         assert system.predicted_decrease(h, mu) == pytest.approx(r @ r - np.sum((r + dense @ h) ** 2), rel=1e-6)
+
+
+def test_guard_refuses_a_step_that_folds_two_faces_over_their_edge():
+    """No face turns over in the step, but the dihedral angle passes 90°: a cuspidal edge builds up."""
+    from ppfab.optimize.guard import StepGuard
+
+    def strip(angle_deg: float) -> np.ndarray:
+        a = np.radians(angle_deg)
+        # face A in the plane z = 0 on x in [-1, 0]; face B hinged at x = 0, turned by ``a``
+        return np.array([[-1, 0, 0], [-1, 1, 0], [0, 0, 0], [0, 1, 0],
+                         [np.cos(a), 0, np.sin(a)], [np.cos(a), 1, np.sin(a)]], dtype=float)
+
+    mesh = QuadMesh(strip(0.0), np.array([[0, 2, 3, 1], [2, 4, 5, 3]]))
+    guard = StepGuard(mesh.faces, mesh.edges, mesh.vertices, 0.2, mesh.topology.edge_faces)
+    assert guard.check(strip(80.0), strip(85.0)) == ""
+    assert guard.check(strip(80.0), strip(100.0)) == "fold"

@@ -32,7 +32,7 @@ import numpy as np
 from .. import planes as pl
 from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid, QuadMesh
-from ..metrics import Quality, quality
+from ..metrics import Quality, face_planarity, quality
 from ..schema import as_plain, parse_params
 from .guard import StepGuard
 from .params import OptimizeParams
@@ -47,6 +47,9 @@ log = logging.getLogger("ppfab")
 
 EXACT_PLANES_LIMIT = 150_000
 """``plane_solver = "auto"`` keeps support normals as unknowns while Σ (polyline length)² is at most this."""
+
+AUTO_FAIRNESS_DELTA_F = 1e-3
+"""``fairness = "auto"`` uses the paper's absolute E_fair when the input's max δ_f exceeds this."""
 
 
 @dataclass
@@ -71,6 +74,7 @@ class OptimizeResult:
     delta_p_max, delta_p_mean : δ_P of the result over the polylines made planar
     excluded : polylines of the requested families left out because they pass twice through a vertex
     polyline_delta_p : (S,) δ_P of each polyline made planar (same order as ``polylines``)
+    fairness, plane_solver : the modes ``"auto"`` resolved to
     """
 
     mesh: QuadMesh | QuadGrid
@@ -93,6 +97,8 @@ class OptimizeResult:
     delta_p_mean: float = 0.0
     excluded: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     polyline_delta_p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    fairness: str = ""
+    plane_solver: str = ""
     params: OptimizeParams = field(default_factory=OptimizeParams)
 
     def summary(self) -> dict:
@@ -109,6 +115,7 @@ class OptimizeResult:
             "delta_p_max": self.delta_p_max, "delta_p_mean": self.delta_p_mean,
             "excluded_polylines": self.excluded.tolist(),
             "polylines": self.polylines.tolist(), "polyline_delta_p": self.polyline_delta_p.tolist(),
+            "fairness": self.fairness, "plane_solver": self.plane_solver,
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
         }
 
@@ -140,6 +147,8 @@ class Problem:
     metrics: PlanarityMetrics
     guard: StepGuard
     reference: ReferenceSurface | None
+    fairness: str = "relative"            # the resolved E_fair mode
+    plane_solver: str = "exact"           # the resolved support-normal treatment
 
     def on_stage(self, z: np.ndarray) -> None:
         """A stage begins: update the shape barrier's face normals and the surface foot points."""
@@ -191,16 +200,21 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                           f"all {len(free)} vertices are fixed: nothing can move")
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
                       p.weight_shape, p.shape_ratio)
+    fairness = p.fairness
+    if fairness == "auto":
+        far = len(qm.faces) and float(face_planarity(v[qm.faces]).max()) > AUTO_FAIRNESS_DELTA_F
+        fairness = "absolute" if far else "relative"
     exact = p.plane_solver == "exact" or (
         p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
-    res = Residuals(vn, qm.faces, qm.edges, sel.planar, sel.fair, free, weights, p.fairness, p.closeness,
+    res = Residuals(vn, qm.faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
                     p.planar_faces, plane_unknowns=exact)
     nf, ns = _initial_normals(vn, qm.faces, sel.planar)
     z0 = res.pack(vn, ns, nf)
     metrics = PlanarityMetrics(qm.faces, sel.planar, len(vn))
-    guard = StepGuard(qm.faces, qm.edges, vn, p.min_edge_ratio)
+    guard = StepGuard(qm.faces, qm.edges, vn, p.min_edge_ratio, qm.topology.edge_faces)
     ref = ReferenceSurface(vn, qm.faces) if p.closeness == "surface" else None
-    return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref)
+    return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref, fairness,
+                   "exact" if exact else "projected")
 
 
 def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
@@ -251,7 +265,8 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         displacement_max=float(disp.max()), planes=planes, polylines=prob.selection.planar_index,
         skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0,
         delta_f_max=dfm, delta_f_mean=dfa, delta_p_max=dpm, delta_p_mean=dpa,
-        excluded=prob.selection.crossing, polyline_delta_p=per_line, params=p)
+        excluded=prob.selection.crossing, polyline_delta_p=per_line, fairness=prob.fairness,
+        plane_solver=prob.plane_solver, params=p)
 
 
 def _support_planes(v: np.ndarray, lines) -> np.ndarray:

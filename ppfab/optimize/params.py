@@ -37,9 +37,11 @@ class OptimizeParams:
     weight_fair: float = param(0.01, doc="λ_fair: weight of E_fair (second differences along polylines)", min=0.0)
     weight_close: float = param(0.01, doc="λ_close: weight of the closeness term to the input", min=0.0)
     fair_families: str = param("both", doc="polyline families that carry the fairness energy", choices=FAMILIES)
-    fairness: str = param("relative", doc="E_fair on absolute second differences (paper: smooths the mesh) or "
-                                          "relative to the input's (keeps its shape, smooths only the change)",
-                          choices=("absolute", "relative"))
+    fairness: str = param("auto", doc="E_fair on absolute second differences (the paper: smooths the mesh), "
+                                      "relative to the input's (keeps its shape, smooths only the change), or "
+                                      "auto: absolute when the input's max δ_f exceeds 1e-3 (far from planar "
+                                      "quads), relative otherwise (a nearly finished design stays in place)",
+                          choices=("auto", "absolute", "relative"))
     closeness: str = param("vertices", doc="closeness to the input vertices, to the input surface "
                                            "(distance to its tangent planes, foot points updated each stage), "
                                            "or none", choices=("vertices", "surface", "none"))
