@@ -6,6 +6,10 @@ Data sets
     Best public tools (data README): rectpack best of 616 variants 52 sheets (85.7 %),
     first-fit shelf 53, spyrrow sheet by sheet 53 (280 s).  Target: <= 49 sheets within 60 s.
   * the glass panels of the bundled example ``examples/default_pp_gridshell.toml``.
+  * the beam plates of the bundled default design (``ppfab build`` without a design file):
+    219 bent strips ~200 mm deep, 3.0–5.9 m long, on 6000 x 2000 mm plate (10 mm trim and
+    spacing), with the design's own 3 s budget.  Extra baseline: the irregular mode's nestled
+    rows alone (what irregular did before strip stacking).
 
 Columns: sheets used, utilisation (part area / area of the sheets used), seconds.
 Baselines measured in the same run: rectpack on bounding rectangles (the best of a few strong
@@ -16,6 +20,7 @@ Usage::
 
     python benchmarks/nesting.py                 # 60 s budget for ppfab (the reference setting)
     python benchmarks/nesting.py --budget 10     # quicker
+    python benchmarks/nesting.py --only beams    # the beam plates only (design budget, 3 s)
 """
 
 from __future__ import annotations
@@ -56,6 +61,74 @@ def example_parts() -> list[FlatPart]:
     return [p.flat_part() for p in panels]
 
 
+def beam_parts() -> tuple[list[FlatPart], NestingParams]:
+    from fabrication.beams import build_beams
+    from ppfab.cli.design import load_design
+    from ppfab.cli.pipeline import build_geometry
+    from ppfab.support import support_structure
+
+    d = load_design(None)
+    g = build_geometry(d)
+    s = support_structure(g.mesh, d.section("support"), planar_families=g.planar_families)
+    return build_beams(s, d.section("beams")).flat_parts(), d.section("beam_nesting")
+
+
+def rows_only(parts: list[FlatPart], params: NestingParams) -> tuple[int, float]:
+    """The irregular mode's nestled rows alone, full budget (the baseline for strips): sheets, seconds."""
+    from fabrication.nesting.catalog import build_catalog
+    from fabrication.nesting.engine import UNITS_PER_SECOND, _solve
+
+    t = time.perf_counter()
+    cat = build_catalog(parts, params)
+    sheets, _, _ = _solve(cat, "rows", params.time_budget * UNITS_PER_SECOND, params.seed, 0, 1)
+    return len(sheets), time.perf_counter() - t
+
+
+def stack_estimate(parts: list[FlatPart], params: NestingParams) -> tuple[int, str]:
+    """Sheets that stacked strips need at least, estimated: rows per sheet by thickness, strips per row by length.
+
+    Each strip in a sheet-long row costs its vertical thickness ``t`` (median over the middle 80 %
+    of its length, lying along x) plus the spacing; a sheet holds the ``k`` strips whose
+    ``Σ (t + s) <= H + s`` (sagitta ignored: optimistic), so at best the ``k`` thinnest.  Two
+    strips share a row only if they fit end to end (exact nestling, :func:`pair_gains`);
+    rows = strips − pairs (greedy matching).  Estimate = ⌈rows / k⌉.
+    """
+    from shapely.geometry import LineString, Polygon
+
+    from fabrication.nesting.catalog import build_catalog
+    from fabrication.nesting.shapes import pair_gains
+
+    cat = build_catalog(parts, params)
+    x0, y0, x1, y1 = params.usable()
+    s = params.spacing
+    thick, flat = [], []
+    for p in range(cat.n_parts):
+        o = min(range(cat.part_start[p], cat.part_start[p + 1]), key=lambda k: cat.o_h[k])
+        poly = Polygon(cat.orients[o].poly)
+        w = cat.orients[o].w
+        cuts = [LineString([(x, -1e5), (x, 1e5)]).intersection(poly).length for x in np.linspace(0.1 * w, 0.9 * w, 41)]
+        thick.append(float(np.median(cuts)))
+        flat.append(o)
+    t = np.sort(np.array(thick) + s)
+    k = int(np.searchsorted(np.cumsum(t), (y1 - y0) + s + 1e-9, side="right"))
+    w = cat.o_w[flat]
+    short = [i for i in range(cat.n_parts) if w[i] + w.min() <= cat.L + 50.0]
+    poses = [o for i in short for o in range(cat.part_start[i], cat.part_start[i + 1]) if cat.o_w[o] < cat.L / 2 + 100]
+    pairs = 0
+    if len(poses) > 1:
+        G = pair_gains([cat.orients[o].halo for o in poses], np.array([cat.orients[o].w for o in poses]),
+                       [cat.orients[o].poly for o in poses], s)
+        fit = (cat.o_w[poses][:, None] + cat.o_w[poses][None, :] - G) <= cat.L + 1e-9
+        used: set[int] = set()
+        for a, b in zip(*np.nonzero(fit)):
+            pa, pb = int(cat.o_part[poses[a]]), int(cat.o_part[poses[b]])
+            if pa != pb and pa not in used and pb not in used:
+                used |= {pa, pb}
+                pairs += 1
+    rows = cat.n_parts - pairs
+    return int(math.ceil(rows / max(k, 1))), f"{rows} rows ({pairs} shared), at most {k} a sheet"
+
+
 def rectpack_best(parts: list[FlatPart], sheet: tuple[float, float], spacing: float) -> tuple[int, str]:
     from rectpack import (SORT_AREA, SORT_LSIDE, GuillotineBssfSas, MaxRectsBaf, MaxRectsBl, MaxRectsBssf,
                           PackingBin, PackingMode, SkylineMwf, newPacker)
@@ -77,7 +150,8 @@ def rectpack_best(parts: list[FlatPart], sheet: tuple[float, float], spacing: fl
     return best
 
 
-def run(name: str, parts: list[FlatPart], params: NestingParams) -> list[tuple]:
+def run(name: str, parts: list[FlatPart], params: NestingParams, modes: tuple[str, ...] = ("guillotine", "irregular"),
+        baseline_rows: bool = False) -> list[tuple]:
     area = sum(p.area for p in parts)
     sheet_area = params.sheet[0] * params.sheet[1]
     rows = []
@@ -86,7 +160,12 @@ def run(name: str, parts: list[FlatPart], params: NestingParams) -> list[tuple]:
     t = time.perf_counter()
     n, how = rectpack_best(parts, tuple(params.sheet), params.spacing)
     rows.append((name, "rectpack, bounding rectangles", n, area / (n * sheet_area), time.perf_counter() - t, how))
-    for mode in ("guillotine", "irregular"):
+    if baseline_rows:
+        est, how = stack_estimate(parts, params)
+        rows.append((name, "strip rows estimate", est, area / (est * sheet_area), 0.0, how))
+        n, sec = rows_only(parts, params)
+        rows.append((name, "ppfab irregular, rows only", n, area / (n * sheet_area), sec, "before strip stacking"))
+    for mode in modes:
         p = NestingParams(**{**params.__dict__, "mode": mode})
         res = nest(parts, p)
         verify_nesting(parts, res, p)
@@ -99,18 +178,28 @@ def run(name: str, parts: list[FlatPart], params: NestingParams) -> list[tuple]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--budget", type=float, default=60.0, help="ppfab time budget per mode, s (default 60)")
+    ap.add_argument("--beam-budget", type=float, default=None,
+                    help="budget for the beam plates, s (default: the design's, 3 s)")
+    ap.add_argument("--only", choices=("glass", "beams"), default=None, help="run one data set only")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     ref = NestingParams(sheet=[6000.0, 3210.0], margin=0.0, spacing=10.0, rotations=[0.0, 90.0, 180.0, 270.0],
                         time_budget=args.budget, seed=args.seed)
-    rows = run("bench_panels_500", bench_parts(), ref)
-    rows += run("example default_pp_gridshell", example_parts(), ref)
+    rows = []
+    if args.only != "beams":
+        rows += run("bench_panels_500", bench_parts(), ref)
+        rows += run("example default_pp_gridshell", example_parts(), ref)
+    if args.only != "glass":
+        plates, bp = beam_parts()
+        bp = NestingParams(**{**bp.__dict__, "seed": args.seed,
+                              "time_budget": bp.time_budget if args.beam_budget is None else args.beam_budget})
+        rows += run("default design beam plates", plates, bp, ("guillotine", "irregular", "auto"), baseline_rows=True)
     print(f"{'data':30s} {'method':32s} {'sheets':>6s} {'util':>7s} {'time s':>8s}  note")
     for data, method, sheets, util, sec, note in rows:
         print(f"{data:30s} {method:32s} {sheets:6d} {100 * util:6.1f}% {sec:8.2f}  {note}")
     base = {d: s for d, m, s, *_ in rows if m.startswith("rectpack")}
     for data, method, sheets, *_ in rows:
-        if method.startswith("ppfab"):
+        if method.startswith("ppfab") and "rows only" not in method:
             print(f"{data}: {method} uses {base[data] - sheets:+d} sheets fewer than rectpack "
                   f"({sheets / base[data]:.3f} x)")
     return 0

@@ -157,7 +157,7 @@ def build_profiles(cat: Catalog, cells: int = CELLS) -> Profiles:
     hi = column_extents([o.halo for o in cat.orients], q, np.full(len(ks), -r * q), ks + 2 * r)[1]
     v_lo = np.array([_vertex(row) for row in lo])
     v_hi = np.array([_vertex(row) for row in hi]) - r
-    jmax = np.floor((Lu - w) / q + 1e-9).astype(np.int64)
+    jmax = np.maximum(np.floor((Lu - w) / q + 1e-9), 0).astype(np.int64)
     return Profiles(q, cells, r, lo, hi, ks, jmax, v_lo, v_hi)
 
 
@@ -282,9 +282,46 @@ class StackFiller:
         a0, a1 = max(lo_c, 0), min(lo_c + len(hi), P.n)
         sky[a0:a1] = np.maximum(sky[a0:a1], Y + hi[a0 - lo_c: a1 - lo_c])
 
+    def _score(self, cfg: StackConfig, o: np.ndarray, y: np.ndarray, gap: np.ndarray) -> np.ndarray:
+        """Waste under the part per unit of its area, less the size bonus, plus the height penalty (lower is better)."""
+        area = self.cat.part_area[self.cat.o_part[o]]
+        return gap / area - cfg.bonus * area / self.mean_area + cfg.height * (y + self.o_h[o]) / self.Hu
+
+    def _best_drop(self, sky: np.ndarray, o: np.ndarray, j: np.ndarray, cfg: StackConfig,
+                   rng: np.random.Generator | None) -> tuple[int, int, float] | None:
+        """The drop of least score that fits under the top edge: ``(pose, cell, Y)``, or ``None``.
+
+        Many candidates are first ranked on every :data:`STRIDE`-th cell (an optimistic rest
+        height: a candidate that fails there fails exactly too), then evaluated exactly in that
+        order, :data:`SHORTLIST` at a time, until a batch holds one that fits.
+        """
+        if len(o) > SHORTLIST:
+            y, gap = self._drop(sky, o, j, STRIDE)
+            rough = np.where(y + self.o_h[o] <= self.Hu + 1e-9, self._score(cfg, o, y, gap), np.inf)
+            order = np.argsort(rough, kind="stable")
+            order = order[np.isfinite(rough[order])]
+            batches = [np.sort(order[i: i + SHORTLIST]) for i in range(0, len(order), SHORTLIST)]
+        else:
+            batches = [np.arange(len(o))]
+        for idx in batches:
+            oo, jj = o[idx], j[idx]
+            y, gap = self._drop(sky, oo, jj)
+            fit = np.flatnonzero(y + self.o_h[oo] <= self.Hu + 1e-9)
+            if len(fit) == 0:
+                continue
+            score = self._score(cfg, oo[fit], y[fit], gap[fit])
+            if cfg.jitter > 0 and rng is not None:
+                score = score + cfg.jitter * rng.random(len(score))
+            b = fit[int(np.argmin(score))]
+            return int(oo[b]), int(jj[b]), float(y[b])
+        return None
+
     def fill_sheet(self, rem: np.ndarray, cfg: StackConfig, values: np.ndarray,
                    rng: np.random.Generator | None) -> Sheet | None:
-        """Stack parts from ``rem`` on one empty sheet (``rem`` is updated); ``None`` if none fits."""
+        """Stack parts from ``rem`` on one empty sheet (``rem`` is updated); ``None`` if none fits.
+
+        ``values`` (the search's part values) are not used: a stack takes whatever fits best.
+        """
         c, P = self.cat, self.prof
         sky = np.zeros(P.n)
         sheet = Sheet()
@@ -293,33 +330,18 @@ class StackFiller:
             o, j = self._candidates(rem, last)
             if len(o) == 0:
                 break
-            if len(o) > SHORTLIST:
-                y, gap = self._drop(sky, o, j, STRIDE)
-                fit = y + self.o_h[o] <= self.Hu + 1e-9
-                area = c.part_area[c.o_part[o]]
-                rough = np.where(fit, gap / area - cfg.bonus * area / self.mean_area, np.inf)
-                keep = np.sort(np.argsort(rough, kind="stable")[:SHORTLIST])
-                keep = keep[np.isfinite(rough[keep])]
-                o, j = o[keep], j[keep]
-            y, gap = self._drop(sky, o, j)
-            fit = y + self.o_h[o] <= self.Hu + 1e-9
-            if not fit.any():
-                break
-            o, j, y, gap = o[fit], j[fit], y[fit], gap[fit]
-            area = c.part_area[c.o_part[o]]
-            score = gap / area - cfg.bonus * area / self.mean_area + cfg.height * (y + self.o_h[o]) / self.Hu
-            if cfg.jitter > 0 and rng is not None:
-                score = score + cfg.jitter * rng.random(len(score))
-            if last is None and cfg.first != "best":
+            if last is None and cfg.first != "best":          # the sheet's first part: longest or random
+                parts = c.o_part[o]
                 if cfg.first == "random" and rng is not None:
-                    parts = np.unique(c.o_part[o])
-                    pick = parts[int(rng.integers(len(parts)))]
+                    pick = np.unique(parts)[int(rng.integers(len(np.unique(parts))))]
                 else:
-                    pick = c.o_part[o][int(np.argmax(c.o_w[o]))]
-                score = np.where(c.o_part[o] == pick, score, np.inf)
-            b = int(np.argmin(score))
-            ob, jb = int(o[b]), int(j[b])
-            X, Y = self._settle(ob, jb * P.q, float(y[b]), sheet.pieces)
+                    pick = parts[int(np.argmax(c.o_w[o]))]
+                o, j = o[parts == pick], j[parts == pick]
+            drop = self._best_drop(sky, o, j, cfg, rng)
+            if drop is None:
+                break
+            ob, jb, y = drop
+            X, Y = self._settle(ob, jb * P.q, y, sheet.pieces)
             sheet.pieces.append(Piece(ob, X, Y))
             rem[c.o_part[ob]] = False
             self._raise(sky, ob, X, Y)
