@@ -47,7 +47,8 @@ def bulges_up(outline: np.ndarray) -> bool:
 
 
 def test_bent_strips_stack_closer_than_their_boxes():
-    """Seven strips 100 mm deep bent ~120 mm: boxes 205–225 mm high fit four to a 940 mm sheet, stacked all seven fit."""
+    """Seven strips 100 mm deep bent ~120 mm: their boxes (205–225 mm high) fit four to a 940 mm
+    sheet; stacked, all seven fit."""
     chords = [1940, 1900, 1860, 1820, 1780, 1920, 1800]
     parts = [arc_strip(f"B-{k}", c, 100.0, 120.0 * (c / 1900) ** 2, down=bool(k % 2)) for k, c in enumerate(chords)]
     params = NestingParams(sheet=[2000, 940], margin=0, spacing=10, mode="irregular", time_budget=0.5)
@@ -166,7 +167,8 @@ def test_row_piece_nestled_under_an_overhang_does_not_pull_the_next_into_it(spac
 
 @pytest.mark.slow
 def test_default_design_beam_plates_stack_on_plate_stock():
-    """The bundled design's 219 beam plates: 33 sheets as box rows, 25 stacked (9 a sheet; see benchmarks/nesting.py)."""
+    """The bundled design's 219 beam plates: 33 sheets as box rows, 25 stacked (9 a sheet; see
+    benchmarks/nesting.py).  CI runs every 4th plate."""
     from fabrication.beams import build_beams
     from ppfab.cli.design import load_design
     from ppfab.cli.pipeline import build_geometry

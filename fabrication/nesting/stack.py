@@ -20,16 +20,19 @@ above comes to rest at
     Y = max(0, max_k (sky[j + k] − lo[o, k])),
 
 where every point of the outline lies above every halo below it, so the new part is at least
-``s`` from all others (the halo contains the round offset).  It is then lowered exactly to
-first contact with the halos (:func:`~.shapes.slide_distance`) — removing the quantisation
-— and the skyline rises to ``max(sky, Y + hi)``.
+``s`` from all others (the halo contains the round offset).  It is then settled exactly
+(:func:`~.shapes.slide_distance` against the halos): lowered to first contact — removing the
+quantisation — pushed left to contact (two short strips end to end in one row) and lowered
+again; the skyline rises to ``max(sky, Y + hi)`` (still an upper envelope of all halos when the
+push tucks a part under an overhang).
 
-Each step of :meth:`StackFiller.fill_sheet` drops, in one vectorised evaluation, every
-remaining part in every allowed pose at a few positions (flush left, flush right, flush with
-either end of the piece placed last, and with the vertex of its bottom profile under the vertex
-of the last piece's top profile — the concentric position) and keeps the drop that wastes least:
-the area between the skyline and the part's underside per unit of part area, less a bonus for
-large parts (long strips first; short ones are left for the ends of rows).  Turning a strip by
+Each step of :meth:`StackFiller.fill_sheet` drops every remaining part in every allowed pose
+at a few positions — flush left, flush right, flush with either end of the piece placed last,
+just beyond either end of it, and with the vertex of its bottom profile under the vertex of the
+last piece's top profile (the concentric position) — and keeps the drop of least score: the area
+between the skyline and the part's underside per unit of part area, less a bonus for large
+parts, plus a penalty for a high top.  Drops are ranked first on every 4th cell (vectorised
+over all candidates), then evaluated exactly in that order, 32 at a time.  Turning a strip by
 180° or mirroring it is just another pose, so bent strips stack convex side into concave side.
 The sheet is done when nothing fits under its top edge.
 
@@ -55,7 +58,8 @@ COST_CELL, COST_STEP, COST_SLIDE = 1.0 / 220.0, 40.0, 60.0
 STRIDE, SHORTLIST = 4, 32      # short-listing: every 4th cell for all candidates, all cells for the best 32
 
 
-def column_extents(polys: list[np.ndarray], q: float, x_from: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def column_extents(polys: list[np.ndarray], q: float, x_from: np.ndarray,
+                   n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Lowest and highest point of each polygon over its slabs ``[x_from + c q, x_from + (c+1) q]``.
 
     Parameters
