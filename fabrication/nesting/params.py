@@ -29,7 +29,7 @@ class NestingParams:
                                    "narrow this)", min_length=1)
     free_rotation: bool = param(False, doc="also try the angles that align each outline edge with the sheet")
     mode: str = param("auto", doc="'guillotine' (bounding rectangles in rows: edge-to-edge cuts), "
-                                  "'irregular' (outlines nestled along rows and between rows), "
+                                  "'irregular' (outlines nestled along rows; long thin beam plates stacked bend into bend), "
                                   "or 'auto' (both; fewer sheets wins, ties go to guillotine)",
                       choices=("auto", "guillotine", "irregular"))
     time_budget: float = param(20.0, doc="search budget, seconds of nominal work (the result depends only on "
