@@ -26,7 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--families", choices=["rows", "cols", "both", "none"], default=None,
                    help="polyline families to make planar (default rows; none = planar faces only)")
     p.add_argument("--polylines", default=None,
-                   help="comma-separated indices of further polylines to make planar (see ppfab check)")
+                   help="comma-separated indices (in QuadMesh.polylines order: family 0, then 1) of further "
+                        "polylines to make planar")
     p.add_argument("--fix-boundary", action="store_true", help="keep boundary vertices in place")
     p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
     p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
