@@ -71,3 +71,27 @@ faces_v = {faces_v}
             else:
                 text += f"\n[{section}]\ntime_budget = 0.5\n"
     return text
+
+
+WAVY_SPHERES = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
+"""Control spheres ``(x, y, z, r)`` of a wavy channel surface (conical P tests)."""
+
+
+def conical_zoo() -> dict:
+    """Conical P and PP grids with their planar families: a P mesh from spheres (§4.2.3), PP meshes from
+    spheres touching a plane (§4.2.4), from eq. (11) and from two principal sections (§4.1.2)."""
+    from ppfab.constructions.conical_pp import Series, conical_pp_grid
+    from ppfab.constructions.conical_sections import sections_grid
+    from ppfab.constructions.conical_spheres import channel_mesh, touching_radii
+
+    c = np.array([[0, 0, 6.0], [10, 0, 8], [20, 0, 7.5], [30, 0, 6]])
+    x = np.linspace(-15, 15, 9)
+    y = np.linspace(-10, 10, 7)
+    return {
+        "P-spheres": (channel_mesh(WAVY_SPHERES, 12, 10, (-80, 80)), ("rows",)),
+        "PP-spheres": (channel_mesh(np.c_[c, touching_radii(c, [0, 0, 1.0, 0])], 12, 10, (-80, 80)), ("rows", "cols")),
+        "PP-eq11": (conical_pp_grid(Series(cos=[-10.0]), Series(cosh=[-20.0], poly=[0, 0, 1.0]),
+                                    np.linspace(-.6, .6, 12), np.linspace(-.4, .4, 9), frame="z_up"), ("rows", "cols")),
+        "PP-sections": (sections_grid(np.c_[x, 8 - x ** 2 / 30], np.c_[y, 8 - y ** 2 / 20], 12, 9, d=3.0),
+                        ("rows", "cols")),
+    }

@@ -22,6 +22,8 @@ from ppfab.isotropic import IsotropicMobius
 from ppfab.laguerre import LaguerreMap, boost, spatial, transform_grid
 from ppfab.metrics import polyline_planarity, quality
 
+from conftest import conical_zoo
+
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 TOL = 1e-9
 WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
@@ -29,16 +31,8 @@ WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.
 
 def meshes():
     """Conical P and PP grids (open and closed) with the planar families of each."""
-    c = np.array([[0, 0, 6.0], [10, 0, 8], [20, 0, 7.5], [30, 0, 6]])
-    x = np.linspace(-15, 15, 9)
-    y = np.linspace(-10, 10, 7)
     return {
-        "P-spheres": (channel_mesh(WAVY, 12, 10, (-80, 80)), ("rows",)),
-        "PP-spheres": (channel_mesh(np.c_[c, touching_radii(c, [0, 0, 1.0, 0])], 12, 10, (-80, 80)), ("rows", "cols")),
-        "PP-eq11": (conical_pp_grid(Series(cos=[-10.0]), Series(cosh=[-20.0], poly=[0, 0, 1.0]),
-                                    np.linspace(-.6, .6, 12), np.linspace(-.4, .4, 9), frame="z_up"), ("rows", "cols")),
-        "PP-sections": (sections_grid(np.c_[x, 8 - x ** 2 / 30], np.c_[y, 8 - y ** 2 / 20], 12, 9, d=3.0),
-                        ("rows", "cols")),
+        **conical_zoo(),
         "P-tube-closed": (channel_mesh(WAVY, 10, 16, (0, 0), closed=True), ("rows",)),
         "PP-dome-closed": (conical_pp_grid(Series(), Series(cosh=[-12.0], poly=[0, 0, 1.5]), np.zeros(24),
                                            np.linspace(.2, 1.2, 7), case="rotational", closed=True), ("rows", "cols")),

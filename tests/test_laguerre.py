@@ -21,6 +21,8 @@ from ppfab.laguerre import (J, LaguerreMap, boost, is_lorentz, lorentz_residual,
 from ppfab.metrics import quality
 from ppfab.spheres import SphereSpline, bisector_normals, reflections, w_planes
 
+from conftest import conical_zoo
+
 TOL = 1e-9
 WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
 
@@ -38,17 +40,7 @@ def random_lorentz(seed: int, rapidity: float = 0.3) -> np.ndarray:
 
 def meshes():
     """A conical P mesh (spheres), conical PP meshes (spheres §4.2.4, eq. 11, sections)."""
-    c = np.array([[0, 0, 6.0], [10, 0, 8], [20, 0, 7.5], [30, 0, 6]])
-    x = np.linspace(-15, 15, 9)
-    y = np.linspace(-10, 10, 7)
-    return {
-        "P-spheres": (channel_mesh(WAVY, 12, 10, (-80, 80)), ("rows",)),
-        "PP-spheres": (channel_mesh(np.c_[c, touching_radii(c, [0, 0, 1.0, 0])], 12, 10, (-80, 80)), ("rows", "cols")),
-        "PP-eq11": (conical_pp_grid(Series(cos=[-10.0]), Series(cosh=[-20.0], poly=[0, 0, 1.0]),
-                                    np.linspace(-.6, .6, 12), np.linspace(-.4, .4, 9), frame="z_up"), ("rows", "cols")),
-        "PP-sections": (sections_grid(np.c_[x, 8 - x ** 2 / 30], np.c_[y, 8 - y ** 2 / 20], 12, 9, d=3.0),
-                        ("rows", "cols")),
-    }
+    return conical_zoo()
 
 
 MESHES = meshes()
