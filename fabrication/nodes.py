@@ -152,10 +152,12 @@ def write_nodes_json(path: str | os.PathLike, records: list[dict], meta: dict | 
     return path
 
 
-def write_nodes(out_dir: str | os.PathLike, beams: Any, stem: str = "nodes") -> tuple[Path, Path]:
-    """``OUT/nodes.csv`` and ``OUT/nodes.json`` for a beam set; returns both paths."""
+def write_nodes(out_dir: str | os.PathLike, beams: Any, stem: str = "nodes",
+                records: list[dict] | None = None) -> tuple[Path, Path]:
+    """``OUT/nodes.csv`` and ``OUT/nodes.json`` for a beam set (``records`` from :func:`node_records`
+    when already computed); returns both paths."""
     out = Path(out_dir)
-    records = node_records(beams)
+    records = node_records(beams) if records is None else records
     meta = {"support": beams.support.summary(), "beam_depth_mm": beams.params.depth,
             "beam_thickness_mm": beams.params.thickness, "joint": beams.params.joint}
     return write_nodes_csv(out / f"{stem}.csv", records), write_nodes_json(out / f"{stem}.json", records, meta)

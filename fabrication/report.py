@@ -85,9 +85,8 @@ def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[
 
 
 def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> str:
-    """The report page from the pipeline's data (mesh, quality, support, beams, panels, nestings, summary)."""
-    from fabrication.nodes import node_records
-
+    """The report page from the pipeline's data (mesh, quality, support, beams, panels, nestings, node
+    records, summary)."""
     s = data["summary"]
     q = data["quality"]
     panels = data["panels"]
@@ -145,7 +144,7 @@ def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> st
     figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure, above"),
             (structure_below_png(qm.face_corners, list(beams.plates), "beam plates from below"),
              "3D structure, below")]
-    node_rows = node_records(beams)
+    node_rows = data["node_records"]
     figs += histograms(panels, list(beams.report.records), node_rows)
     rep.figures(figs)
 

@@ -224,7 +224,6 @@ def stage_manifest(ctx: BuildContext) -> None:
     qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
     mesh_entry.update(vertices=int(len(qm.vertices)), faces=int(len(qm.faces)))
     fabrication = _fab.fabrication_params(ctx)
-    ctx.data["summary"] = _fab.summary(ctx)
     design = ctx.design
     manifest = {
         "generator": f"ppfab {__version__}",

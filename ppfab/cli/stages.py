@@ -86,7 +86,7 @@ def stage_files(ctx: "BuildContext") -> None:
     """STEP solids, DXF cutting sheets, per-type DXFs, order list, parts and node lists."""
     from fabrication.beams.solids import export_panels_step
     from fabrication.dxf import write_sheet_dxfs
-    from fabrication.nodes import write_nodes
+    from fabrication.nodes import node_records, write_nodes
     from fabrication.parts import (order_rows, part_rows, write_order_list, write_parts_csv, write_parts_json,
                                    write_type_dxfs)
 
@@ -118,9 +118,11 @@ def stage_files(ctx: "BuildContext") -> None:
     write_parts_csv(rows, out / "parts.csv")
     write_parts_json(rows, out / "parts.json", extra={"units": "mm"})
     files["parts_csv"], files["parts_json"] = "parts.csv", "parts.json"
-    write_nodes(out, beams)
+    d["node_records"] = node_records(beams)
+    write_nodes(out, beams, records=d["node_records"])
     files["nodes_csv"], files["nodes_json"] = "nodes.csv", "nodes.json"
     d["parts_rows"] = rows
+    d["summary"] = summary(ctx)
     ctx.progress.done(f"{len(glass)} glass + {len(plates)} plate sheets")
 
 
@@ -172,7 +174,6 @@ def stage_report(ctx: "BuildContext") -> None:
     from fabrication.report import build_report
 
     ctx.progress.start("report")
-    ctx.data["summary"] = summary(ctx)
     html = build_report(ctx.data, ctx.design, ctx.files)
     (ctx.out / "report.html").write_text(html, encoding="utf-8")
     ctx.files["report_html"] = "report.html"
