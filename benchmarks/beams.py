@@ -19,7 +19,7 @@ from pathlib import Path
 
 def boolean_plate(plate):
     """Baseline: the plate without slots, extruded, then one boolean cut per slot."""
-    from fabrication.beams.solids import _placed_prism
+    from fabrication.writers.step import _placed_prism
 
     t = plate.thickness
     solid = _placed_prism(plate.body, plate.frame, -0.5 * t, t, plate.part_id)
@@ -42,8 +42,8 @@ def main(argv: list[str] | None = None) -> None:
 
     from fabrication.beams import BeamParams, build_beams
     from fabrication.beams.samples import sample_pp_grid
-    from fabrication.beams.solids import _is_valid, check_step, export_step, plate_solid
-    from ppfab.support import support_pp
+    from fabrication.writers.step import _is_valid, check_step, export_step, plate_solid
+    from ppfab.support.pp import support_pp
 
     grid = sample_pp_grid(fu, fv)
     rows: list[tuple[str, float]] = []

@@ -15,13 +15,13 @@ import time
 
 import numpy as np
 
-from ppfab.conical import conical_quality
-from ppfab.conical_edit import edit_conical, mobius_of_laguerre
+from ppfab.conical.cones import laguerre_transform, conical_quality
+from ppfab.conical.edit import edit_conical, mobius_of_laguerre
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
 from ppfab.constructions.conical_sections import sections_grid
 from ppfab.constructions.conical_spheres import channel_mesh
 from ppfab.faceimage import pp_from_face_image
-from ppfab.laguerre import LaguerreMap, boost, transform_grid
+from ppfab.transforms.laguerre import LaguerreMap, boost
 from ppfab.sections import PlanarCurve
 
 
@@ -67,7 +67,7 @@ def main(sizes: list[int]) -> None:
         t, g = timed(lambda: channel_mesh(spheres, m, n, (-80, 80), profile=prof))
         rows.append(("conical_spheres + profile (Step 4)", t, g))
         L = LaguerreMap(boost([0.3, 0.2, 1.0], 0.2))
-        t, g = timed(lambda: transform_grid(mesh_pp, L))
+        t, g = timed(lambda: laguerre_transform(mesh_pp, L))
         rows.append(("Laguerre transform of the eq. 11 mesh", t, g))
         if m * n <= 20000:
             t, r = timed(lambda: edit_conical(mesh_pp, A=mobius_of_laguerre(L.A)), repeat=1)

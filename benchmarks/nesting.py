@@ -63,12 +63,12 @@ def example_parts() -> list[FlatPart]:
 
 def beam_parts() -> tuple[list[FlatPart], NestingParams]:
     from fabrication.beams import build_beams
-    from ppfab.cli.design import load_design
-    from ppfab.cli.pipeline import build_geometry
-    from ppfab.support import support_structure
+    from fabrication.design import load_design
+    from ppfab.geometry import build_geometry
+    from ppfab.support.select import support_structure
 
     d = load_design(None)
-    g = build_geometry(d)
+    g = build_geometry(d.geometry, d.optimize, d.base_dir)
     s = support_structure(g.mesh, d.section("support"), planar_families=g.planar_families)
     return build_beams(s, d.section("beams")).flat_parts(), d.section("beam_nesting")
 

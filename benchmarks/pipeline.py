@@ -2,8 +2,9 @@
 
     python benchmarks/pipeline.py [DESIGN.toml]
 
-Prints the seconds per stage and the total, and — as the baseline measured in the same run — the time of
-the geometry alone (construction + quality), so the cost of fabrication is visible as a ratio.
+Prints the seconds per stage (compute stages, then one line per writer) and the total, and — as the
+baseline measured in the same run — the time of the geometry alone, so the cost of fabrication is visible
+as a ratio.
 """
 
 from __future__ import annotations
@@ -15,22 +16,19 @@ from pathlib import Path
 
 
 def main(argv: list[str]) -> None:
-    from ppfab.cli.design import load_design
-    from ppfab.cli.output import AtomicFolder, Progress
-    from ppfab.cli.pipeline import STAGES, BuildContext, build_geometry
+    from fabrication import build, load_design
+    from fabrication.build.progress import Progress
+    from ppfab.geometry import build_geometry
 
     design = load_design(argv[0] if argv else None)
     t0 = time.perf_counter()
-    build_geometry(design)
+    build_geometry(design.geometry, design.optimize, design.base_dir)
     t_geo = time.perf_counter() - t0
-    times = {}
+    progress = Progress(quiet=True)
+    result = build(design, progress=progress)
     with tempfile.TemporaryDirectory() as tmp:
-        with AtomicFolder(Path(tmp) / "out") as out:
-            ctx = BuildContext(design=design, out=out, progress=Progress(quiet=True))
-            for name, fn in STAGES:
-                t = time.perf_counter()
-                fn(ctx)
-                times[name] = time.perf_counter() - t
+        result.write(Path(tmp) / "out", progress=progress)
+    times = progress.times
     total = sum(times.values())
     print(f"ppfab build — {design.info.name}")
     print(f"{'stage':<12}{'seconds':>10}{'share':>8}")

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from ppfab import transforms as tf
+from ppfab.transforms import pp as tf
 from ppfab.constructions.bisector import bisector_mesh
 from ppfab.constructions.cauchy import cauchy_pp_mesh, node_axes_lines
 from ppfab.constructions.plane_splines import plane_spline, plane_spline_mesh
@@ -108,7 +108,7 @@ def main(faces: int = 200) -> None:
         ("plane_splines", timed(plane_spline_mesh, gs, hs, m, n)[0]),
         ("translational", timed(translational_mesh, a, b)[0]),
         ("transform: parallel_mesh", timed(tf.parallel_mesh, base, 0.01)[0]),
-        ("transform: offset (f_transform)", timed(tf.offset, base, 0.01, mode="f_transform")[0]),
+        ("transform: offset (f_transform)", timed(tf.offset_along_axes, base, 0.01, mode="f_transform")[0]),
         ("transform: projective_map", timed(tf.projective_map, base, np.eye(5) + 0.01)[0]),
         ("transform: multinet 2 x 2", timed(tf.multinet, base, 2, 2)[0]),
         ("transform: grid w/o face image", timed(tf.f_transform, type(base)(base.vertices), np.zeros(4))[0]),

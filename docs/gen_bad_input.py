@@ -20,7 +20,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 def main() -> None:
     from bad_inputs import CASES
 
-    from ppfab.cli import main as ppfab
+    from fabrication.cli import main as ppfab
 
     lines = ["# Bad input and what ppfab says", "",
              "Every class of bad input that was tried, and the one line ppfab prints for it (exit code in the "

@@ -44,7 +44,7 @@ def _table(cls, defaults: dict | None = None) -> list[str]:
 
 
 def reference() -> str:
-    from ppfab.cli.design import SECTION_DEFAULTS, _section_types
+    from fabrication.design import SECTION_DEFAULTS, _section_types
     from ppfab.constructions import load_all
 
     lines = [START, ""]

@@ -14,11 +14,11 @@ OUT = HERE.parent / "docs" / "images"
 
 def render(path: Path) -> Path:
     from fabrication.figures import render_mesh_png
-    from ppfab.cli.design import load_design
-    from ppfab.cli.pipeline import build_geometry
+    from fabrication.design import load_design
+    from ppfab.geometry import build_geometry
 
     design = load_design(path)
-    mesh = build_geometry(design).mesh
+    mesh = build_geometry(design.geometry, design.optimize, design.base_dir).mesh
     OUT.mkdir(parents=True, exist_ok=True)
     target = OUT / f"{path.stem}.png"
     render_mesh_png(mesh, target, title=design.info.name)

@@ -41,9 +41,8 @@ import numpy as np
 
 from ppfab import planes as pl
 
-CSV_COLUMNS = ["node_id", "vertex", "i", "j", "x", "y", "z", "axis_x", "axis_y", "axis_z", "beams", "roles",
-               "joint", "valence", "boundary", "dihedral_deg", "beam_panel_deg", "torsion_deg", "torsion_mm",
-               "slot_width_mm", "trims_mm"]
+from . import contract
+
 
 
 def _fmt(x: float, digits: int = 6) -> str:
@@ -99,7 +98,7 @@ def node_records(beams: Any) -> list[dict]:
                            "panel_angles_deg": angles, "panel_angle_min_deg": min(angles) if angles else None,
                            "trim_mm": trim})
         rec = {
-            "node_id": f"N{k:04d}",
+            "node_id": contract.node_id(k),
             "vertex": k,
             "grid": None if grid is None else [int(grid[k, 0]), int(grid[k, 1])],
             "position": v[k].tolist(),
@@ -134,11 +133,11 @@ def _csv_row(r: dict) -> list[str]:
 
 
 def write_nodes_csv(path: str | os.PathLike, records: list[dict]) -> Path:
-    """Write ``nodes.csv`` (columns :data:`CSV_COLUMNS`, one row per vertex, in vertex order)."""
+    """Write ``nodes.csv`` (columns :data:`contract.NODES_COLUMNS`, one row per vertex, in vertex order)."""
     path = Path(path)
     with open(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.writer(fh)
-        w.writerow(CSV_COLUMNS)
+        w.writerow(contract.NODES_COLUMNS)
         for r in records:
             w.writerow(_csv_row(r))
     return path

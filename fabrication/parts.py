@@ -19,14 +19,9 @@ import json
 import os
 from pathlib import Path
 
+from .contract import ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS, PARTS_KNOWN_COLUMNS
 from .flatpart import FlatPart, Placement
 
-CONTRACT_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", "nest_tag", "area_mm2"]
-KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "type_id", "material", "thickness_mm",
-                 "width_mm", "height_mm", "perimeter_mm", "weight_kg", "planarity_dev_mm", "min_angle_deg",
-                 "flags", "outside"]
-ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
-                 "rotations", "mirror_allowed", "file"]
 
 
 def _num(v: float, digits: int) -> float:
@@ -64,7 +59,7 @@ def part_rows(parts: list[FlatPart], placements: list[Placement] | None = None,
 def columns(rows: list[dict]) -> list[str]:
     """Contract columns, then the known ones present, then any others (sorted)."""
     present = {k for r in rows for k in r}
-    cols = CONTRACT_COLUMNS + [c for c in KNOWN_COLUMNS if c in present]
+    cols = PARTS_CONTRACT_COLUMNS + [c for c in PARTS_KNOWN_COLUMNS if c in present]
     return cols + sorted(present - set(cols))
 
 
@@ -134,21 +129,3 @@ def write_order_list(rows: list[dict], path: str | os.PathLike) -> Path:
     path = Path(path)
     path.write_text(csv_text(rows, ORDER_COLUMNS), encoding="utf-8")
     return path
-
-
-def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: str = "type") -> dict[str, str]:
-    """One flat DXF per type (its first part, in its own coordinates); returns ``type_id → file name``."""
-    from .dxf import write_part_dxf
-
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    out: dict[str, str] = {}
-    for p in parts:
-        tid = p.type_id or p.part_id
-        if tid in out:
-            continue
-        name = f"{prefix}_{tid}.dxf"
-        material = p.meta.get("material", "")
-        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id}) {material}".strip())
-        out[tid] = name
-    return out

@@ -9,12 +9,15 @@ the parts and node tables with nest tags.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .flatpart import place_points
-from .htmlreport import HtmlReport, esc, fmt
+from .htmlreport import HtmlReport, esc
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .build.records import Build
 
 
 def sheet_svg(sheet_size: tuple[float, float], usable: tuple[float, float, float, float],
@@ -84,45 +87,45 @@ def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[
     return [(save(histogram(v, t, x)), t) for v, t, x in figs]
 
 
-def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> str:
-    """The report page from the pipeline's data (mesh, quality, support, beams, panels, nestings, node
-    records, summary)."""
-    s = data["summary"]
-    q = data["quality"]
-    panels = data["panels"]
-    beams = data["beams"]
+def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) -> str:
+    """The report page of a build, listing the files written so far (``files``) and the parts table."""
+    s = build.summary
+    q = build.quality
+    panels = list(build.panels.panels)
+    beams = build.beams
+    design = build.design
     rep = HtmlReport(f"ppfab fabrication report — {design.info.name}")
     if design.info.description:
         rep.paragraph(design.info.description, "muted")
 
     rep.heading("Summary")
-    ext = s["extent_mm"]
+    ext = s.extent_mm
     rep.key_values([
         ("structure size (x × y × z)", f"{ext[0] / 1000:.2f} m × {ext[1] / 1000:.2f} m × {ext[2] / 1000:.2f} m"),
-        ("construction", data.get("source", "")),
-        ("planar beam families", ", ".join(data.get("planar_families", ())) or "—"),
-        ("panels / panel types", f"{s['panels']} / {s['panel_types']}"),
-        ("beams / plates / plate types", f"{s['beams']} / {s['beam_plates']} / {s['beam_types']}"),
-        ("nodes", s["nodes"]),
-        ("glass area", f"{s['glass_area_m2']:.1f} m²"),
-        ("glass weight", f"{s['glass_weight_kg'] / 1000:.2f} t"),
-        ("total beam length", f"{s['beam_length_m']:.1f} m"),
-        ("plate area / weight", f"{s['plate_area_m2']:.1f} m² / {s['beam_mass_kg'] / 1000:.2f} t"),
+        ("construction", build.geometry.source),
+        ("planar beam families", ", ".join(build.geometry.planar_families) or "—"),
+        ("panels / panel types", f"{s.panels} / {s.panel_types}"),
+        ("beams / plates / plate types", f"{s.beams} / {s.beam_plates} / {s.beam_types}"),
+        ("nodes", s.nodes),
+        ("glass area", f"{s.glass_area_m2:.1f} m²"),
+        ("glass weight", f"{s.glass_weight_kg / 1000:.2f} t"),
+        ("total beam length", f"{s.beam_length_m:.1f} m"),
+        ("plate area / weight", f"{s.plate_area_m2:.1f} m² / {s.beam_mass_kg / 1000:.2f} t"),
         ("glass sheets (utilisation; area lower bound)",
-         f"{s['glass_sheets']} ({100 * s['glass_utilisation']:.1f} %; ≥ {s['glass_lower_bound']})"),
+         f"{s.glass_sheets} ({100 * s.glass_utilisation:.1f} %; ≥ {s.glass_lower_bound})"),
         ("plate sheets (utilisation; area lower bound)",
-         f"{s['plate_sheets']} ({100 * s['plate_utilisation']:.1f} %; ≥ {s['plate_lower_bound']})"),
+         f"{s.plate_sheets} ({100 * s.plate_utilisation:.1f} %; ≥ {s.plate_lower_bound})"),
     ])
 
     rep.heading("Quality")
-    tol = design.section("panels").planarity_tolerance
+    tol = design.panels.planarity_tolerance
     over = [p for p in panels if p.deviation_mm > tol]
     rows = [
         ("δ_f (face planarity) max / mean", f"{q.delta_f_max:.2e} / {q.delta_f_mean:.2e}"),
         ("δ_P rows max / mean", f"{q.delta_p_rows_max:.2e} / {q.delta_p_rows_mean:.2e}"),
         ("δ_P columns max / mean", f"{q.delta_p_cols_max:.2e} / {q.delta_p_cols_mean:.2e}"),
         ("panel deviation from plane, max", f"{q.deviation_abs_max:.3g} mm (tolerance {tol:g} mm)"),
-        ("support structure torsion, max", f"{s['torsion_max_deg']:.3g}°"),
+        ("support structure torsion, max", f"{s.torsion_max_deg:.3g}°"),
         ("torsion offset at beam depth, max", f"{beams.report.torsion_offset_max_mm:.3g} mm"),
         ("conical residual max / mean", f"{q.conical_max:.2e} / {q.conical_mean:.2e} rad"),
         ("panels above tolerance", len(over)),
@@ -139,21 +142,22 @@ def build_report(data: dict[str, Any], design: Any, files: dict[str, Any]) -> st
                    for p in flagged])
 
     rep.heading("Figures")
-    mesh = data["mesh"]
+    mesh = build.mesh
     qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
     figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure, above"),
             (structure_below_png(qm.face_corners, list(beams.plates), "beam plates from below"),
              "3D structure, below")]
-    node_rows = data["node_records"]
+    node_rows = list(build.nodes.records)
     figs += histograms(panels, list(beams.report.records), node_rows)
     rep.figures(figs)
 
+    nest = build.nesting
     rep.heading("Cutting sheets — glass")
-    rep.raw('<div class="figs">' + "".join(_sheets(data["glass_parts"], data["glass_nesting"])) + "</div>")
+    rep.raw('<div class="figs">' + "".join(_sheets(list(nest.glass_parts), nest.glass)) + "</div>")
     rep.heading("Cutting sheets — beam plates")
-    rep.raw('<div class="figs">' + "".join(_sheets(data["beam_parts"], data["beam_nesting"])) + "</div>")
+    rep.raw('<div class="figs">' + "".join(_sheets(list(nest.beam_parts), nest.plates)) + "</div>")
 
-    place = {r["part_id"]: r for r in data.get("parts_rows", [])}
+    place = {r["part_id"]: r for r in parts_rows}
     rep.heading("Panels")
     rep.table(["panel", "type", "face", "area [m²]", "weight [kg]", "min/max corner [°]", "deviation [mm]",
                "sheet", "nest tag", "flags"],

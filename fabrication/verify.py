@@ -17,8 +17,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-PARTS_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", "nest_tag", "area_mm2"]
-NODES_COLUMNS = ["node_id", "vertex", "x", "y", "z", "axis_x", "axis_y", "axis_z", "beams"]
+from .contract import NODES_CONTRACT_COLUMNS as NODES_COLUMNS
+from .contract import PARTS_CONTRACT_COLUMNS as PARTS_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -225,7 +225,7 @@ def check_dxf(v: Verification) -> None:
     agreement with parts.csv, and (glass) congruence with the 3D face inset by half the gap."""
     from shapely import Polygon, STRtree
 
-    from .dxf import check_sheet_dxf
+    from .writers.dxf import check_sheet_dxf
 
     m = v.data.get("manifest", {})
     files = m.get("files", {})
@@ -288,7 +288,7 @@ def check_step(v: Verification) -> None:
         return
     from build123d import import_step
 
-    from .beams.solids import named_solids
+    from .writers.step import named_solids
 
     try:
         pairs = named_solids(import_step(str(v.folder / rel)))

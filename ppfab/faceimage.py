@@ -28,7 +28,7 @@ from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import breadth_first_order
 from scipy.sparse.linalg import spsolve
 
-from . import planes as pl
+from ppfab import planes as pl
 from .errors import GeometryError
 from .mesh import QuadGrid, QuadMesh
 

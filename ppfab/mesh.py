@@ -18,16 +18,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import planes as pl
 from .errors import GeometryError
 from .topology import Polyline, Topology, grid_face_indices, recover_grid
-
-if TYPE_CHECKING:  # pragma: no cover
-    import trimesh
 
 
 def _readonly(a: np.ndarray | None, dtype=float) -> np.ndarray | None:
@@ -165,9 +160,11 @@ class QuadGrid:
         keep.update(changes)
         return replace(self, vertices=vertices, **keep)
 
-    def trimesh(self) -> "trimesh.Trimesh":
-        """Triangulated view (two triangles per quad) for display and export."""
-        return self.to_quadmesh().trimesh()
+    def triangles(self) -> tuple[np.ndarray, np.ndarray]:
+        """Triangulated view: vertices ``(N, 3)`` in row-major order and ``(2F, 3)`` triangles
+        (:meth:`QuadMesh.triangles`)."""
+        qm = self.to_quadmesh()
+        return qm.vertices, qm.triangles()
 
 
 class QuadMesh:
@@ -285,10 +282,8 @@ class QuadMesh:
             grid = self._grid.with_vertices(np.asarray(vertices)[self.grid_ids])
         return QuadMesh(vertices, self.faces, grid=grid, grid_ids=self.grid_ids)
 
-    def trimesh(self) -> "trimesh.Trimesh":
-        """Triangulated view (faces split along diagonal 0–2) for display and export."""
-        import trimesh
-
+    def triangles(self) -> np.ndarray:
+        """``(2F, 3)`` vertex indices of a triangulated view: every face split along its diagonal 0–2
+        (triangles ``(0, 1, 2)`` of all faces, then ``(0, 2, 3)``), for display and export."""
         f = self.faces
-        tris = np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]], axis=0)
-        return trimesh.Trimesh(vertices=np.array(self.vertices), faces=tris, process=False)
+        return np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]], axis=0)

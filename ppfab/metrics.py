@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from . import planes as pl
+from ppfab import planes as pl
 from .mesh import QuadGrid, QuadMesh
 from .topology import Polyline
 
@@ -66,6 +66,36 @@ def plane_residual(points: np.ndarray, planes: np.ndarray) -> np.ndarray:
     dist = np.abs(pl.signed_distance(np.asarray(planes)[..., None, :], x)).max(axis=-1)
     diag = np.linalg.norm(x.max(axis=-2) - x.min(axis=-2), axis=-1)
     return dist / np.where(diag == 0, 1.0, diag)
+
+
+def polyline_fit(mesh: QuadMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares plane ``(L, 4)`` and absolute deviation ``(L,)`` of every polyline of ``mesh.polylines``.
+
+    The deviation is the largest distance of a polyline's vertices from its plane (mesh units); polylines with
+    fewer than 3 vertices get ``nan`` planes and deviation 0.  ``δ_P`` (§3.3) is this deviation over the
+    bounding-box diagonal (:func:`relative_deviation`).
+    """
+    lines = mesh.polylines
+    planes = np.full((len(lines), 4), np.nan)
+    dev = np.zeros(len(lines))
+    groups: dict[int, list[int]] = {}
+    for k, p in enumerate(lines):
+        if len(p) >= 3:
+            groups.setdefault(len(p), []).append(k)
+    for length, ks in groups.items():
+        pts = mesh.vertices[np.stack([lines[k].vertices for k in ks])]
+        planes[ks], dev[ks] = pl.fit_plane(pts)
+    return planes, dev
+
+
+def relative_deviation(dev: np.ndarray, mesh: QuadMesh) -> np.ndarray:
+    """``(L,)`` deviation of each polyline relative to its bounding-box diagonal (``δ_P`` of §3.3)."""
+    out = np.zeros(len(dev))
+    for k, p in enumerate(mesh.polylines):
+        x = mesh.vertices[p.vertices]
+        diag = float(np.linalg.norm(x.max(axis=0) - x.min(axis=0)))
+        out[k] = dev[k] / diag if diag > 0 else 0.0
+    return out
 
 
 def pad_polylines(vertices: np.ndarray, lines: list[Polyline]) -> tuple[np.ndarray, np.ndarray]:

@@ -22,6 +22,36 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
+from .errors import DesignError
+
+FAMILY_NAMES: tuple[str, str] = ("rows", "cols")
+"""The one encoding of the two polyline families: family 0 = ``"rows"`` (``v[i, :]``, planes ``U_i``),
+family 1 = ``"cols"`` (``v[:, j]``, planes ``W_j``)."""
+
+
+def family_index(family: int | str, key: str = "family") -> int:
+    """0 for ``"rows"`` (also ``0``, ``"U"``), 1 for ``"cols"`` (also ``1``, ``"W"``); else :class:`DesignError`.
+
+    >>> family_index("cols"), family_index(0)
+    (1, 0)
+    """
+    if family in (0, "rows", "U", "u"):
+        return 0
+    if family in (1, "cols", "W", "w"):
+        return 1
+    raise DesignError(key, f"must be 'rows' or 'cols', got {family!r}")
+
+
+def families_of(choice: str) -> tuple[str, ...]:
+    """The families an ``[optimize] families`` choice makes planar: ``"both"`` → ``("rows", "cols")``.
+
+    >>> families_of("both"), families_of("cols"), families_of("none")
+    (('rows', 'cols'), ('cols',), ())
+    """
+    return {"rows": ("rows",), "cols": ("cols",), "both": FAMILY_NAMES}.get(choice, ())
+
+
+
 
 @dataclass(frozen=True)
 class Polyline:

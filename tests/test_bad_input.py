@@ -3,7 +3,7 @@ output folder (the table in docs/bad-input.md is generated from the same cases).
 
 import pytest
 
-from ppfab.cli import main
+from fabrication.cli import main
 
 from bad_inputs import CASES
 

@@ -14,8 +14,10 @@ from ppfab import planes as pl
 from ppfab.errors import DesignError, FabricationError
 from ppfab.io import load_mesh
 from ppfab.schema import parse_params
-from ppfab.similarity import transform
-from ppfab.support import support_p, support_pp, support_structure
+from ppfab.transforms.similarity import transform
+from ppfab.support.p import support_p
+from ppfab.support.pp import support_pp
+from ppfab.support.select import support_structure
 
 
 @pytest.fixture(scope="module")

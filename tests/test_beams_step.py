@@ -7,8 +7,10 @@ import pytest
 
 from fabrication.beams import BeamParams, build_beams
 from fabrication.beams.samples import sample_p_grid, sample_pp_grid
-from fabrication.beams.solids import check_step, export_panels_step, named_solids, solid_vertices
-from ppfab.support import support_p, support_pp
+from fabrication.writers.step import (build_solids, check_step, export_panels_step, export_step, named_solids,
+                                      solid_vertices)
+from ppfab.support.p import support_p
+from ppfab.support.pp import support_pp
 
 pytest.importorskip("build123d")
 
@@ -18,7 +20,7 @@ def pp_step(tmp_path_factory):
     s = support_pp(sample_pp_grid(4, 5))
     bs = build_beams(s, BeamParams(max_length=0, depth=250.0, thickness=15.0))
     path = tmp_path_factory.mktemp("step") / "beams.step"
-    bs.export_step(path)
+    export_step(build_solids(list(bs.plates)), path)
     return s, bs, path, solid_vertices(path)
 
 
@@ -69,7 +71,7 @@ def test_slots_of_crossing_beams_share_the_node_axis_in_the_step_file(pp_step):
 def test_segmented_p_mesh_step(tmp_path):
     s = support_p(sample_p_grid(3, 4), "rows")
     bs = build_beams(s, BeamParams(joint="segmented", max_length=0))
-    path = bs.export_step(tmp_path / "beams.step")
+    path = export_step(build_solids(list(bs.plates)), tmp_path / "beams.step")
     res = check_step(path, bs.plates)
     assert res.ok, res.problems
     assert res.solids == 4 + 5 * 3

@@ -8,7 +8,7 @@ import shutil
 import numpy as np
 import pytest
 
-from ppfab.cli import main
+from fabrication.cli import main
 from ppfab.io import load_mesh
 
 from conftest import small_design
@@ -101,7 +101,7 @@ def test_verify_names_a_dxf_part_moved_onto_another(built, tmp_path, capsys):
 def test_verify_names_a_removed_step_solid(built, tmp_path, capsys):
     from build123d import Compound, export_step, import_step
 
-    from fabrication.beams.solids import named_solids
+    from fabrication.writers.step import named_solids
 
     out = damaged(built, tmp_path)
     pairs = named_solids(import_step(str(out / "beams.step")))

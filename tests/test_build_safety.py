@@ -2,12 +2,12 @@
 existing folder) and determinism (same design, same bytes)."""
 
 import hashlib
-import os
 from pathlib import Path
 
 import pytest
 
-from ppfab.cli import main, pipeline
+from fabrication.build import pipeline
+from fabrication.cli import main
 
 from conftest import small_design
 
@@ -30,15 +30,38 @@ def leftovers(parent: Path) -> list[str]:
     return [p.name for p in parent.iterdir() if p.name.startswith(".") and ".tmp-" in p.name or ".old-" in p.name]
 
 
-@pytest.mark.parametrize("stage", [name for name, _ in pipeline.STAGES])
+def _writer_names() -> list[str]:
+    from fabrication.writers import load_writers
+
+    return [w.name for w in load_writers()]
+
+
+def _inject(monkeypatch, stage: str, exc: BaseException) -> None:
+    """Make compute stage ``stage`` (``pipeline.stage_<name>``) or the writer ``stage`` raise ``exc``."""
+    import dataclasses
+
+    from fabrication import writers
+
+    def boom(*args, **kwargs):
+        raise exc
+
+    if stage in pipeline.STAGES:
+        monkeypatch.setattr(pipeline, f"stage_{stage}", boom)
+    else:
+        writers.load_writers()
+        monkeypatch.setitem(writers.WRITERS, stage, dataclasses.replace(writers.WRITERS[stage], write=boom))
+
+
+def test_stage_list_names_the_stage_functions():
+    for name in pipeline.STAGES:
+        assert callable(getattr(pipeline, f"stage_{name}"))
+    assert _writer_names()[-1] == "manifest"
+
+
+@pytest.mark.parametrize("stage", list(pipeline.STAGES) + _writer_names())
 def test_failure_at_any_stage_leaves_no_partial_folder(tmp_path, small_design, monkeypatch, capsys, stage):
     out = tmp_path / "out"
-    stages = [(name, fn) for name, fn in pipeline.STAGES]
-
-    def boom(ctx):
-        raise RuntimeError(f"injected failure in {stage}")
-
-    monkeypatch.setattr(pipeline, "STAGES", [(n, boom if n == stage else f) for n, f in stages])
+    _inject(monkeypatch, stage, RuntimeError(f"injected failure in {stage}"))
     with pytest.raises(RuntimeError, match="injected"):
         main(["build", str(small_design), "-o", str(out), "--quiet"])
     assert not out.exists()
@@ -49,12 +72,7 @@ def test_failure_never_damages_existing_folder(tmp_path, small_design, monkeypat
     out = tmp_path / "out"
     assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 0
     before = tree(out)
-    last = pipeline.STAGES[-1][0]
-
-    def boom(ctx):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(pipeline, "STAGES", [(n, boom if n == last else f) for n, f in pipeline.STAGES])
+    _inject(monkeypatch, "manifest", KeyboardInterrupt())
     assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 130
     assert tree(out) == before
     assert leftovers(tmp_path) == []

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from ppfab.cli import main
+from fabrication.cli import main
 from ppfab.io import load_mesh
 
 from conftest import SHARED_DATA, small_design
@@ -40,13 +40,13 @@ GEOMETRY = small_design(7, 5, u_range=(-6.0, 6.0), v_range=(-4.0, 4.0), fast=Fal
 
 
 def test_check_on_built_obj_reports_pp(capsys, tmp_path):
-    from ppfab.cli.design import parse_design
-    from ppfab.cli.pipeline import build_geometry
+    from fabrication.design import parse_design
+    from ppfab.geometry import build_geometry
     from ppfab.io import write_obj
     import tomllib
 
     design = parse_design(tomllib.loads(GEOMETRY), sections=("design", "geometry"))
-    mesh = build_geometry(design).mesh
+    mesh = build_geometry(design.geometry, design.optimize, design.base_dir).mesh
     write_obj(mesh, tmp_path / "m.obj")
     code, out, _ = run(capsys, "check", tmp_path / "m.obj", "--json", "--tol", "1e-9")
     assert code == 0

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ppfab.conical import (axis_of_normals, concyclic_residual, conical_quality, extended_planes, offset,
+from ppfab.conical.cones import (axis_of_normals, concyclic_residual, conical_quality, extended_planes, offset_faces,
                            rigid_motion, vertex_planes)
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
 from ppfab.errors import GeometryError
@@ -70,7 +70,7 @@ def test_rigid_motion_keeps_planes_consistent():
     F = moved.meta["extended_face_image"]
     P = np.stack([F[:-1, :-1], F[1:, :-1], F[1:, 1:], F[:-1, 1:]], axis=-2)
     assert np.abs(np.einsum("ijkl,ijl->ijk", P[..., :3], moved.vertices) + P[..., 3]).max() < 1e-9
-    assert np.allclose(offset(moved, 0.2).vertices, rigid_motion(offset(grid, 0.2), R, [1.0, 2.0, 3.0]).vertices)
+    assert np.allclose(offset_faces(moved, 0.2).vertices, rigid_motion(offset_faces(grid, 0.2), R, [1.0, 2.0, 3.0]).vertices)
     with pytest.raises(GeometryError, match="proper"):
         rigid_motion(grid, np.diag([1.0, 1.0, -1.0]))
 

@@ -9,17 +9,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ppfab import isotropic
-from ppfab.conical import axis_of_normals, conical_quality, extended_planes, ghost_planes, offset, vertex_planes
-from ppfab.conical_edit import edit_conical
+from ppfab.transforms import isotropic
+from ppfab.conical.cones import laguerre_transform, axis_of_normals, conical_quality, extended_planes, ghost_planes, offset_faces, vertex_planes
+from ppfab.conical.edit import edit_conical
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
 from ppfab.constructions.conical_sections import sections_grid
 from ppfab.constructions.conical_spheres import channel_mesh, touching_radii
 from ppfab.errors import GeometryError
 from ppfab.io import load_mesh
 from ppfab.io.jsonio import grid_from_json, grid_to_json
-from ppfab.isotropic import IsotropicMobius
-from ppfab.laguerre import LaguerreMap, boost, spatial, transform_grid
+from ppfab.transforms.isotropic import IsotropicMobius
+from ppfab.transforms.laguerre import LaguerreMap, boost, spatial
 from ppfab.metrics import polyline_planarity, quality
 
 from conftest import conical_zoo
@@ -116,7 +116,7 @@ def test_stale_support_planes_fall_back_to_fitted_planes():
     grid, bare, families = reloaded("PP-eq11")
     wrong = replace(bare, support_u=bare.support_u + [0.0, 0.0, 0.0, 0.3])       # shifted: no longer through rows
     assert np.allclose(ghost_planes(wrong), ghost_planes(bare), atol=1e-9)
-    assert boundary_delta_p(transform_grid(wrong, LAG), families) <= TOL
+    assert boundary_delta_p(laguerre_transform(wrong, LAG), families) <= TOL
 
 
 # -- transformations of reloaded grids ------------------------------------------------------------------
@@ -124,13 +124,13 @@ def test_stale_support_planes_fall_back_to_fitted_planes():
 @pytest.mark.parametrize("name", NAMES)
 def test_laguerre_map_of_a_reloaded_grid_keeps_boundary_polylines_planar(name):
     grid, bare, families = reloaded(name)
-    out = transform_grid(bare, LAG)
+    out = laguerre_transform(bare, LAG)
     assert np.abs(out.vertices - bare.vertices).max() > 0.1
     assert boundary_delta_p(out, families) <= TOL                     # was 1.6e-3 with repeated ghosts
     assert_conical(out, families)
     assert quality(out).flipped_edges == 0
     # the interior is the same as the image of the constructed grid (only boundary cones may differ)
-    image = transform_grid(grid, LAG)
+    image = laguerre_transform(grid, LAG)
     inner = (slice(1, -1), slice(None)) if grid.closed else (slice(1, -1), slice(1, -1))
     assert np.abs(out.vertices[inner] - image.vertices[inner]).max() < 1e-9
 
@@ -138,7 +138,7 @@ def test_laguerre_map_of_a_reloaded_grid_keeps_boundary_polylines_planar(name):
 @pytest.mark.parametrize("name", NAMES)
 def test_offset_of_a_reloaded_grid_keeps_boundary_polylines_planar(name):
     _, bare, families = reloaded(name)
-    out = offset(bare, 0.5)
+    out = offset_faces(bare, 0.5)
     assert boundary_delta_p(out, families) <= TOL
     assert_conical(out, families)
     # constant face–face distance, the stored ghosts shifted with the faces
@@ -150,16 +150,16 @@ def test_offset_of_a_reloaded_grid_keeps_boundary_polylines_planar(name):
 def test_isotropic_maps_of_a_reloaded_grid(name):
     grid, bare, families = reloaded(name)
     size = np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0))
-    same = isotropic.transform_grid(bare, IsotropicMobius())
+    same = isotropic.isotropic_transform(bare, IsotropicMobius())
     assert np.abs(same.vertices - bare.vertices).max() < 1e-8 * size  # identity: the vertices stay (was 529)
     rot = np.linalg.qr(np.random.default_rng(2).normal(size=(3, 3)))[0]
     rot = rot * np.sign(np.linalg.det(rot))
     lag = IsotropicMobius.rotation(rot) @ IsotropicMobius.shear(1.0, [0.2, -0.1, 0.3], 0.5)
-    out = isotropic.transform_grid(bare, lag)                         # Laguerre type: stays conical P / PP
+    out = isotropic.isotropic_transform(bare, lag)                         # Laguerre type: stays conical P / PP
     assert boundary_delta_p(out, families) <= 1e-8
     assert_conical(out, families, tol=1e-8)
     T = IsotropicMobius.special_conformal([0.02, -0.01, 0.01]) @ IsotropicMobius.shear(1.1, [0.02, 0.0, -0.03], 0.3)
-    out = isotropic.transform_grid(bare, T)
+    out = isotropic.isotropic_transform(bare, T)
     assert np.abs(out.vertices - bare.vertices).max() > 1e-3 * size
     assert quality(out).delta_f_max < 1e-9 and quality(out).flipped_edges == 0
 
@@ -170,7 +170,7 @@ def test_isotropic_map_rejects_vertices_whose_planes_meet_in_a_line():
     repeated = np.pad(f, ((1, 1), (1, 1), (0, 0)), mode="edge")      # each boundary face its own ghost
     bad = replace(grid, meta={"extended_face_planes": repeated})
     with pytest.raises(GeometryError, match=r"vertex \(0, 0\) do not meet in a single point"):
-        isotropic.transform_grid(bad, IsotropicMobius())
+        isotropic.isotropic_transform(bad, IsotropicMobius())
 
 
 @pytest.mark.parametrize("name", ["P-spheres", "PP-eq11", "P-tube-closed"])
@@ -181,7 +181,7 @@ def test_conical_edit_of_a_reloaded_grid(name):
     assert boundary_delta_p(res.grid, families) <= TOL
     assert_conical(res.grid, families)
     L = LaguerreMap(spatial(np.eye(3)) @ boost([0.2, 0.4, 1.0], 0.2))
-    image = transform_grid(bare, L)
+    image = laguerre_transform(bare, L)
     fixed = edit_conical(bare, A=L.mobius_matrix(), fairness=0.0)     # fixed A: the Laguerre image itself
     assert np.abs(fixed.grid.vertices - image.vertices).max() < 1e-8
 
@@ -196,9 +196,9 @@ def test_ghosts_of_a_published_conical_mesh_and_of_a_closed_non_planar_boundary(
     assert res.max() < 2e-5                                           # as conical as the file (interior 5e-6)
     s = np.linalg.svd(P[..., :3], compute_uv=False)
     assert (s[..., 2] / s[..., 0]).min() > 1e-4 and c.min() > 0.9
-    out = offset(grid, 0.01 * np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0)))
+    out = offset_faces(grid, 0.01 * np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0)))
     assert quality(out).flipped_edges == 0 and quality(out).nonconvex_faces == 0
     closed = load_mesh(DATA / "DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj").to_grid()
     assert closed.closed and polyline_planarity(closed.vertices[[0, -1]]).max() > 1e-6
     with pytest.raises(GeometryError, match="do not meet in a single point"):
-        isotropic.transform_grid(closed, IsotropicMobius(), max_residual=1e-3)
+        isotropic.isotropic_transform(closed, IsotropicMobius(), max_residual=1e-3)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ppfab.conical import concyclic_residual, cone_axes, conical_quality, offset, vertex_planes
+from ppfab.conical.cones import concyclic_residual, cone_axes, conical_quality, offset_faces, vertex_planes
 from ppfab.constructions import build_construction
 from ppfab.constructions.conical_pp import (FRAMES, Series, appendix_surface, conical_pp_grid, envelope,
                                             normal_field)
@@ -158,7 +158,7 @@ def test_cone_axes_make_equal_angles_with_the_four_faces():
 @pytest.mark.parametrize("name", ["case1-wavy", "rotational-dome", "case2-asymmetric"])
 def test_offset_at_constant_face_distance(name):
     grid = build(name)
-    off = offset(grid, 0.35)
+    off = offset_faces(grid, 0.35)
     # every face plane moved by exactly 0.35 along its normal
     n = grid.face_planes[..., :3]
     d0 = np.einsum("...i,...i->...", n, grid.face_corners.mean(axis=-2))

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ppfab.conical import conical_quality
+from ppfab.conical.cones import conical_quality
 from ppfab.constructions import build_construction
 from ppfab.constructions.conical_pp import FRAMES, Series, appendix_surface, normal_field
 from ppfab.constructions.conical_sections import polar_radius, sections_grid

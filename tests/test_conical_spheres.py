@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from ppfab import planes as pl
-from ppfab.conical import cone_axes, conical_quality, offset
+from ppfab.conical.cones import cone_axes, conical_quality, offset_faces
 from ppfab.constructions import build_construction
 from ppfab.constructions.conical_spheres import channel_mesh, pp_column_planes, touching_radii
 from ppfab.errors import DesignError, FoldError, GeometryError
 from ppfab.metrics import quality
 from ppfab.sections import PlanarCurve
-from ppfab.spheres import SphereSpline, bisector_normals, tangential_distances, w_planes
+from ppfab.conical.spheres import SphereSpline, bisector_normals, tangential_distances, w_planes
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 TOL = 1e-9
@@ -87,7 +87,7 @@ def test_cone_axes_pass_through_the_sphere_centres():
 
 def test_offset_of_channel_mesh_stays_conical_p():
     grid = channel_mesh(**SETS["wavy-open"])
-    off = offset(grid, -0.3)
+    off = offset_faces(grid, -0.3)
     q = conical_quality(off)
     assert max(q.delta_f_max, q.delta_p_rows_max, q.angle_max) <= TOL
 

@@ -4,8 +4,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ppfab.cli import main
-from ppfab.cli.design import load_design, parse_design
+from fabrication.cli import main
+from fabrication.design import load_design, parse_design
 from ppfab.errors import DesignError
 
 from conftest import small_design

@@ -12,12 +12,13 @@ import numpy as np
 import pytest
 
 from conftest import REPO, smooth_face_image
-from fabrication.dxf import check_sheet_dxf, read_sheet_dxf, write_sheet_dxfs
+from fabrication.writers.dxf import check_sheet_dxf, read_sheet_dxf, write_sheet_dxfs
 from fabrication.flatpart import FlatPart, place_points
 from fabrication.nesting import NestingParams, nest, verify_nesting
 from fabrication.panels import PanelParams, make_panels
-from fabrication.parts import (CONTRACT_COLUMNS, order_rows, part_rows, write_order_list, write_parts_csv,
-                               write_parts_json, write_type_dxfs)
+from fabrication.contract import PARTS_CONTRACT_COLUMNS as CONTRACT_COLUMNS
+from fabrication.parts import order_rows, part_rows, write_order_list, write_parts_csv, write_parts_json
+from fabrication.writers.dxf import write_type_dxfs
 from ppfab.errors import VerificationError
 from ppfab.faceimage import pp_from_face_image
 
@@ -108,7 +109,7 @@ def test_bytes_are_deterministic_across_processes(build, tmp_path):
     code = (
         "import numpy as np, sys\n"
         "from fabrication.flatpart import FlatPart, Placement\n"
-        "from fabrication.dxf import CuttingSheet\n"
+        "from fabrication.writers.dxf import CuttingSheet\n"
         "b = CuttingSheet((1000, 800), (5, 5, 995, 795), 'x')\n"
         "b.add_part(FlatPart('A', 'panel', np.array([[0,0],[300,0],[250,200.5]])), Placement('A', 0, 100, 50, 90, False, 'S01-001'))\n"
         "b.write(sys.argv[1])\n"
@@ -186,7 +187,7 @@ def test_checker_rejects_a_broken_file(tmp_path):
 
 
 def test_mirrored_placement_keeps_the_outline_counter_clockwise(tmp_path):
-    from fabrication.dxf import CuttingSheet
+    from fabrication.writers.dxf import CuttingSheet
     from fabrication.flatpart import Placement
 
     part = FlatPart("T", "panel", np.array([[0, 0], [300, 0], [40, 200.0]]), mirror_allowed=True)

@@ -2,13 +2,12 @@
 package of the bundled default verified end to end (small nesting budgets unless PPFAB_FULL=1)."""
 
 import re
-from pathlib import Path
 
 import pytest
 
-from ppfab.cli import main
-from ppfab.cli.design import DEFAULT_DESIGN, load_design
-from ppfab.cli.pipeline import build_geometry
+from fabrication.cli import main
+from fabrication.design import DEFAULT_DESIGN, load_design
+from ppfab.geometry import build_geometry
 from ppfab.metrics import quality
 
 from conftest import FULL, REPO
@@ -19,7 +18,7 @@ EXAMPLES = sorted((REPO / "examples").glob("*.toml"))
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_geometry(path):
     design = load_design(path)
-    g = build_geometry(design)
+    g = build_geometry(design.geometry, design.optimize, design.base_dir)
     q = quality(g.mesh)
     assert q.delta_f_max <= 1e-6 and q.flipped_edges == 0
     if "rows" in g.planar_families:

@@ -7,19 +7,21 @@ import doctest
 import numpy as np
 import pytest
 
-from ppfab import conical_edit, isotropic, laguerre
+from ppfab.conical import edit as conical_edit
+from ppfab.transforms import isotropic, laguerre
 from ppfab import planes as pl
-from ppfab.conical import conical_quality, extended_planes, offset
+from ppfab.conical.cones import conical_quality, extended_planes, offset_faces
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
 from ppfab.constructions.conical_sections import sections_grid
 from ppfab.constructions.conical_spheres import channel_mesh, touching_radii
-from ppfab.conical_edit import ConicalEditor, edit_conical, fit_lorentz, mobius_of_laguerre
+from ppfab.conical.edit import ConicalEditor, edit_conical, fit_lorentz, mobius_of_laguerre
 from ppfab.errors import FoldError, GeometryError
-from ppfab.isotropic import IsotropicMobius, quad_circularity, quad_planarity_4d
-from ppfab.laguerre import (J, LaguerreMap, boost, is_lorentz, lorentz_residual, minkowski_polar, project_lorentz,
-                            spatial, transform_grid)
+from ppfab.transforms.isotropic import IsotropicMobius, quad_circularity, quad_planarity_4d
+from ppfab.conical.cones import laguerre_transform
+from ppfab.transforms.laguerre import (J, LaguerreMap, boost, is_lorentz, lorentz_residual, minkowski_polar,
+                                       project_lorentz, spatial)
 from ppfab.metrics import quality
-from ppfab.spheres import SphereSpline, bisector_normals, reflections, w_planes
+from ppfab.conical.spheres import SphereSpline, bisector_normals, reflections, w_planes
 
 from conftest import conical_zoo
 
@@ -148,8 +150,8 @@ def test_reflection_fixes_w_plane_and_maps_neighbour_spheres():
 
 def test_offset_map_is_the_conical_offset():
     grid, _ = MESHES["PP-eq11"]
-    a = transform_grid(grid, LaguerreMap.offset(0.4))
-    b = offset(grid, 0.4)
+    a = laguerre_transform(grid, LaguerreMap.offset(0.4))
+    b = offset_faces(grid, 0.4)
     assert np.allclose(a.vertices, b.vertices, atol=1e-10)
 
 
@@ -159,7 +161,7 @@ def test_offset_map_is_the_conical_offset():
 @pytest.mark.parametrize("seed", [0, 1])
 def test_laguerre_transform_keeps_conical_p_and_pp(name, seed):
     grid, families = MESHES[name]
-    out = transform_grid(grid, random_map(seed))
+    out = laguerre_transform(grid, random_map(seed))
     assert np.abs(out.vertices - grid.vertices).max() > 0.1                # it really moved
     assert_conical_planar(out, families)
     assert quality(out).flipped_edges == 0
@@ -169,7 +171,7 @@ def test_laguerre_transform_rejects_non_conical_meshes():
     grid, _ = MESHES["PP-eq11"]
     bent = grid.with_vertices(grid.vertices + 0.05 * np.sin(grid.vertices[..., :1]))
     with pytest.raises(GeometryError, match="not conical at vertex"):
-        transform_grid(bent, random_map(0))
+        laguerre_transform(bent, random_map(0))
 
 
 @pytest.mark.parametrize("name", ["P-spheres", "PP-eq11"])
@@ -179,7 +181,7 @@ def test_fixed_matrix_edit_reproduces_the_laguerre_image(name, seed):
     fairness the solution is the Laguerre image itself, with fairness a parallel mesh of it."""
     grid, families = MESHES[name]
     L = LaguerreMap(spatial(rotation(seed)) @ boost(np.random.default_rng(seed).normal(size=3), 0.25))
-    image = transform_grid(grid, L)
+    image = laguerre_transform(grid, L)
     res = edit_conical(grid, A=mobius_of_laguerre(L.A), fairness=0.0)
     assert res.constraint_residual < 1e-9 * 30
     assert np.abs(res.grid.vertices - image.vertices).max() < 1e-8
@@ -204,7 +206,7 @@ def test_parallel_edit_with_a_handle():
 def test_fitting_the_matrix_recovers_a_laguerre_image():
     grid, families = MESHES["P-spheres"]
     L = LaguerreMap(boost([0.3, 0.2, 1.0], 0.2))
-    image = transform_grid(grid, L)
+    image = laguerre_transform(grid, L)
     ij = np.argwhere(np.ones(grid.shape, bool))
     res = edit_conical(grid, handles=(ij, image.vertices.reshape(-1, 3)), fit_A=True, proximity=1e-8, fairness=0.0)
     B = mobius_of_laguerre(L.A)
@@ -231,8 +233,8 @@ def test_closed_grids_transform_and_edit():
                            case="rotational", closed=True)
     L = LaguerreMap(boost([1.0, 0.0, 0.3], 0.2))
     for grid, families in ((tube, ("rows",)), (dome, ("rows", "cols"))):
-        assert_conical_planar(transform_grid(grid, L), families)
-        image = transform_grid(grid, L)
+        assert_conical_planar(laguerre_transform(grid, L), families)
+        image = laguerre_transform(grid, L)
         res = edit_conical(grid, A=mobius_of_laguerre(L.A), fairness=0.0)
         assert np.abs(res.grid.vertices - image.vertices).max() < 1e-8
         res = edit_conical(grid, handles={(2, 3): grid.vertices[2, 3] + 0.3})
@@ -282,7 +284,7 @@ def test_isotropic_mobius_keeps_planar_circular_face_images(name):
                                                                                        0.3, 0.4)
     F = T(E)
     assert quad_planarity_4d(F).max() < 1e-10 and quad_circularity(F).max() < 1e-10
-    out = isotropic.transform_grid(grid, T)
+    out = isotropic.isotropic_transform(grid, T)
     assert np.abs(out.vertices - grid.vertices).max() > 0.05
     assert quality(out).delta_f_max < 1e-9 and quality(out).flipped_edges == 0
     # orthogonal nodes: the new normal image is circular, and the node axes lie in all four support planes
@@ -296,7 +298,7 @@ def test_isotropic_map_of_laguerre_type_keeps_the_mesh_conical():
     grid, families = MESHES["P-spheres"]
     T = IsotropicMobius.rotation(rotation(2)) @ IsotropicMobius.shear(1.0, [0.2, -0.1, 0.3], 0.5)
     assert T.preserves_unit_sphere
-    out = isotropic.transform_grid(grid, T)
+    out = isotropic.isotropic_transform(grid, T)
     assert_conical_planar(out, families)
 
 

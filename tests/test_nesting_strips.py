@@ -170,12 +170,12 @@ def test_default_design_beam_plates_stack_on_plate_stock():
     """The bundled design's 219 beam plates: 33 sheets as box rows, 25 stacked (9 a sheet; see
     benchmarks/nesting.py).  CI runs every 4th plate."""
     from fabrication.beams import build_beams
-    from ppfab.cli.design import load_design
-    from ppfab.cli.pipeline import build_geometry
-    from ppfab.support import support_structure
+    from fabrication.design import load_design
+    from ppfab.geometry import build_geometry
+    from ppfab.support.select import support_structure
 
     d = load_design(None)
-    g = build_geometry(d)
+    g = build_geometry(d.geometry, d.optimize, d.base_dir)
     s = support_structure(g.mesh, d.section("support"), planar_families=g.planar_families)
     parts = build_beams(s, d.section("beams")).flat_parts()
     params = d.section("beam_nesting")

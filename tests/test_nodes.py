@@ -11,11 +11,13 @@ from conftest import SHARED_DATA
 
 from fabrication.beams import BeamParams, build_beams
 from fabrication.beams.samples import sample_pp_grid
-from fabrication.nodes import CSV_COLUMNS, write_nodes
+from fabrication.contract import NODES_COLUMNS as CSV_COLUMNS
+from fabrication.nodes import write_nodes
 from ppfab import planes as pl
 from ppfab.io import load_mesh
-from ppfab.similarity import transform
-from ppfab.support import support_pp, support_structure
+from ppfab.transforms.similarity import transform
+from ppfab.support.pp import support_pp
+from ppfab.support.select import support_structure
 
 REQUIRED = ["node_id", "vertex", "x", "y", "z", "axis_x", "axis_y", "axis_z", "beams", "i", "j"]
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ppfab.cli import main
+from fabrication.cli import main
 from ppfab.io import read_mesh
 from ppfab.metrics import quality
 

@@ -283,7 +283,9 @@ def _point_triangle_distance(p, a, b, c):
 def _distance_to_mesh(grid, points, near=24):
     """Distance of points from the triangulated mesh (exact over the ``near`` triangles with the closest
     centroids, which contain the closest one on a fair mesh)."""
-    tri = grid.trimesh()
+    import trimesh
+
+    tri = trimesh.Trimesh(*grid.triangles(), process=False)
     t = tri.vertices[tri.faces]                                              # (T, 3, 3)
     cd = np.linalg.norm(points[:, None, :] - t.mean(axis=1)[None], axis=-1)
     idx = np.argpartition(cd, near, axis=1)[:, :near]                        # (P, near)
@@ -410,7 +412,7 @@ def test_example_builds_as_an_architectural_pp_mesh(path: Path):
     assert float(doc["geometry"]["scale"]) == 1000.0
 
 
-@pytest.mark.parametrize("module", ["ppfab.transforms", "ppfab.constructions.cauchy", "ppfab.constructions.bisector",
+@pytest.mark.parametrize("module", ["ppfab.transforms.pp", "ppfab.constructions.cauchy", "ppfab.constructions.bisector",
                                     "ppfab.constructions.profile_curves", "ppfab.constructions.plane_splines",
                                     "ppfab.constructions.translational"])
 def test_docstring_examples_run(module):

@@ -54,18 +54,18 @@ def test_flattening_a_planar_quad_is_an_isometry(seed, size, gap):
 @settings(max_examples=30, deadline=None)
 @given(st.integers(2, 9), st.integers(2, 9), st.integers(0, 1000), st.floats(-0.05, 0.05))
 def test_offsets_keep_planarity_and_pp(m, n, seed, distance):
-    from ppfab.transforms import offset
+    from ppfab.transforms.pp import offset_along_axes
 
     grid = pp_from_face_image(*smooth_face_image(m, n, seed))
     for mode in ("parallel", "f_transform"):
-        off = offset(grid, distance, mode=mode)
+        off = offset_along_axes(grid, distance, mode=mode)
         assert face_planarity(off.face_corners).max() <= 1e-9
         assert plane_residual(off.rows(), grid.support_u).max() <= 1e-9
         assert plane_residual(off.cols(), grid.support_w).max() <= 1e-9
         if min(off.shape) >= 3:
             assert polyline_planarity(off.rows()).max() <= 1e-9
     # the parallel offset has parallel edges (a Combesure transform, §2.2.3)
-    off = offset(grid, distance, mode="parallel")
+    off = offset_along_axes(grid, distance, mode="parallel")
     e0, e1 = np.diff(grid.vertices, axis=1), np.diff(off.vertices, axis=1)
     cross = np.linalg.norm(np.cross(e0, e1), axis=-1) / (np.linalg.norm(e0, axis=-1) ** 2)
     assert cross.max() < 1e-9

@@ -13,10 +13,13 @@ from ppfab.io import load_mesh
 from ppfab.mesh import QuadMesh
 from ppfab.metrics import polyline_planarity, quality
 from ppfab.schema import parse_params
-from ppfab.support import (
-    SupportParams, conical_axis_residual, support_conical, support_p, support_parallel, support_pp,
-    support_structure, torsion, torsion_offset, vertex_normals,
-)
+from ppfab.support.conical import conical_axis_residual, support_conical
+from ppfab.support.p import support_p
+from ppfab.support.parallel import support_parallel
+from ppfab.support.params import SupportParams
+from ppfab.support.pp import support_pp
+from ppfab.support.select import support_structure
+from ppfab.support.structure import torsion, torsion_offset, vertex_normals
 
 
 def _independent_torsion(mesh, axes):

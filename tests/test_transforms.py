@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ppfab import planes as pl
-from ppfab import transforms as tf
+from ppfab.transforms import pp as tf
 from ppfab.constructions import build_construction
 from ppfab.errors import GeometryError
 from ppfab.faceimage import pp_from_face_image
@@ -120,7 +120,7 @@ def test_parallel_mesh_keeps_edge_directions(grid):
 @pytest.mark.parametrize("mode", ["parallel", "f_transform"])
 def test_offset_moves_vertices_along_node_axes(grid, mode):
     depth = 0.02 * size(grid)
-    out = tf.offset(grid, depth, mode=mode)
+    out = tf.offset_along_axes(grid, depth, mode=mode)
     assert_pp(out)
     axes = tf.with_face_image(grid).axes
     d = out.vertices - grid.vertices
@@ -137,11 +137,11 @@ def test_offset_is_uniform_where_it_can_be_and_f_transform_is_closer_elsewhere()
     xs, ys = np.linspace(-15, 15, 7), np.linspace(-10, 10, 5)
     tr = build_construction("translational", {"a_points": [[x, 8 - x * x / 40] for x in xs],
                                               "b_points": [[y, -y * y / 40] for y in ys]})
-    o = tf.offset(tr, 0.25)                 # vertical axes: a vertical shift is an exact parallel offset
+    o = tf.offset_along_axes(tr, 0.25)                 # vertical axes: a vertical shift is an exact parallel offset
     assert o.meta["offset"]["max"] - o.meta["offset"]["min"] <= 1e-9
     assert np.abs(o.vertices - tr.vertices - 0.25 * tr.axes).max() <= 1e-9
     g = profile_grid()
-    par, ftr = tf.offset(g, 0.3), tf.offset(g, 0.3, mode="f_transform")
+    par, ftr = tf.offset_along_axes(g, 0.3), tf.offset_along_axes(g, 0.3, mode="f_transform")
     spread = lambda o: o.meta["offset"]["max"] - o.meta["offset"]["min"]    # noqa: E731
     assert spread(ftr) <= spread(par) + 1e-12
 

@@ -4,7 +4,7 @@
 that carries a mesh polyline (top edge = the polyline, bottom edge = the
 polyline moved by the depth along the node axes), cuts half-lap slots or
 butt ends at the nodes in each plate's own 2D frame, checks every plate and
-reports the defects by part id.  ``BeamSet.export_step`` writes ``beams.step``
+reports the defects by part id.  ``fabrication.writers.step`` writes ``beams.step``
 (one extruded solid per plate, build123d imported only there) and
 ``BeamSet.flat_parts()`` gives the plates for nesting and DXF cutting sheets.
 """

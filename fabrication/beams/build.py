@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from pathlib import Path
 
 import numpy as np
 
 from ppfab.errors import DesignError
-from ppfab.support import SupportStructure
+from ppfab.support.structure import SupportStructure
+from ppfab.topology import FAMILY_NAMES
 
 from .flat import flat_parts, type_ids
 from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
@@ -42,17 +42,6 @@ class BeamSet:
         """:class:`~fabrication.flatpart.FlatPart` of every plate (kind ``"beam"``)."""
         return flat_parts(list(self.plates), self.params.material, self.params.density, self.types)
 
-    def solids(self) -> list:
-        """build123d solids, one per plate, labelled with its part id (imports build123d)."""
-        from .solids import build_solids
-
-        return build_solids(list(self.plates))
-
-    def export_step(self, path: str | Path) -> Path:
-        """Write ``beams.step`` (one solid per plate, named by part id); returns the path."""
-        from .solids import export_step
-
-        return export_step(self.solids(), path)
 
 
 def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True) -> BeamSet:
@@ -86,7 +75,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     for p in final:
         spread, play, extra, ok = assembly_check(p, params.clearance)
         area = p.area
-        records.append(BeamRecord(p.part_id, p.beam_id, ("rows", "cols")[p.family], p.piece, len(p.nodes),
+        records.append(BeamRecord(p.part_id, p.beam_id, FAMILY_NAMES[p.family], p.piece, len(p.nodes),
                                   p.length, area, area * p.thickness * params.density * 1e-9, len(p.slots),
                                   spread, play, extra, ok, p.plane_deviation, types[p.part_id]))
     off = support.torsion_offset(params.depth) if len(support.edges) else np.zeros(1)

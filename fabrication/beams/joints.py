@@ -32,7 +32,7 @@ from shapely.ops import unary_union
 from shapely.validation import explain_validity
 
 from ppfab import planes as pl
-from ppfab.support import SupportStructure
+from ppfab.support.structure import SupportStructure
 
 from .params import BeamParams
 from .plates import BeamPlate, Slot

@@ -27,7 +27,9 @@ import numpy as np
 
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
-from ppfab.support import SupportStructure
+from ppfab.support.structure import SupportStructure
+
+from .. import contract
 
 from .params import BeamParams
 from .report import Defect
@@ -201,14 +203,16 @@ def beam_ids(support: SupportStructure) -> list[str]:
     lines = support.polylines
     if support.mesh.grid is not None:
         m1, n1 = support.mesh.grid.shape
-        w = max(2, len(str(max(m1, n1) - 1)))
+        w = contract.digits(max(m1, n1))
         out = []
         for k in range(len(lines)):
-            fam, idx = support.polyline_grid_index(k)
-            out.append(f"B-{'UW'[fam]}{idx:0{w}d}")
+            found = support.polyline_grid_index(k)
+            assert found is not None
+            fam, idx = found
+            out.append(contract.beam_id_grid(fam, idx, w))
         return out
-    w = max(4, len(str(len(lines) - 1)))
-    return [f"B-R{k:0{w}d}" for k in range(len(lines))]
+    w = contract.digits(len(lines), 4)
+    return [contract.beam_id(k, w) for k in range(len(lines))]
 
 
 # -- splitting ---------------------------------------------------------------------------------------
@@ -354,9 +358,9 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
                 a, b = np.r_[a, vs[-1]], np.r_[b, vs[0]]
             lo, hi = np.minimum(a, b), np.maximum(a, b)
             eids = np.searchsorted(edge_key, lo * nv + hi)
-            w = max(2, len(str(len(a) - 1)))
+            w = contract.digits(len(a))
             for k, (va, vb, e) in enumerate(zip(a, b, eids)):
-                pid = ids[l] if len(a) == 1 else f"{ids[l]}-S{k:0{w}d}"
+                pid = ids[l] if len(a) == 1 else contract.piece_id(ids[l], k, w)
                 pts = v[[va, vb]]
                 plate = make_plate(pid, ids[l], l, line.family, k, len(a), support.edge_planes[e], pts,
                                    axes[[va, vb]], np.array([va, vb]), np.array([False, False]),
@@ -410,7 +414,7 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
             hi = nn - 1 if e is None else e
             pieces.append((s, list(range(lo, hi + 1)), e))
     out = []
-    w = max(2, len(str(len(pieces) - 1)))
+    w = contract.digits(len(pieces))
     for r, (s, idx, e) in enumerate(pieces):
         cp, ca, chain = [], [], []
         if s is not None:
@@ -427,7 +431,7 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
         ca /= np.linalg.norm(ca, axis=1, keepdims=True)
         # a node is an end only where the polyline itself ends (pieces end at edge midpoints)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
-        pid = beam_id if len(pieces) == 1 else f"{beam_id}-S{r:0{w}d}"
+        pid = beam_id if len(pieces) == 1 else contract.piece_id(beam_id, r, w)
         out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca, vs[idx],
                               through, np.asarray(chain), params, pts[idx]))
     return out

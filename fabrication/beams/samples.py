@@ -17,7 +17,7 @@ import numpy as np
 from ppfab import planes as pl
 from ppfab.faceimage import pp_from_curves, sample_extended
 from ppfab.mesh import QuadGrid
-from ppfab.similarity import transform
+from ppfab.transforms.similarity import transform
 
 
 def _vault(faces_u: int, faces_v: int, spacing: float, bend: float, tilt: float):

@@ -26,6 +26,7 @@ from ppfab.errors import FabricationError, GeometryError, NonPlanarPanelError
 from ppfab.mesh import QuadGrid, QuadMesh
 
 from ..flatpart import FlatPart
+from .. import contract
 from . import geometry as geo
 from .congruence import group_congruent
 from .params import PanelParams
@@ -154,13 +155,13 @@ def _face_layout(mesh: QuadMesh | QuadGrid) -> tuple[np.ndarray, np.ndarray | No
     if grid is None:
         corners = np.asarray(qm.face_corners, dtype=float)
         F = len(corners)
-        width = max(4, len(str(F - 1)))
-        return corners, None, np.arange(F), [f"P-{f:0{width}d}" for f in range(F)]
+        width = contract.digits(F, 4)
+        return corners, None, np.arange(F), [contract.panel_id(f, width) for f in range(F)]
     fm, fn = grid.face_shape
     corners = np.asarray(grid.face_corners, dtype=float).reshape(-1, 4, 3)
     ij = np.stack(np.meshgrid(np.arange(fm), np.arange(fn), indexing="ij"), axis=-1).reshape(-1, 2)
-    wi, wj = max(2, len(str(fm - 1))), max(2, len(str(fn - 1)))
-    ids = [f"P-U{i:0{wi}d}-V{j:0{wj}d}" for i, j in ij]
+    wi, wj = contract.digits(fm), contract.digits(fn)
+    ids = [contract.panel_id_grid(int(i), int(j), wi, wj) for i, j in ij]
     mesh_face = np.arange(len(ij))
     if qm is not None and qm.grid_ids is not None:
         from ppfab.topology import grid_face_indices

@@ -6,17 +6,6 @@ registers its constructions with :func:`~ppfab.constructions.registry.constructi
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
-from .registry import CONSTRUCTIONS, Construction, build_construction, construction, get_construction
+from .registry import CONSTRUCTIONS, Construction, build_construction, construction, get_construction, load_all
 
 __all__ = ["CONSTRUCTIONS", "Construction", "build_construction", "construction", "get_construction", "load_all"]
-
-
-def load_all() -> dict[str, Construction]:
-    """Import every construction module (once) and return the registry."""
-    for info in pkgutil.iter_modules(__path__):
-        if info.name != "registry" and not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    return CONSTRUCTIONS

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import planes as pl
+from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
 from ..faceimage import pp_from_face_image
 from ..mesh import QuadGrid

@@ -34,7 +34,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..conical import rigid_motion
+from ppfab.conical.cones import rigid_motion
 from ..errors import DesignError, GeometryError
 from ..faceimage import orient_axes, pp_from_face_image, sample_extended
 from ..folds import check_folds, orientation_sign

@@ -38,7 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..conical import rigid_motion
+from ppfab.conical.cones import rigid_motion
 from ..errors import DesignError, GeometryError
 from ..faceimage import orient_axes, pp_from_face_image
 from ..folds import check_folds, orientation_sign

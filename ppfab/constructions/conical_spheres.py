@@ -30,13 +30,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import planes as pl
+from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
 from ..folds import check_folds, orientation_sign
 from ..mesh import QuadGrid
 from ..schema import param
 from ..sections import PlanarCurve, support_values
-from ..spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
+from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
 from .registry import construction
 
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from .. import planes as pl
+from ppfab import planes as pl
 from ..errors import DesignError
 from ..faceimage import pp_from_curves
 from ..mesh import QuadGrid

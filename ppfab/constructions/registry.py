@@ -8,6 +8,8 @@ the package imports every module, so a new construction is one new file.
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -46,10 +48,17 @@ def construction(name: str, params: type, summary: str, planar_families: tuple[s
     return register
 
 
+def load_all() -> dict[str, Construction]:
+    """Import every construction module of :mod:`ppfab.constructions` (once) and return the registry."""
+    package = importlib.import_module("ppfab.constructions")
+    for info in pkgutil.iter_modules(package.__path__):
+        if info.name != "registry" and not info.name.startswith("_"):
+            importlib.import_module(f"ppfab.constructions.{info.name}")
+    return CONSTRUCTIONS
+
+
 def get_construction(name: str, key: str = "geometry.method") -> Construction:
     """Look a construction up by name; an unknown name lists the valid ones."""
-    from . import load_all
-
     load_all()
     if name not in CONSTRUCTIONS:
         raise DesignError(key, f"unknown method {name!r}{suggest(name, list(CONSTRUCTIONS))}; "

@@ -22,11 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import planes as pl
+from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid
 from ..schema import param
-from ..transforms import with_face_image
+from ppfab.transforms.pp import with_face_image
 from ._planar_curve import PlanarCurve, PlaneFrame, fit_planar_curve
 from .registry import construction
 

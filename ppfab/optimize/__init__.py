@@ -29,7 +29,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import planes as pl
+from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid, QuadMesh
 from ..metrics import Quality, face_planarity, quality

@@ -1,0 +1,173 @@
+"""``build(design) -> Build``: design → geometry → quality → support → panels → beams → nesting → nodes → summary.
+
+One function per stage, each returning a frozen record (:mod:`fabrication.build.records`); :data:`STAGES`
+names them in order and :func:`build` calls them in that order with typed arguments.  Every check that can
+reject a design (a fold, non-planar panels in mm, degenerate beams, parts that fit no sheet) runs here,
+before any file exists; :meth:`Build.write` then hands the record to the writers
+(:mod:`fabrication.writers`).  Tests inject a failure by replacing a ``stage_<name>`` function of this
+module.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ppfab.errors import DesignError, GeometryError
+from ppfab.geometry import Geometry, build_geometry
+from ppfab.mesh import QuadGrid, QuadMesh
+from ppfab.metrics import Quality
+from ppfab.support.structure import SupportStructure
+
+from ..beams import BeamSet
+from ..nesting import Nesting
+from ..design import Design
+from .progress import Progress
+from .records import Build, NestingSet, NodeTable, PanelSet, Summary
+
+STAGES: tuple[str, ...] = ("geometry", "quality", "support", "panels", "beams", "nesting", "nodes", "summary")
+"""The compute stages in order; stage ``name`` is the function ``stage_<name>`` of this module.  Panel
+planarity (mm) is the root cause of most beam defects, so ``panels`` is checked before ``beams``."""
+
+
+def build(design: Design, progress: Progress | None = None, allow_large: bool = False) -> Build:
+    """Run every compute stage of a design and return the typed :class:`Build` (no file is written).
+
+    Parameters
+    ----------
+    design : a validated design (:func:`fabrication.load_design` or :func:`fabrication.parse_design`)
+    progress : a :class:`Progress` display (silent when omitted)
+    allow_large : go on above ``[geometry] max_vertices``
+
+    Raises a :class:`~ppfab.errors.PpfabError` naming the element and value at fault when the design cannot
+    be fabricated correctly.
+    """
+    p = progress or Progress(quiet=True)
+    try:
+        geometry = stage_geometry(design, p, allow_large)
+        quality = stage_quality(geometry, p)
+        support = stage_support(design, geometry, p)
+        panels = stage_panels(design, geometry, p)
+        beams = stage_beams(design, support, p)
+        nesting = stage_nesting(design, panels, beams, p)
+        nodes = stage_nodes(beams, p)
+        summary = stage_summary(geometry, panels, beams, nesting, support)
+    except BaseException:
+        p.fail()
+        raise
+    return Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, times=p.times)
+
+
+def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:
+    """Construct the mesh, or read (and optimise) a mesh file, placed in mm (:func:`ppfab.geometry.build_geometry`)."""
+    geo = design.geometry
+    progress.start("geometry", f"construction '{geo.method}'" if geo.method else f"mesh {geo.mesh}")
+    g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note)
+    mesh = g.mesh
+    shape = mesh.shape if isinstance(mesh, QuadGrid) else (mesh.grid.shape if mesh.grid is not None else None)
+    progress.done(f"{'grid ' + 'x'.join(map(str, shape)) if shape else 'quad mesh'}")
+    return g
+
+
+def stage_quality(geometry: Geometry, progress: Progress) -> Quality:
+    """Measure δ_f, δ_P, deviation (mm), conical residual and folds; a folded mesh stops the build."""
+    from ppfab.metrics import quality
+
+    progress.start("quality")
+    q = quality(geometry.mesh)
+    if q.flipped_edges:
+        raise GeometryError(f"the mesh is folded: {q.flipped_edges} edge(s) join faces with opposite normals "
+                            "(the surface passes through a cuspidal edge)", element="mesh", value=q.flipped_edges)
+    if q.degenerate_edges:
+        raise GeometryError(f"the mesh has {q.degenerate_edges} zero-length edge(s)", element="mesh")
+    progress.done(f"δ_f max {q.delta_f_max:.1e}, δ_P rows {q.delta_p_rows_max:.1e} "
+                  f"cols {q.delta_p_cols_max:.1e}, panel deviation {q.deviation_abs_max:.2g} mm")
+    return q
+
+
+def stage_support(design: Design, geometry: Geometry, progress: Progress) -> SupportStructure:
+    """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh."""
+    from ppfab.support.select import support_structure
+
+    progress.start("support")
+    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None)
+    s = support.summary()
+    progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
+    return support
+
+
+def stage_panels(design: Design, geometry: Geometry, progress: Progress) -> PanelSet:
+    """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types."""
+    from ..panels import make_panels, panel_types
+
+    progress.start("panels")
+    panels = make_panels(geometry.mesh, design.panels)
+    types = panel_types(panels)
+    progress.done(f"{len(panels)} panels, {len(types)} types")
+    return PanelSet(tuple(panels), types)
+
+
+def stage_beams(design: Design, support: SupportStructure, progress: Progress) -> BeamSet:
+    """Planar beam plates with joints; a degenerate plate stops the build naming its part id."""
+    from ..beams import build_beams
+
+    progress.start("beams")
+    params = design.beams
+    sheet_len = design.beam_nesting.usable()
+    usable_len = max(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
+    if params.max_length == 0 or params.max_length > usable_len:
+        raise DesignError("beams.max_length", f"beam pieces up to {params.max_length:g} mm do not fit the "
+                                              f"usable plate length {usable_len:g} mm of [beam_nesting]; "
+                                              "set beams.max_length to at most the usable length")
+    beams = build_beams(support, params, strict=True)
+    t = beams.report.totals()
+    progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
+    return beams
+
+
+def stage_nesting(design: Design, panels: PanelSet, beams: BeamSet, progress: Progress) -> NestingSet:
+    """Nest glass panels and beam plates on their stock sheets and verify every placement with shapely."""
+    from ..nesting import nest, verify_nesting
+
+    progress.start("nesting")
+    glass_parts = [p.flat_part() for p in panels.panels]
+    beam_parts = beams.flat_parts()
+    nestings: list[Nesting] = []
+    for parts, params, what in ((glass_parts, design.nesting, "glass"), (beam_parts, design.beam_nesting, "plates")):
+        nesting = nest(parts, params)
+        verify_nesting(parts, nesting, params)
+        progress.note(f"{what}: {nesting.sheets} sheets ({100 * nesting.utilisation:.1f} %, "
+                      f"bound {nesting.lower_bound});")
+        nestings.append(nesting)
+    progress.done()
+    return NestingSet(tuple(glass_parts), tuple(beam_parts), nestings[0], nestings[1])
+
+
+def stage_nodes(beams: BeamSet, progress: Progress) -> NodeTable:
+    """One record per vertex: position, axis, the plates meeting there, angles, torsion (:mod:`fabrication.nodes`)."""
+    from ..nodes import node_records
+
+    return NodeTable(tuple(node_records(beams)))
+
+
+def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting: NestingSet,
+                  support: SupportStructure) -> Summary:
+    """Totals for the manifest, the report and ``--json``."""
+    mesh = geometry.mesh
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    assert isinstance(qm, QuadMesh)
+    v = qm.vertices
+    bt = beams.report.totals()
+    gn, bn = nesting.glass, nesting.plates
+    return Summary(
+        extent_mm=[float(x) for x in np.ptp(v, axis=0)],
+        panels=len(panels.panels), panel_types=len(panels.types),
+        glass_area_m2=float(sum(p.area_mm2 for p in panels.panels) / 1e6),
+        glass_weight_kg=float(sum(p.weight_kg for p in panels.panels)),
+        beams=bt["beams"], beam_plates=bt["plates"], beam_types=bt["types"],
+        beam_length_m=bt["length_m"], beam_mass_kg=bt["mass_kg"],
+        plate_area_m2=float(sum(p.area for p in nesting.beam_parts) / 1e6),
+        nodes=int(len(v)),
+        glass_sheets=gn.sheets, glass_utilisation=gn.utilisation, glass_lower_bound=gn.lower_bound,
+        plate_sheets=bn.sheets, plate_utilisation=bn.utilisation, plate_lower_bound=bn.lower_bound,
+        torsion_max_deg=float(np.degrees(support.torsion.max())) if len(support.edges) else 0.0,
+    )

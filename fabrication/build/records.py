@@ -1,0 +1,162 @@
+"""The typed results of the build stages, and :class:`Build`, which holds them all.
+
+Each stage of :mod:`fabrication.build.pipeline` returns one frozen record; nothing passes between stages
+in an untyped dictionary.  The support structure (node axes and support planes) exists once, in
+:attr:`Build.support`: the beams, the node table, ``mesh.json``, ``nodes.csv`` and the report all read it
+from there.
+"""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ppfab.geometry import Geometry
+    from ppfab.metrics import Quality
+    from ppfab.support.structure import SupportStructure
+
+    from ..beams import BeamSet
+    from ..flatpart import FlatPart
+    from ..nesting import Nesting
+    from ..panels import Panel
+    from ..design import Design
+    from .progress import Progress
+
+
+@dataclass(frozen=True)
+class PanelSet:
+    """Glass panels (in face order) and their congruence types: ``types[type_id] = [part_id, …]``."""
+
+    panels: tuple["Panel", ...]
+    types: dict[str, list[str]]
+
+
+@dataclass(frozen=True)
+class NestingSet:
+    """The flat parts of glass and beam plates and their nestings on stock sheets."""
+
+    glass_parts: tuple["FlatPart", ...]
+    beam_parts: tuple["FlatPart", ...]
+    glass: "Nesting"
+    plates: "Nesting"
+
+
+@dataclass(frozen=True)
+class NodeTable:
+    """One record per mesh vertex, in vertex order: the rows of ``nodes.json`` (see :mod:`fabrication.nodes`)."""
+
+    records: tuple[dict[str, Any], ...]
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Totals for the manifest, the report and ``ppfab build --json`` (mm, m, m², kg)."""
+
+    extent_mm: list[float]
+    panels: int
+    panel_types: int
+    glass_area_m2: float
+    glass_weight_kg: float
+    beams: int
+    beam_plates: int
+    beam_types: int
+    beam_length_m: float
+    beam_mass_kg: float
+    plate_area_m2: float
+    nodes: int
+    glass_sheets: int
+    glass_utilisation: float
+    glass_lower_bound: int
+    plate_sheets: int
+    plate_utilisation: float
+    plate_lower_bound: int
+    torsion_max_deg: float
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values in field order (the manifest's ``summary``)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+@dataclass(frozen=True, eq=False)
+class Build:
+    """Everything a build computed, stage by stage; :meth:`write` turns it into the output folder.
+
+    Made by :func:`fabrication.build` (``build(design) -> Build``).  ``times`` holds the seconds each stage
+    took (not written to any file, so builds stay byte-reproducible).
+    """
+
+    design: "Design"
+    geometry: "Geometry"
+    quality: "Quality"
+    support: "SupportStructure"
+    panels: PanelSet
+    beams: "BeamSet"
+    nesting: NestingSet
+    nodes: NodeTable
+    summary: Summary
+    times: dict[str, float] = field(default_factory=dict, compare=False)
+    _written: list[Path] = field(default_factory=list, repr=False, compare=False)
+
+    @property
+    def mesh(self) -> Any:
+        """The placed mesh in mm (:class:`~ppfab.mesh.QuadGrid` or :class:`~ppfab.mesh.QuadMesh`)."""
+        return self.geometry.mesh
+
+    def write(self, out: str | Path, force: bool = False, progress: "Progress | None" = None) -> Path:
+        """Write the output folder ``out`` atomically (see the README's output contract); returns its path.
+
+        Every file goes into a temporary folder beside ``out`` that is renamed into place only when all
+        writers succeeded; with ``force`` an existing folder is replaced.
+        """
+        from ..writers import write_all
+        from .folder import AtomicFolder
+        from .progress import Progress
+
+        prog = progress or Progress(quiet=True)
+        with AtomicFolder(out, force=force) as tmp:
+            write_all(self, tmp, prog)
+        path = Path(out)
+        self._written.append(path)
+        return path
+
+    def verify(self, out: str | Path | None = None) -> Any:
+        """Re-read a folder this build wrote (the last one by default) with ``ppfab verify``'s checks."""
+        from ..verify import verify
+
+        if out is None:
+            if not self._written:
+                raise ValueError("nothing written yet: call Build.write(out) first, or pass the folder")
+            out = self._written[-1]
+        return verify(out)
+
+    def _repr_html_(self) -> str:
+        """The summary as an HTML table (for notebooks), with the structure seen from above."""
+        s = self.summary
+        rows = [("design", self.design.info.name), ("panels / types", f"{s.panels} / {s.panel_types}"),
+                ("beams / plates", f"{s.beams} / {s.beam_plates}"), ("nodes", s.nodes),
+                ("glass area", f"{s.glass_area_m2:.1f} m²"), ("beam length", f"{s.beam_length_m:.1f} m"),
+                ("glass sheets", f"{s.glass_sheets} ({100 * s.glass_utilisation:.1f} %)"),
+                ("plate sheets", f"{s.plate_sheets} ({100 * s.plate_utilisation:.1f} %)"),
+                ("torsion max", f"{s.torsion_max_deg:.3g}°")]
+        body = "".join(f"<tr><th style='text-align:left'>{html.escape(str(k))}</th>"
+                       f"<td>{html.escape(str(v))}</td></tr>" for k, v in rows)
+        return f"<table>{body}</table>{self._plan_svg()}"
+
+    def _plan_svg(self, width: int = 360) -> str:
+        """Panels seen from above as a small inline SVG."""
+        import numpy as np
+
+        corners = np.array([p.corners_3d for p in self.panels.panels])
+        if corners.size == 0:
+            return ""
+        xy = corners[..., :2]
+        lo, hi = xy.reshape(-1, 2).min(axis=0), xy.reshape(-1, 2).max(axis=0)
+        scale = width / max(float(hi[0] - lo[0]), 1e-9)
+        height = float(hi[1] - lo[1]) * scale
+        polys = "".join('<polygon points="' + " ".join(f"{(x - lo[0]) * scale:.1f},{height - (y - lo[1]) * scale:.1f}"
+                                                        for x, y in quad) + '"/>' for quad in xy)
+        return (f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height:.0f}" '
+                f'style="fill:#cfe3f3;stroke:#1f4e79;stroke-width:0.5">{polys}</svg>')

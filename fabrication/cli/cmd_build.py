@@ -1,0 +1,42 @@
+"""``ppfab build [DESIGN.toml] -o OUT`` — the whole fabrication package from a design file."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+NAME = "build"
+HELP = "build a design (default: the bundled PP gridshell) into a complete fabrication folder"
+ORDER = 10
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("design", nargs="?", default=None,
+                   help="design file (TOML); omitted: the bundled default example")
+    p.add_argument("-o", "--out", required=True, help="output folder (written atomically)")
+    p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--json", action="store_true", help="print a machine-readable summary on stdout")
+    p.add_argument("--allow-large", action="store_true",
+                   help="proceed with meshes above geometry.max_vertices")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..design import load_design
+    from ..build.folder import AtomicFolder
+    from ..build.pipeline import build
+    from ..build.progress import Progress
+
+    design = load_design(args.design)
+    progress = Progress(quiet=args.quiet or args.json)
+    AtomicFolder.check_target(args.out, force=args.force)          # refuse before the work, not after
+    result = build(design, progress=progress, allow_large=args.allow_large)
+    out = result.write(args.out, force=args.force, progress=progress)
+    manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+    if args.json:
+        print(json.dumps({"out": str(args.out), "files": manifest["files"], "summary": manifest["summary"],
+                          "quality": manifest["quality"], "times_s": progress.times}, indent=2))
+    elif not args.quiet:
+        print(f"ppfab: wrote {args.out} ({len(manifest['sha256'])} files)", file=sys.stderr)
+    return 0

@@ -1,0 +1,186 @@
+"""``ppfab optimize IN.obj -o OUT.obj`` — make faces and polylines planar (P / PP, paper §3.3)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import asdict
+import os
+import sys
+import time
+import uuid
+from pathlib import Path
+
+NAME = "optimize"
+HELP = "optimise a quad mesh for planar faces and planar polylines (P: rows or cols, PP: both)"
+ORDER = 30
+
+EPILOG = """exit status: 0 targets met, 1 mesh written but targets not met, 2 bad input.
+Any field of the [optimize] table can be given with --set KEY=VALUE (e.g. --set weight_fair=0.1)."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = EPILOG
+    p.add_argument("mesh", help="input quad mesh (.obj or .off)")
+    p.add_argument("-o", "--out", required=True, help="output mesh (.obj or .off), same vertex and face order")
+    p.add_argument("--families", choices=["rows", "cols", "both", "none"], default=None,
+                   help="polyline families to make planar (default rows; none = planar faces only)")
+    p.add_argument("--polylines", default=None,
+                   help="comma-separated indices (in QuadMesh.polylines order: family 0, then 1) of further "
+                        "polylines to make planar")
+    p.add_argument("--fix-boundary", action="store_true", help="keep boundary vertices in place")
+    p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
+    p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
+    p.add_argument("--target-dp", type=float, default=None, help="target max δ_P (default 1e-6)")
+    p.add_argument("--max-iter", type=int, default=None, help="maximum Levenberg–Marquardt iterations (default 500)")
+    p.add_argument("--design", default=None, help="take parameters from the [optimize] table of this TOML file")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="set any optimisation parameter (TOML value syntax), repeatable")
+    p.add_argument("--verbose", action="store_true", help="print energies and metrics of every iteration")
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--json", action="store_true", help="print a JSON summary (with the per-iteration history)")
+
+
+def _int_list(text: str | None, key: str) -> list[int] | None:
+    from ppfab.errors import DesignError
+
+    if text is None:
+        return None
+    try:
+        return [int(t) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise DesignError(key, f"expected comma-separated integers, got {text!r}") from None
+
+
+def _parse_set(items: list[str]) -> dict:
+    from ppfab.errors import DesignError
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        import tomli as tomllib
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise DesignError("--set", f"expected KEY=VALUE, got {item!r}")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()          # a bare word: a string
+    return out
+
+
+def _design_table(path: str) -> dict:
+    from ppfab.errors import DesignError
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover
+        import tomli as tomllib
+    try:
+        doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise DesignError("--design", f"cannot read {path} ({exc.strerror})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("--design", f"{path} is not valid TOML ({exc})") from None
+    table = doc.get("optimize", {})
+    if not isinstance(table, dict):
+        raise DesignError("optimize", "expected a table")
+    return table
+
+
+def collect_params(args: argparse.Namespace) -> dict:
+    """The ``[optimize]`` table from ``--design``, then ``--set``, then the dedicated options."""
+    table = _design_table(args.design) if args.design else {}
+    table.update(_parse_set(args.set))
+    direct = {
+        "families": args.families, "polylines": _int_list(args.polylines, "--polylines"),
+        "fixed_vertices": _int_list(args.fixed, "--fixed"), "target_delta_f": args.target_df,
+        "target_delta_p": args.target_dp, "max_iterations": args.max_iter,
+    }
+    table.update({k: v for k, v in direct.items() if v is not None})
+    if args.fix_boundary:
+        table["fix_boundary"] = True
+    return table
+
+
+class _ProgressLine:
+    """Progress on stderr: every iteration with ``--verbose``, else a refreshed line once a run is long."""
+
+    def __init__(self, verbose: bool, quiet: bool, stream=None, after_s: float = 2.0):
+        self.verbose, self.quiet = verbose, quiet
+        self.stream = stream or sys.stderr
+        self.after_s = after_s
+        self.t0 = time.perf_counter()
+        self.last = 0.0
+        self.shown = False
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    def __call__(self, rec) -> None:
+        if self.quiet:
+            return
+        if self.verbose:
+            print(rec.line(), file=self.stream, flush=True)
+            return
+        now = time.perf_counter() - self.t0
+        if now < self.after_s or (now - self.last < 1.0 and self.tty is False):
+            return
+        self.last = now
+        text = (f"[ppfab] optimize: iteration {rec.iteration}, stage {rec.stage}, "
+                f"max δ_f {rec.delta_f_max:.2e}, max δ_P {rec.delta_p_max:.2e} ({now:.0f} s)")
+        if self.tty:
+            print("\r" + text, end="", file=self.stream, flush=True)
+        else:
+            print(text, file=self.stream, flush=True)
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown and self.tty and not self.verbose:
+            print(file=self.stream, flush=True)
+
+
+def _write_atomic(mesh, out: Path) -> None:
+    from ppfab.io import write_mesh
+
+    tmp = out.parent / f".{out.stem}.tmp-{uuid.uuid4().hex[:8]}{out.suffix}"
+    try:
+        write_mesh(mesh, tmp)
+        os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def run(args: argparse.Namespace) -> int:
+    from ppfab.errors import GeometryError, MeshFileError
+    from ppfab.io import load_mesh
+    from ppfab.optimize import optimize
+
+    out = Path(args.out)
+    if out.suffix.lower() not in (".obj", ".off"):
+        raise MeshFileError(str(out), f"unknown mesh format '{out.suffix}' (use .obj or .off)")
+    if not out.parent.exists():
+        raise MeshFileError(str(out), f"folder {out.parent} does not exist")
+    params = collect_params(args)
+    mesh = load_mesh(args.mesh)
+    progress = _ProgressLine(args.verbose, args.quiet or args.json)
+    try:
+        result = optimize(mesh, params, callback=progress)
+    except GeometryError as exc:
+        raise MeshFileError(args.mesh, str(exc)) from None
+    finally:
+        progress.close()
+    _write_atomic(result.mesh, out)
+    if args.json:
+        doc = result.summary()
+        doc.update({"input": str(args.mesh), "output": str(out),
+                    "history": [asdict(h) for h in result.history]})
+        print(json.dumps(doc, indent=2))
+    elif not args.quiet:
+        q = result.quality
+        print(f"{args.mesh} -> {out}: {result.message}", file=sys.stderr)
+        print(f"  {result.iterations} iterations, {result.time:.2f} s; mean displacement "
+              f"{result.displacement_mean:.3g} ({result.displacement_rel:.2e} of the bounding-box diagonal); "
+              f"δ_P rows {q.delta_p_rows_max:.2e}, cols {q.delta_p_cols_max:.2e}", file=sys.stderr)
+    return 0 if result.targets_met else 1

@@ -1,0 +1,123 @@
+"""The output contract in one place: columns, layers, DXF version, XDATA layout, part ids and file names.
+
+Other programs read ppfab's files; the writers (:mod:`fabrication.writers`) and ``ppfab verify``
+(:mod:`fabrication.verify`) both take every name and format from here, so the two cannot drift apart.
+The README's "Contract" section documents the same.
+"""
+
+from __future__ import annotations
+
+# -- parts.csv / parts.json -----------------------------------------------------------------------------
+
+PARTS_CONTRACT_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", "nest_tag", "area_mm2"]
+"""The first columns of ``parts.csv``, in this order (DESIGN.md)."""
+
+PARTS_KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "type_id", "material", "thickness_mm",
+                       "width_mm", "height_mm", "perimeter_mm", "weight_kg", "planarity_dev_mm", "min_angle_deg",
+                       "flags", "outside"]
+"""Further columns of ``parts.csv`` in this order when present; any others follow sorted by name."""
+
+ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
+                 "rotations", "mirror_allowed", "file"]
+"""Columns of ``glass_order.csv`` (one row per panel type)."""
+
+PART_KINDS = ("panel", "beam")
+
+# -- nodes.csv / nodes.json ------------------------------------------------------------------------------
+
+NODES_CONTRACT_COLUMNS = ["node_id", "vertex", "x", "y", "z", "axis_x", "axis_y", "axis_z", "beams"]
+"""Columns ``nodes.csv`` must have (DESIGN.md)."""
+
+NODES_COLUMNS = ["node_id", "vertex", "i", "j", "x", "y", "z", "axis_x", "axis_y", "axis_z", "beams", "roles",
+                 "joint", "valence", "boundary", "dihedral_deg", "beam_panel_deg", "torsion_deg", "torsion_mm",
+                 "slot_width_mm", "trims_mm"]
+"""All columns of ``nodes.csv`` as written."""
+
+# -- DXF -------------------------------------------------------------------------------------------------
+
+DXF_VERSION = "R2010"
+"""The DXF version written (AC1024); the contract promises R2000 (AC1015) or newer."""
+
+DXF_OLDEST = "AC1015"
+"""The oldest DXF version ``ppfab verify`` accepts (R2000)."""
+
+DXF_INSUNITS_MM = 4
+
+LAYERS = {"SHEET": 8, "TRIM": 3, "CUT": 1, "LABEL": 5, "MARK": 6}
+"""Layer name → ACI colour.  SHEET stock outline, TRIM usable area, CUT part outlines (one closed LWPOLYLINE
+per part), LABEL part id text (never machined), MARK scribe/marking lines."""
+
+XDATA_APPID = "PPFAB"
+"""The application id of the XDATA on every CUT outline: group-1000 strings ``key=value``."""
+
+XDATA_KEYS = ("part_id", "nest_tag", "kind", "type_id")
+"""The ``key=value`` strings on a CUT outline, in this order (``part_id`` and ``nest_tag`` are the contract)."""
+
+
+def xdata_strings(part_id: str, nest_tag: str, kind: str, type_id: str) -> list[tuple[int, str]]:
+    """The XDATA tags of a CUT outline: ``[(1000, "part_id=…"), (1000, "nest_tag=…"), …]``.
+
+    >>> xdata_strings("P-0001", "G01-001", "panel", "T001")[:2]
+    [(1000, 'part_id=P-0001'), (1000, 'nest_tag=G01-001')]
+    """
+    values = (part_id, nest_tag, kind, type_id)
+    return [(1000, f"{k}={v}") for k, v in zip(XDATA_KEYS, values)]
+
+
+# -- identifiers -----------------------------------------------------------------------------------------
+
+def digits(count: int, minimum: int = 2) -> int:
+    """Width of zero-padded numbers ``0 … count − 1`` (at least ``minimum``)."""
+    return max(minimum, len(str(max(count - 1, 0))))
+
+
+def panel_id_grid(i: int, j: int, wi: int, wj: int) -> str:
+    """``P-U07-V12``: the panel of face ``f[i, j]`` of a regular patch."""
+    return f"P-U{i:0{wi}d}-V{j:0{wj}d}"
+
+
+def panel_id(face: int, width: int) -> str:
+    """``P-0042``: the panel of face 42 of a general quad mesh."""
+    return f"P-{face:0{width}d}"
+
+
+def beam_id_grid(family: int, index: int, width: int) -> str:
+    """``B-U03`` (row polyline 3, plane ``U_3``) or ``B-W07`` (column 7)."""
+    return f"B-{'UW'[family]}{index:0{width}d}"
+
+
+def beam_id(polyline: int, width: int) -> str:
+    """``B-R0012``: polyline 12 of a general mesh."""
+    return f"B-R{polyline:0{width}d}"
+
+
+def piece_id(beam: str, piece: int, width: int) -> str:
+    """``B-U03-S02``: piece 2 of a long beam, or segment 2 of a segmented joint."""
+    return f"{beam}-S{piece:0{width}d}"
+
+
+def node_id(vertex: int) -> str:
+    """``N0042``: the node at OBJ vertex 42."""
+    return f"N{vertex:04d}"
+
+
+def nest_tag(prefix: str, sheet: int, part: int, sheet_width: int, part_width: int) -> str:
+    """``G03-017``: 1-based ``sheet`` 3, 1-based ``part`` 17 on it, with the glass or plate prefix."""
+    return f"{prefix}{sheet:0{sheet_width}d}-{part:0{part_width}d}"
+
+
+# -- file names ------------------------------------------------------------------------------------------
+
+GLASS_SHEET_DIR, GLASS_SHEET_PREFIX = "glass", "glass"
+PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
+TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
+
+
+def sheet_file(prefix: str, sheet: int, sheets: int) -> str:
+    """``glass_03.dxf``: the file of 1-based ``sheet`` out of ``sheets``."""
+    return f"{prefix}_{sheet:0{max(2, len(str(sheets)))}d}.dxf"
+
+
+def type_file(type_id: str, prefix: str = TYPE_PREFIX) -> str:
+    """``type_T017.dxf``: the flat DXF of a panel type."""
+    return f"{prefix}_{type_id}.dxf"

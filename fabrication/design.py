@@ -1,0 +1,205 @@
+"""The design file (TOML): what to build and how to fabricate it.
+
+Sections (every key is documented in the README, ``ppfab methods`` lists the
+construction parameters)::
+
+    [design]            name, description
+    [geometry]          method | mesh, scale, translate, rotate_z_deg, flip_orientation, planar_families
+    [geometry.params]   the parameters of the chosen construction
+    [optimize]          optional: optimise a mesh input for the P/PP property first
+    [support]           how the node axes / support planes are found
+    [beams]             beam plates and joints
+    [panels]            glass panels
+    [nesting]           stock sheets for the glass
+    [beam_nesting]      stock sheets for the beam plates
+    [output]            which optional files to write
+
+Every problem is a :class:`~ppfab.errors.DesignError` naming the key path,
+printed as one line and exit code 2 by the command line.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable
+
+from ppfab.errors import DesignError
+from ppfab.geometry import GeometrySpec
+from ppfab.schema import param, parse_params, suggest
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ppfab.optimize.params import OptimizeParams
+    from ppfab.support.params import SupportParams
+
+    from .beams.params import BeamParams
+    from .nesting import NestingParams
+    from .panels import PanelParams
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+DEFAULT_DESIGN = Path(__file__).resolve().parent / "data" / "default.toml"
+"""The bundled default example (a PP gridshell roof), built by ``ppfab build`` without a design file."""
+
+
+@dataclass(frozen=True)
+class DesignInfo:
+    name: str = param("untitled", doc="name shown in the report and manifest")
+    description: str = param("", doc="free text")
+
+
+@dataclass(frozen=True)
+class OutputSection:
+    panels_step: bool = param(True, doc="also write panels.step (glass as thin solids, for clash checks)")
+    report: bool = param(True, doc="write report.html")
+    per_type_dxf: bool = param(True, doc="write one flat DXF per panel type")
+
+
+def _section_types() -> dict[str, Callable[[], type]]:
+    """Section name → its parameter dataclass (imported lazily: fabrication is heavy)."""
+    def beams():
+        from fabrication.beams.params import BeamParams
+        return BeamParams
+
+    def panels():
+        from fabrication.panels import PanelParams
+        return PanelParams
+
+    def nesting():
+        from fabrication.nesting import NestingParams
+        return NestingParams
+
+    def optimize():
+        from ppfab.optimize.params import OptimizeParams
+        return OptimizeParams
+
+    def support():
+        from ppfab.support.params import SupportParams
+        return SupportParams
+
+    return {
+        "design": lambda: DesignInfo,
+        "geometry": lambda: GeometrySpec,
+        "optimize": optimize,
+        "support": support,
+        "beams": beams,
+        "panels": panels,
+        "nesting": nesting,
+        "beam_nesting": nesting,
+        "output": lambda: OutputSection,
+    }
+
+
+SECTION_DEFAULTS: dict[str, dict[str, Any]] = {
+    # plate stock for the beams differs from glass stock: 6 m x 2 m steel plate
+    "nesting": {"tag_prefix": "G"},
+    "beam_nesting": {"sheet": [6000.0, 2000.0], "time_budget": 5.0, "tag_prefix": "B"},
+}
+"""Defaults that differ between sections sharing one parameter record."""
+
+
+@dataclass(frozen=True)
+class Design:
+    """A parsed, validated design file."""
+
+    source: str
+    sha256: str
+    base_dir: Path
+    info: DesignInfo
+    geometry: GeometrySpec
+    sections: dict[str, Any] = field(default_factory=dict)
+    raw: dict = field(default_factory=dict)
+
+    def section(self, name: str) -> Any:
+        """The record of a section by name (defaults when absent); the typed properties below name each one."""
+        return self.sections[name]
+
+    @property
+    def optimize(self) -> "OptimizeParams | None":
+        """``[optimize]``, or ``None`` when the design file has no such section."""
+        return self.sections.get("optimize") if "optimize" in self.raw else None
+
+    @property
+    def support(self) -> "SupportParams":
+        return self.sections["support"]
+
+    @property
+    def beams(self) -> "BeamParams":
+        return self.sections["beams"]
+
+    @property
+    def panels(self) -> "PanelParams":
+        return self.sections["panels"]
+
+    @property
+    def nesting(self) -> "NestingParams":
+        """Glass stock sheets (``[nesting]``)."""
+        return self.sections["nesting"]
+
+    @property
+    def beam_nesting(self) -> "NestingParams":
+        """Plate stock for the beams (``[beam_nesting]``)."""
+        return self.sections["beam_nesting"]
+
+    @property
+    def output(self) -> OutputSection:
+        return self.sections["output"]
+
+    def mesh_path(self) -> Path | None:
+        """The mesh file of ``[geometry] mesh``, relative to the design file's folder."""
+        return self.geometry.mesh_path(self.base_dir)
+
+
+def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: Path | None = None,
+                 sections: tuple[str, ...] | None = None) -> Design:
+    """Validate a design document (already parsed TOML) into a :class:`Design`."""
+    types = _section_types()
+    for key, value in doc.items():
+        if key not in types:
+            raise DesignError(key, "unknown section" + suggest(key, list(types)) +
+                              f"; valid sections: {', '.join(types)}")
+        if not isinstance(value, dict):
+            raise DesignError(key, f"must be a table ([{key}]), got {type(value).__name__}")
+    if "geometry" not in doc:
+        raise DesignError("geometry", "missing required section [geometry] (with 'method' or 'mesh')")
+    wanted = sections or tuple(types)
+    records = {}
+    for name in wanted:
+        table = dict(doc.get(name, {}))
+        for key, value in SECTION_DEFAULTS.get(name, {}).items():
+            table.setdefault(key, value)
+        records[name] = parse_params(types[name](), table, name)
+    geometry: GeometrySpec = records["geometry"]
+    if geometry.method is not None:
+        from ppfab.constructions import get_construction
+
+        c = get_construction(geometry.method)
+        parse_params(c.params, geometry.params, "geometry.params")   # validate early
+    elif geometry.params:
+        raise DesignError("geometry.params", "only a construction ('method') takes parameters")
+    return Design(source=source, sha256=sha256, base_dir=base_dir or Path.cwd(),
+                  info=records["design"], geometry=geometry, sections=records, raw=doc)
+
+
+def load_design(path: str | Path | None, sections: tuple[str, ...] | None = None) -> Design:
+    """Read and validate a design file; ``None`` loads the bundled default example."""
+    p = DEFAULT_DESIGN if path is None else Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise DesignError("", f"{p}: cannot read design file ({exc.strerror or exc})") from None
+    try:
+        doc = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise DesignError("", f"{p}: design file is not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("", f"{p}: malformed TOML: {exc}") from None
+    try:
+        return parse_design(doc, str(p), hashlib.sha256(data).hexdigest(), p.resolve().parent, sections)
+    except DesignError as exc:
+        raise DesignError(exc.key, f"{str(exc)[len(exc.key) + 2:] if exc.key else str(exc)} (in {p})") from None

@@ -1,0 +1,72 @@
+"""The output writers: one module per output format, registered in a table.
+
+A writer is a function ``write(build, out, files) -> str`` that writes its files into the (temporary) output
+folder ``out`` and records each under a key of ``files`` (the manifest's ``files`` table, in writing
+order); it returns a short note for the progress display.  Modules of this package register theirs with
+:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF 30, tables 50, report 80, manifest 90) and an
+``enabled(design)`` predicate for optional files; :func:`write_all` runs them in order.  Adding an output
+format is one new module.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import Design
+    from ..build.progress import Progress
+    from ..build.records import Build
+
+Files = dict[str, "str | list[str]"]
+"""The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""
+
+
+@dataclass(frozen=True)
+class Writer:
+    """One entry of :data:`WRITERS`."""
+
+    name: str
+    order: int
+    write: Callable[["Build", Path, Files], str]
+    enabled: Callable[["Design"], bool]
+
+
+WRITERS: dict[str, Writer] = {}
+
+
+def writer(name: str, order: int, enabled: Callable[["Design"], bool] | None = None) -> Callable:
+    """Decorator registering ``write(build, out, files) -> note`` as the writer ``name``."""
+    def register(fn: Callable[["Build", Path, Files], str]) -> Callable[["Build", Path, Files], str]:
+        if name in WRITERS:
+            raise RuntimeError(f"writer {name!r} registered twice")
+        WRITERS[name] = Writer(name, order, fn, enabled or (lambda design: True))
+        return fn
+    return register
+
+
+def load_writers() -> list[Writer]:
+    """Import every writer module of this package (once); the writers in their order."""
+    for info in pkgutil.iter_modules(__path__):
+        if not info.name.startswith("_"):
+            importlib.import_module(f"{__name__}.{info.name}")
+    return sorted(WRITERS.values(), key=lambda w: (w.order, w.name))
+
+
+def write_all(build: "Build", out: Path, progress: "Progress") -> Files:
+    """Run every enabled writer in order into ``out``; returns the ``files`` table."""
+    files: Files = {}
+    for w in load_writers():
+        if not w.enabled(build.design):
+            continue
+        progress.start(w.name)
+        try:
+            note = w.write(build, out, files)
+        except BaseException:
+            progress.fail()
+            raise
+        progress.done(note)
+    return files

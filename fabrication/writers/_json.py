@@ -1,0 +1,26 @@
+"""JSON text as every writer writes it: indented, keys in insertion order, numpy values as plain numbers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def json_text(obj: Any) -> str:
+    """``obj`` as indented JSON with a final newline (arrays become lists, paths strings)."""
+    return json.dumps(obj, indent=2, sort_keys=False, default=_plain) + "\n"
+
+
+def _plain(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")

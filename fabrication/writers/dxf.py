@@ -1,0 +1,318 @@
+"""DXF cutting files (ezdxf): one flat file per stock sheet, one per part or part type, and a reader.
+
+Layout of a cutting sheet (DESIGN.md, output contract): R2010, ``$INSUNITS`` = 4 (mm),
+origin at the sheet's lower-left corner; layers
+
+* ``SHEET`` — the stock outline, ``TRIM`` — the usable area after edge trim,
+* ``CUT`` — one closed ``LWPOLYLINE`` per part in sheet coordinates, carrying XDATA under
+  the application id ``PPFAB``: ``part_id=…``, ``nest_tag=…``, ``kind=…``, ``type_id=…``,
+* ``LABEL`` — part id and nest tag as TEXT (never machined),
+* ``MARK`` — marking lines (reference corner of a panel, node axes of a beam).
+
+No blocks, no splines: flat geometry a CAM program reads as it is.  Files are byte-for-byte
+reproducible: handles are assigned in a fixed order and ezdxf's time stamps and GUIDs are
+fixed (``ezdxf.options.write_fixed_meta_data_for_testing`` while a file is built and saved).
+:func:`read_sheet_dxf` re-reads a file with ``ezdxf.readfile``, audits it and extracts the
+parts by their XDATA; the tests and ``ppfab verify`` use it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ppfab.errors import VerificationError
+
+from . import Files, writer
+
+from ..contract import (DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, LAYERS,
+                        PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, sheet_file,
+                        type_file, xdata_strings)
+from ..flatpart import FlatPart, Placement, place_points
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..build.records import Build
+
+
+
+@contextlib.contextmanager
+def _fixed_metadata():
+    import ezdxf
+
+    old = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        yield
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = old
+
+
+def _new_doc():
+    import ezdxf
+
+    doc = ezdxf.new(DXF_VERSION, setup=False)
+    doc.units = DXF_INSUNITS_MM                 # millimetres
+    doc.header["$INSUNITS"] = DXF_INSUNITS_MM
+    doc.header["$MEASUREMENT"] = 1              # metric
+    for name, colour in LAYERS.items():
+        doc.layers.add(name, color=colour)
+    doc.appids.add(XDATA_APPID)
+    return doc
+
+
+def _label_point(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """A point well inside a polygon and the distance to its boundary (pole of inaccessibility)."""
+    from shapely.geometry import Polygon
+    from shapely.ops import polylabel
+
+    poly = Polygon(points)
+    size = float(np.sqrt(max(poly.area, 1e-9)))
+    pt = polylabel(poly, tolerance=max(size * 0.01, 0.1))
+    return np.array([pt.x, pt.y]), float(poly.exterior.distance(pt))
+
+
+class CuttingSheet:
+    """Builder of one flat DXF: ``add_part`` for each placed part, then ``write(path)``.
+
+    Parameters
+    ----------
+    sheet_size : (length, width) of the stock sheet, mm; ``None`` for a part file (no SHEET/TRIM)
+    usable : (x0, y0, x1, y1) usable area after trim (layer TRIM), mm
+    title : text written on LABEL below the sheet (sheet number, material)
+    """
+
+    def __init__(self, sheet_size: tuple[float, float] | None = None,
+                 usable: tuple[float, float, float, float] | None = None, title: str = ""):
+        self._ctx = _fixed_metadata()
+        self._ctx.__enter__()
+        try:
+            self.doc = _new_doc()
+        finally:
+            self._ctx.__exit__(None, None, None)
+        self.msp = self.doc.modelspace()
+        if sheet_size is not None:
+            w, h = float(sheet_size[0]), float(sheet_size[1])
+            self.msp.add_lwpolyline([(0, 0), (w, 0), (w, h), (0, h)], close=True, dxfattribs={"layer": "SHEET"})
+        if usable is not None:
+            x0, y0, x1, y1 = (float(v) for v in usable)
+            self.msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
+                                    dxfattribs={"layer": "TRIM"})
+        if title:
+            self.msp.add_text(title, height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+
+    def add_part(self, part: FlatPart, placement: Placement | None = None) -> None:
+        """The part's outline on CUT (with XDATA), its label on LABEL, its marks on MARK.
+
+        With ``placement`` everything is mapped to sheet coordinates; without, the part is
+        drawn in its own flat frame.
+        """
+        def to_sheet(pts: np.ndarray) -> np.ndarray:
+            p = np.asarray(pts, dtype=float)
+            return place_points(p, placement) if placement is not None else p
+
+        outline = to_sheet(part.outline)
+        if placement is not None and placement.mirrored:
+            outline = outline[::-1]                 # keep the outline counter-clockwise
+        cut = self.msp.add_lwpolyline([tuple(map(float, p)) for p in outline], close=True,
+                                      dxfattribs={"layer": "CUT"})
+        tag = placement.nest_tag if placement is not None else ""
+        cut.set_xdata(XDATA_APPID, xdata_strings(part.part_id, tag, part.kind, part.type_id))
+        centre, room = _label_point(outline)
+        height = float(np.clip(0.25 * room, 2.0, 60.0))
+        rot = float(placement.rotation_deg) if placement is not None else 0.0
+        from ezdxf.enums import TextEntityAlignment
+
+        label = self.msp.add_text(part.label or part.part_id, height=height,
+                                  dxfattribs={"layer": "LABEL", "rotation": rot})
+        label.set_placement(tuple(map(float, centre)), align=TextEntityAlignment.MIDDLE_CENTER)
+        if tag:
+            off = np.array([-np.sin(np.radians(rot)), np.cos(np.radians(rot))]) * (-1.4 * height)
+            sub = self.msp.add_text(tag, height=0.6 * height, dxfattribs={"layer": "LABEL", "rotation": rot})
+            sub.set_placement(tuple(map(float, centre + off)), align=TextEntityAlignment.MIDDLE_CENTER)
+        for mark in part.marks:
+            pts = to_sheet(mark)
+            if len(pts) >= 2:
+                self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
+                                        dxfattribs={"layer": "MARK"})
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Save (deterministic bytes)."""
+        path = Path(path)
+        # ezdxf adds a CLASS per entity type in use in set order (varies with the hash seed): add them
+        # now and sort them, so the CLASSES section is the same in every process
+        classes = self.doc.classes
+        classes.add_required_classes(self.doc.dxfversion)
+        ordered = sorted(classes.classes.items())
+        classes.classes.clear()
+        classes.classes.update(ordered)
+        with _fixed_metadata():
+            self.doc.saveas(path)
+        return path
+
+
+def write_sheet_dxfs(parts: list[FlatPart], nesting, folder: str | os.PathLike, prefix: str = "sheet",
+                     title: str = "") -> list[Path]:
+    """One DXF per sheet of ``nesting`` (``{prefix}_01.dxf`` …) in ``folder``; returns the paths in sheet order."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    by_id = {p.part_id: p for p in parts}
+    out = []
+    for k, group in enumerate(nesting.by_sheet()):
+        head = f"{title} sheet {k + 1}/{nesting.sheets}".strip()
+        builder = CuttingSheet(nesting.sheet_size, nesting.usable, head)
+        for pl in group:
+            builder.add_part(by_id[pl.part_id], pl)
+        out.append(builder.write(folder / sheet_file(prefix, k + 1, nesting.sheets)))
+    return out
+
+
+def write_part_dxf(part: FlatPart, path: str | os.PathLike, title: str = "") -> Path:
+    """One part flat in its own coordinates (for processors whose optimiser re-nests)."""
+    builder = CuttingSheet(None, None, title)
+    builder.add_part(part, None)
+    return builder.write(path)
+
+
+# -- reading back ----------------------------------------------------------------------------------
+@dataclass
+class DXFPart:
+    """A part found on CUT: its XDATA fields and its outline ``(k, 2)``."""
+
+    part_id: str
+    nest_tag: str
+    points: np.ndarray
+    closed: bool
+    xdata: dict
+
+
+@dataclass
+class DXFContent:
+    """What :func:`read_sheet_dxf` found in a file."""
+
+    path: Path
+    dxfversion: str
+    insunits: int
+    layers: list[str]
+    parts: list[DXFPart]
+    sheet_outline: np.ndarray | None
+    trim_outline: np.ndarray | None
+    labels: list[str]
+    marks: int
+    audit_errors: list[str] = field(default_factory=list)
+    other_entities: list[str] = field(default_factory=list)
+
+
+def _xdata(entity) -> dict:
+    out = {}
+    if entity.has_xdata(XDATA_APPID):
+        for code, value in entity.get_xdata(XDATA_APPID):
+            if code == 1000 and "=" in str(value):
+                k, v = str(value).split("=", 1)
+                out[k] = v
+    return out
+
+
+def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
+    """Re-read a DXF with ``ezdxf.readfile``, audit it and extract parts, outlines, labels and marks."""
+    import ezdxf
+
+    path = Path(path)
+    doc = ezdxf.readfile(path)
+    auditor = doc.audit()
+    errors = [f"{e.code}: {e.message}" for e in auditor.errors]
+    parts, labels, marks, other = [], [], 0, []
+    sheet = trim = None
+    for e in doc.modelspace():
+        layer = e.dxf.layer
+        kind = e.dxftype()
+        if kind == "LWPOLYLINE":
+            pts = np.array([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
+            if layer == "CUT":
+                x = _xdata(e)
+                parts.append(DXFPart(x.get("part_id", ""), x.get("nest_tag", ""), pts, bool(e.closed), x))
+            elif layer == "SHEET":
+                sheet = pts
+            elif layer == "TRIM":
+                trim = pts
+            elif layer == "MARK":
+                marks += 1
+            else:
+                other.append(f"LWPOLYLINE on {layer}")
+        elif kind == "TEXT" and layer == "LABEL":
+            labels.append(e.dxf.text)
+        else:
+            other.append(f"{kind} on {layer}")
+    return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
+                      parts, sheet, trim, labels, marks, errors, other)
+
+
+def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True) -> DXFContent:
+    """:func:`read_sheet_dxf` plus the contract: raises :class:`VerificationError` naming the first problem.
+
+    Audit without errors; R2000 or newer; ``$INSUNITS`` = 4; the five layers exist; every CUT
+    entity a closed LWPOLYLINE with ``part_id`` and (on a sheet) ``nest_tag`` XDATA; part ids
+    unique; nothing but LWPOLYLINE and TEXT; on a sheet, the SHEET and TRIM outlines present.
+    """
+    c = read_sheet_dxf(path)
+    name = Path(path).name
+    if c.audit_errors:
+        raise VerificationError(f"{name}: ezdxf audit found {len(c.audit_errors)} error(s): {c.audit_errors[0]}")
+    if c.dxfversion < DXF_OLDEST:
+        raise VerificationError(f"{name}: DXF version {c.dxfversion} is older than R2000 (AC1015)")
+    if c.insunits != DXF_INSUNITS_MM:
+        raise VerificationError(f"{name}: $INSUNITS is {c.insunits}, expected 4 (mm)")
+    missing = [la for la in LAYERS if la not in c.layers]
+    if missing:
+        raise VerificationError(f"{name}: layers {missing} are missing")
+    if c.other_entities:
+        raise VerificationError(f"{name}: unexpected entity {c.other_entities[0]}")
+    seen = set()
+    for p in c.parts:
+        if not p.closed:
+            raise VerificationError(f"{name}: CUT outline of {p.part_id or '?'} is not closed")
+        if not p.part_id or (require_sheet and not p.nest_tag):
+            raise VerificationError(f"{name}: a CUT outline has no PPFAB part_id/nest_tag XDATA")
+        if p.part_id in seen:
+            raise VerificationError(f"{name}: part {p.part_id} is cut twice")
+        seen.add(p.part_id)
+    if require_sheet and (c.sheet_outline is None or c.trim_outline is None):
+        raise VerificationError(f"{name}: SHEET or TRIM outline missing")
+    return c
+
+
+def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: str = TYPE_PREFIX) -> dict[str, str]:
+    """One flat DXF per type (its first part, in its own coordinates); returns ``type_id → file name``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out: dict[str, str] = {}
+    for p in parts:
+        tid = p.type_id or p.part_id
+        if tid in out:
+            continue
+        name = type_file(tid, prefix)
+        material = p.meta.get("material", "")
+        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id}) {material}".strip())
+        out[tid] = name
+    return out
+
+
+@writer("dxf", order=30)
+def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
+    """Glass and beam-plate cutting sheets and, with ``[output] per_type_dxf``, one flat DXF per panel type."""
+    name = build.design.info.name
+    nest = build.nesting
+    glass = write_sheet_dxfs(list(nest.glass_parts), nest.glass, out / GLASS_SHEET_DIR, GLASS_SHEET_PREFIX,
+                             f"{name} glass")
+    plates = write_sheet_dxfs(list(nest.beam_parts), nest.plates, out / PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
+                              f"{name} beam plates")
+    files["glass_sheets"] = [str(p.relative_to(out)) for p in glass]
+    files["beam_sheets"] = [str(p.relative_to(out)) for p in plates]
+    if build.design.output.per_type_dxf:
+        types = write_type_dxfs(list(nest.glass_parts), out / TYPE_DIR)
+        files["panel_type_dxfs"] = [f"{TYPE_DIR}/{v}" for v in types.values()]
+    return f"{len(glass)} glass + {len(plates)} plate sheets"

@@ -1,0 +1,90 @@
+"""``manifest.json``: generator, units, design, mesh, fabrication parameters, files, quality, summary and the
+sha256 of every file listed — written last."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ppfab import __version__
+from ppfab.mesh import QuadGrid
+from ppfab.schema import as_plain
+
+from . import Files, writer
+from ._json import json_text
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import Design
+    from ..build.records import Build
+
+
+def sha256_of(path: Path) -> str:
+    """Hex sha256 of a file, read in 1 MiB chunks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def listed_files(files: Files) -> list[str]:
+    """Every path in the ``files`` table, sorted, each once."""
+    out: list[str] = []
+    for value in files.values():
+        if isinstance(value, str):
+            out.append(value)
+        else:
+            out.extend(v for v in value if isinstance(v, str))
+    return sorted(set(out))
+
+
+def fabrication_params(design: "Design") -> dict[str, Any]:
+    """Every fabrication parameter used, for ``manifest.json['fabrication']``."""
+    out: dict[str, Any] = {}
+    out.update(design.beams.manifest())
+    panels = design.panels
+    nesting = design.nesting
+    out.update({"panel_gap": panels.gap, "planarity_tolerance": panels.planarity_tolerance,
+                "glass_thickness": panels.thickness, "glass_makeup": panels.makeup,
+                "sheet": list(nesting.sheet), "sheet_margin": nesting.margin, "part_spacing": nesting.spacing})
+    for name in ("support", "beams", "panels", "nesting", "beam_nesting", "output"):
+        out[name] = as_plain(design.section(name))
+    return out
+
+
+def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
+    """The manifest document for a build written into ``out`` with the ``files`` table."""
+    from ..design import DEFAULT_DESIGN
+
+    mesh = build.mesh
+    grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
+    mesh_entry: dict[str, Any] = {"path": files.get("mesh_obj", "mesh.obj"),
+                                  "planar_families": list(build.geometry.planar_families)}
+    if grid is not None:
+        mesh_entry.update(rows=int(grid.shape[0]), cols=int(grid.shape[1]), closed=bool(grid.closed))
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    mesh_entry.update(vertices=int(len(qm.vertices)), faces=int(len(qm.faces)))
+    design = build.design
+    doc: dict[str, Any] = {
+        "generator": f"ppfab {__version__}",
+        "units": "mm",
+        "design": {"name": design.info.name, "method": design.geometry.method or "mesh",
+                   "source": design.source if design.source != str(DEFAULT_DESIGN) else "bundled default",
+                   "sha256": design.sha256,
+                   "geometry": as_plain(design.geometry)},
+        "mesh": mesh_entry,
+        "fabrication": fabrication_params(design),
+        "files": files,
+        "quality": dict(build.quality.as_dict().items()),
+        "summary": build.summary.as_dict(),
+    }
+    doc["sha256"] = {name: sha256_of(out / name) for name in listed_files(files)}
+    return doc
+
+
+@writer("manifest", order=90)
+def write_manifest(build: "Build", out: Path, files: Files) -> str:
+    doc = manifest(build, out, files)
+    (out / "manifest.json").write_text(json_text(doc), encoding="utf-8")
+    return f"{len(doc['sha256'])} files"

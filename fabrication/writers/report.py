@@ -1,0 +1,22 @@
+"""``report.html``: one self-contained page (inline CSS, figures as data URIs, sheets as inline SVG)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from . import Files, writer
+from .tables import parts_table
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..build.records import Build
+
+
+@writer("report", order=80, enabled=lambda design: design.output.report)
+def write_report(build: "Build", out: Path, files: Files) -> str:
+    from ..report import build_report
+
+    html = build_report(build, files, parts_table(build, files))
+    (out / "report.html").write_text(html, encoding="utf-8")
+    files["report_html"] = "report.html"
+    return f"{len(html) / 1e6:.1f} MB"

@@ -1,0 +1,47 @@
+"""The tables: ``glass_order.csv`` (per panel type), ``parts.csv``/``parts.json`` (per part) and
+``nodes.csv``/``nodes.json`` (per vertex); their columns are in :mod:`fabrication.contract`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..contract import TYPE_DIR, type_file
+from ..nodes import write_nodes_csv, write_nodes_json
+from ..parts import order_rows, part_rows, write_order_list, write_parts_csv, write_parts_json
+from . import Files, writer
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..build.records import Build
+
+
+def parts_table(build: "Build", files: Files) -> list[dict]:
+    """The rows of ``parts.csv``: glass panels, then beam plates, with their sheet files from ``files``."""
+    nest = build.nesting
+    glass_sheets = files.get("glass_sheets", [])
+    beam_sheets = files.get("beam_sheets", [])
+    assert isinstance(glass_sheets, list) and isinstance(beam_sheets, list)
+    return part_rows(list(nest.glass_parts), nest.glass.placements, glass_sheets) + \
+        part_rows(list(nest.beam_parts), nest.plates.placements, beam_sheets)
+
+
+@writer("tables", order=50)
+def write_tables(build: "Build", out: Path, files: Files) -> str:
+    design = build.design
+    parts = list(build.nesting.glass_parts)
+    if design.output.per_type_dxf:
+        type_files = {p.type_id or p.part_id: f"{TYPE_DIR}/{type_file(p.type_id or p.part_id)}" for p in parts}
+        write_order_list(order_rows(parts, list(design.nesting.rotations), type_files), out / "glass_order.csv")
+        files["glass_order_csv"] = "glass_order.csv"
+    rows = parts_table(build, files)
+    write_parts_csv(rows, out / "parts.csv")
+    write_parts_json(rows, out / "parts.json", extra={"units": "mm"})
+    files["parts_csv"], files["parts_json"] = "parts.csv", "parts.json"
+    beams = build.beams
+    records = list(build.nodes.records)
+    meta = {"support": build.support.summary(), "beam_depth_mm": beams.params.depth,
+            "beam_thickness_mm": beams.params.thickness, "joint": beams.params.joint}
+    write_nodes_csv(out / "nodes.csv", records)
+    write_nodes_json(out / "nodes.json", records, meta)
+    files["nodes_csv"], files["nodes_json"] = "nodes.csv", "nodes.json"
+    return f"{len(rows)} parts, {len(records)} nodes"
