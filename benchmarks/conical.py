@@ -22,7 +22,7 @@ from ppfab.constructions.conical_sections import sections_grid
 from ppfab.constructions.conical_spheres import channel_mesh
 from ppfab.faceimage import pp_from_face_image
 from ppfab.transforms.laguerre import LaguerreMap, boost
-from ppfab.sections import PlanarCurve
+from ppfab.curves import PlanarCurve
 
 
 def timed(fn, repeat: int = 3):

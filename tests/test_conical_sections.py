@@ -14,7 +14,7 @@ from ppfab.constructions.conical_pp import FRAMES, Series, appendix_surface, nor
 from ppfab.constructions.conical_sections import polar_radius, sections_grid
 from ppfab.errors import DesignError
 from ppfab.metrics import quality
-from ppfab.sections import ConvexSection, PlanarCurve, support_values
+from ppfab.curves import ConvexSection, PlanarCurve, support_values
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "conical_sections.toml"
 TOL = 1e-9

@@ -14,7 +14,7 @@ from ppfab.constructions import build_construction
 from ppfab.constructions.conical_spheres import channel_mesh, pp_column_planes, touching_radii
 from ppfab.errors import DesignError, FoldError, GeometryError
 from ppfab.metrics import quality
-from ppfab.sections import PlanarCurve
+from ppfab.curves import PlanarCurve
 from ppfab.conical.spheres import SphereSpline, bisector_normals, tangential_distances, w_planes
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -109,7 +109,7 @@ def test_profile_change_keeps_the_mesh_parallel_conical_and_p(plane):
     assert np.allclose(pl.normalize(grid.support_u), pl.normalize(base.support_u))   # same planes W_i
     # the new profile polygon in W_plane circumscribes the ellipse: every edge line touches it
     frame = grid.meta["profile_frame"]
-    poly = frame.to_2d(grid.vertices[plane])
+    poly = frame.to2d(grid.vertices[plane])
     dense = prof(np.linspace(prof.t0, prof.t1, 20001))
     for a, b in zip(poly[:-1], poly[1:]):
         n = np.array([b[1] - a[1], a[0] - b[0]]) / np.linalg.norm(b - a)

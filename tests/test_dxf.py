@@ -92,7 +92,7 @@ def test_inset_is_half_the_gap_from_the_mesh_edges(build):
         c = p.corners_3d[p.corner_index]
         n = p.frame.normal
         proj = c - np.outer((c - p.frame.origin) @ n, n)
-        flat = p.frame.to_2d(proj)
+        flat = p.frame.to2d(proj)
         for k in range(4):
             a, b = flat[k], flat[(k + 1) % 4]
             d = (b - a) / np.linalg.norm(b - a)

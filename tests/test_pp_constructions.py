@@ -239,8 +239,8 @@ def test_profile_formula_interpolates_both_curves(frames):
     surface x = f ∩ f_u ∩ f_v (eq. 9) passes through both curves."""
     c_pts, d_pts = arches()
     S = profile_surface(c_pts, d_pts, **frames)
-    u = np.linspace(*S.c_curve.domain, 41)
-    v = np.linspace(*S.d_curve.domain, 37)
+    u = np.linspace(S.c_curve.t0, S.c_curve.t1, 41)
+    v = np.linspace(S.d_curve.t0, S.d_curve.t1, 37)
     c = S.c_curve.point(u)
     d = S.d_curve.point(v)
     f_c = S.f(u, np.full_like(u, S.v0))
@@ -306,8 +306,8 @@ def test_profile_mesh_converges_to_both_curves(fit):
         assert 0.005 < abs(lift) < 0.02
         S = profile_surface(c_pts, [[y, z + lift] for y, z in d_pts], fit=fit)
     assert S.gap <= 1e-9
-    lo_u, hi_u = S.c_curve.domain
-    lo_v, hi_v = S.d_curve.domain
+    lo_u, hi_u = S.c_curve.t0, S.c_curve.t1
+    lo_v, hi_v = S.d_curve.t0, S.d_curve.t1
     c = S.c_curve.point(np.linspace(lo_u + 0.1 * (hi_u - lo_u), hi_u - 0.1 * (hi_u - lo_u), 60))
     d = S.d_curve.point(np.linspace(lo_v + 0.1 * (hi_v - lo_v), hi_v - 0.1 * (hi_v - lo_v), 60))
     errs = []

@@ -34,7 +34,7 @@ def test_flattening_a_planar_quad_is_an_isometry(seed, size, gap):
     mesh = QuadMesh(corners, np.array([[0, 1, 2, 3]]))
     panel = make_panels(mesh, PanelParams(gap=0.0, planarity_tolerance=1e-3))[0]
     # the flat outline maps back onto the 3D corners, and edge lengths / angles are kept
-    back = panel.frame.to_3d(panel.outline)
+    back = panel.frame.to3d(panel.outline)
     d = np.linalg.norm(back[:, None] - corners[None], axis=-1).min(axis=1)
     assert d.max() < 1e-6
     e2 = np.linalg.norm(np.roll(panel.outline, -1, 0) - panel.outline, axis=1)
@@ -43,7 +43,7 @@ def test_flattening_a_planar_quad_is_an_isometry(seed, size, gap):
     if gap > 0:
         inset = make_panels(mesh, PanelParams(gap=gap, planarity_tolerance=1e-3))[0]
         # every inset corner lies gap/2 from both face edges meeting at its corner (in the face plane)
-        o3 = inset.frame.to_3d(inset.outline)
+        o3 = inset.frame.to3d(inset.outline)
         for k, c in enumerate(inset.corner_index):
             for a_, b_ in ((corners[c - 1], corners[c]), (corners[c], corners[(c + 1) % 4])):
                 t = (b_ - a_) / np.linalg.norm(b_ - a_)

@@ -14,8 +14,8 @@ from __future__ import annotations
 from .build import BeamSet, build_beams
 from .joints import NodeJoint, end_setback, slot_width
 from .params import BeamParams
-from .plates import BeamPlate, PlaneFrame, Slot
+from .plates import BeamPlate, Slot
 from .report import BeamRecord, BeamReport, Defect
 
-__all__ = ["BeamSet", "build_beams", "BeamParams", "BeamPlate", "PlaneFrame", "Slot", "NodeJoint",
+__all__ = ["BeamSet", "build_beams", "BeamParams", "BeamPlate", "Slot", "NodeJoint",
            "BeamRecord", "BeamReport", "Defect", "slot_width", "end_setback"]

@@ -27,53 +27,13 @@ import numpy as np
 
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
+from ppfab.frame import Frame
 from ppfab.support.structure import SupportStructure
 
 from .. import contract
 
 from .params import BeamParams
 from .report import Defect
-
-
-@dataclass(frozen=True, eq=False)
-class PlaneFrame:
-    """An orthonormal frame of a plate's plane: ``X = origin + x·ex + y·ey``, normal ``ex × ey``."""
-
-    origin: np.ndarray
-    ex: np.ndarray
-    ey: np.ndarray
-
-    @property
-    def normal(self) -> np.ndarray:
-        return np.cross(self.ex, self.ey)
-
-    @property
-    def plane(self) -> np.ndarray:
-        """The frame's plane ``(n, d)``, ``n·x + d = 0``, unit normal."""
-        n = self.normal
-        return np.r_[n, -float(n @ self.origin)]
-
-    def to2d(self, points: np.ndarray) -> np.ndarray:
-        """``(..., 3)`` points → ``(..., 2)`` plate coordinates (the normal component is dropped)."""
-        d = np.asarray(points, dtype=float) - self.origin
-        return np.stack([d @ self.ex, d @ self.ey], axis=-1)
-
-    def to3d(self, points: np.ndarray) -> np.ndarray:
-        """``(..., 2)`` plate coordinates → ``(..., 3)`` points in the plane."""
-        q = np.asarray(points, dtype=float)
-        return self.origin + q[..., 0, None] * self.ex + q[..., 1, None] * self.ey
-
-    def vec2d(self, vectors: np.ndarray) -> np.ndarray:
-        v = np.asarray(vectors, dtype=float)
-        return np.stack([v @ self.ex, v @ self.ey], axis=-1)
-
-    def vec3d(self, vectors: np.ndarray) -> np.ndarray:
-        q = np.asarray(vectors, dtype=float)
-        return q[..., 0, None] * self.ex + q[..., 1, None] * self.ey
-
-    def as_dict(self) -> dict:
-        return {"origin": self.origin.tolist(), "x_dir": self.ex.tolist(), "y_dir": self.ey.tolist(),
-                "normal": self.normal.tolist()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,7 +99,7 @@ class BeamPlate:
     top: np.ndarray
     bottom: np.ndarray
     plane: np.ndarray
-    frame: PlaneFrame
+    frame: Frame
     depth: float
     thickness: float
     plane_deviation: float
@@ -297,7 +257,7 @@ def make_plate(part_id: str, beam_id: str, polyline: int, family: int, piece: in
     ey = np.cross(n, ex)
     if ahat.sum(axis=0) @ ey > 0:
         ey = -ey
-    frame = PlaneFrame(top3[0].copy(), ex, ey)
+    frame = Frame(top3[0].copy(), ex, ey)
     top = frame.to2d(top3)
     bottom = top + params.depth * frame.vec2d(ahat)
     raw = _ccw(np.concatenate([top, bottom[::-1]], axis=0))

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ppfab.errors import FabricationError, GeometryError, NonPlanarPanelError
+from ppfab.frame import Frame
 from ppfab.mesh import QuadGrid, QuadMesh
 
 from ..flatpart import FlatPart
@@ -30,29 +31,6 @@ from .. import contract
 from . import geometry as geo
 from .congruence import group_congruent
 from .params import PanelParams
-
-
-@dataclass(frozen=True, eq=False)
-class PanelFrame:
-    """Orthonormal frame of a panel: ``p3 = origin + x·x_axis + y·y_axis``; ``normal`` points outside."""
-
-    origin: np.ndarray
-    x_axis: np.ndarray
-    y_axis: np.ndarray
-    normal: np.ndarray
-
-    def to_3d(self, points: np.ndarray) -> np.ndarray:
-        """Flat points ``(k, 2)`` → 3D points ``(k, 3)`` on the panel plane (mm)."""
-        p = np.asarray(points, dtype=float)
-        return self.origin + p[..., :1] * self.x_axis + p[..., 1:2] * self.y_axis
-
-    def to_2d(self, points: np.ndarray) -> np.ndarray:
-        """3D points ``(k, 3)`` → flat coordinates ``(k, 2)`` (orthogonal projection onto the plane)."""
-        rel = np.asarray(points, dtype=float) - self.origin
-        return np.stack([rel @ self.x_axis, rel @ self.y_axis], axis=-1)
-
-    def as_dict(self) -> dict:
-        return {k: [float(x) for x in getattr(self, k)] for k in ("origin", "x_axis", "y_axis", "normal")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,7 +49,7 @@ class Panel:
         face's normal points inside)
     corner_index : (k,) face corner (0..3 in the face's corner order) of each outline vertex
     corners_3d : (k, 3) the mesh face's corners (mm), in face order
-    frame : :class:`PanelFrame` mapping the flat outline back to 3D
+    frame : :class:`Frame` mapping the flat outline back to 3D
     deviation_mm : largest distance of a face corner from the face's least-squares plane
     """
 
@@ -82,7 +60,7 @@ class Panel:
     outline: np.ndarray
     corner_index: np.ndarray
     corners_3d: np.ndarray
-    frame: PanelFrame
+    frame: Frame
     deviation_mm: float
     area_mm2: float
     perimeter_mm: float
@@ -100,7 +78,7 @@ class Panel:
 
     def outline_3d(self) -> np.ndarray:
         """The inset outline in 3D, ``(k, 3)`` mm, on the face's least-squares plane."""
-        return self.frame.to_3d(self.outline)
+        return self.frame.to3d(self.outline)
 
     def flat_part(self) -> FlatPart:
         """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF."""
@@ -271,7 +249,7 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
             outline=o,
             corner_index=corner_index[f],
             corners_3d=corners[f],
-            frame=PanelFrame(origin[f], X[f], Y[f], N[f]),
+            frame=Frame(origin[f], X[f], Y[f]),
             deviation_mm=float(deviation[f]),
             area_mm2=float(area[f]),
             perimeter_mm=float(perim[f]),

@@ -22,7 +22,9 @@ import numpy as np
 from ppfab import planes as pl
 from ppfab.errors import FabricationError, VerificationError
 
-from ..beams.plates import BeamPlate, PlaneFrame
+from ppfab.frame import Frame
+
+from ..beams.plates import BeamPlate
 
 from . import Files, writer
 
@@ -35,7 +37,7 @@ def _is_valid(shape) -> bool:
     return bool(v() if callable(v) else v)
 
 
-def _placed_prism(outline: np.ndarray, frame: PlaneFrame, z0: float, height: float, label: str):
+def _placed_prism(outline: np.ndarray, frame: Frame, z0: float, height: float, label: str):
     from build123d import Face, Location, Plane, Solid, Vector, Wire
 
     wire = Wire.make_polygon([Vector(float(x), float(y), z0) for x, y in outline], close=True)
@@ -230,7 +232,7 @@ def panel_solids(corners: np.ndarray, thickness: float, ids: Iterable[str]) -> l
         proj = c[k] - np.outer(c[k] @ nrm + planes[k, 3], nrm)
         ex = proj[1] - proj[0]
         ex /= np.linalg.norm(ex)
-        frame = PlaneFrame(proj.mean(axis=0), ex, np.cross(nrm, ex))
+        frame = Frame(proj.mean(axis=0), ex, np.cross(nrm, ex))
         q = frame.to2d(proj)
         x, y = q.T
         if 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) < 0:

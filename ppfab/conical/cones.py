@@ -34,7 +34,7 @@ import numpy as np
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
 from ppfab.folds import check_folds
-from ppfab.mesh import QuadGrid
+from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.transforms.laguerre import LaguerreMap
 from ppfab.metrics import face_planarity, grid_conical_residual, plane_residual, polyline_planarity
 
@@ -294,13 +294,16 @@ def vertex_planes(grid: QuadGrid, E: np.ndarray | None = None) -> np.ndarray:
 
 # -- cone axes -------------------------------------------------------------------------------
 
-def axis_of_normals(normals: np.ndarray, degenerate: float = 1e-12) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def axis_of_normals(normals: np.ndarray, degenerate: float = 1e-12,
+                    mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Axis of the circle through unit normals ``(..., k, 3)`` on ``S²``.
 
     The axis ``a`` is the normal of the least-squares plane ``a·n = c`` through
-    the ``k`` points.  When the points do not span a plane (two distinct normals,
+    the ``k`` points: ``(n_k − n̄)·a = 0``, the eigenvector of the smallest eigenvalue of
+    ``Σ (n_k − n̄)(n_k − n̄)ᵀ``.  When the points do not span a plane (two distinct normals,
     e.g. on a cylinder or at a boundary with repeated ghosts) the axis is the
     direction in the null space closest to the mean normal (the bisector).
+    ``mask (..., k)`` marks the normals present when the stacks are padded.
 
     Returns
     -------
@@ -309,14 +312,21 @@ def axis_of_normals(normals: np.ndarray, degenerate: float = 1e-12) -> tuple[np.
     residual : (...,) largest distance of a normal from the plane (0 when concyclic)
     """
     n = np.asarray(normals, dtype=float)
-    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
-    mean = n.mean(axis=-2)
-    y = n - mean[..., None, :]
+    if mask is None:
+        n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+        w = None
+        mean = n.mean(axis=-2)
+        y = n - mean[..., None, :]
+    else:
+        w = np.asarray(mask, dtype=float)
+        n = n / np.where(w[..., None] > 0, np.linalg.norm(n, axis=-1, keepdims=True), 1.0)
+        mean = np.einsum("...k,...ki->...i", w, n) / w.sum(axis=-1)[..., None]
+        y = (n - mean[..., None, :]) * w[..., None]
     cov = np.einsum("...ki,...kj->...ij", y, y)
-    w, vec = np.linalg.eigh(cov)
-    top = np.maximum(w[..., 2:3], 1e-300)
-    small = w <= w[..., :1] + degenerate * top                     # (..., 3) eigen-directions in the null space
-    small = small | (w[..., 2:3] <= 1e-28)                         # all normals equal: any axis, take the mean
+    ev, vec = np.linalg.eigh(cov)
+    top = np.maximum(ev[..., 2:3], 1e-300)
+    small = ev <= ev[..., :1] + degenerate * top                    # (..., 3) eigen-directions in the null space
+    small = small | (ev[..., 2:3] <= 1e-28)                         # all normals equal: any axis, take the mean
     coef = np.einsum("...ik,...i->...k", vec, mean) * small         # components of the mean in the null space
     a = np.einsum("...ik,...k->...i", vec, coef)
     length = np.linalg.norm(a, axis=-1, keepdims=True)
@@ -326,27 +336,59 @@ def axis_of_normals(normals: np.ndarray, degenerate: float = 1e-12) -> tuple[np.
                             f"(they are spread over a great circle)", element=f"vertex {idx}")
     a = a / length
     c = np.einsum("...ki,...i->...k", n, a)
-    residual = np.abs(c - c.mean(axis=-1, keepdims=True)).max(axis=-1)
-    return a, c.mean(axis=-1), residual
+    if w is None:
+        return a, c.mean(axis=-1), np.abs(c - c.mean(axis=-1, keepdims=True)).max(axis=-1)
+    cm = (c * w).sum(axis=-1) / w.sum(axis=-1)
+    residual = np.where(w > 0, np.abs(c - cm[..., None]), 0.0).max(axis=-1)
+    return a, cm, residual
 
 
-def cone_axes(grid: QuadGrid, inward: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Node axes of a conical mesh: the axes of the vertex cones (§2.3.3).
+def vertex_face_normals(mesh: QuadMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Padded unit normals of the faces at each vertex of a quad mesh, ``(N, k, 3)``, and a mask ``(N, k)``."""
+    f = mesh.faces.ravel()
+    fid = np.repeat(np.arange(len(mesh.faces)), 4)
+    order = np.argsort(f, kind="stable")
+    f, fid = f[order], fid[order]
+    counts = np.bincount(f, minlength=len(mesh.vertices))
+    start = np.r_[0, np.cumsum(counts)[:-1]]
+    slot = np.arange(len(f)) - start[f]
+    k = int(counts.max())
+    normals = np.zeros((len(mesh.vertices), k, 3))
+    mask = np.zeros((len(mesh.vertices), k), dtype=bool)
+    normals[f, slot] = pl.normalize(mesh.face_planes)[fid, :3]
+    mask[f, slot] = True
+    return normals, mask
+
+
+def cone_axes(mesh: QuadGrid | QuadMesh, inward: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Node axes of a conical mesh: the axes of the vertex cones (§2.3.3), :func:`axis_of_normals` of the
+    unit normals of the faces around each vertex.
 
     Parameters
     ----------
-    grid : a conical grid (boundary vertices use the extended face planes)
+    mesh : a conical grid (boundary vertices use the extended face planes, ghosts included), or any quad
+        mesh (the faces around each vertex; vertices with fewer than 3 faces have no cone)
     inward : turn the axes against the face normals (the side of the beams, as
         :func:`ppfab.faceimage.orient_axes` does); otherwise along them
 
     Returns
     -------
-    axes : (rows, cols, 3) unit
-    cos : (rows, cols) ``a·n`` of the faces at each vertex (positive)
+    axes : (rows, cols, 3) for a grid, (N, 3) for a quad mesh; unit, 0 where undetermined
+    cos : (rows, cols) or (N,) ``a·n`` of the faces at each vertex (positive); ``nan`` where undetermined
     """
-    P = vertex_planes(grid)
-    a, c, _ = axis_of_normals(P[..., :3])
-    return (-a if inward else a), c
+    if isinstance(mesh, QuadGrid):
+        P = vertex_planes(mesh)
+        a, c, _ = axis_of_normals(P[..., :3])
+        return (-a if inward else a), c
+    normals, mask = vertex_face_normals(mesh)
+    determined = mask.sum(axis=1) >= 3
+    axes = np.zeros((len(mesh.vertices), 3))
+    cos = np.full(len(mesh.vertices), np.nan)
+    if np.any(determined):
+        a, c, _ = axis_of_normals(normals[determined], mask=mask[determined])
+        axes[determined] = -a if inward else a
+        cos[determined] = c
+    return axes, cos
 
 
 def concyclic_residual(grid: QuadGrid) -> np.ndarray:

@@ -44,7 +44,7 @@ from ..faceimage import orient_axes, pp_from_face_image
 from ..folds import check_folds, orientation_sign
 from ..mesh import QuadGrid
 from ..schema import param
-from ..sections import ConvexSection, PlanarCurve
+from ..curves import ConvexSection, PlanarCurve
 from .conical_pp import FRAMES
 from .registry import construction
 

@@ -35,7 +35,8 @@ from ..errors import DesignError, GeometryError
 from ..folds import check_folds, orientation_sign
 from ..mesh import QuadGrid
 from ..schema import param
-from ..sections import PlanarCurve, support_values
+from ..frame import Frame
+from ..curves import PlanarCurve, support_values
 from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
 from .registry import construction
 
@@ -68,24 +69,6 @@ def profile_angles(faces: int, angle_range: tuple[float, float], closed: bool) -
         step = 2 * np.pi / faces
         return a0 + step * ((np.arange(faces + 1) - 1) % faces)
     return a0 + (np.arange(-1, faces + 1) + 0.5) * (a1 - a0) / faces
-
-
-@dataclass(frozen=True)
-class ProfileFrame:
-    """Local 2D frame of the profile plane ``W_k``: ``x = origin + p e1 + q e2``."""
-
-    plane: int
-    origin: np.ndarray
-    e1: np.ndarray
-    e2: np.ndarray
-
-    def to_3d(self, q: np.ndarray) -> np.ndarray:
-        q = np.asarray(q, dtype=float)
-        return self.origin + q[..., :1] * self.e1 + q[..., 1:2] * self.e2
-
-    def to_2d(self, x: np.ndarray) -> np.ndarray:
-        y = np.asarray(x, dtype=float) - self.origin
-        return np.stack([y @ self.e1, y @ self.e2], axis=-1)
 
 
 def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
@@ -150,7 +133,7 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
         frame = _profile_frame(W[k0], Z[k0], cosb * a + sinb * b1, k0)
         reference = None
         if profile is not None:
-            reference = frame.to_2d(_vertices(_propagate(T0, s0, sigma), W, closed)[k0])
+            reference = frame.to2d(_vertices(_propagate(T0, s0, sigma), W, closed)[k0])
             T0 = _profile_planes(T0, frame, W[k0], profile)
         E = _propagate(T0, s0, sigma)
         v = _vertices(E, W, closed)
@@ -186,21 +169,21 @@ def _vertices(E: np.ndarray, W: np.ndarray, closed: bool) -> np.ndarray:
     return pl.intersect_three(strip[:, :-1], strip[:, 1:], Wb)
 
 
-def _profile_frame(Wk: np.ndarray, Zk: np.ndarray, crown: np.ndarray, k: int) -> ProfileFrame:
+def _profile_frame(Wk: np.ndarray, Zk: np.ndarray, crown: np.ndarray, k: int) -> Frame:
     w = pl.normalize(Wk)
     origin = Zk[:3] - (w[:3] @ Zk[:3] + w[3]) * w[:3]
     e1 = crown - (crown @ w[:3]) * w[:3]
     e1 = e1 / np.linalg.norm(e1)
-    return ProfileFrame(k, origin, e1, np.cross(w[:3], e1))
+    return Frame(origin, e1, np.cross(w[:3], e1))
 
 
-def _profile_planes(T0: np.ndarray, frame: ProfileFrame, Wk: np.ndarray, profile: PlanarCurve) -> np.ndarray:
+def _profile_planes(T0: np.ndarray, frame: Frame, Wk: np.ndarray, profile: PlanarCurve) -> np.ndarray:
     """Step 4: strip planes with the normals of ``T0`` through the support lines of ``profile`` in ``W_k``."""
     w = pl.normalize(Wk)[:3]
     n = T0[:, :3]
     nu = n - (n @ w)[:, None] * w
     nu /= np.linalg.norm(nu, axis=1, keepdims=True)
-    omega = np.stack([nu @ frame.e1, nu @ frame.e2], axis=1)
+    omega = np.stack([nu @ frame.ex, nu @ frame.ey], axis=1)
     omega /= np.linalg.norm(omega, axis=1, keepdims=True)
     h, _ = support_values(profile, omega)
     x = frame.origin + h[:, None] * nu

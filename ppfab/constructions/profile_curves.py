@@ -40,7 +40,8 @@ from ..errors import DesignError
 from ..faceimage import pp_from_curves
 from ..mesh import QuadGrid
 from ..schema import param
-from ._planar_curve import PlanarCurve, PlaneFrame, fit_planar_curve
+from ..curves import PlanarCurve, fit_planar_curve
+from ..frame import Frame
 from .registry import construction
 
 
@@ -51,7 +52,7 @@ def crossing(curve: PlanarCurve, plane_point: np.ndarray, plane_normal: np.ndarr
     Raises :class:`DesignError` under ``key`` when it never gets within ``tol``
     of the plane or crosses it more than once.
     """
-    tt = np.linspace(*curve.domain, 4001)
+    tt = np.linspace(curve.t0, curve.t1, 4001)
 
     def dist(t):
         return np.einsum("...i,i->...", curve.point(np.atleast_1d(t)) - plane_point, plane_normal)
@@ -74,7 +75,7 @@ def crossing(curve: PlanarCurve, plane_point: np.ndarray, plane_normal: np.ndarr
                                    f"(the two curves must meet on the line where the planes intersect)")
         return float(best.x)
     if len(roots) > 1:
-        pts = ", ".join(f"{tuple(np.round(curve.points2d(t), 4).tolist())}" for t in roots[:4])
+        pts = ", ".join(f"{tuple(np.round(curve(t), 4).tolist())}" for t in roots[:4])
         raise DesignError(key, f"curve {curve.name} crosses the plane {other} {len(roots)} times (at {pts}); "
                                f"it must cross it once, at the common point of the two curves")
     return roots[0]
@@ -82,7 +83,7 @@ def crossing(curve: PlanarCurve, plane_point: np.ndarray, plane_normal: np.ndarr
 
 def check_convex(curve: PlanarCurve, key: str, t: np.ndarray | None = None) -> None:
     """Raise ``DesignError(key)`` if the signed curvature vanishes or changes sign on ``t``."""
-    t = np.linspace(*curve.domain, 801) if t is None else t
+    t = np.linspace(curve.t0, curve.t1, 801) if t is None else t
     kappa = curve.curvature(t)
     size = curve.length
     small = np.abs(kappa) * size <= 1e-6
@@ -90,7 +91,7 @@ def check_convex(curve: PlanarCurve, key: str, t: np.ndarray | None = None) -> N
     bad = small | flip
     if np.any(bad):
         k = int(np.argmax(bad))
-        where = tuple(np.round(curve.points2d(t[k]), 4).tolist())
+        where = tuple(np.round(curve(t[k]), 4).tolist())
         raise DesignError(key, f"curve {curve.name} has an inflection or a straight piece near {where} (curvature "
                                f"{kappa[k]:.3g}); profile curves must bend one way only — the support planes are "
                                f"derivatives of the tangent planes and vanish where the curvature does")
@@ -200,8 +201,8 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
     >>> bool(np.allclose(S.limit_point(u, S.v0), S.c_curve.point([u])[0]))
     True
     """
-    eps = PlaneFrame.from_axes(eps_origin, eps_axes, "eps_axes")
-    phi = PlaneFrame.from_axes(phi_origin, phi_axes, "phi_axes")
+    eps = Frame.from_axes(eps_origin, eps_axes, "eps_axes")
+    phi = Frame.from_axes(phi_origin, phi_axes, "phi_axes")
     ang = float(np.degrees(np.arccos(np.clip(abs(eps.normal @ phi.normal), 0.0, 1.0))))
     if abs(90.0 - ang) > angle_tolerance_deg:
         raise DesignError("phi_axes", f"planes eps and phi are not orthogonal: they meet at {ang:.4g}° "
@@ -221,7 +222,7 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
                                       f"{gap:.4g} apart (allowed {tol:.3g})")
     line = np.cross(eps.normal, phi.normal)
     line /= np.linalg.norm(line)
-    if line @ (eps.e2 + phi.e2) < 0:
+    if line @ (eps.ey + phi.ey) < 0:
         line = -line
     signs = []
     for curve, t, key in ((c, u0, "c_points"), (d, v0, "d_points")):

@@ -27,7 +27,8 @@ from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid
 from ..schema import param
 from ppfab.transforms.pp import with_face_image
-from ._planar_curve import PlanarCurve, PlaneFrame, fit_planar_curve
+from ..curves import PlanarCurve, fit_planar_curve
+from ..frame import Frame
 from .registry import construction
 
 
@@ -110,9 +111,9 @@ class TranslationalParams:
                                           f"a translational surface needs two different profile planes")
         self.curves()
 
-    def frames(self) -> tuple[PlaneFrame, PlaneFrame]:
-        return (PlaneFrame.from_axes(self.eps_origin, self.eps_axes, "eps_axes"),
-                PlaneFrame.from_axes(self.phi_origin, self.phi_axes, "phi_axes"))
+    def frames(self) -> tuple[Frame, Frame]:
+        return (Frame.from_axes(self.eps_origin, self.eps_axes, "eps_axes"),
+                Frame.from_axes(self.phi_origin, self.phi_axes, "phi_axes"))
 
     def curves(self) -> tuple[PlanarCurve, PlanarCurve]:
         eps, phi = self.frames()

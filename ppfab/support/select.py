@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ppfab.errors import GeometryError
 from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.metrics import face_planarity, polyline_fit, relative_deviation
 from ppfab.topology import family_index
 
-from .conical import conical_axis_residual, cone_axes
+from ppfab.conical.cones import cone_axes
+
+from .conical import conical_axis_residual
 from .params import SupportParams
 from .registry import get_support_method
 from .structure import SupportStructure, as_quadmesh
@@ -70,8 +73,11 @@ def _auto_method(mesh: QuadMesh, tol: float) -> str:
     if planar:
         return "p"
     if float(face_planarity(mesh.face_corners).max()) <= 1e-3:
-        a, _, det = cone_axes(mesh)
-        res = conical_axis_residual(mesh, np.where(det[:, None], a, 0.0))
-        if np.any(det) and float(np.nanmax(res)) <= 1e-6:
+        try:
+            a, cos = cone_axes(mesh)
+        except GeometryError:                   # some vertex has no cone: not a conical mesh
+            return "parallel"
+        res = conical_axis_residual(mesh, a)
+        if np.any(np.isfinite(cos)) and float(np.nanmax(res)) <= 1e-6:
             return "conical"
     return "parallel"

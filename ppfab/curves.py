@@ -1,8 +1,11 @@
 """Smooth planar curves drawn by a designer, and their support functions (§4.1.2, eqs. 14–15).
 
+:class:`PlanarCurve` is the one planar curve of ppfab: a 2D B-spline ``c(t)``, ``t ∈ [t0, t1]``, optionally
+placed in space by a :class:`~ppfab.frame.Frame` (then :meth:`PlanarCurve.point` is ``frame.to3d(c(t))``).
 A designer gives a planar curve as a list of points (interpolated by a cubic
 spline, chord-length parametrised) or as the control points of a clamped
-B-spline.  A *convex* curve has exactly one tangent line for each normal
+B-spline (:meth:`PlanarCurve.from_points`, :meth:`PlanarCurve.from_control_points`, :func:`fit_planar_curve`
+for the profile constructions of §3.2.1).  A *convex* curve has exactly one tangent line for each normal
 direction ``(cos φ, sin φ)``; written ``x cos φ + y sin φ + p(φ) = 0`` it defines the
 support function ``p(φ)`` of eqs. (14), (15).  :class:`ConvexSection` evaluates
 the normal angle ``φ(t)`` (continuous, strictly monotone) and ``p(φ(t)) = −c(t)·n(t)``
@@ -17,27 +20,36 @@ spline's polynomial extrapolation and are checked for convexity too.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline
 from scipy.optimize import brentq
 
 from .errors import DesignError
+from .frame import Frame
 
 
 def _rot90(v: np.ndarray) -> np.ndarray:
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlanarCurve:
-    """A parametric C² curve ``c(t)`` in R², ``t ∈ [t0, t1]`` (a scipy B-spline)."""
+    """A parametric curve ``c(t)`` in R², ``t ∈ [t0, t1]`` (a scipy B-spline that extrapolates beyond its
+    ends), optionally placed in space in the plane of ``frame``.
+
+    2D: ``curve(t) (k, 2)``, :meth:`derivative`, :meth:`curvature`, :meth:`arclength_table`.
+    In space (``frame`` given): :meth:`point`, :meth:`tangent`, :meth:`unit_normal` (in-plane normal),
+    :meth:`unit_normal_derivative`, all ``(k, 3)``.
+    """
 
     spline: BSpline
     t0: float
     t1: float
     closed: bool = False
     name: str = "curve"
+    frame: Frame | None = None
 
     @classmethod
     def from_points(cls, points: np.ndarray, closed: bool = False, name: str = "curve") -> "PlanarCurve":
@@ -70,30 +82,130 @@ class PlanarCurve:
         knots = np.concatenate([np.zeros(k), inner, np.ones(k)])
         return cls(BSpline(knots, p, k, extrapolate=True), 0.0, 1.0, False, name)
 
+    # -- in the plane ---------------------------------------------------------------------------------
     def __call__(self, t: np.ndarray) -> np.ndarray:
-        return self.spline(t)
+        """``c(t)``, ``(k, 2)``."""
+        return self.spline(np.asarray(t, dtype=float))
+
+    @cached_property
+    def _derivatives(self) -> tuple[BSpline, BSpline | None]:
+        k = self.spline.k
+        return self.spline.derivative(1), (self.spline.derivative(2) if k >= 2 else None)
 
     def derivative(self, t: np.ndarray, order: int = 1) -> np.ndarray:
-        return self.spline.derivative(order)(t)
+        """``c'(t)`` (``order = 1``) or ``c''(t)`` (``order = 2``), ``(k, 2)``."""
+        t = np.asarray(t, dtype=float)
+        if order > 2:
+            return self.spline.derivative(order)(t)
+        d = self._derivatives[order - 1]
+        return d(t) if d is not None else np.zeros(t.shape + (2,))
+
+    def speed(self, t: np.ndarray) -> np.ndarray:
+        """``|c'(t)|``, ``(k,)``."""
+        return np.linalg.norm(self.derivative(t), axis=-1)
 
     def curvature(self, t: np.ndarray) -> np.ndarray:
-        """Signed curvature ``(c' × c'') / |c'|³``."""
+        """Signed curvature ``(c' × c'') / |c'|³``, ``(k,)`` (positive turning counter-clockwise)."""
         d1, d2 = self.derivative(t), self.derivative(t, 2)
         cr = d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]
-        return cr / np.linalg.norm(d1, axis=-1) ** 3
+        sp = np.linalg.norm(d1, axis=-1)
+        return cr / np.where(sp == 0, np.inf, sp ** 3)
 
     def arclength_table(self, samples: int = 4001, extend: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Dense ``t`` and arclength ``s(t)`` with ``s(t0) = 0``, over ``[t0 − extend, t1 + extend]``."""
+        """Dense ``t`` and arclength ``s(t)`` (trapezoidal rule on the speed) with ``s(t0) = 0``, over
+        ``[t0 − extend, t1 + extend]``."""
         t = np.linspace(self.t0 - extend, self.t1 + extend, samples)
         speed = np.linalg.norm(self.derivative(t), axis=-1)
         s = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))])
         s0 = np.interp(self.t0, t, s)
         return t, s - s0
 
+    @cached_property
+    def _chord_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """``t`` at 2001 samples of ``[t0, t1]`` and the length of the inscribed polyline up to each."""
+        tt = np.linspace(self.t0, self.t1, 2001)
+        seg = np.linalg.norm(np.diff(self(tt), axis=0), axis=1)
+        return tt, np.concatenate([[0.0], np.cumsum(seg)])
+
     @property
     def length(self) -> float:
-        t, s = self.arclength_table()
-        return float(s[-1])
+        """Length of the curve over ``[t0, t1]`` (inscribed polyline of 2000 chords)."""
+        return float(self._chord_table[1][-1])
+
+    def param_at_length(self, s: np.ndarray) -> np.ndarray:
+        """Curve parameters at arc lengths ``s`` from ``c(t0)`` (within the domain)."""
+        tt, arc = self._chord_table
+        return np.interp(s, arc, tt)
+
+    # -- in space -------------------------------------------------------------------------------------
+    def _placed(self) -> Frame:
+        if self.frame is None:
+            raise ValueError(f"curve {self.name!r} has no frame: it lies in no plane of space")
+        return self.frame
+
+    @property
+    def extent(self) -> float:
+        """Diagonal of the bounding box of the curve over ``[t0, t1]`` (space units)."""
+        return float(np.linalg.norm(np.ptp(self.point(self._chord_table[0]), axis=0)))
+
+    def point(self, t: np.ndarray) -> np.ndarray:
+        """``c(t)`` in space, ``(k, 3)``."""
+        return self._placed().to3d(self(t))
+
+    def tangent(self, t: np.ndarray) -> np.ndarray:
+        """``c'(t)`` in space, ``(k, 3)``."""
+        return self._placed().vec3d(self.derivative(t))
+
+    def unit_normal(self, t: np.ndarray, sign: float = 1.0) -> np.ndarray:
+        """In-plane unit normal ``m(t) = σ N × T`` in space, ``(k, 3)`` (``N`` the frame's normal)."""
+        d1 = self.tangent(t)
+        T = d1 / np.linalg.norm(d1, axis=-1, keepdims=True)
+        return sign * np.cross(self._placed().normal, T)
+
+    def unit_normal_derivative(self, t: np.ndarray, sign: float = 1.0) -> np.ndarray:
+        """``m'(t) = σ N × T'`` with ``T' = (c'' − (c''·T) T) / |c'|``, ``(k, 3)``."""
+        d1 = self.tangent(t)
+        sp = np.linalg.norm(d1, axis=-1, keepdims=True)
+        T = d1 / sp
+        d2 = self._placed().vec3d(self.derivative(t, 2))
+        dT = (d2 - np.einsum("...i,...i->...", d2, T)[..., None] * T) / sp
+        return sign * np.cross(self._placed().normal, dT)
+
+
+def fit_planar_curve(points: object, frame: Frame, fit: str, key: str, name: str) -> PlanarCurve:
+    """Cubic (or lower, for few points) B-spline through or over 2D points ``(k, 2)`` placed in ``frame``.
+
+    ``fit="interpolate"``: through the points, chord-length parameter;
+    ``fit="control"``: the points are the control polygon of a clamped uniform
+    B-spline.  Bad point lists raise :class:`DesignError` under ``key``.
+    """
+    for k, q in enumerate(points):  # type: ignore[call-overload]
+        if np.ndim(q) != 1 or len(q) != 2:
+            raise DesignError(f"{key}[{k}]", f"needs 2 numbers [s, t] (a point in the plane's own coordinates), "
+                                             f"got {np.ndim(q) and len(q)}")
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise DesignError(key, f"needs a list of [s, t] pairs (2D points in the plane), got shape {p.shape}")
+    if len(p) < 3:
+        raise DesignError(key, f"needs at least 3 points to define a curved profile, got {len(p)}")
+    if not np.all(np.isfinite(p)):
+        raise DesignError(key, "points must be finite numbers")
+    chord = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    size = float(np.linalg.norm(np.ptp(p, axis=0))) or 1.0
+    if chord.min() <= 1e-9 * size:
+        k = int(np.argmin(chord))
+        raise DesignError(f"{key}[{k + 1}]", f"repeats point {k} (consecutive points {chord[k]:.3g} apart)")
+    k = min(3, len(p) - 1)
+    if fit == "interpolate":
+        tau = np.concatenate([[0.0], np.cumsum(chord)])
+        spline = make_interp_spline(tau, p, k=k)
+    elif fit == "control":
+        inner = np.linspace(0.0, 1.0, len(p) - k + 1)
+        knots = np.concatenate([np.zeros(k), inner, np.ones(k)]) * float(chord.sum())
+        spline = BSpline(knots, p, k, extrapolate=True)
+    else:
+        raise DesignError("fit", f"must be 'interpolate' or 'control', got {fit!r}")
+    return PlanarCurve(spline, float(spline.t[k]), float(spline.t[-k - 1]), False, name, frame)
 
 
 def _size(p: np.ndarray) -> float:
