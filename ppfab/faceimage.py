@@ -91,7 +91,7 @@ def pp_from_face_image(g: np.ndarray, h: np.ndarray, c: np.ndarray | None = None
     v = intersect_checked(face, Ui, Wj, min_sine)
     axes = orient_axes(np.cross(pl.normalize(Ui)[..., :3], pl.normalize(Wj)[..., :3]), F)
     return QuadGrid(v, support_u=U, support_w=W, face_image=F[1:-1, 1:-1], axes=axes,
-                    meta={"extended_face_image": F})
+                    extended_face_image=F)
 
 
 def intersect_checked(face: np.ndarray, u: np.ndarray, w: np.ndarray, min_sine: float) -> np.ndarray:

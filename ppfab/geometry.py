@@ -92,7 +92,8 @@ class Geometry:
 
 
 def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | None = None,
-                   allow_large: bool = True, note: Callable[[str], None] | None = None) -> Geometry:
+                   allow_large: bool = True, note: Callable[[str], None] | None = None,
+                   on_iteration: Callable[[Any], None] | None = None) -> Geometry:
     """Construct the mesh (or read it and optionally optimise it) and place it in millimetres.
 
     Parameters
@@ -102,6 +103,7 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
     base_dir : folder that relative mesh paths are taken from
     allow_large : go on above ``spec.max_vertices``
     note : called with a short progress text before long steps
+    on_iteration : called with every optimiser :class:`~ppfab.optimize.solver.IterationRecord`
     """
     from .constructions import get_construction
     from .io import load_mesh
@@ -131,7 +133,7 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
 
             if note:
                 note("optimising…")
-            result = run_optimize(mesh, optimize)
+            result = run_optimize(mesh, optimize, callback=on_iteration)
             if not result.targets_met:
                 log.warning("optimisation did not meet its targets: %s", result.message)
             mesh = result.mesh

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from types import MappingProxyType
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -68,8 +70,17 @@ class QuadGrid:
     support_u : (m+1, 4) float, optional — planes ``U_i`` of the rows (``n·x + d = 0``)
     support_w : (n+1, 4) float, optional — planes ``W_j`` of the columns
     face_image : (m, n', 4) float, optional — weighted face planes ``f_ij`` (§2.2.1)
-    axes : (m+1, n+1, 3) float, optional — unit node axes of the support structure
+    axes : (m+1, n+1, 3) float, optional — unit node axes of the construction
     vertex_ids : (m+1, n+1) int, optional — index of each vertex in the file it came from
+    extended_face_image : (m+2, n'+2, 4) float, optional — the weighted face image with one ghost face
+        beyond each side (PP constructions, eq. 7); vertex ``v[i, j]`` lies on faces ``[i:i+2, j:j+2]``
+    extended_face_planes : (m+2, n'+2, 4) float, optional — unit face planes with ghost faces (conical
+        constructions and transforms)
+    meta : read-only record of how the construction was made (its parameters, sample positions, cusps,
+        the spheres it started from): diagnostics only, never read by another stage
+
+    The support planes and axes a grid carries are its construction's; the node axes and support planes
+    that are fabricated live only in :class:`ppfab.support.structure.SupportStructure`.
     """
 
     vertices: np.ndarray
@@ -79,7 +90,9 @@ class QuadGrid:
     face_image: np.ndarray | None = None
     axes: np.ndarray | None = None
     vertex_ids: np.ndarray | None = None
-    meta: dict = field(default_factory=dict)
+    extended_face_image: np.ndarray | None = None
+    extended_face_planes: np.ndarray | None = None
+    meta: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
         v = np.asarray(self.vertices, dtype=float)
@@ -89,9 +102,10 @@ class QuadGrid:
             bad = tuple(int(k) for k in np.argwhere(~np.isfinite(v))[0][:2])
             raise GeometryError(f"grid vertex {bad} is not finite (NaN or inf)", element=str(bad))
         object.__setattr__(self, "vertices", _readonly(v))
-        for name in ("support_u", "support_w", "face_image", "axes"):
+        for name in ("support_u", "support_w", "face_image", "axes", "extended_face_image", "extended_face_planes"):
             object.__setattr__(self, name, _readonly(getattr(self, name)))
         object.__setattr__(self, "vertex_ids", _readonly(self.vertex_ids, np.int64))
+        object.__setattr__(self, "meta", MappingProxyType(dict(self.meta)))
 
     # -- shape -------------------------------------------------------------------------
     @property
@@ -154,9 +168,10 @@ class QuadGrid:
         faces = grid_face_indices(self.vertex_index, self.closed).reshape(-1, 4)
         return QuadMesh(self.vertices.reshape(-1, 3), faces, grid=self)
 
-    def with_vertices(self, vertices: np.ndarray, **changes) -> "QuadGrid":
-        """A copy with new vertices (support data dropped unless given)."""
-        keep = {"support_u": None, "support_w": None, "face_image": None, "axes": None}
+    def with_vertices(self, vertices: np.ndarray, **changes: Any) -> "QuadGrid":
+        """A copy with new vertices (planes, axes and the construction record dropped unless given)."""
+        keep: dict[str, Any] = {"support_u": None, "support_w": None, "face_image": None, "axes": None,
+                                "extended_face_image": None, "extended_face_planes": None, "meta": {}}
         keep.update(changes)
         return replace(self, vertices=vertices, **keep)
 

@@ -51,8 +51,8 @@ def test_concyclic_residual_tells_conical_from_non_conical_data():
 def test_stale_ghost_planes_are_not_used():
     grid = conical_pp_grid(Series(cos=[-10.0]), Series(cosh=[-20.0]), np.linspace(-.5, .5, 6), np.linspace(-.3, .3, 5))
     stored = extended_planes(grid)
-    assert np.allclose(stored[0], grid.meta["extended_face_image"][0] /
-                       np.linalg.norm(grid.meta["extended_face_image"][0, :, :3], axis=-1, keepdims=True))
+    assert np.allclose(stored[0], grid.extended_face_image[0] /
+                       np.linalg.norm(grid.extended_face_image[0, :, :3], axis=-1, keepdims=True))
     moved = grid.with_vertices(grid.vertices * 1.1)
     padded = extended_planes(moved)
     assert np.allclose(padded[1:-1, 1:-1], moved.face_planes)
@@ -67,7 +67,7 @@ def test_rigid_motion_keeps_planes_consistent():
     grid = conical_pp_grid(Series(cos=[-10.0]), Series(cosh=[-20.0]), np.linspace(-.5, .5, 6), np.linspace(-.3, .3, 5))
     R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
     moved = rigid_motion(grid, R, [1.0, 2.0, 3.0])
-    F = moved.meta["extended_face_image"]
+    F = moved.extended_face_image
     P = np.stack([F[:-1, :-1], F[1:, :-1], F[1:, 1:], F[:-1, 1:]], axis=-2)
     assert np.abs(np.einsum("ijkl,ijl->ijk", P[..., :3], moved.vertices) + P[..., 3]).max() < 1e-9
     assert np.allclose(offset_faces(moved, 0.2).vertices, rigid_motion(offset_faces(grid, 0.2), R, [1.0, 2.0, 3.0]).vertices)

@@ -47,7 +47,7 @@ LAG = LaguerreMap(boost([0.3, 0.5, 1.0], 0.4), 1.0, np.array([0.3, -0.2, 0.5, 0.
 def reloaded(name):
     grid, families = MESHES[name]
     bare = grid_from_json(grid_to_json(grid))
-    assert not bare.meta                                              # the stored ghosts are gone
+    assert bare.extended_face_image is None and bare.extended_face_planes is None   # the ghosts are gone
     return grid, bare, families
 
 
@@ -91,7 +91,7 @@ def test_rebuilt_ghosts_are_conical_and_determine_every_vertex(name):
     E = extended_planes(bare)
     assert E.shape == (grid.shape[0] + 1, grid.shape[1] + 1, 4)
     assert np.allclose(E[1:-1, 1:] if grid.closed else E[1:-1, 1:-1], bare.face_planes, atol=1e-14)
-    through, cyc = boundary_cone_residual(replace(bare, meta={"extended_face_planes": E}))
+    through, cyc = boundary_cone_residual(replace(bare, extended_face_planes=E))
     assert through < 1e-13 and cyc < 1e-12
     s = np.linalg.svd(vertex_planes(bare, E)[..., :3], compute_uv=False)
     assert (s[..., 2] / s[..., 0]).min() > 1e-6                       # four planes meet in one point
@@ -143,7 +143,7 @@ def test_offset_of_a_reloaded_grid_keeps_boundary_polylines_planar(name):
     assert_conical(out, families)
     # constant face–face distance, the stored ghosts shifted with the faces
     assert np.allclose(out.face_planes[..., 3] - bare.face_planes[..., 3], -0.5, atol=1e-9)
-    assert np.allclose(out.meta["extended_face_planes"], extended_planes(bare) - [0, 0, 0, 0.5], atol=1e-12)
+    assert np.allclose(out.extended_face_planes, extended_planes(bare) - [0, 0, 0, 0.5], atol=1e-12)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -168,7 +168,7 @@ def test_isotropic_map_rejects_vertices_whose_planes_meet_in_a_line():
     grid, _ = MESHES["PP-eq11"]
     f = grid.face_planes
     repeated = np.pad(f, ((1, 1), (1, 1), (0, 0)), mode="edge")      # each boundary face its own ghost
-    bad = replace(grid, meta={"extended_face_planes": repeated})
+    bad = replace(grid, extended_face_planes=repeated)
     with pytest.raises(GeometryError, match=r"vertex \(0, 0\) do not meet in a single point"):
         isotropic.isotropic_transform(bad, IsotropicMobius())
 

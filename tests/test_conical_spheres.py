@@ -32,7 +32,7 @@ SETS = {
 
 def spheres_tangent(grid):
     """Largest |n·c + d + r| of the strip planes E[a] against the spheres Z_{a−1}, Z_a they should touch."""
-    Z, E = grid.meta["spheres"], grid.meta["extended_face_planes"]
+    Z, E = grid.meta["spheres"], grid.extended_face_planes
     inner = E[1:-1]
     lo = np.einsum("akn,an->ak", inner[..., :3], Z[:-1, :3]) + inner[..., 3] + Z[:-1, 3:4]
     hi = np.einsum("akn,an->ak", inner[..., :3], Z[1:, :3]) + inner[..., 3] + Z[1:, 3:4]
@@ -66,7 +66,7 @@ def test_w_planes_carry_the_intersection_of_consecutive_cones():
     Z = grid.meta["spheres"]
     W = w_planes(Z, grid.meta["H"])
     assert np.allclose(pl.normalize(W), pl.normalize(grid.support_u))
-    E = grid.meta["extended_face_planes"]
+    E = grid.extended_face_planes
     v = grid.vertices
     # vertex v[i, j] is on the two planes of strip i−1 and of strip i around it, and in W_i
     for a in (0, 1):

@@ -40,7 +40,7 @@ def test_shape_and_ghost_faces():
     assert grid.face_image.shape == (6, 9, 4)
     assert grid.support_u.shape == (7, 4) and grid.support_w.shape == (10, 4)
     # every vertex (boundary ones too) lies on all four surrounding extended face planes
-    F = grid.meta["extended_face_image"]
+    F = grid.extended_face_image
     v = grid.vertices
     for da in (0, 1):
         for db in (0, 1):

@@ -168,7 +168,7 @@ def test_projective_map_keeps_pp_and_gives_a_torsion_free_support_structure(grid
         for db in (0, 1):
             assert np.abs(pl.signed_distance(Fp[da:da + m1, db:db + n1], v)).max() <= TOL * size(out)
     # ... and the re-weighted edge planes (differences of F/w) contain both end points and their axes
-    a = out.meta["projective_axes"]
+    a, w = tf.reweighted_axes(grid, T)
     s = Fp[1:-1, 1:] - Fp[1:-1, :-1]         # across column polylines j: faces (a, j), (a, j+1), a = 1..m
     s = pl.normalize(s)
     for di in (0, 1):                         # the edge v[i, j] v[i+1, j] has both ends in the plane
@@ -176,7 +176,6 @@ def test_projective_map_keeps_pp_and_gives_a_torsion_free_support_structure(grid
         ax = a[di:di + s.shape[0], :]
         assert np.abs(pl.signed_distance(s, pts)).max() <= 1e-8 * size(out)
         assert np.abs(np.einsum("...i,...i->...", s[..., :3], ax)).max() <= 1e-8
-    w = out.meta["face_image_weights"]
     assert np.ptp(w) > 1e-3                   # a genuinely projective (not affine) map
 
 

@@ -1,6 +1,6 @@
 """Atomic output: folders and single files written through a temporary sibling and renamed into place.
 
-:class:`AtomicFolder` writes into a temporary folder beside the target and
+:func:`atomic_file` does the same for one file.  :class:`AtomicFolder` writes into a temporary folder beside the target and
 renames it into place only when the whole run succeeded; on any failure
 (exception, Ctrl-C) the temporary folder is removed and an existing target
 is left untouched.
@@ -8,10 +8,12 @@ is left untouched.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import uuid
 from pathlib import Path
+from typing import Iterator
 
 from ppfab.errors import PpfabError
 
@@ -66,12 +68,14 @@ class AtomicFolder:
         return False
 
 
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write a file through a temporary sibling and an atomic rename."""
+@contextlib.contextmanager
+def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
+    """``with atomic_file(p) as tmp:`` — write the file ``tmp`` (a sibling of ``p`` with the same suffix);
+    it replaces ``p`` in one rename when the block succeeds and is removed when it fails."""
     p = Path(path)
-    tmp = p.parent / f".{p.name}.tmp-{uuid.uuid4().hex[:8]}"
+    tmp = p.parent / f".{p.stem}.tmp-{uuid.uuid4().hex[:8]}{p.suffix}"
     try:
-        tmp.write_text(text, encoding="utf-8")
+        yield tmp
         os.replace(tmp, p)
     finally:
         if tmp.exists():

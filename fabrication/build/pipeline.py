@@ -61,7 +61,8 @@ def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geo
     """Construct the mesh, or read (and optimise) a mesh file, placed in mm (:func:`ppfab.geometry.build_geometry`)."""
     geo = design.geometry
     progress.start("geometry", f"construction '{geo.method}'" if geo.method else f"mesh {geo.mesh}")
-    g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note)
+    g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note,
+                       on_iteration=progress.iteration)
     mesh = g.mesh
     shape = mesh.shape if isinstance(mesh, QuadGrid) else (mesh.grid.shape if mesh.grid is not None else None)
     progress.done(f"{'grid ' + 'x'.join(map(str, shape)) if shape else 'quad mesh'}")

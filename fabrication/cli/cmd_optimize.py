@@ -5,10 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from dataclasses import asdict
-import os
 import sys
-import time
-import uuid
 from pathlib import Path
 
 NAME = "optimize"
@@ -105,57 +102,13 @@ def collect_params(args: argparse.Namespace) -> dict:
     return table
 
 
-class _ProgressLine:
-    """Progress on stderr: every iteration with ``--verbose``, else a refreshed line once a run is long."""
-
-    def __init__(self, verbose: bool, quiet: bool, stream=None, after_s: float = 2.0):
-        self.verbose, self.quiet = verbose, quiet
-        self.stream = stream or sys.stderr
-        self.after_s = after_s
-        self.t0 = time.perf_counter()
-        self.last = 0.0
-        self.shown = False
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-
-    def __call__(self, rec) -> None:
-        if self.quiet:
-            return
-        if self.verbose:
-            print(rec.line(), file=self.stream, flush=True)
-            return
-        now = time.perf_counter() - self.t0
-        if now < self.after_s or (now - self.last < 1.0 and self.tty is False):
-            return
-        self.last = now
-        text = (f"[ppfab] optimize: iteration {rec.iteration}, stage {rec.stage}, "
-                f"max δ_f {rec.delta_f_max:.2e}, max δ_P {rec.delta_p_max:.2e} ({now:.0f} s)")
-        if self.tty:
-            print("\r" + text, end="", file=self.stream, flush=True)
-        else:
-            print(text, file=self.stream, flush=True)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown and self.tty and not self.verbose:
-            print(file=self.stream, flush=True)
-
-
-def _write_atomic(mesh, out: Path) -> None:
-    from ppfab.io import write_mesh
-
-    tmp = out.parent / f".{out.stem}.tmp-{uuid.uuid4().hex[:8]}{out.suffix}"
-    try:
-        write_mesh(mesh, tmp)
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
 def run(args: argparse.Namespace) -> int:
     from ppfab.errors import GeometryError, MeshFileError
-    from ppfab.io import load_mesh
+    from ppfab.io import load_mesh, write_mesh
     from ppfab.optimize import optimize
+
+    from ..build.folder import atomic_file
+    from ..build.progress import Progress
 
     out = Path(args.out)
     if out.suffix.lower() not in (".obj", ".off"):
@@ -164,14 +117,15 @@ def run(args: argparse.Namespace) -> int:
         raise MeshFileError(str(out), f"folder {out.parent} does not exist")
     params = collect_params(args)
     mesh = load_mesh(args.mesh)
-    progress = _ProgressLine(args.verbose, args.quiet or args.json)
+    progress = Progress(quiet=args.quiet or args.json, verbose=args.verbose)
     try:
-        result = optimize(mesh, params, callback=progress)
+        result = optimize(mesh, params, callback=progress.iteration)
     except GeometryError as exc:
         raise MeshFileError(args.mesh, str(exc)) from None
     finally:
-        progress.close()
-    _write_atomic(result.mesh, out)
+        progress.clear()
+    with atomic_file(out) as tmp:
+        write_mesh(result.mesh, tmp)
     if args.json:
         doc = result.summary()
         doc.update({"input": str(args.mesh), "output": str(out),

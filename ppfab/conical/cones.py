@@ -16,7 +16,7 @@ plane by the same distance ``δ`` along its unit normal keeps the mesh conical
 
 Boundary vertices use the *extended* face planes of the grid: the ghost faces
 one step beyond each side that the constructions keep in
-``meta["extended_face_image"]`` (:mod:`ppfab.faceimage`).  The extended array has
+``QuadGrid.extended_face_image`` (:mod:`ppfab.faceimage`).  The extended array has
 shape ``(rows + 1, cols + 1, 4)`` for a grid of ``rows × cols`` vertices and
 vertex ``v[i, j]`` is surrounded by ``E[i, j], E[i+1, j], E[i+1, j+1], E[i, j+1]``
 (for a closed grid ``E[:, b]`` is face column ``(b − 1) mod cols``).  Without
@@ -48,16 +48,15 @@ PLANAR_BOUNDARY_TOL = 1e-7
 def extended_planes(grid: QuadGrid) -> np.ndarray:
     """Unit face planes with one ghost face beyond each side, ``(rows + 1, cols + 1, 4)``.
 
-    Taken from ``meta["extended_face_planes"]`` (unit planes of a conical P
-    construction) or ``meta["extended_face_image"]`` (the weighted face image of a
+    Taken from ``grid.extended_face_planes`` (unit planes of a conical P
+    construction) or ``grid.extended_face_image`` (the weighted face image of a
     PP construction, orientation of the weights kept) when the construction stored it
     and every vertex still lies on its four stored planes; otherwise built by
     :func:`ghost_planes`.
     """
     rows, cols = grid.shape
     size = _size(grid)
-    for key in ("extended_face_planes", "extended_face_image"):
-        stored = grid.meta.get(key)
+    for stored in (grid.extended_face_planes, grid.extended_face_image):
         if stored is not None:
             E = np.asarray(stored, dtype=float)
             if E.shape == (rows + 1, cols + 1, 4):
@@ -413,7 +412,7 @@ def offset_faces(grid: QuadGrid, distance: float) -> QuadGrid:
     weights (``F − |F_n| δ e4``), so a PP face image stays a translation net.
 
     The extended planes used (stored or built by :func:`ghost_planes`) are shifted too and kept in
-    ``meta["extended_face_planes"]``; they pass through the new vertices.
+    ``extended_face_planes``; they pass through the new vertices.
 
     Raises :class:`GeometryError` when a cone degenerates (``a·n ≤ 0.05``) or the
     offset planes do not meet at a vertex (the input is not conical).
@@ -427,14 +426,12 @@ def offset_faces(grid: QuadGrid, distance: float) -> QuadGrid:
         raise GeometryError(f"vertex {idx}: its faces make {np.degrees(np.arccos(np.clip(c[idx], -1, 1))):.1f}° "
                             f"with the cone axis; an offset is ill defined", element=f"vertex {idx}", value=float(c[idx]))
     v = grid.vertices + d * a / c[..., None]
-    meta = dict(grid.meta)
-    for key in ("extended_face_image", "extended_face_planes"):
-        if key in meta:
-            meta[key] = _shift_planes(np.asarray(meta[key], dtype=float), d)
-    meta["extended_face_planes"] = _shift_planes(E, d)         # the planes used, through the new vertices
-    meta["offset_distance"] = meta.get("offset_distance", 0.0) + d
+    meta = {**grid.meta, "offset_distance": grid.meta.get("offset_distance", 0.0) + d}
+    image = grid.extended_face_image
     out = replace(grid, vertices=v, face_image=None if grid.face_image is None else _shift_planes(grid.face_image, d),
                   support_u=_refit(v, grid.support_u, rows=True), support_w=_refit(v, grid.support_w, rows=False),
+                  extended_face_image=None if image is None else _shift_planes(np.asarray(image, dtype=float), d),
+                  extended_face_planes=_shift_planes(E, d),          # the planes used, through the new vertices
                   meta=meta)
     return out
 
@@ -475,13 +472,11 @@ def rigid_motion(grid: QuadGrid, rotation: np.ndarray, translation: np.ndarray |
         n = p[..., :3] @ R.T
         return np.concatenate([n, (p[..., 3] - n @ t)[..., None]], axis=-1)
 
-    meta = dict(grid.meta)
-    for key in ("extended_face_image", "extended_face_planes"):
-        if key in meta:
-            meta[key] = planes(meta[key])
     return replace(grid, vertices=grid.vertices @ R.T + t, support_u=planes(grid.support_u),
                    support_w=planes(grid.support_w), face_image=planes(grid.face_image),
-                   axes=None if grid.axes is None else grid.axes @ R.T, meta=meta)
+                   axes=None if grid.axes is None else grid.axes @ R.T,
+                   extended_face_image=planes(grid.extended_face_image),
+                   extended_face_planes=planes(grid.extended_face_planes))
 
 
 # -- one summary --------------------------------------------------------------------------------
@@ -580,11 +575,9 @@ def laguerre_transform(grid: QuadGrid, lmap: "LaguerreMap", check: bool = True, 
         raise GeometryError(f"vertex {idx} goes to infinity under the Laguerre map (its cone becomes a cylinder)",
                             element=f"vertex {idx}")
     Enew = lmap.planes(E)
-    meta = {k: val for k, val in grid.meta.items() if k != "extended_face_image"}
-    meta["extended_face_planes"] = Enew
     out = QuadGrid(new, closed=grid.closed, support_u=_refit(new, grid.support_u, rows=True),
                    support_w=_refit(new, grid.support_w, rows=False), face_image=None, axes=None,
-                   vertex_ids=grid.vertex_ids, meta=meta)
+                   vertex_ids=grid.vertex_ids, extended_face_planes=Enew, meta=grid.meta)
     inner = Enew[1:-1, 1:] if grid.closed else Enew[1:-1, 1:-1]
     if check:
         check_folds(out, reference=inner, context="the Laguerre image")

@@ -243,7 +243,8 @@ class ConicalEditor:
         A = np.eye(4) if A0 is None else np.asarray(A0, float)
         start = self.solve_fixed(A, handles, w_handles)
         x = start.grid.vertices.reshape(-1, 3).copy()
-        Eext = start.grid.meta["extended_face_planes"]
+        Eext = start.grid.extended_face_planes
+        assert Eext is not None
         d = (Eext[:, 1:] if self.grid.closed else Eext).reshape(-1, 4)[:, 3].copy()
         V, P = self.n_vertices, self.n_planes
         N = np.concatenate([self.n0, np.ones((P, 1))], axis=1)                    # (P, 4) homogeneous normals
@@ -314,12 +315,10 @@ class ConicalEditor:
         hres = float(np.linalg.norm(xv[hid] - hpos, axis=1).max()) if len(hid) else 0.0
         E = planes[self.plane_index]
         g = self.grid
-        meta = {k: v for k, v in g.meta.items() if k not in ("extended_face_image",)}
-        meta["extended_face_planes"] = E
         inner = E[1:-1, 1:] if g.closed else E[1:-1, 1:-1]
         a, _, _ = axis_of_normals(Pv[..., :3].reshape(self.shape + (4, 3)))
         out = QuadGrid(x, closed=g.closed, support_u=_refit(x, g.support_u, True), support_w=_refit(x, g.support_w, False),
-                       face_image=inner, axes=-a, vertex_ids=g.vertex_ids, meta=meta)
+                       face_image=inner, axes=-a, vertex_ids=g.vertex_ids, extended_face_planes=E, meta=g.meta)
         return EditResult(out, A, converged, iterations, history, message, cres, hres, lorentz_residual(A))
 
 
@@ -386,7 +385,8 @@ def edit_conical(grid: QuadGrid, handles=None, A: np.ndarray | None = None, fit_
     else:
         res = ed.solve_fixed(A, handles, w_handles)
     if check:
-        E = res.grid.meta["extended_face_planes"]
+        E = res.grid.extended_face_planes
+        assert E is not None
         check_folds(res.grid, reference=E[1:-1, 1:] if grid.closed else E[1:-1, 1:-1],
                     context="the edited conical mesh (§4.3)")
     return res

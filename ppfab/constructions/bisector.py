@@ -20,7 +20,7 @@ spheres of the first polyline (bisector of two consecutive points).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -58,7 +58,7 @@ def bisector_mesh(g_points: np.ndarray, h_points: np.ndarray, g_radii: np.ndarra
     Returns
     -------
     QuadGrid ``(m+1, n+1)``: face ``f[i, j]`` lies in the radical plane of sphere
-    ``g_{i+1}`` and ``h_{j+1}``; ``meta["extended_face_image"]`` holds all
+    ``g_{i+1}`` and ``h_{j+1}``; ``extended_face_image`` holds all
     ``(m+2) × (n+2)`` planes ``g_a − h_b``.
 
     Raises
@@ -97,7 +97,7 @@ def bisector_mesh(g_points: np.ndarray, h_points: np.ndarray, g_radii: np.ndarra
     g = pl.sphere_to_plane_coordinates(G)
     h = -pl.sphere_to_plane_coordinates(H)
     grid = pp_from_face_image(g, h, None, min_sine=min_sine)
-    grid.meta.update({"g_spheres": G, "h_spheres": H})
+    grid = replace(grid, meta={**grid.meta, "g_spheres": G, "h_spheres": H})
     return grid
 
 

@@ -205,10 +205,10 @@ def appendix_surface(case: str, g: Series, h: Series, u: np.ndarray, v: np.ndarr
 
 def _close_columns(grid: QuadGrid) -> QuadGrid:
     """Drop the duplicate last vertex column of a periodic sampling and mark the grid closed."""
-    F = grid.meta["extended_face_image"]
+    F = grid.extended_face_image
     return QuadGrid(grid.vertices[:, :-1], closed=True, support_u=grid.support_u,
                     support_w=grid.support_w[:-1], face_image=grid.face_image,
-                    axes=grid.axes[:, :-1], meta={**grid.meta, "extended_face_image": F[:, :-1]})
+                    axes=grid.axes[:, :-1], extended_face_image=F[:, :-1], meta=grid.meta)
 
 
 def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v: np.ndarray, case: str = "case1",
@@ -232,7 +232,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
     Returns
     -------
     QuadGrid with ``(m+1, n+1)`` vertices (``(n+1, m)`` when closed), support planes ``U_i``, ``W_j``,
-    the face image, node axes and ``meta["extended_face_image"]``; the corner order of every face
+    the face image, node axes and the extended face image; the corner order of every face
     agrees with its face-image normal.
     """
     if case not in CASES:
@@ -284,7 +284,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
         grid = rigid_motion(grid, FRAMES[case])
     elif frame != "paper":
         raise GeometryError(f"unknown frame {frame!r}; valid: paper, z_up", element="frame")
-    F = grid.meta["extended_face_image"]
+    F = grid.extended_face_image
     return replace(grid, axes=orient_axes(grid.axes, F))
 
 

@@ -189,7 +189,7 @@ def sections_grid(section_a, section_b, faces_a: int, faces_b: int, case: str = 
     if check:
         check_folds(grid, sa[1:-1], sb[order][1:-1], context=f"conical_sections ({case})", names=("s_a", "s_b"))
     grid = rigid_motion(grid, FRAMES[case])
-    return replace(grid, axes=orient_axes(grid.axes, grid.meta["extended_face_image"]))
+    return replace(grid, axes=orient_axes(grid.axes, grid.extended_face_image))
 
 
 def _crest_height(case: str, support_value: float) -> float:

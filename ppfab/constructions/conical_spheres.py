@@ -107,7 +107,7 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     Returns
     -------
     QuadGrid ``(N+1, faces_profile + 1)`` (``(N+1, faces_profile)`` closed) with ``support_u = W``,
-    unit face planes as ``face_image``, ``meta["extended_face_planes"]`` (ghosts included), cone axes
+    unit face planes as ``face_image``, ``extended_face_planes`` (ghosts included), cone axes
     through the sphere centres, and ``meta`` with the sampled spheres ``Z``, their parameters and ``H``.
     """
     if faces_spine < 1 or faces_profile < (3 if closed else 1):
@@ -138,7 +138,7 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
         E = _propagate(T0, s0, sigma)
         v = _vertices(E, W, closed)
         inner = E[1:-1, 1:] if closed else E[1:-1, 1:-1]
-        grid = QuadGrid(v, closed=closed, support_u=W, face_image=inner, meta={"extended_face_planes": E})
+        grid = QuadGrid(v, closed=closed, support_u=W, face_image=inner, extended_face_planes=E)
         s = orientation_sign(grid, inner)
         if (s > 0).sum() >= (s < 0).sum():
             break
@@ -147,10 +147,10 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     axes *= np.sign(np.einsum("ijk,ijk->ij", axes, _mean_normals(E)))[..., None] * -1.0
     degrees = np.degrees(th[1:] if closed else th[1:-1])
     strip_t = 0.5 * (tz[1:] + tz[:-1])
-    meta = {"extended_face_planes": E, "spheres": Z, "sphere_t": tz, "H": H, "profile_plane": k0,
+    meta = {"spheres": Z, "sphere_t": tz, "H": H, "profile_plane": k0,
             "theta_deg": degrees, "profile_frame": frame, "profile_reference": reference,
             "planar_families": ("rows",)}
-    grid = replace(grid, axes=axes, meta=meta)
+    grid = replace(grid, axes=axes, extended_face_planes=E, meta=meta)
     if check:
         check_folds(grid, strip_t, degrees, reference=inner, context="conical_spheres",
                     names=("spine t", "profile angle"))

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import logging
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -280,7 +280,7 @@ def plane_spline_mesh(g: PlaneSpline, h: PlaneSpline, faces_u: int, faces_v: int
         raise GeometryError("the two plane splines must start at the same weighted plane g_0 = h_0")
     grid = pp_from_curves(g, h, _face_parameters(g.segments, faces_u), _face_parameters(h.segments, faces_v),
                           g.knots[0])
-    grid.meta.update({"cusps_u": list(g.cusps), "cusps_v": list(h.cusps)})
+    grid = replace(grid, meta={**grid.meta, "cusps_u": list(g.cusps), "cusps_v": list(h.cusps)})
     return grid
 
 

@@ -30,7 +30,7 @@ normals there lie along ε ∩ φ (a common normal); the curves are strictly con
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -169,7 +169,8 @@ class ProfileSurface:
             ext = np.concatenate([[2 * t[0] - t[1]], t, [2 * t[-1] - t[-2]]])
             check_convex(curve, key, np.linspace(ext[0], ext[-1], 801))
         grid = pp_from_curves(self.g, self.h, u, v, self.const)
-        grid.meta.update({"u": u, "v": v, "u0": self.u0, "v0": self.v0, "profile_gap": self.gap})
+        grid = replace(grid, meta={**grid.meta, "u": u, "v": v, "u0": self.u0, "v0": self.v0,
+                                   "profile_gap": self.gap})
         return grid
 
 

@@ -193,8 +193,8 @@ def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, 
     vertex becomes the common point of its four mapped planes (Prop. 2.5) and its node axis the line
     common to the four support planes ``f_{k+1} − f_k`` around it.
 
-    Returns a grid with the weighted image in ``face_image`` and ``meta["isotropic_face_image"]``
-    (extended), and ``meta["extended_face_planes"]`` (unit).  Raises :class:`GeometryError` when the
+    Returns a grid with the weighted image in ``face_image`` and the unit planes, ghosts included, in
+    ``extended_face_planes``.  Raises :class:`GeometryError` when the
     four mapped planes of a vertex do not determine one point — their unit normals span only a plane
     (smallest/largest singular value of the 4×3 normal matrix ``≤ min_span``: the planes share a line) —
     or do not meet (relative residual ``s₃/s₀`` of the 4×4 plane matrix above ``max_residual``: the
@@ -229,9 +229,8 @@ def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, 
     nbar = pl.normalize(P)[..., :3].sum(axis=-2)
     axes = axes * -np.sign(np.einsum("...i,...i->...", axes, nbar))[..., None]
     inner = F[1:-1, 1:] if grid.closed else F[1:-1, 1:-1]
-    meta = {k: val for k, val in grid.meta.items() if k != "extended_face_image"}
-    meta.update({"isotropic_face_image": F, "extended_face_planes": pl.normalize(F)})
-    out = QuadGrid(v, closed=grid.closed, face_image=inner, axes=axes, vertex_ids=grid.vertex_ids, meta=meta)
+    out = QuadGrid(v, closed=grid.closed, face_image=inner, axes=axes, vertex_ids=grid.vertex_ids,
+                   extended_face_planes=pl.normalize(F), meta=grid.meta)
     if check:
         check_folds(out, reference=inner, context="the isotropic Möbius image")
     return out

@@ -21,7 +21,7 @@ image and rebuilds the vertices ``v[i, j] = F[i+1, j+1] ∩ U_i ∩ W_j`` with
 
 The transforms accept any open PP :class:`~ppfab.mesh.QuadGrid`: one made by
 :func:`~ppfab.faceimage.pp_from_face_image` carries its extended image in
-``meta["extended_face_image"]``; for any other PP grid the image is recovered
+``extended_face_image``; for any other PP grid the image is recovered
 with :func:`~ppfab.faceimage.pp_face_image` and completed by ghost faces
 (:func:`extended_face_image_of`).  Boundary vertices stay exactly where they are
 under the identity transform either way.
@@ -51,7 +51,7 @@ from ppfab.faceimage import pp_face_image, pp_from_face_image
 from ppfab.mesh import QuadGrid
 
 __all__ = ["extended_face_image_of", "grid_from_extended", "with_face_image", "f_transform", "parallel_mesh",
-           "offset", "projective_map", "delete_face_rows", "delete_face_cols", "multinet"]
+           "offset_along_axes", "projective_map", "reweighted_axes", "delete_face_rows", "delete_face_cols", "multinet"]
 
 
 def _size(v: np.ndarray) -> float:
@@ -88,7 +88,7 @@ def _ghost(first: np.ndarray, step: np.ndarray | None, support: np.ndarray, scal
 def extended_face_image_of(grid: QuadGrid, tol: float = 1e-6) -> np.ndarray:
     """The extended weighted face image ``F (m+2, n+2, 4)`` of an open PP grid, a translation net (eq. 7).
 
-    Taken from ``grid.meta["extended_face_image"]`` when it still fits the
+    Taken from ``grid.extended_face_image`` when it still fits the
     vertices, otherwise recovered with :func:`~ppfab.faceimage.pp_face_image`
     (face ``(0, 0)`` gets unit weight) and completed by ghost faces
     ``F[0, ·] = F[1, ·] − λ U_0`` etc.
@@ -101,7 +101,7 @@ def extended_face_image_of(grid: QuadGrid, tol: float = 1e-6) -> np.ndarray:
     """
     if grid.closed:
         raise GeometryError("face-image transforms need an open patch; this grid is closed in j")
-    stored = grid.meta.get("extended_face_image") if isinstance(grid.meta, dict) else None
+    stored = grid.extended_face_image
     if stored is not None and _stored_image_fits(grid, np.asarray(stored, dtype=float), tol):
         return np.array(stored, dtype=float)
     v = grid.vertices
@@ -151,7 +151,7 @@ def grid_from_extended(F: np.ndarray, min_sine: float = 1e-9, tol: float = 1e-9)
 
 
 def with_face_image(grid: QuadGrid, tol: float = 1e-6) -> QuadGrid:
-    """The same vertices with support planes, face image, node axes and ``meta["extended_face_image"]``.
+    """The same vertices with support planes, face image, node axes and the extended face image.
 
     Used by constructions that make PP grids directly from vertices (Cauchy
     data, translational surfaces) so that every transform applies to them.
@@ -160,7 +160,7 @@ def with_face_image(grid: QuadGrid, tol: float = 1e-6) -> QuadGrid:
     rebuilt = grid_from_extended(F)
     return QuadGrid(grid.vertices, closed=False, support_u=rebuilt.support_u, support_w=rebuilt.support_w,
                     face_image=rebuilt.face_image, axes=rebuilt.axes, vertex_ids=grid.vertex_ids,
-                    meta={**grid.meta, "extended_face_image": F})
+                    extended_face_image=F, meta=grid.meta)
 
 
 def f_transform(grid: QuadGrid, t: np.ndarray) -> QuadGrid:
@@ -243,26 +243,8 @@ def offset_along_axes(grid: QuadGrid, distance: float, mode: str = "parallel") -
                     axes=axes, meta={**out.meta, "offset": stats})
 
 
-def projective_map(grid: QuadGrid, matrix: np.ndarray, min_weight: float = 1e-9) -> QuadGrid:
-    """Apply a 4D projective map to the face image and rebuild the mesh (§2.3.5, Fig. 5).
-
-    ``f' = (A f + b) / (cᵀ f + e)`` with ``matrix = [[A, b], [cᵀ, e]]`` (5×5,
-    acting on ``(f, 1)``).  Planes are points of RP³, so ``f'`` and ``A f + b``
-    are the same plane: the rebuilt mesh depends only on the upper 4×5 block,
-    and since ``A f + b`` maps the translation net ``F`` to a translation net
-    the result is again PP, with support planes ``A U_i`` and ``A W_j``.
-
-    The last row re-weights the face image by ``w = cᵀ f + e``; the re-weighted
-    image ``F / w`` is the face image of the *same* mesh with a different
-    torsion-free support structure (Prop. 2.4/2.5): its edge planes are the
-    differences of ``F / w`` and its node axes are returned in
-    ``meta["projective_axes"] (m+1, n+1, 3)``, the weights in
-    ``meta["face_image_weights"] (m+2, n+2)``.  The grid's own ``axes`` stay
-    the PP ones, ``U_i ∩ W_j``.
-
-    Raises :class:`GeometryError` when a face (ghost faces included) is sent to
-    infinity (``|w|`` below ``min_weight`` relative) or the new planes degenerate.
-    """
+def _projective_image(grid: QuadGrid, matrix: np.ndarray, min_weight: float) -> tuple[np.ndarray, np.ndarray]:
+    """``A f + b`` ``(m+2, n+2, 4)`` and the weights ``w = cᵀ f + e`` ``(m+2, n+2)`` of the extended face image."""
     T = np.asarray(matrix, dtype=float)
     if T.shape != (5, 5) or not np.all(np.isfinite(T)):
         raise GeometryError(f"a 4D projective map needs a finite 5x5 matrix, got shape {T.shape}")
@@ -276,7 +258,43 @@ def projective_map(grid: QuadGrid, matrix: np.ndarray, min_weight: float = 1e-9)
         a, b = (int(k) for k in np.unravel_index(np.argmin(np.abs(w)), w.shape))
         raise GeometryError(f"the projective map sends face image point F[{a}, {b}] to infinity "
                             f"(weight {w[a, b]:.3g})", element=f"face image {a},{b}", value=float(w[a, b]))
+    return Fa, w
+
+
+def projective_map(grid: QuadGrid, matrix: np.ndarray, min_weight: float = 1e-9) -> QuadGrid:
+    """Apply a 4D projective map to the face image and rebuild the mesh (§2.3.5, Fig. 5).
+
+    ``f' = (A f + b) / (cᵀ f + e)`` with ``matrix = [[A, b], [cᵀ, e]]`` (5×5,
+    acting on ``(f, 1)``).  Planes are points of RP³, so ``f'`` and ``A f + b``
+    are the same plane: the rebuilt mesh depends only on the upper 4×5 block,
+    and since ``A f + b`` maps the translation net ``F`` to a translation net
+    the result is again PP, with support planes ``A U_i`` and ``A W_j`` and axes ``U_i ∩ W_j``.
+    The re-weighting by the last row gives the same mesh another torsion-free support structure:
+    :func:`reweighted_axes`.
+
+    Raises :class:`GeometryError` when a face (ghost faces included) is sent to
+    infinity (``|w|`` below ``min_weight`` relative) or the new planes degenerate.
+    """
+    Fa, _ = _projective_image(grid, matrix, min_weight)
+    reweighted_axes(grid, matrix, min_weight)                 # the re-weighted structure must not degenerate
     out = grid_from_extended(Fa)
+    return QuadGrid(out.vertices, support_u=out.support_u, support_w=out.support_w, face_image=out.face_image,
+                    axes=out.axes, extended_face_image=out.extended_face_image, meta=out.meta)
+
+
+def reweighted_axes(grid: QuadGrid, matrix: np.ndarray, min_weight: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """The torsion-free support structure of :func:`projective_map`'s mesh given by the re-weighted image.
+
+    The re-weighted image ``F' = (A f + b) / w``, ``w = cᵀ f + e``, is the face image of the *same* mesh with
+    another torsion-free support structure (Prop. 2.4/2.5): its edge planes are the differences of ``F'``
+    and its node axes their intersections.
+
+    Returns
+    -------
+    axes : (m+1, n+1, 3) unit node axes
+    weights : (m+2, n+2) ``w`` of every face, ghosts included
+    """
+    Fa, w = _projective_image(grid, matrix, min_weight)
     Fp = Fa / w[..., None]
     s_row = Fp[1:, :-1] - Fp[:-1, :-1]          # across row i: faces F[i, j], F[i+1, j]   (m+1, n+1, 4)
     s_col = Fp[:-1, 1:] - Fp[:-1, :-1]          # across column j: faces F[i, j], F[i, j+1]
@@ -286,8 +304,7 @@ def projective_map(grid: QuadGrid, matrix: np.ndarray, min_weight: float = 1e-9)
         i, j = (int(k) for k in np.unravel_index(np.argmin(length[..., 0]), length.shape[:2]))
         raise GeometryError(f"the re-weighted support structure degenerates at vertex ({i}, {j})",
                             element=f"vertex ({i}, {j})")
-    return QuadGrid(out.vertices, support_u=out.support_u, support_w=out.support_w, face_image=out.face_image,
-                    axes=out.axes, meta={**out.meta, "face_image_weights": w, "projective_axes": axes / length})
+    return axes / length, w
 
 
 def _check_indices(idx: Sequence[int], count: int, what: str) -> np.ndarray:

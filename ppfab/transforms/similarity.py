@@ -15,8 +15,6 @@ import numpy as np
 from ppfab.mesh import QuadGrid, QuadMesh
 
 
-PLANE_META = ("extended_face_image", "extended_face_planes")
-"""Grid ``meta`` entries that hold weighted planes ``(..., 4)`` and move with the mesh."""
 
 
 def rotation_z(deg: float) -> np.ndarray:
@@ -56,12 +54,10 @@ def transform(mesh: QuadGrid | QuadMesh, scale: float = 1.0, rotate_z_deg: float
     g = mesh
     v = g.vertices @ rot.T * scale + t
     axes = None if g.axes is None else g.axes @ rot.T
-    meta = dict(g.meta)
-    for key in PLANE_META:
-        if key in meta:
-            meta[key] = _planes(meta[key], m)
     out = replace(g, vertices=v, support_u=_planes(g.support_u, m), support_w=_planes(g.support_w, m),
-                  face_image=_planes(g.face_image, m), axes=axes, meta=meta)
+                  face_image=_planes(g.face_image, m), axes=axes,
+                  extended_face_image=_planes(g.extended_face_image, m),
+                  extended_face_planes=_planes(g.extended_face_planes, m))
     return flip_grid(out) if flip else out
 
 
@@ -72,11 +68,10 @@ def flip_grid(g: QuadGrid) -> QuadGrid:
             return None
         a = np.flip(a, axis=axis)
         return np.roll(a, 1, axis=axis) if g.closed else a
-    meta = {k: v for k, v in g.meta.items() if k not in PLANE_META}
-    for key in PLANE_META:
-        if key in g.meta and not g.closed:
-            meta[key] = np.flip(g.meta[key], axis=1)
+    def ext(a):
+        return None if a is None or g.closed else np.flip(a, axis=1)
     face_image = None if g.face_image is None else np.flip(g.face_image, axis=1)
     return replace(g, vertices=rev(g.vertices), support_w=None if g.support_w is None else g.support_w[::-1],
                    face_image=face_image, axes=None if g.axes is None else -rev(g.axes),
-                   vertex_ids=rev(g.vertex_ids), meta=meta)
+                   vertex_ids=rev(g.vertex_ids), extended_face_image=ext(g.extended_face_image),
+                   extended_face_planes=ext(g.extended_face_planes))
