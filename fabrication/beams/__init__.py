@@ -12,7 +12,8 @@ reports the defects by part id.  ``fabrication.writers.step`` writes ``beams.ste
 from __future__ import annotations
 
 from .build import BeamSet, build_beams
-from .joints import NodeJoint, end_setback, slot_width
+from .joint_types.halflap import slot_width
+from .joints import NodeJoint, end_setback
 from .params import BeamParams
 from .plates import BeamPlate, Slot
 from .report import BeamRecord, BeamReport, Defect

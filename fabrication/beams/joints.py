@@ -34,16 +34,10 @@ from shapely.validation import explain_validity
 from ppfab import planes as pl
 from ppfab.support.structure import SupportStructure
 
+from .joint_types import get_joint_type
 from .params import BeamParams
 from .plates import BeamPlate, Slot
 from .report import Defect
-
-
-def slot_width(thickness: float, cos_theta: float, clearance: float) -> float:
-    """Width of a half-lap slot for plates of ``thickness`` crossing at ``θ``: ``t(1 + |cos θ|)/sin θ + c``."""
-    c = min(abs(float(cos_theta)), 1.0)
-    s = max(np.sqrt(1.0 - c * c), 1e-12)
-    return thickness * (1.0 + c) / s + clearance
 
 
 def end_setback(thickness: float, cos_phi: float, sin_phi: float, clearance: float) -> float:
@@ -96,7 +90,9 @@ def _end_direction3(p: BeamPlate, v: int, axis: np.ndarray) -> np.ndarray:
 
 def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: BeamParams
                   ) -> tuple[list[NodeJoint], dict[str, list[tuple[int, float]]], dict[str, list[Slot]], list[Defect]]:
-    """Joints at every node: angles, end set-backs, half-lap slots, angle defects."""
+    """Joints at every node: angles, end set-backs, the joint type's cuts where plates run through
+    (:mod:`fabrication.beams.joint_types`), angle defects."""
+    jt = get_joint_type(params.joint)
     joints: list[NodeJoint] = []
     trims: dict[str, list[tuple[int, float]]] = {}
     slots: dict[str, list[Slot]] = {}
@@ -135,41 +131,25 @@ def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: Be
                                           f"{ps[i].part_id} and {ps[j].part_id} meet at node {v} at {ang:.1f}° "
                                           f"(< min_angle_deg {min_ang:g}°)"))
                     continue
-                if params.joint != "none":
+                if jt.cuts_ends:
                     for e, c, s in pairs:
                         setback[e] = max(setback[e], end_setback(t, c, s, cl))
         through = [k for k, r in enumerate(roles) if r == "through"]
-        kind = "free" if len(ps) == 1 else ("plain" if params.joint == "none" else "butt")
+        kind = "free" if len(ps) == 1 else ("butt" if jt.cuts_ends else "plain")
         width = float("nan")
         line = None
-        if params.joint == "halflap" and len(through) == 2:
-            kind = "halflap"
-            i, j = through
-            if ps[j].family < ps[i].family:
-                i, j = j, i
-            A, B = ps[i], ps[j]
-            cos = abs(float(A.plane[:3] @ B.plane[:3]))
-            if cos < np.cos(np.radians(max(min_ang, 1e-3))):
-                point, d = pl.line_of_two_planes(A.plane, B.plane)
-                d = d if d @ a >= 0 else -d
-                x = support.vertices[v]
-                p0 = point + ((x - point) @ d) * d
-                width = slot_width(t, cos, cl)
-                line = (p0, d)
-                for plate, top in ((A, True), (B, False)):
-                    s2 = plate.frame.vec2d(d)
-                    slots.setdefault(plate.part_id, []).append(Slot(
-                        v, (B if top else A).part_id, top, plate.frame.to2d(p0), s2 / np.linalg.norm(s2), width,
-                        0.5 * params.depth, params.depth))
-        elif params.joint == "halflap" and len(through) > 2:
-            defects.append(Defect(ps[through[0]].part_id, "outline", float(len(through)), 2.0, f"node {v}",
-                                  f"node {v}: {len(through)} plates run through it, a half-lap joins two"))
+        cut = jt.through(ps, through, v, a, support, params) if jt.through is not None else None
+        if cut is not None:
+            kind, width, line = cut.kind, cut.width, cut.line
+            for pid, extra in cut.slots.items():
+                slots.setdefault(pid, []).extend(extra)
+            defects += cut.defects
+        cuts = jt.cuts_ends and len(ps) > 1
         for k, c in setback.items():
-            if params.joint != "none" and len(ps) > 1:
+            if cuts:
                 trims.setdefault(ps[k].part_id, []).append((v, c))
         joints.append(NodeJoint(v, tuple(p.part_id for p in ps), tuple(roles), tuple(angles), kind, width,
-                                tuple((ps[k].part_id, c) for k, c in setback.items() if params.joint != "none"
-                                      and len(ps) > 1), line))
+                                tuple((ps[k].part_id, c) for k, c in setback.items() if cuts), line))
     return joints, trims, slots, defects
 
 

@@ -7,8 +7,6 @@ from dataclasses import dataclass
 from ppfab.errors import DesignError
 from ppfab.schema import param
 
-JOINTS = ("halflap", "segmented", "none")
-
 
 @dataclass(frozen=True)
 class BeamParams:
@@ -28,7 +26,7 @@ class BeamParams:
     density: float = param(7850.0, doc="material density, kg/m³ (steel 7850, glulam 470)", exclusive_min=0)
     joint: str = param("halflap", doc="'halflap' (PP: slots from above in rows, from below in columns), "
                                       "'segmented' (P: one family continuous, the other cut into segments "
-                                      "between crossings), 'none' (plain intersecting plates)", choices=JOINTS)
+                                      "between crossings), 'none' (plain intersecting plates); see fabrication.beams.joint_types")
     clearance: float = param(1.0, doc="extra slot width, mm; ends that butt against another plate stop "
                                       "half of it short of its face", min=0)
     continuous: str = param("auto", doc="segmented joints: the family that runs through the nodes, 'rows', "
@@ -44,7 +42,10 @@ class BeamParams:
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
+        from .joint_types import get_joint_type
+
+        get_joint_type(self.joint, "joint")
         if self.max_length and self.max_length < 2 * self.min_segment:
             raise DesignError("max_length", f"must be 0 or at least twice min_segment ({2 * self.min_segment:g} mm), "
                                             f"got {self.max_length:g}")

@@ -284,6 +284,9 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
     """
+    from .joint_types import get_joint_type
+
+    jt = get_joint_type(params.joint)
     v = support.vertices
     axes = support.axes
     ids = beam_ids(support)
@@ -300,16 +303,14 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
         dev = float(support.polyline_deviation[l])
         supported = bool(support.polyline_planar[l]) or len(vs) == 2
         planar = supported and dev <= params.plane_tolerance
-        segmented = params.joint == "segmented" and line.family != cont
-        if not planar and not segmented and params.joint in ("halflap", "segmented"):
+        segmented = jt.segments and line.family != cont
+        if not planar and not segmented and jt.planar_requirement is not None:
             why = (f"its vertices lie up to {dev:.3g} mm off the beam plane (tolerance {params.plane_tolerance:g} mm)"
                    if dev > params.plane_tolerance else
                    f"its plane is not a support plane of the '{support.kind}' support structure (the axes leave it)")
             defects.append(Defect(ids[l], "not_planar", dev, params.plane_tolerance,
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
-                                  f"{ids[l]}: {why}; "
-                                  + ("half-lap joints need both families planar (PP)" if params.joint == "halflap"
-                                     else "the continuous family of segmented joints must be planar")))
+                                  f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
             plates.extend(_continuous(support, params, l, ids[l], defects))
         else:

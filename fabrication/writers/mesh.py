@@ -1,20 +1,36 @@
-"""``mesh.obj`` (the mesh in mm; a regular patch in row-major order) and ``mesh.json`` (grid, support planes,
-face image, node axes)."""
+"""``mesh.obj`` (the mesh in mm; a regular patch in row-major order) and ``mesh.json`` (grid, face image, and
+the support planes and node axes of the support structure that was fabricated)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
+
 
 from ppfab import __version__
 from ppfab.io import grid_to_json, write_obj
 from ppfab.mesh import QuadGrid
+from ppfab.support.structure import SupportStructure
 
 from . import Files, writer
 from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..build.records import Build
+
+
+def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:
+    """``grid`` carrying the fabricated structure's node axes and, for each family whose polylines all lie in
+    their planes with the axes, its support planes (``support_u`` rows, ``support_w`` columns)."""
+    ids = support.mesh.grid_ids
+    assert ids is not None and ids.shape == grid.shape
+    m1 = grid.shape[0]
+    planes, planar = support.polyline_planes, support.polyline_planar
+    rows, cols = slice(0, m1), slice(m1, None)
+    return replace(grid, axes=support.axes[ids],
+                   support_u=planes[rows] if planar[rows].all() else None,
+                   support_w=planes[cols] if planar[cols].all() else None)
 
 
 @writer("mesh", order=10)
@@ -24,6 +40,7 @@ def write_mesh_files(build: "Build", out: Path, files: Files) -> str:
     files["mesh_obj"] = "mesh.obj"
     grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
     if grid is not None:
-        (out / "mesh.json").write_text(json_text(grid_to_json(grid)), encoding="utf-8")
+        doc = grid_to_json(grid_with_support(grid, build.support))
+        (out / "mesh.json").write_text(json_text(doc), encoding="utf-8")
         files["mesh_json"] = "mesh.json"
     return "mesh.obj"
