@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence, overload
 
 import numpy as np
 
@@ -27,7 +27,12 @@ from .errors import GeometryError
 from .topology import Polyline, Topology, grid_face_indices, recover_grid
 
 
-def _readonly(a: np.ndarray | None, dtype=float) -> np.ndarray | None:
+@overload
+def _readonly(a: None, dtype: Any = float) -> None: ...
+@overload
+def _readonly(a: np.ndarray | Sequence[Any], dtype: Any = float) -> np.ndarray: ...
+def _readonly(a: np.ndarray | Sequence[Any] | None, dtype: Any = float) -> np.ndarray | None:
+    """A read-only copy of ``a`` as ``dtype`` (``None`` stays ``None``)."""
     if a is None:
         return None
     out = np.array(a, dtype=dtype, copy=True)
