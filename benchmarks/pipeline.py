@@ -17,7 +17,7 @@ from pathlib import Path
 
 def main(argv: list[str]) -> None:
     from fabrication import build, load_design
-    from fabrication.build.progress import Progress
+    from fabrication.pipeline.progress import Progress
     from ppfab.geometry import build_geometry
 
     design = load_design(argv[0] if argv else None)

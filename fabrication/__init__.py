@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # pragma: no cover
     from .design import Design, load_design, parse_design
-    from .build.pipeline import build
-    from .build.progress import Progress
-    from .build.records import Build
+    from .pipeline.stages import build
+    from .pipeline.progress import Progress
+    from .pipeline.records import Build
     from .verify import verify
 
 _API = {"Design": "design", "load_design": "design", "parse_design": "design",
-        "build": "build.pipeline", "Build": "build.records", "Progress": "build.progress", "verify": "verify"}
+        "build": "pipeline.stages", "Build": "pipeline.records", "Progress": "pipeline.progress", "verify": "verify"}
 
 __all__ = ["Build", "Design", "Progress", "build", "load_design", "parse_design", "verify"]
 

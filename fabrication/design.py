@@ -21,7 +21,7 @@ printed as one line and exit code 2 by the command line.
 from __future__ import annotations
 
 import hashlib
-import sys
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
@@ -38,10 +38,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .nesting import NestingParams
     from .panels import PanelParams
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 DEFAULT_DESIGN = Path(__file__).resolve().parent / "data" / "default.toml"
 """The bundled default example (a PP gridshell roof), built by ``ppfab build`` without a design file."""
@@ -186,7 +182,7 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
                   info=records["design"], geometry=geometry, sections=records, raw=doc)
 
 
-def load_design(path: str | Path | None, sections: tuple[str, ...] | None = None) -> Design:
+def load_design(path: str | Path | None = None, sections: tuple[str, ...] | None = None) -> Design:
     """Read and validate a design file; ``None`` loads the bundled default example."""
     p = DEFAULT_DESIGN if path is None else Path(path)
     try:

@@ -109,29 +109,3 @@ def histogram(values: np.ndarray, title: str, xlabel: str, bins: int = 30):
     fig.tight_layout()
     return fig
 
-
-def sheet_figure(sheet_size: tuple[float, float], trim: tuple[float, float, float, float],
-                 outlines: list[np.ndarray], labels: list[str], title: str = ""):
-    """A cutting sheet: stock outline, usable area, parts with labels (sheet coordinates, mm)."""
-    plt = _plt()
-    from matplotlib.patches import Polygon, Rectangle
-
-    w, h = sheet_size
-    fig, ax = plt.subplots(figsize=(6.0, 6.0 * h / w + 0.4), dpi=100)
-    ax.add_patch(Rectangle((0, 0), w, h, fill=False, edgecolor="black", linewidth=0.8))
-    x0, y0, x1, y1 = trim
-    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor="grey", linestyle="--",
-                           linewidth=0.5))
-    for poly, lab in zip(outlines, labels):
-        ax.add_patch(Polygon(poly, closed=True, facecolor=(0.75, 0.86, 0.95), edgecolor=(0.1, 0.3, 0.5),
-                             linewidth=0.5))
-        c = np.asarray(poly).mean(axis=0)
-        ax.text(c[0], c[1], lab, fontsize=4, ha="center", va="center")
-    ax.set_xlim(-0.02 * w, 1.02 * w)
-    ax.set_ylim(-0.02 * h, 1.02 * h)
-    ax.set_aspect("equal")
-    ax.set_axis_off()
-    if title:
-        ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    return fig

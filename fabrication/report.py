@@ -17,7 +17,7 @@ from .flatpart import place_points
 from .htmlreport import HtmlReport, esc
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .build.records import Build
+    from .pipeline.records import Build
 
 
 def sheet_svg(sheet_size: tuple[float, float], usable: tuple[float, float, float, float],

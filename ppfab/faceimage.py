@@ -256,7 +256,3 @@ def face_image(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
     w = np.real(np.exp(logw))
     return f * w[:, None]
 
-
-def normal_image(F: np.ndarray) -> np.ndarray:
-    """The weighted normal image ``M_N``: the face image with its 4th coordinate forgotten (§2.2.2)."""
-    return np.asarray(F, dtype=float)[..., :3]

@@ -137,27 +137,6 @@ def intersect_three(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray,
     return np.linalg.solve(a, rhs[..., None])[..., 0]
 
 
-def intersect_planes_lstsq(planes: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
-    """Least-squares common point of several planes per item (Prop. 2.5).
-
-    Parameters
-    ----------
-    planes : (N, k, 4) float, up to ``k`` planes per item
-    mask : (N, k) bool, which planes are present (padding otherwise)
-
-    Returns
-    -------
-    (N, 3) float, the point minimising ``Σ (n·x + d)²`` over unit planes.
-    """
-    p = normalize(planes)
-    if mask is not None:
-        p = p * np.asarray(mask, dtype=float)[..., None]
-    n = p[..., :3]
-    ata = np.einsum("nki,nkj->nij", n, n)
-    atb = -np.einsum("nki,nk->ni", n, p[..., 3])
-    return np.linalg.solve(ata, atb[..., None])[..., 0]
-
-
 def line_of_two_planes(p1: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The line ``p1 ∩ p2`` as (point closest to the origin, unit direction), stacked."""
     a, b = normalize(p1), normalize(p2)

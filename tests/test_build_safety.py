@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from fabrication.build import pipeline
+from fabrication.pipeline import stages as pipeline
 from fabrication.cli import main
 
 from conftest import small_design

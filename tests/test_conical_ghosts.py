@@ -13,8 +13,7 @@ from ppfab.transforms import isotropic
 from ppfab.conical.cones import laguerre_transform, axis_of_normals, conical_quality, extended_planes, ghost_planes, offset_faces, vertex_planes
 from ppfab.conical.edit import edit_conical
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
-from ppfab.constructions.conical_sections import sections_grid
-from ppfab.constructions.conical_spheres import channel_mesh, touching_radii
+from ppfab.constructions.conical_spheres import channel_mesh
 from ppfab.errors import GeometryError
 from ppfab.io import load_mesh
 from ppfab.io.jsonio import grid_from_json, grid_to_json

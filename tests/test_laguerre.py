@@ -2,18 +2,15 @@
 
 from __future__ import annotations
 
-import doctest
 
 import numpy as np
 import pytest
 
-from ppfab.conical import edit as conical_edit
-from ppfab.transforms import isotropic, laguerre
+from ppfab.transforms import isotropic
 from ppfab import planes as pl
 from ppfab.conical.cones import conical_quality, extended_planes, offset_faces
 from ppfab.constructions.conical_pp import Series, conical_pp_grid
-from ppfab.constructions.conical_sections import sections_grid
-from ppfab.constructions.conical_spheres import channel_mesh, touching_radii
+from ppfab.constructions.conical_spheres import channel_mesh
 from ppfab.conical.edit import ConicalEditor, edit_conical, fit_lorentz, mobius_of_laguerre
 from ppfab.errors import FoldError, GeometryError
 from ppfab.transforms.isotropic import IsotropicMobius, quad_circularity, quad_planarity_4d
@@ -301,7 +298,3 @@ def test_isotropic_map_of_laguerre_type_keeps_the_mesh_conical():
     out = isotropic.isotropic_transform(grid, T)
     assert_conical_planar(out, families)
 
-
-@pytest.mark.parametrize("module", [laguerre, conical_edit, isotropic])
-def test_docstring_examples(module):
-    assert doctest.testmod(module).failed == 0

@@ -28,7 +28,7 @@ FAB_LAYERS = [
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "figures", "htmlreport",
      "report"},
     {"writers", "verify"},
-    {"build"},
+    {"pipeline"},
     {"cli"},
 ]
 

@@ -411,13 +411,3 @@ def test_example_builds_as_an_architectural_pp_mesh(path: Path):
     assert 0.8 <= e.min() and e.max() <= 2.2                          # panels of about 1.2-1.8 m
     assert float(doc["geometry"]["scale"]) == 1000.0
 
-
-@pytest.mark.parametrize("module", ["ppfab.transforms.pp", "ppfab.constructions.cauchy", "ppfab.constructions.bisector",
-                                    "ppfab.constructions.profile_curves", "ppfab.constructions.plane_splines",
-                                    "ppfab.constructions.translational"])
-def test_docstring_examples_run(module):
-    import doctest
-    import importlib
-
-    result = doctest.testmod(importlib.import_module(module))
-    assert result.attempted > 0 and result.failed == 0

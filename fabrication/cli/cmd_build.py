@@ -24,9 +24,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..design import load_design
-    from ..build.folder import AtomicFolder
-    from ..build.pipeline import build
-    from ..build.progress import Progress
+    from ..pipeline.folder import AtomicFolder
+    from ..pipeline.stages import build
+    from ..pipeline.progress import Progress
 
     design = load_design(args.design)
     progress = Progress(quiet=args.quiet or args.json)

@@ -52,10 +52,8 @@ def _int_list(text: str | None, key: str) -> list[int] | None:
 def _parse_set(items: list[str]) -> dict:
     from ppfab.errors import DesignError
 
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        import tomli as tomllib
+    import tomllib
+
     out = {}
     for item in items:
         key, sep, value = item.partition("=")
@@ -71,10 +69,8 @@ def _parse_set(items: list[str]) -> dict:
 def _design_table(path: str) -> dict:
     from ppfab.errors import DesignError
 
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # pragma: no cover
-        import tomli as tomllib
+    import tomllib
+
     try:
         doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
@@ -107,8 +103,8 @@ def run(args: argparse.Namespace) -> int:
     from ppfab.io import load_mesh, write_mesh
     from ppfab.optimize import optimize
 
-    from ..build.folder import atomic_file
-    from ..build.progress import Progress
+    from ..pipeline.folder import atomic_file
+    from ..pipeline.progress import Progress
 
     out = Path(args.out)
     if out.suffix.lower() not in (".obj", ".off"):

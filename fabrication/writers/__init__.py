@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Callable
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..build.progress import Progress
-    from ..build.records import Build
+    from ..pipeline.progress import Progress
+    from ..pipeline.records import Build
 
 Files = dict[str, "str | list[str]"]
 """The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""

@@ -36,7 +36,7 @@ from ..contract import (DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DI
 from ..flatpart import FlatPart, Placement, place_points
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..build.records import Build
+    from ..pipeline.records import Build
 
 
 

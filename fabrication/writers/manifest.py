@@ -16,7 +16,7 @@ from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..build.records import Build
+    from ..pipeline.records import Build
 
 
 def sha256_of(path: Path) -> str:

@@ -17,7 +17,7 @@ from . import Files, writer
 from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..build.records import Build
+    from ..pipeline.records import Build
 
 
 def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:

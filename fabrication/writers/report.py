@@ -9,7 +9,7 @@ from . import Files, writer
 from .tables import parts_table
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..build.records import Build
+    from ..pipeline.records import Build
 
 
 @writer("report", order=80, enabled=lambda design: design.output.report)

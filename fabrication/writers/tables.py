@@ -12,7 +12,7 @@ from ..parts import order_rows, part_rows, write_order_list, write_parts_csv, wr
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..build.records import Build
+    from ..pipeline.records import Build
 
 
 def parts_table(build: "Build", files: Files) -> list[dict]:

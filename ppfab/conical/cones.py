@@ -529,19 +529,6 @@ def conical_quality(grid: QuadGrid) -> ConicalQuality:
 
 # -- Laguerre maps of conical meshes ----------------------------------------------------------
 
-def vertex_cones(grid: QuadGrid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For every vertex the cone touched by its (up to four, ghosts included) faces.
-
-    Returns
-    -------
-    axes : (rows, cols, 3) unit, along the face normals
-    cos : (rows, cols) ``a·n``
-    residual : (rows, cols) concyclicity residual of the normals (0 for a conical mesh)
-    """
-    P = vertex_planes(grid)
-    return axis_of_normals(P[..., :3])
-
-
 def laguerre_transform(grid: QuadGrid, lmap: "LaguerreMap", check: bool = True, max_residual: float = 1e-6) -> QuadGrid:
     """Apply a Laguerre map to a conical grid (§2.1.3): face planes map, vertices follow their cones.
 

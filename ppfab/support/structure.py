@@ -108,19 +108,6 @@ class SupportStructure:
         leaves the plane of the edge and the other axis (see :func:`torsion_offset`)."""
         return torsion_offset(self.mesh, self.axes, depth)
 
-    def vertex_torsion(self) -> np.ndarray:
-        """``(N,)`` largest torsion angle of the edges at each vertex, radians."""
-        out = np.zeros(len(self.vertices))
-        t = self.torsion
-        np.maximum.at(out, self.edges[:, 0], t)
-        np.maximum.at(out, self.edges[:, 1], t)
-        return out
-
-    @cached_property
-    def edge_polyline(self) -> np.ndarray:
-        """``(E,)`` index of the polyline (into :attr:`polylines`) that contains each edge."""
-        return edge_polyline_index(self.mesh)
-
     @cached_property
     def grid_index(self) -> np.ndarray | None:
         """``(N, 2)`` grid index ``(i, j)`` of every vertex on a regular patch, else ``None``."""
@@ -140,15 +127,6 @@ class SupportStructure:
             return None
         m1 = g.shape[0]
         return (0, k) if k < m1 else (1, k - m1)
-
-    def axis_plane_angle(self) -> np.ndarray:
-        """``(L,)`` largest angle (radians) between an axis on a polyline and that polyline's plane."""
-        out = np.zeros(len(self.polylines))
-        n = pl.normalize(self.polyline_planes)[:, :3]
-        for k, p in enumerate(self.polylines):
-            s = np.abs(self.axes[p.vertices] @ n[k])
-            out[k] = float(np.arcsin(np.clip(s.max(), 0.0, 1.0)))
-        return out
 
     def summary(self) -> dict:
         """Plain numbers for reports: torsion max/mean (deg), worst polyline deviation, solver record."""

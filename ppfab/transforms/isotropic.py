@@ -117,14 +117,6 @@ class IsotropicMobius:
         return cls(M)
 
     @classmethod
-    def scaling(cls, s: float) -> "IsotropicMobius":
-        """``n ↦ s n`` (``d`` kept)."""
-        M = np.eye(6)
-        M[0, 0] = s * s
-        M[1:4, 1:4] *= s
-        return cls(M)
-
-    @classmethod
     def inversion(cls, center: np.ndarray | None = None, radius: float = 1.0) -> "IsotropicMobius":
         """``(n, d) ↦ (m + ρ² (n − m) / |n − m|², ρ² d / |n − m|²)``: inversion of the normal image in the
         sphere ``(m, ρ)``, the weighted plane rescaled with it."""

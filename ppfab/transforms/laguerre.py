@@ -175,12 +175,6 @@ class LaguerreMap:
         the offset at constant face–face distance (§2.1.3)."""
         return cls(np.eye(4), 1.0, np.array([0.0, 0.0, 0.0, float(distance)]))
 
-    @classmethod
-    def similarity(cls, R: np.ndarray | None = None, scale: float = 1.0, t: np.ndarray | None = None) -> "LaguerreMap":
-        """``x ↦ s R x + t`` (radii scale by ``s``)."""
-        tt = np.zeros(3) if t is None else np.asarray(t, dtype=float)
-        return cls(spatial(np.eye(3) if R is None else R), float(scale), np.concatenate([tt, [0.0]]))
-
     # -- actions -------------------------------------------------------------------------------
     def spheres(self, X: np.ndarray) -> np.ndarray:
         """Image of spheres ``(..., 4)``."""

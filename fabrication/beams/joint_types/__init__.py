@@ -74,11 +74,6 @@ def load_joint_types() -> dict[str, JointType]:
     return JOINT_TYPES
 
 
-def joint_names() -> tuple[str, ...]:
-    """The registered joint names, sorted."""
-    return tuple(sorted(load_joint_types()))
-
-
 def get_joint_type(name: str, key: str = "beams.joint") -> JointType:
     """Look a joint type up by name; an unknown name lists the valid ones."""
     table = load_joint_types()

@@ -1,6 +1,6 @@
 """``build(design) -> Build``: design → geometry → quality → support → panels → beams → nesting → nodes → summary.
 
-One function per stage, each returning a frozen record (:mod:`fabrication.build.records`); :data:`STAGES`
+One function per stage, each returning a frozen record (:mod:`fabrication.pipeline.records`); :data:`STAGES`
 names them in order and :func:`build` calls them in that order with typed arguments.  Every check that can
 reject a design (a fold, non-planar panels in mm, degenerate beams, parts that fit no sheet) runs here,
 before any file exists; :meth:`Build.write` then hands the record to the writers

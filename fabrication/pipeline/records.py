@@ -1,6 +1,6 @@
 """The typed results of the build stages, and :class:`Build`, which holds them all.
 
-Each stage of :mod:`fabrication.build.pipeline` returns one frozen record; nothing passes between stages
+Each stage of :mod:`fabrication.pipeline.stages` returns one frozen record; nothing passes between stages
 in an untyped dictionary.  The support structure (node axes and support planes) exists once, in
 :attr:`Build.support`: the beams, the node table, ``mesh.json``, ``nodes.csv`` and the report all read it
 from there.
@@ -84,7 +84,7 @@ class Summary:
 class Build:
     """Everything a build computed, stage by stage; :meth:`write` turns it into the output folder.
 
-    Made by :func:`fabrication.build` (``build(design) -> Build``).  ``times`` holds the seconds each stage
+    Made by :func:`fabrication.pipeline` (``build(design) -> Build``).  ``times`` holds the seconds each stage
     took (not written to any file, so builds stay byte-reproducible).
     """
 
