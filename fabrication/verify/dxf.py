@@ -1,0 +1,67 @@
+"""The DXF cutting sheets: audit, layers, parts once, inside TRIM, spacing, parts.csv, panel congruence."""
+
+from __future__ import annotations
+
+from .congruence import congruence_error, inset_face_2d
+from . import Verification, check
+
+
+@check("dxf", 50)
+def check_dxf(v: Verification) -> None:
+    """Every cutting sheet: ezdxf audit, contract layers/entities, parts once, inside TRIM, spacing,
+    agreement with parts.csv, and (glass) congruence with the 3D face inset by half the gap."""
+    from shapely import Polygon, STRtree
+
+    from ..writers.dxf import check_sheet_dxf
+
+    m = v.data.get("manifest", {})
+    files = m.get("files", {})
+    fab = m.get("fabrication", {})
+    parts = {r["part_id"]: r for r in v.data.get("parts", [])}
+    mesh = v.data.get("mesh")
+    seen: dict[str, str] = {}
+    for key, spacing_key in (("glass_sheets", "nesting"), ("beam_sheets", "beam_nesting")):
+        spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
+        for sheet_no, rel in enumerate(files.get(key, []), start=1):
+            try:
+                content = check_sheet_dxf(v.folder / rel)
+            except Exception as exc:  # noqa: BLE001 - reported as a finding
+                v.error(rel, "", str(exc))
+                continue
+            polys = []
+            trim = Polygon(content.trim_outline).buffer(1e-6)
+            for part in content.parts:
+                pid = part.part_id
+                if pid in seen:
+                    v.error(rel, pid, f"part is also cut on {seen[pid]}")
+                seen[pid] = rel
+                row = parts.get(pid)
+                if row is None:
+                    v.error(rel, pid, "part is not in parts.csv")
+                elif str(row.get("sheet")) != str(sheet_no) or row.get("nest_tag") != part.nest_tag:
+                    v.error(rel, pid, f"sheet/nest tag ({sheet_no}, {part.nest_tag}) differ from parts.csv "
+                                      f"({row.get('sheet')}, {row.get('nest_tag')})")
+                poly = Polygon(part.points)
+                if not poly.is_valid:
+                    v.error(rel, pid, "outline intersects itself")
+                if not trim.contains(poly):
+                    v.error(rel, pid, "outline leaves the usable (TRIM) area")
+                polys.append((pid, poly))
+                if key == "glass_sheets" and mesh is not None and row is not None and row.get("face", "") != "":
+                    face = int(row["face"])
+                    ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))
+                    dl, da = congruence_error(ref, part.points)
+                    if dl > 1e-6 or da > 1e-6:
+                        v.error(rel, pid, f"outline is not the face {face} inset by half the gap "
+                                          f"(edge lengths differ by {dl:.3g} mm, angles by {da:.3g} rad)")
+            tree = STRtree([p for _, p in polys])
+            for i, (pid, poly) in enumerate(polys):
+                for j in tree.query(poly, predicate="dwithin", distance=max(spacing - 1e-6, 0.0)):
+                    if j > i:
+                        d = poly.distance(polys[j][1])
+                        what = "overlaps" if d == 0 else f"is {d:.3g} mm from"
+                        v.error(rel, pid, f"{what} {polys[j][0]} (spacing {spacing:g} mm)")
+    for pid, row in parts.items():
+        if pid not in seen and (files.get("glass_sheets") or files.get("beam_sheets")):
+            v.error("parts.csv", pid, "part is on no cutting sheet")
+    v.checked.append("dxf")
