@@ -301,7 +301,7 @@ def test_rigid_motion_keeps_the_plates(pp):
 
 
 def test_bad_parameters():
-    with pytest.raises(DesignError, match=r"beams\.joint: must be one of .*did you mean 'halflap'"):
+    with pytest.raises(DesignError, match=r"beams\.joint: unknown joint .*did you mean 'halflap'"):
         parse_params(BeamParams, {"joint": "halflapp"}, "beams")
     with pytest.raises(DesignError, match=r"beams\.depth: must be > 0"):
         parse_params(BeamParams, {"depth": 0}, "beams")

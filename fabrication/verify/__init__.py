@@ -10,11 +10,11 @@ for DXF and the CAD kernel for STEP.  Adding a check is one new module.
 from __future__ import annotations
 
 import csv
-import importlib
-import pkgutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
+
+from ppfab.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -56,25 +56,21 @@ class Check:
     run: Callable[[Verification], None]
 
 
-CHECKS: dict[str, Check] = {}
+_TABLE: Registry[Check] = Registry("check", "fabrication.verify")
+CHECKS: dict[str, Check] = _TABLE.entries
 
 
 def check(name: str, order: int) -> Callable[[Callable[[Verification], None]], Callable[[Verification], None]]:
     """Decorator registering ``run(verification)`` as the check ``name``."""
     def register(fn: Callable[[Verification], None]) -> Callable[[Verification], None]:
-        if name in CHECKS:
-            raise RuntimeError(f"check {name!r} registered twice")
-        CHECKS[name] = Check(name, order, fn)
+        _TABLE.add(name, Check(name, order, fn))
         return fn
     return register
 
 
 def load_checks() -> list[Check]:
     """Import every check module of this package (once); the checks in order."""
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    return sorted(CHECKS.values(), key=lambda c: (c.order, c.name))
+    return sorted(_TABLE.load().values(), key=lambda c: (c.order, c.name))
 
 
 def verify(folder: str | Path) -> Verification:

@@ -10,11 +10,11 @@ format is one new module.
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
+
+from ppfab.registry import Registry
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
@@ -35,25 +35,21 @@ class Writer:
     enabled: Callable[["Design"], bool]
 
 
-WRITERS: dict[str, Writer] = {}
+_TABLE: Registry[Writer] = Registry("writer", "fabrication.writers")
+WRITERS: dict[str, Writer] = _TABLE.entries
 
 
 def writer(name: str, order: int, enabled: Callable[["Design"], bool] | None = None) -> Callable:
     """Decorator registering ``write(build, out, files) -> note`` as the writer ``name``."""
     def register(fn: Callable[["Build", Path, Files], str]) -> Callable[["Build", Path, Files], str]:
-        if name in WRITERS:
-            raise RuntimeError(f"writer {name!r} registered twice")
-        WRITERS[name] = Writer(name, order, fn, enabled or (lambda design: True))
+        _TABLE.add(name, Writer(name, order, fn, enabled or (lambda design: True)))
         return fn
     return register
 
 
 def load_writers() -> list[Writer]:
     """Import every writer module of this package (once); the writers in their order."""
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    return sorted(WRITERS.values(), key=lambda w: (w.order, w.name))
+    return sorted(_TABLE.load().values(), key=lambda w: (w.order, w.name))
 
 
 def write_all(build: "Build", out: Path, progress: "Progress") -> Files:

@@ -8,13 +8,11 @@ the package imports every module, so a new construction is one new file.
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..errors import DesignError
-from ..schema import parse_params, suggest
+from ..registry import Registry
+from ..schema import parse_params
 
 
 @dataclass(frozen=True)
@@ -29,7 +27,8 @@ class Construction:
     section: str
 
 
-CONSTRUCTIONS: dict[str, Construction] = {}
+_TABLE: Registry[Construction] = Registry("method", "ppfab.constructions", skip=("registry",))
+CONSTRUCTIONS: dict[str, Construction] = _TABLE.entries
 
 
 def construction(name: str, params: type, summary: str, planar_families: tuple[str, ...] = ("rows", "cols"),
@@ -41,29 +40,19 @@ def construction(name: str, params: type, summary: str, planar_families: tuple[s
     cites the paper.
     """
     def register(fn: Callable[[Any], Any]) -> Callable[[Any], Any]:
-        if name in CONSTRUCTIONS:
-            raise RuntimeError(f"construction {name!r} registered twice")
-        CONSTRUCTIONS[name] = Construction(name, params, fn, summary, tuple(planar_families), section)
+        _TABLE.add(name, Construction(name, params, fn, summary, tuple(planar_families), section))
         return fn
     return register
 
 
 def load_all() -> dict[str, Construction]:
     """Import every construction module of :mod:`ppfab.constructions` (once) and return the registry."""
-    package = importlib.import_module("ppfab.constructions")
-    for info in pkgutil.iter_modules(package.__path__):
-        if info.name != "registry" and not info.name.startswith("_"):
-            importlib.import_module(f"ppfab.constructions.{info.name}")
-    return CONSTRUCTIONS
+    return _TABLE.load()
 
 
 def get_construction(name: str, key: str = "geometry.method") -> Construction:
     """Look a construction up by name; an unknown name lists the valid ones."""
-    load_all()
-    if name not in CONSTRUCTIONS:
-        raise DesignError(key, f"unknown method {name!r}{suggest(name, list(CONSTRUCTIONS))}; "
-                               f"valid methods: {', '.join(sorted(CONSTRUCTIONS))}")
-    return CONSTRUCTIONS[name]
+    return _TABLE.get(name, key)
 
 
 def build_construction(name: str, params: dict | None, key: str = "geometry") -> Any:

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ppfab.errors import DesignError
-from ppfab.schema import param, suggest
+from ppfab.schema import param
 
 
 @dataclass(frozen=True)
@@ -24,9 +23,6 @@ class SupportParams:
     flip: bool = param(False, doc="turn all axes to the other side (beams on the outside)")
 
     def __post_init__(self) -> None:
-        from .registry import method_names
+        from .registry import check_method
 
-        valid = ("auto",) + method_names()
-        if self.method not in valid:
-            raise DesignError("method", f"must be one of {', '.join(map(repr, valid))}, got {self.method!r}"
-                                        + suggest(self.method, list(valid)))
+        check_method(self.method, "method")

@@ -8,13 +8,10 @@ A method is a function ``build(mesh, params, family) -> SupportStructure`` regis
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable
 
-from ppfab.errors import DesignError
-from ppfab.schema import suggest
+from ppfab.registry import Registry
 
 if TYPE_CHECKING:  # pragma: no cover
     from ppfab.mesh import QuadMesh
@@ -35,37 +32,28 @@ class SupportMethod:
     summary: str
 
 
-SUPPORT_METHODS: dict[str, SupportMethod] = {}
+_TABLE: Registry[SupportMethod] = Registry("support method", "ppfab.support", skip=_INFRASTRUCTURE)
+SUPPORT_METHODS: dict[str, SupportMethod] = _TABLE.entries
 
 
 def support_method(name: str, summary: str) -> Callable:
     """Decorator registering ``build(mesh, params, family) -> SupportStructure`` under ``name``."""
     def register(fn: Callable) -> Callable:
-        if name in SUPPORT_METHODS:
-            raise RuntimeError(f"support method {name!r} registered twice")
-        SUPPORT_METHODS[name] = SupportMethod(name, fn, summary)
+        _TABLE.add(name, SupportMethod(name, fn, summary))
         return fn
     return register
 
 
 def load_methods() -> dict[str, SupportMethod]:
     """Import every method module of :mod:`ppfab.support` (once) and return the table."""
-    package = importlib.import_module("ppfab.support")
-    for info in pkgutil.iter_modules(package.__path__):
-        if info.name not in _INFRASTRUCTURE and not info.name.startswith("_"):
-            importlib.import_module(f"ppfab.support.{info.name}")
-    return SUPPORT_METHODS
+    return _TABLE.load()
 
 
-def method_names() -> tuple[str, ...]:
-    """The registered method names, sorted."""
-    return tuple(sorted(load_methods()))
+def check_method(name: str, key: str = "support.method") -> None:
+    """Raise :class:`~ppfab.errors.DesignError` unless ``name`` is ``auto`` or a registered method."""
+    _TABLE.check(name, key, also=("auto",))
 
 
 def get_support_method(name: str, key: str = "support.method") -> SupportMethod:
     """Look a method up by name; an unknown name lists the valid ones."""
-    table = load_methods()
-    if name not in table:
-        raise DesignError(key, f"unknown method {name!r}{suggest(name, list(table))}; "
-                               f"valid: auto, {', '.join(sorted(table))}")
-    return table[name]
+    return _TABLE.get(name, key)

@@ -9,13 +9,10 @@ module of this package registering itself with :func:`joint_type`; adding a join
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable
 
-from ppfab.errors import DesignError
-from ppfab.schema import suggest
+from ppfab.registry import Registry
 
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
@@ -55,29 +52,15 @@ class JointType:
     through: ThroughHook | None = None
 
 
-JOINT_TYPES: dict[str, JointType] = {}
+_TABLE: Registry[JointType] = Registry("joint", "fabrication.beams.joint_types")
+JOINT_TYPES: dict[str, JointType] = _TABLE.entries
 
 
 def joint_type(jt: JointType) -> JointType:
     """Register a joint type under its name."""
-    if jt.name in JOINT_TYPES:
-        raise RuntimeError(f"joint type {jt.name!r} registered twice")
-    JOINT_TYPES[jt.name] = jt
-    return jt
-
-
-def load_joint_types() -> dict[str, JointType]:
-    """Import every joint module of this package (once) and return the table."""
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    return JOINT_TYPES
+    return _TABLE.add(jt.name, jt)
 
 
 def get_joint_type(name: str, key: str = "beams.joint") -> JointType:
     """Look a joint type up by name; an unknown name lists the valid ones."""
-    table = load_joint_types()
-    if name not in table:
-        raise DesignError(key, f"must be one of {', '.join(map(repr, sorted(table)))}, got {name!r}"
-                               + suggest(name, list(table)))
-    return table[name]
+    return _TABLE.get(name, key)
