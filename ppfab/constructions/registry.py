@@ -11,10 +11,13 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import DesignError
 from ..schema import parse_params, suggest
+
+if TYPE_CHECKING:  # pragma: no cover
+    from _typeshed import DataclassInstance
 
 
 @dataclass(frozen=True)
@@ -22,7 +25,7 @@ class Construction:
     """One entry of :data:`CONSTRUCTIONS`."""
 
     name: str
-    params: type
+    params: type[DataclassInstance]
     build: Callable[[Any], Any]
     summary: str
     planar_families: tuple[str, ...]
@@ -32,7 +35,7 @@ class Construction:
 CONSTRUCTIONS: dict[str, Construction] = {}
 
 
-def construction(name: str, params: type, summary: str, planar_families: tuple[str, ...] = ("rows", "cols"),
+def construction(name: str, params: type[DataclassInstance], summary: str, planar_families: tuple[str, ...] = ("rows", "cols"),
                  section: str = "") -> Callable:
     """Decorator registering ``fn(params) -> QuadGrid`` under ``name``.
 
