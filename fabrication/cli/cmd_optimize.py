@@ -52,9 +52,9 @@ def _int_list(text: str | None, key: str) -> list[int] | None:
 def _parse_set(items: list[str]) -> dict:
     from ppfab.errors import DesignError
 
-    try:
+    if sys.version_info >= (3, 11):
         import tomllib
-    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    else:  # pragma: no cover - Python 3.10
         import tomli as tomllib
     out = {}
     for item in items:
@@ -71,9 +71,9 @@ def _parse_set(items: list[str]) -> dict:
 def _design_table(path: str) -> dict:
     from ppfab.errors import DesignError
 
-    try:
+    if sys.version_info >= (3, 11):
         import tomllib
-    except ModuleNotFoundError:  # pragma: no cover
+    else:  # pragma: no cover
         import tomli as tomllib
     try:
         doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
