@@ -164,7 +164,7 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
     if "geometry" not in doc:
         raise DesignError("geometry", "missing required section [geometry] (with 'method' or 'mesh')")
     wanted = sections or tuple(types)
-    records = {}
+    records: dict[str, Any] = {}      # section name -> its parameter record (types differ by section)
     for name in wanted:
         table = dict(doc.get(name, {}))
         for key, value in SECTION_DEFAULTS.get(name, {}).items():

@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable, overload
 
 import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 _META = {"Software": None}
 
@@ -68,7 +71,11 @@ def mesh_figure(quads: np.ndarray, title: str = "", plates: Iterable[np.ndarray]
     return fig
 
 
-def save(fig, path: str | Path | None = None, fmt: str = "png") -> bytes | None:
+@overload
+def save(fig: Figure, path: None = None, fmt: str = "png") -> bytes: ...
+@overload
+def save(fig: Figure, path: str | Path, fmt: str = "png") -> None: ...
+def save(fig: Figure, path: str | Path | None = None, fmt: str = "png") -> bytes | None:
     """Save and close a figure; with no path return the bytes."""
     import warnings
 

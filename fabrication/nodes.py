@@ -87,7 +87,7 @@ def node_records(beams: Any) -> list[dict]:
             pos = int(np.flatnonzero(seq == k)[0])
             nbrs = [int(seq[q % len(seq)]) for q in (pos - 1, pos + 1)
                     if 0 <= q < len(seq) or (support.polylines[p.polyline].closed and not p.meta.get("segment"))]
-            faces = set()
+            faces: set[int] = set()
             for w in nbrs:
                 e = edge_id.get((min(k, w), max(k, w)))
                 if e is not None:

@@ -21,8 +21,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.interpolate import BSpline, make_interp_spline
 from scipy.optimize import brentq
 
@@ -52,7 +54,7 @@ class PlanarCurve:
     frame: Frame | None = None
 
     @classmethod
-    def from_points(cls, points: np.ndarray, closed: bool = False, name: str = "curve") -> "PlanarCurve":
+    def from_points(cls, points: ArrayLike, closed: bool = False, name: str = "curve") -> "PlanarCurve":
         """Interpolating cubic spline through ``points (k, 2)``, chord-length parameter (periodic when closed)."""
         p = _as_points(points, name, 4 if not closed else 3)
         if closed and np.linalg.norm(p[0] - p[-1]) > 1e-12 * _size(p):
@@ -68,7 +70,7 @@ class PlanarCurve:
         return cls(spline, 0.0, float(t[-1]), closed, name)
 
     @classmethod
-    def from_control_points(cls, points: np.ndarray, degree: int = 3, closed: bool = False,
+    def from_control_points(cls, points: ArrayLike, degree: int = 3, closed: bool = False,
                             name: str = "curve") -> "PlanarCurve":
         """Clamped uniform B-spline with control points ``(k, 2)`` (periodic uniform when closed)."""
         p = _as_points(points, name, 2 if not closed else 3)
@@ -83,7 +85,7 @@ class PlanarCurve:
         return cls(BSpline(knots, p, k, extrapolate=True), 0.0, 1.0, False, name)
 
     # -- in the plane ---------------------------------------------------------------------------------
-    def __call__(self, t: np.ndarray) -> np.ndarray:
+    def __call__(self, t: ArrayLike) -> np.ndarray:
         """``c(t)``, ``(k, 2)``."""
         return self.spline(np.asarray(t, dtype=float))
 
@@ -172,14 +174,14 @@ class PlanarCurve:
         return sign * np.cross(self._placed().normal, dT)
 
 
-def fit_planar_curve(points: object, frame: Frame, fit: str, key: str, name: str) -> PlanarCurve:
+def fit_planar_curve(points: Sequence[Sequence[float]], frame: Frame, fit: str, key: str, name: str) -> PlanarCurve:
     """Cubic (or lower, for few points) B-spline through or over 2D points ``(k, 2)`` placed in ``frame``.
 
     ``fit="interpolate"``: through the points, chord-length parameter;
     ``fit="control"``: the points are the control polygon of a clamped uniform
     B-spline.  Bad point lists raise :class:`DesignError` under ``key``.
     """
-    for k, q in enumerate(points):  # type: ignore[call-overload]
+    for k, q in enumerate(points):
         if np.ndim(q) != 1 or len(q) != 2:
             raise DesignError(f"{key}[{k}]", f"needs 2 numbers [s, t] (a point in the plane's own coordinates), "
                                              f"got {np.ndim(q) and len(q)}")

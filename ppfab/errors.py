@@ -8,6 +8,8 @@ measured value, limit) so callers can react without parsing the message.
 
 from __future__ import annotations
 
+from typing import Any, Sequence
+
 
 class PpfabError(Exception):
     """Base class of every error ppfab raises on purpose."""
@@ -56,7 +58,12 @@ class FoldError(GeometryError):
 
 
 class FabricationError(PpfabError):
-    """Fabrication data cannot be produced without being wrong (stop before writing)."""
+    """Fabrication data cannot be produced without being wrong (stop before writing).
+
+    ``defects``: the defect records behind the error when a check found several (empty otherwise).
+    """
+
+    defects: Sequence[Any] = ()
 
 
 class NonPlanarPanelError(FabricationError):

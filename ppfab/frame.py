@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import DesignError
 
@@ -66,7 +67,7 @@ class Frame:
                 "y_dir": [float(x) for x in self.ey], "normal": [float(x) for x in self.normal]}
 
     @classmethod
-    def from_axes(cls, origin: np.ndarray, axes: np.ndarray, key: str = "frame") -> "Frame":
+    def from_axes(cls, origin: ArrayLike, axes: ArrayLike, key: str = "frame") -> "Frame":
         """Frame from an origin ``(3,)`` and two axes ``(2, 3)`` (Gram–Schmidt); parallel or zero axes raise
         :class:`~ppfab.errors.DesignError` under ``key``."""
         o = np.asarray(origin, dtype=float)
@@ -81,6 +82,6 @@ class Frame:
         e1 = a[0] / n1
         rest = a[1] - (a[1] @ e1) * e1
         n2 = np.linalg.norm(rest)
-        if n2 <= 1e-9 * max(np.linalg.norm(a[1]), 1e-300):
+        if n2 <= 1e-9 * max(float(np.linalg.norm(a[1])), 1e-300):
             raise DesignError(key, "the two axes are parallel: they do not span a plane")
         return cls(o, e1, rest / n2)

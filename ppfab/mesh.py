@@ -237,6 +237,7 @@ class QuadMesh:
     def _grid_polylines(self) -> list[Polyline]:
         g = self._grid
         ids = self.grid_ids
+        assert g is not None and ids is not None, "grid polylines of a mesh that was not made from a grid"
         rows = [Polyline(ids[i].copy(), g.closed, 0) for i in range(ids.shape[0])]
         cols = [Polyline(ids[:, j].copy(), False, 1) for j in range(ids.shape[1])]
         return rows + cols

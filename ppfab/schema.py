@@ -24,11 +24,14 @@ import difflib
 import math
 import types
 import typing
-from typing import Any, Mapping, TypeVar
+from typing import TYPE_CHECKING, Any, Mapping, TypeVar
 
 from .errors import DesignError
 
-T = TypeVar("T")
+if TYPE_CHECKING:  # pragma: no cover
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 
 
 def param(default: Any = dataclasses.MISSING, *, doc: str = "", **limits: Any) -> Any:
@@ -106,7 +109,7 @@ def _convert(value: Any, tp: Any, path: str) -> Any:
         if not isinstance(value, Mapping):
             raise DesignError(path, f"expected a table, got {type(value).__name__}")
         return dict(value)
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return parse_params(tp, value, path)
     return value
 
@@ -181,8 +184,8 @@ def describe(cls: type) -> list[tuple[str, str, str, str]]:
     for f in dataclasses.fields(cls):
         if f.default is not dataclasses.MISSING:
             default = repr(f.default)
-        elif f.default_factory is not dataclasses.MISSING:  # type: ignore[misc]
-            default = repr(f.default_factory())  # type: ignore[misc]
+        elif f.default_factory is not dataclasses.MISSING:
+            default = repr(f.default_factory())
         else:
             default = "(required)"
         out.append((f.name, _type_name(hints[f.name]), default, f.metadata.get("doc", "")))

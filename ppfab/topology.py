@@ -317,6 +317,7 @@ def recover_grid(topo: Topology) -> tuple[np.ndarray, bool] | str:
         where[p.vertices] = np.arange(len(p))
     if np.any(member < 0):
         return f"vertex {int(np.flatnonzero(member < 0)[0])} lies on no polyline of the first family"
+    col: np.ndarray | None
     if closed:
         col = fam[1][0].vertices
     else:

@@ -24,9 +24,11 @@ def test_flattening_a_planar_quad_is_an_isometry(seed, size, gap):
     from fabrication.panels import PanelParams, make_panels
 
     rng = np.random.default_rng(seed)
-    # a convex quad: corners on a circle at sorted random angles, jittered radius
+    # a convex quad: corners on a circle at sorted random angles, jittered radius; no edge shorter than
+    # about a quarter of the size (a quad with a 3 mm edge cannot be inset by gap/2 = 15 mm)
     ang = np.sort(rng.uniform(0, 2 * np.pi, 4))
-    if np.max(np.diff(np.r_[ang, ang[0] + 2 * np.pi])) > 0.9 * np.pi:
+    steps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
+    if steps.max() > 0.9 * np.pi or steps.min() < 0.3:
         ang = np.array([0.2, 1.8, 3.3, 4.9]) + rng.uniform(-0.2, 0.2, 4)
     rad = size * rng.uniform(0.8, 1.2, 4)
     flat = np.stack([rad * np.cos(ang), rad * np.sin(ang), np.zeros(4)], axis=1)

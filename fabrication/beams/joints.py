@@ -61,7 +61,7 @@ class NodeJoint:
     vertex: int
     parts: tuple[str, ...]
     roles: tuple[str, ...]
-    angles: tuple[tuple[str, str, float, str], ...]
+    angles: tuple[tuple[str, str, float, float, bool], ...]
     kind: str
     slot_width: float
     trims: tuple[tuple[str, float], ...]
@@ -104,7 +104,7 @@ def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: Be
         ps = [plates[k] for k in idx]
         roles = ["through" if bool(p.through[np.flatnonzero(p.nodes == v)[0]]) else "end" for p in ps]
         ends = {k: _end_direction3(p, v, a) for k, (p, r) in enumerate(zip(ps, roles)) if r == "end"}
-        angles = []
+        angles: list[tuple[str, str, float, float, bool]] = []
         setback = {k: 0.0 for k in ends}
         for i in range(len(ps)):
             for j in range(i + 1, len(ps)):
@@ -228,9 +228,9 @@ def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Defect]:
     top, bot = plate.top, plate.bottom
     d = params.depth
     seg = np.linalg.norm(np.diff(top, axis=0), axis=1)
-    for k in np.flatnonzero(seg < max(params.min_segment, 1e-9)):
-        out.append(Defect(plate.part_id, "short_segment", float(seg[k]), params.min_segment, f"edge {k}",
-                          f"{plate.part_id}: edge {k} of its top edge is {seg[k]:.3g} mm long "
+    for edge in np.flatnonzero(seg < max(params.min_segment, 1e-9)):
+        out.append(Defect(plate.part_id, "short_segment", float(seg[edge]), params.min_segment, f"edge {edge}",
+                          f"{plate.part_id}: edge {edge} of its top edge is {seg[edge]:.3g} mm long "
                           f"(< min_segment {params.min_segment:g} mm)"))
     s = (bot - top) / d
     for k in range(len(top) - 1):

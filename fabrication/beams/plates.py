@@ -294,6 +294,8 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
     nv = len(v)
     edge_key = epl_edges[:, 0] * nv + epl_edges[:, 1]
     cont = _continuous_family(support, params)
+    planar_lines = support.polyline_planar
+    assert planar_lines is not None, "SupportStructure.__post_init__ sets polyline_planar"
     plates: list[BeamPlate] = []
     defects: list[Defect] = []
     for l, line in enumerate(support.polylines):
@@ -301,7 +303,7 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
         if len(vs) < 2:
             continue
         dev = float(support.polyline_deviation[l])
-        supported = bool(support.polyline_planar[l]) or len(vs) == 2
+        supported = bool(planar_lines[l]) or len(vs) == 2
         planar = supported and dev <= params.plane_tolerance
         segmented = jt.segments and line.family != cont
         if not planar and not segmented and jt.planar_requirement is not None:
@@ -363,21 +365,24 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
     plane = support.polyline_planes[l]
     axes = support.axes[vs]
     nn = len(vs)
+    pieces: list[tuple[int | None, list[int], int | None]] = []
     if closed:
-        pieces = []
         for r in range(len(cuts)):
             a, b = cuts[r], cuts[(r + 1) % len(cuts)]
             pieces.append((a, [(a + 1 + t) % nn for t in range(((b - a) % nn) or nn)], b))
     else:
-        pieces = []
-        for s, e in zip([None] + cuts, cuts + [None]):
+        starts: list[int | None] = [None, *cuts]
+        ends: list[int | None] = [*cuts, None]
+        for s, e in zip(starts, ends):
             lo = 0 if s is None else s + 1
             hi = nn - 1 if e is None else e
             pieces.append((s, list(range(lo, hi + 1)), e))
     out = []
     w = contract.digits(len(pieces))
     for r, (s, idx, e) in enumerate(pieces):
-        cp, ca, chain = [], [], []
+        cp: list[np.ndarray] = []
+        ca: list[np.ndarray] = []
+        chain: list[int] = []
         if s is not None:
             cp.append(0.5 * (pts[s] + pts[(s + 1) % nn]))
             ca.append(axes[s] + axes[(s + 1) % nn])
@@ -388,11 +393,11 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
         if e is not None:
             cp.append(0.5 * (pts[e] + pts[(e + 1) % nn]))
             ca.append(axes[e] + axes[(e + 1) % nn])
-        ca = np.asarray(ca)
-        ca /= np.linalg.norm(ca, axis=1, keepdims=True)
+        ca_unit = np.asarray(ca)
+        ca_unit /= np.linalg.norm(ca_unit, axis=1, keepdims=True)
         # a node is an end only where the polyline itself ends (pieces end at edge midpoints)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
         pid = beam_id if len(pieces) == 1 else contract.piece_id(beam_id, r, w)
-        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca, vs[idx],
+        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca_unit, vs[idx],
                               through, np.asarray(chain), params, pts[idx]))
     return out

@@ -115,5 +115,5 @@ class BeamReport:
         shown = "; ".join(d.message for d in self.defects[:6])
         more = f" (and {len(self.defects) - 6} more)" if len(self.defects) > 6 else ""
         err = FabricationError(f"{len(self.defects)} beam defect(s): {shown}{more}")
-        err.defects = list(self.defects)  # type: ignore[attr-defined]
+        err.defects = list(self.defects)
         raise err

@@ -131,6 +131,7 @@ def _face_layout(mesh: QuadMesh | QuadGrid) -> tuple[np.ndarray, np.ndarray | No
     else:
         raise GeometryError(f"panels need a QuadMesh or QuadGrid, got {type(mesh).__name__}")
     if grid is None:
+        assert qm is not None, "a QuadGrid input always has its grid"
         corners = np.asarray(qm.face_corners, dtype=float)
         F = len(corners)
         width = contract.digits(F, 4)

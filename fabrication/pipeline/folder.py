@@ -13,7 +13,8 @@ import os
 import shutil
 import uuid
 from pathlib import Path
-from typing import Iterator
+from types import TracebackType
+from typing import Iterator, Literal
 
 from ppfab.errors import PpfabError
 
@@ -48,7 +49,8 @@ class AtomicFolder:
             raise OutputExistsError(f"cannot create output folder beside {self.target} ({exc.strerror})") from None
         return self.tmp
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> Literal[False]:
         if exc_type is not None:
             shutil.rmtree(self.tmp, ignore_errors=True)
             return False

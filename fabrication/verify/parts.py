@@ -34,7 +34,7 @@ def check_parts(v: Verification) -> None:
     if mesh is not None and panels:
         faces = sorted(int(row["face"]) for row in panels)
         if faces != list(range(len(mesh.faces))):
-            missing = sorted(set(range(len(mesh.faces))) - set(faces))
+            bare = sorted(set(range(len(mesh.faces))) - set(faces))
             v.error(rel, "panels", f"{len(panels)} panel rows for {len(mesh.faces)} mesh faces"
-                                   + (f"; faces without a panel: {missing[:10]}" if missing else ""))
+                                   + (f"; faces without a panel: {bare[:10]}" if bare else ""))
     v.checked.append("parts")

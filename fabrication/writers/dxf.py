@@ -220,6 +220,7 @@ def _xdata(entity) -> dict:
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     """Re-read a DXF with ``ezdxf.readfile``, audit it and extract parts, outlines, labels and marks."""
     import ezdxf
+    from ezdxf.entities import LWPolyline
 
     path = Path(path)
     doc = ezdxf.readfile(path)
@@ -231,6 +232,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
         layer = e.dxf.layer
         kind = e.dxftype()
         if kind == "LWPOLYLINE":
+            assert isinstance(e, LWPolyline), "ezdxf reads LWPOLYLINE entities as LWPolyline"
             pts = np.array([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
             if layer == "CUT":
                 x = _xdata(e)

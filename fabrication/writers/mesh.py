@@ -27,6 +27,7 @@ def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:
     assert ids is not None and ids.shape == grid.shape
     m1 = grid.shape[0]
     planes, planar = support.polyline_planes, support.polyline_planar
+    assert planar is not None, "SupportStructure.__post_init__ sets polyline_planar"
     rows, cols = slice(0, m1), slice(m1, None)
     return replace(grid, axes=support.axes[ids],
                    support_u=planes[rows] if planar[rows].all() else None,

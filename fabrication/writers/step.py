@@ -29,6 +29,8 @@ from ..beams.plates import BeamPlate
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
+    from build123d import Shape, Solid
+
     from ..pipeline.records import Build
 
 
@@ -180,13 +182,13 @@ def check_step(path: str | os.PathLike, plates: Sequence[BeamPlate], tol: float 
     return res
 
 
-def named_solids(shape) -> list[tuple[str, object]]:
+def named_solids(shape: Shape) -> list[tuple[str, Solid]]:
     """``(label, solid)`` of every solid in an imported shape, walking the assembly children
     (``shape.solids()`` would drop the labels)."""
     from build123d import Solid
 
-    out = []
-    stack = [shape]
+    out: list[tuple[str, Solid]] = []
+    stack: list[Shape] = [shape]
     while stack:
         node = stack.pop(0)
         if isinstance(node, Solid):

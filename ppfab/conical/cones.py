@@ -116,7 +116,8 @@ def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray
     m, size = rows - 1, _size(grid)
     fc = np.concatenate([f[:, -1:], f], axis=1) if grid.closed else f
     inner = _interior_cones(fc)                                 # interior vertices v[1:-1, 1:-1] (closed: v[1:-1])
-    col_maps = [None, None]
+    col_maps: list[LaguerreMap | None] = [None, None]
+    ghosts: np.ndarray | None
     if grid.closed:
         pad = fc                                                # E[:, b] is face column (b − 1) mod cols
     else:
@@ -125,9 +126,10 @@ def ghost_planes(grid: QuadGrid, tol: float = PLANAR_BOUNDARY_TOL) -> np.ndarray
             support = None if grid.support_w is None else grid.support_w[j]
             W = _boundary_plane(v[:, j], support, size, tol)
             nb = None if inner is None else (inner[0][:, j], inner[1][:, j])
-            col_maps[k] = None if W is None else _reflection(W, f[:-1, j, :3], f[1:, j, :3], nb)
-            if col_maps[k] is not None:
-                ghosts = col_maps[k].planes(f[:, j])
+            cmap = None if W is None else _reflection(W, f[:-1, j, :3], f[1:, j, :3], nb)
+            col_maps[k] = cmap
+            if cmap is not None:
+                ghosts = cmap.planes(f[:, j])
             else:
                 ghosts = _propagated(v[:, j], f[:, j], None if nb is None else nb[0])
             sides.append(f[:, j] if ghosts is None else ghosts)
@@ -182,7 +184,8 @@ def _boundary_plane(points: np.ndarray, support: np.ndarray | None, size: float,
     return W if res <= tol * size else None
 
 
-def _reflection(W: np.ndarray, n1: np.ndarray, n2: np.ndarray, neighbours: tuple[np.ndarray, np.ndarray] | None):
+def _reflection(W: np.ndarray, n1: np.ndarray, n2: np.ndarray,
+                neighbours: tuple[np.ndarray, np.ndarray] | None) -> LaguerreMap | None:
     """The Minkowski reflection in ``H = (w, h₄)`` through a point of the plane ``W`` (see :func:`ghost_planes`).
 
     ``n1, n2 (k, 3)`` are the unit normals of the two faces at each of the ``k`` boundary vertices between
@@ -556,7 +559,7 @@ def laguerre_transform(grid: QuadGrid, lmap: "LaguerreMap", check: bool = True, 
     size = np.linalg.norm(np.ptp(v.reshape(-1, 3), axis=0))
     tstar = -base[..., 3] / np.where(denom == 0, np.nan, denom)
     new = base[..., :3] + tstar[..., None] * direc[..., :3]
-    bad = ~np.isfinite(new).all(axis=-1) | (np.linalg.norm(new - new.reshape(-1, 3).mean(0), axis=-1) > 1e6 * max(size, 1e-300))
+    bad = ~np.isfinite(new).all(axis=-1) | (np.linalg.norm(new - new.reshape(-1, 3).mean(0), axis=-1) > 1e6 * max(float(size), 1e-300))
     if np.any(bad):
         idx = tuple(int(k) for k in np.argwhere(bad)[0])
         raise GeometryError(f"vertex {idx} goes to infinity under the Laguerre map (its cone becomes a cylinder)",

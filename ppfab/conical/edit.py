@@ -301,10 +301,10 @@ class ConicalEditor:
             if done:
                 converged = True
                 break
-        res = self.solve_fixed(A, handles, w_handles, previous=x.reshape(self.shape + (3,)))
+        fixed = self.solve_fixed(A, handles, w_handles, previous=x.reshape(self.shape + (3,)))
         msg = (f"converged after {it} Gauss-Newton steps (energy {history[-1]:.3e})" if converged else
                f"stopped after {it} Gauss-Newton steps without converging")
-        return replace(res, converged=converged, iterations=it, history=history, message=msg)
+        return replace(fixed, converged=converged, iterations=it, history=history, message=msg)
 
     def _result(self, A, nbar, d, x, handles, converged, iterations, history, message) -> EditResult:
         planes = np.concatenate([nbar, d[:, None]], axis=1)

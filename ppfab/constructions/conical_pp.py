@@ -206,6 +206,8 @@ def appendix_surface(case: str, g: Series, h: Series, u: np.ndarray, v: np.ndarr
 def _close_columns(grid: QuadGrid) -> QuadGrid:
     """Drop the duplicate last vertex column of a periodic sampling and mark the grid closed."""
     F = grid.extended_face_image
+    assert F is not None and grid.support_w is not None and grid.axes is not None, \
+        "a grid from pp_from_face_image carries its planes, axes and extended face image"
     return QuadGrid(grid.vertices[:, :-1], closed=True, support_u=grid.support_u,
                     support_w=grid.support_w[:-1], face_image=grid.face_image,
                     axes=grid.axes[:, :-1], extended_face_image=F[:, :-1], meta=grid.meta)
@@ -258,7 +260,6 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
     else:
         _check_samples(u, "u")
         faces_u, faces_v = u, v
-    grid = None
     for attempt in range(2):
         vv = faces_v if attempt == 0 else faces_v[::-1]
         Hs = sample_extended(H, vv)
@@ -268,6 +269,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
         else:
             built = pp_from_face_image(sample_extended(G, faces_u), Hs, c)
             ref = built.face_image
+        assert ref is not None, "pp_from_face_image sets the face image"
         s = orientation_sign(built, ref)
         grid = built
         if (s > 0).sum() >= (s < 0).sum():
@@ -285,6 +287,7 @@ def conical_pp_grid(g: Series | Callable, h: Series | Callable, u: np.ndarray, v
     elif frame != "paper":
         raise GeometryError(f"unknown frame {frame!r}; valid: paper, z_up", element="frame")
     F = grid.extended_face_image
+    assert grid.axes is not None and F is not None, "pp_from_face_image sets the axes and extended face image"
     return replace(grid, axes=orient_axes(grid.axes, F))
 
 
@@ -343,8 +346,9 @@ def samples(p: ConicalPPParams) -> tuple[np.ndarray, np.ndarray]:
     """Face parameters ``u (m,)``, ``v (n,)`` of a parameter record."""
     u = np.asarray(p.u, float) if p.u else (
         p.u_range[0] + 2 * np.pi * np.arange(p.faces_u) / p.faces_u if p.closed
-        else np.linspace(*p.u_range, p.faces_u) if p.faces_u > 1 else np.array([np.mean(p.u_range)]))
-    v = np.asarray(p.v, float) if p.v else np.linspace(*p.v_range, p.faces_v)
+        else np.linspace(p.u_range[0], p.u_range[1], p.faces_u) if p.faces_u > 1
+        else np.array([np.mean(p.u_range)]))
+    v = np.asarray(p.v, float) if p.v else np.linspace(p.v_range[0], p.v_range[1], p.faces_v)
     return u, v
 
 

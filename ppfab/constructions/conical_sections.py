@@ -174,11 +174,11 @@ def sections_grid(section_a, section_b, faces_a: int, faces_b: int, case: str = 
     ga, hb = sec_a.support(ta), sec_b.support(tb) + (a_val - b_val)
     G = section_generators(case, "a", phi, ga, d)
     c = section_constant(case, a_val, d)
-    grid = None
     for attempt in range(2):
         order = slice(None) if attempt == 0 else slice(None, None, -1)
         H = section_generators(case, "b", psi[order], hb[order], d)
         grid = pp_from_face_image(G, H, c)
+        assert grid.face_image is not None, "pp_from_face_image sets the face image"
         s = orientation_sign(grid, grid.face_image)
         if (s > 0).sum() >= (s < 0).sum():
             break
@@ -189,6 +189,8 @@ def sections_grid(section_a, section_b, faces_a: int, faces_b: int, case: str = 
     if check:
         check_folds(grid, sa[1:-1], sb[order][1:-1], context=f"conical_sections ({case})", names=("s_a", "s_b"))
     grid = rigid_motion(grid, FRAMES[case])
+    assert grid.axes is not None and grid.extended_face_image is not None, \
+        "pp_from_face_image sets the axes and extended face image"
     return replace(grid, axes=orient_axes(grid.axes, grid.extended_face_image))
 
 

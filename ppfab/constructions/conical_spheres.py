@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
@@ -41,7 +42,7 @@ from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check
 from .registry import construction
 
 
-def cone_frame(Z0: np.ndarray, Z1: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+def cone_frame(Z0: np.ndarray, Z1: np.ndarray, up: ArrayLike) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
     """Axis ``a``, ``cos β`` and the profile frame ``b1, b2`` of the cone touching spheres ``Z0``, ``Z1``.
 
     Tangent planes have unit normals ``n(θ) = cos β a + sin β (cos θ b1 + sin θ b2)`` with
@@ -85,7 +86,7 @@ def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
 
 def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
                  angle_range: tuple[float, float] = (-90.0, 90.0), closed: bool = False,
-                 up: np.ndarray = (0.0, 0.0, 1.0), degree: int = 3, profile: PlanarCurve | None = None,
+                 up: ArrayLike = (0.0, 0.0, 1.0), degree: int = 3, profile: PlanarCurve | None = None,
                  profile_plane: int | None = None, check: bool = True) -> QuadGrid:
     """A conical P mesh from control spheres (Steps 1–4 of §4.2.3).
 
@@ -125,7 +126,6 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     a, cosb, b1, b2 = cone_frame(Z[s0], Z[s0 + 1], up)
     sinb = np.sqrt(max(0.0, 1.0 - cosb * cosb))
     theta = profile_angles(faces_profile, angle_range, closed)
-    grid = None
     for attempt in range(2):
         th = theta if attempt == 0 else (-theta if closed else theta[::-1])
         n = cosb * a + sinb * (np.cos(th)[:, None] * b1 + np.sin(th)[:, None] * b2)
@@ -274,7 +274,8 @@ def _profile_curve(p: ConicalSpheresParams) -> PlanarCurve | None:
               "conical P mesh from a B-spline family of spheres: channel surface, propagated tangent planes, "
               "optional designed profile", planar_families=("rows",), section="§4.2.3")
 def build_conical_spheres(p: ConicalSpheresParams) -> QuadGrid:
-    return channel_mesh(np.asarray(p.spheres, float), p.faces_spine, p.faces_profile, tuple(p.angle_range),
+    return channel_mesh(np.asarray(p.spheres, float), p.faces_spine, p.faces_profile,
+                        (p.angle_range[0], p.angle_range[1]),
                         p.closed, np.asarray(p.up, float), p.degree, _profile_curve(p),
                         None if p.profile_plane < 0 else p.profile_plane)
 
@@ -314,7 +315,7 @@ class ConicalSpheresPPParams:
 def build_conical_spheres_pp(p: ConicalSpheresPPParams) -> QuadGrid:
     c = np.asarray(p.centers, dtype=float)
     spheres = np.concatenate([c, touching_radii(c, np.asarray(p.touch_plane, float))[:, None]], axis=1)
-    grid = channel_mesh(spheres, p.faces_spine, p.faces_profile, tuple(p.angle_range), p.closed,
+    grid = channel_mesh(spheres, p.faces_spine, p.faces_profile, (p.angle_range[0], p.angle_range[1]), p.closed,
                         np.asarray(p.up, float), p.degree)
     Wc, _ = pp_column_planes(grid)
     return replace(grid, support_w=Wc, meta={**grid.meta, "planar_families": ("rows", "cols")})

@@ -54,6 +54,6 @@ def polynomial_curve(coeffs: list[list[float]]):
 @construction("face_image_curves", FaceImageCurvesParams,
               "PP mesh from polynomial face-image curves g(u), h(v) in R^4 (eq. 7/8)", section="§3.1, §3.2.1")
 def build_face_image_curves(p: FaceImageCurvesParams) -> QuadGrid:
-    u = np.linspace(*p.u_range, p.faces_u)
-    v = np.linspace(*p.v_range, p.faces_v)
+    u = np.linspace(p.u_range[0], p.u_range[1], p.faces_u)
+    v = np.linspace(p.v_range[0], p.v_range[1], p.faces_v)
     return pp_from_curves(polynomial_curve(p.g), polynomial_curve(p.h), u, v, np.asarray(p.c))

@@ -253,9 +253,9 @@ def plane_spline(control, tangents=None, side_condition: str = "project", tolera
             nu[i], lam1 = _solve_pencil(ctrl[i], T[i + 1], gam[i + 1], f"knot {i + 1} of {key}")
         except GeometryError as exc:
             raise DesignError(key, str(exc)) from None
-        for what, lam_, k_ in (("inner", lam, 2 * i + 1), ("knot", lam1, 2 * i + 2)):
+        for what, lam_, slot in (("inner", lam, 2 * i + 1), ("knot", lam1, 2 * i + 2)):
             if abs(lam_) <= 1e-9:
-                raise DesignError(f"{key}[{k_}]", f"gets weight {lam_:.3g} in the re-weighting: the arrangement is "
+                raise DesignError(f"{key}[{slot}]", f"gets weight {lam_:.3g} in the re-weighting: the arrangement is "
                                                   f"degenerate at knot {i + (what == 'knot')}")
         knots[i + 1] = lam1 * gam[i + 1]
         if abs(mu[i]) <= 1e-12 or abs(nu[i]) <= 1e-12:

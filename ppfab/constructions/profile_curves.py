@@ -65,8 +65,8 @@ def crossing(curve: PlanarCurve, plane_point: np.ndarray, plane_normal: np.ndarr
     span = tt[-1] - tt[0]
     roots = [r for k, r in enumerate(roots) if k == 0 or r - roots[k - 1] > 1e-6 * span]
     if not roots:
-        k = int(np.argmin(np.abs(s)))
-        lo, hi = tt[max(k - 1, 0)], tt[min(k + 1, len(tt) - 1)]
+        near = int(np.argmin(np.abs(s)))
+        lo, hi = tt[max(near - 1, 0)], tt[min(near + 1, len(tt) - 1)]
         best = minimize_scalar(lambda t: abs(float(dist(t)[0])), bounds=(lo, hi), method="bounded",
                                options={"xatol": 1e-12 * (tt[-1] - tt[0])})
         gap = abs(float(dist(best.x)[0]))

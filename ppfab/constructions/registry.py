@@ -9,10 +9,13 @@ the package imports every module, so a new construction is one new file.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from ..registry import Registry
 from ..schema import parse_params
+
+if TYPE_CHECKING:  # pragma: no cover
+    from _typeshed import DataclassInstance
 
 
 @dataclass(frozen=True)
@@ -20,7 +23,7 @@ class Construction:
     """One entry of :data:`CONSTRUCTIONS`."""
 
     name: str
-    params: type
+    params: type[DataclassInstance]
     build: Callable[[Any], Any]
     summary: str
     planar_families: tuple[str, ...]
@@ -31,7 +34,7 @@ _TABLE: Registry[Construction] = Registry("method", "ppfab.constructions", skip=
 CONSTRUCTIONS: dict[str, Construction] = _TABLE.entries
 
 
-def construction(name: str, params: type, summary: str, planar_families: tuple[str, ...] = ("rows", "cols"),
+def construction(name: str, params: type[DataclassInstance], summary: str, planar_families: tuple[str, ...] = ("rows", "cols"),
                  section: str = "") -> Callable:
     """Decorator registering ``fn(params) -> QuadGrid`` under ``name``.
 

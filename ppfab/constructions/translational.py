@@ -58,7 +58,7 @@ def translational_mesh(a: np.ndarray, b: np.ndarray, p: np.ndarray | None = None
     if a.ndim != 2 or b.ndim != 2 or a.shape[1] != 3 or b.shape[1] != 3 or len(a) < 2 or len(b) < 2:
         raise GeometryError(f"profiles need shapes (m+1, 3) and (n+1, 3) with m, n >= 1, got {a.shape}, {b.shape}")
     p = b[0] if p is None else np.asarray(p, dtype=float)
-    normals = []
+    normals: list[np.ndarray | None] = []
     for name, c in (("a", a), ("b", b)):
         if len(c) >= 3:
             plane, res = pl.fit_plane(c)
@@ -76,12 +76,12 @@ def translational_mesh(a: np.ndarray, b: np.ndarray, p: np.ndarray | None = None
         if s < np.sin(np.radians(1.0)):
             raise GeometryError(f"the planes of the two profiles are parallel ({np.degrees(np.arcsin(s)):.3g}°): "
                                 f"the node axes (their common direction) are undefined", element="a, b", value=s)
-    kw = {}
+    support_u = support_w = None
     if nb is not None:       # rows are translates of b: U_i through a_i, normal n_b
-        kw["support_u"] = np.concatenate([np.broadcast_to(nb, (len(a), 3)), -(v[:, 0] @ nb)[:, None]], axis=1)
+        support_u = np.concatenate([np.broadcast_to(nb, (len(a), 3)), -(v[:, 0] @ nb)[:, None]], axis=1)
     if na is not None:
-        kw["support_w"] = np.concatenate([np.broadcast_to(na, (len(b), 3)), -(v[0, :] @ na)[:, None]], axis=1)
-    return with_face_image(QuadGrid(v, **kw))
+        support_w = np.concatenate([np.broadcast_to(na, (len(b), 3)), -(v[0, :] @ na)[:, None]], axis=1)
+    return with_face_image(QuadGrid(v, support_u=support_u, support_w=support_w))
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,16 +33,21 @@ def grid_to_json(grid: QuadGrid) -> dict:
 def grid_from_json(doc: dict | str | os.PathLike) -> QuadGrid:
     """Inverse of :func:`grid_to_json` (accepts the dict or a file path)."""
     source = "<json>"
-    if not isinstance(doc, dict):
+    data: dict[str, Any]
+    if isinstance(doc, dict):
+        data = doc
+    else:
         source = str(doc)
         try:
-            doc = json.loads(Path(doc).read_text(encoding="utf-8"))
+            data = json.loads(Path(doc).read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
             raise MeshFileError(source, f"cannot read grid JSON ({exc})") from None
     try:
-        m1, n1 = int(doc["rows"]), int(doc["cols"])
-        v = np.asarray(doc["vertices"], dtype=float).reshape(m1, n1, 3)
-        extra = {k: np.asarray(doc[k], dtype=float) for k in ("support_u", "support_w", "face_image", "axes") if k in doc}
-        return QuadGrid(v, closed=bool(doc.get("closed", False)), **extra)
+        m1, n1 = int(data["rows"]), int(data["cols"])
+        v = np.asarray(data["vertices"], dtype=float).reshape(m1, n1, 3)
+        extra = {k: np.asarray(data[k], dtype=float) for k in ("support_u", "support_w", "face_image", "axes")
+                 if k in data}
+        return QuadGrid(v, closed=bool(data.get("closed", False)), support_u=extra.get("support_u"),
+                        support_w=extra.get("support_w"), face_image=extra.get("face_image"), axes=extra.get("axes"))
     except (KeyError, ValueError, TypeError) as exc:
         raise MeshFileError(source, f"not a ppfab grid JSON ({exc})") from None

@@ -9,7 +9,7 @@ plane) by an augmented Lagrangian with one sparse factorisation.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 from dataclasses import dataclass
 
@@ -37,7 +37,7 @@ def _perpendicular_pair(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p, np.cross(d, p)
 
 
-def parallel_offsets(mesh: QuadMesh, target: np.ndarray, plane_normals: list[tuple[np.ndarray, np.ndarray]] = (),
+def parallel_offsets(mesh: QuadMesh, target: np.ndarray, plane_normals: Sequence[tuple[np.ndarray, np.ndarray]] = (),
                      fixed: np.ndarray | None = None, rho: float = 1e6, max_iter: int = 40,
                      tol: float = 1e-11) -> tuple[np.ndarray, dict]:
     """Offsets ``u (N, 3)`` of a parallel mesh ``v + u`` nearest to ``target`` (§2.2.3).

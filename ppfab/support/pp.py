@@ -44,6 +44,7 @@ def support_pp(mesh: QuadMesh | QuadGrid, flip: bool = False) -> SupportStructur
         raise GeometryError(f"vertex ({i}, {j}): support planes U_{i} and W_{j} are parallel "
                             f"(sine {s[i, j]:.1e}), no node axis", element=f"vertex {i},{j}", value=float(s[i, j]))
     axes = np.zeros_like(qm.vertices)
+    assert qm.grid_ids is not None, "a mesh with a grid carries its grid ids"
     axes[qm.grid_ids.ravel()] = (ax / s[..., None]).reshape(-1, 3)
     axes = _orient_inward(axes, vertex_normals(qm), flip)
     planes = np.concatenate([U, W], axis=0)            # grid polylines: rows, then columns

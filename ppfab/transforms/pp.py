@@ -218,6 +218,7 @@ def offset_along_axes(grid: QuadGrid, distance: float, mode: str = "parallel") -
         raise GeometryError(f"offset distance must be finite, got {distance}")
     F = extended_face_image_of(grid)
     axes = grid_from_extended(F).axes
+    assert axes is not None, "pp_from_face_image sets the node axes"
     if grid.axes is not None and grid.axes.shape == axes.shape:
         axes = axes * np.where(np.einsum("...i,...i->...", axes, grid.axes) < 0, -1.0, 1.0)[..., None]
     v = grid.vertices

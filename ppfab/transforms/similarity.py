@@ -9,8 +9,10 @@ projective maps of §2.3.5).
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ppfab.mesh import QuadGrid, QuadMesh
 
@@ -36,8 +38,17 @@ def _planes(p: np.ndarray | None, m: np.ndarray) -> np.ndarray | None:
     return None if p is None else np.asarray(p) @ m.T
 
 
+@overload
+def transform(mesh: QuadGrid, scale: float = 1.0, rotate_z_deg: float = 0.0,
+              translate: ArrayLike = (0.0, 0.0, 0.0), flip: bool = False) -> QuadGrid: ...
+@overload
+def transform(mesh: QuadMesh, scale: float = 1.0, rotate_z_deg: float = 0.0,
+              translate: ArrayLike = (0.0, 0.0, 0.0), flip: bool = False) -> QuadMesh: ...
+@overload
 def transform(mesh: QuadGrid | QuadMesh, scale: float = 1.0, rotate_z_deg: float = 0.0,
-              translate=(0.0, 0.0, 0.0), flip: bool = False) -> QuadGrid | QuadMesh:
+              translate: ArrayLike = (0.0, 0.0, 0.0), flip: bool = False) -> QuadGrid | QuadMesh: ...
+def transform(mesh: QuadGrid | QuadMesh, scale: float = 1.0, rotate_z_deg: float = 0.0,
+              translate: ArrayLike = (0.0, 0.0, 0.0), flip: bool = False) -> QuadGrid | QuadMesh:
     """Apply ``x' = s R_z x + t`` (and optionally reverse the orientation) to a mesh and its support data."""
     rot = rotation_z(rotate_z_deg)
     t = np.asarray(translate, dtype=float)
@@ -48,6 +59,7 @@ def transform(mesh: QuadGrid | QuadMesh, scale: float = 1.0, rotate_z_deg: float
         grid = None
         if mesh.grid is not None:
             grid = transform(mesh.grid, scale, rotate_z_deg, translate, flip)
+            assert mesh.grid_ids is not None, "a mesh made from a grid carries its grid ids"
             ids = mesh.grid_ids[:, ::-1] if flip else mesh.grid_ids
             return QuadMesh(v, faces, grid=grid, grid_ids=ids)
         return QuadMesh(v, faces)
