@@ -14,8 +14,8 @@ README.md) it records
   method = "p"`` with segmented beams, the rows continuous; PP: ``method = "pp"`` with half-lap joints),
   ``ppfab build`` and ``ppfab verify``: "built and verified" or the one-line refusal.
 
-Only the ``ppfab`` command is used (found on PATH, run with this checkout first on PYTHONPATH), so the
-script does not depend on the package's internal layout.  Every command has a timeout.
+Only the ``ppfab`` command is used (the entry point this checkout's pyproject.toml declares, run with this
+checkout first on PYTHONPATH), so the script does not depend on the package's internal layout.  Every command has a timeout.
 
 Crease: for an interior edge shared by faces f, g with unit normals n_f, n_g (the normalised cross
 product of the face diagonals, flipped where the two faces are oriented inconsistently), the dihedral
@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -177,11 +178,17 @@ def max_crease_deg(verts: np.ndarray, faces: list[list[int]]) -> float:
 # ---------------------------------------------------------------------------------------------- commands
 
 
-def ppfab_command() -> list[str]:
-    exe = shutil.which("ppfab")
-    if exe is None:
-        sys.exit("real_meshes.py: the ppfab command is not on PATH (pip install -e . first)")
-    return [exe]
+def ppfab_command(exe: str | None = None) -> list[str]:
+    """The ``ppfab`` command of this checkout: the console-script entry point declared in its
+    pyproject.toml, run with this interpreter (so an installed ``ppfab`` of another checkout is not used);
+    ``exe`` overrides it with a given executable."""
+    if exe:
+        return [exe]
+    with open(ROOT / "pyproject.toml", "rb") as fh:
+        target = tomllib.load(fh)["project"]["scripts"]["ppfab"]
+    module, func = target.split(":")
+    return [sys.executable, "-c",
+            f"import sys; from {module} import {func}; sys.argv[0] = 'ppfab'; sys.exit({func}())"]
 
 
 def run(cmd: list[str], timeout: float) -> tuple[int | None, str, str, float]:
@@ -291,7 +298,12 @@ def build_and_verify(name: str, label: str, families: str, mesh: Path, work: Pat
     if rc is None:
         rec["result"] = f"built; verify timed out after {timeout:.0f} s"
     elif rc != 0:
-        rec["result"] = "built; verify failed: " + error_line(se, so)
+        problems = [ln.strip() for ln in (se + "\n" + so).splitlines() if ln.startswith("ppfab: verify:")]
+        more = [ln for ln in problems if ln.startswith("ppfab: verify: … and ")]
+        count = len(problems) - len(more) + sum(int(ln.split()[4]) for ln in more if ln.split()[4].isdigit())
+        first = next((ln for ln in problems if ln not in more), None)
+        rec["result"] = (f"built; verify failed ({count} problems), first: {first}" if first
+                         else "built; verify failed: " + error_line(se, so))
     else:
         rec["result"] = "built and verified"
     return rec
@@ -427,6 +439,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, help="Markdown table to write (default docs/real-meshes.md; with --only: "
                                             "printed)")
     ap.add_argument("--json", type=Path, help="also write the raw records as JSON")
+    ap.add_argument("--ppfab", help="run this ppfab executable instead of this checkout's entry point")
     ap.add_argument("--workdir", type=Path, help="keep optimised meshes, designs and builds here")
     args = ap.parse_args(argv)
     paths = sorted(p for d in (SHARED, LOCAL) for p in d.glob("*") if p.suffix.lower() in (".obj", ".off"))
@@ -435,7 +448,7 @@ def main(argv: list[str] | None = None) -> int:
     if not paths:
         print("real_meshes.py: no mesh matches", file=sys.stderr)
         return 2
-    cmd = ppfab_command()
+    cmd = ppfab_command(args.ppfab)
     work = args.workdir or Path(tempfile.mkdtemp(prefix="ppfab-real-meshes-"))
     records = []
     out_md = None if (args.out is None and args.only) else (args.out or OUT_MD)
