@@ -306,7 +306,27 @@ def build_and_verify(name: str, label: str, families: str, mesh: Path, work: Pat
                          else "built; verify failed: " + error_line(se, so))
     else:
         rec["result"] = "built and verified"
+    rec.update(node_torsion(out / "nodes.csv"))
     return rec
+
+
+def node_torsion(nodes_csv: Path) -> dict:
+    """Largest torsion at a node (degrees and mm at the beam's bottom edge) and the number of nodes above
+    1°, from the build's nodes.csv (columns ``torsion_deg``, ``torsion_mm``; missing columns give {})."""
+    import csv
+
+    if not nodes_csv.exists():
+        return {}
+    with open(nodes_csv, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    out: dict = {"nodes": len(rows)}
+    for key in ("torsion_deg", "torsion_mm"):
+        vals = [float(r[key]) for r in rows if r.get(key) not in (None, "")]
+        if vals:
+            out[key + "_max"] = max(vals)
+            if key == "torsion_deg":
+                out["nodes_over_1deg"] = sum(v > 1.0 for v in vals)
+    return out
 
 
 def survey(path: Path, work: Path, args: argparse.Namespace, cmd: list[str]) -> dict:
@@ -374,7 +394,7 @@ def cell(text: str) -> str:
 def opt_cell(opt: dict) -> str:
     if "delta_f_max" not in opt:
         return cell(opt.get("result", "–"))
-    met = "met" if opt.get("targets_met") else "not met"
+    met = "met" if opt.get("targets_met") else "not met (" + str(opt.get("message") or "").split(":")[0] + ")"
     return (f"{fmt(opt['delta_f_max'])} / {fmt(opt['delta_p_max'])}, {opt['time_s']:.1f} s, "
             f"move {fmt(opt.get('move_rel'), '.1e')}, {met}")
 
@@ -389,9 +409,9 @@ def build_cell(opt: dict) -> str:
     if b is None:
         return "–"
     extra = f"{b['span_m']:.0f} m span"
-    tors = (b.get("summary") or {}).get("torsion_max_deg")
-    if tors is not None:
-        extra += f", torsion max {tors:.2g}°"
+    if "torsion_deg_max" in b:
+        extra += (f", torsion max {b['torsion_deg_max']:.2g}° / {b.get('torsion_mm_max', float('nan')):.2g} mm, "
+                  f"{b['nodes_over_1deg']} of {b['nodes']} nodes > 1°")
     return cell(b["result"]) + f" ({extra})"
 
 
@@ -412,7 +432,9 @@ def table(records: list[dict], quick: bool) -> str:
         "largest vertex move relative to the bounding-box diagonal, whether the targets (1e-6) were met; the "
         "largest dihedral angle between neighbouring faces before → after; the build of the optimised mesh "
         "scaled to a roof of the given span (P: `[support] method = \"p\"`, segmented beams, rows "
-        "continuous; PP: `method = \"pp\"`, half-lap joints), then `ppfab verify`.",
+        "continuous; PP: `method = \"pp\"`, half-lap joints), then `ppfab verify`; for a written build the "
+        "largest torsion at a node (degrees, and mm at the beam's bottom edge, from its nodes.csv) and the "
+        "nodes above 1°.",
         "",
         f"Built and verified: {ok} of {2 * len(records)} builds.",
         "",
