@@ -387,7 +387,12 @@ def fmt(x: float | None, spec: str = ".1e") -> str:
     return format(x, spec)
 
 
-def cell(text: str) -> str:
+def cell(text: str, limit: int = 0) -> str:
+    """Table-safe text; with ``limit``, a long message is cut after the last ``; `` before that many
+    characters (the records written by ``--json`` keep it whole)."""
+    if limit and len(text) > limit:
+        cut = text.rfind("; ", 0, limit)
+        text = text[:cut if cut > 0 else limit] + " …"
     return text.replace("|", "\\|").replace("\n", " ")
 
 
@@ -412,7 +417,7 @@ def build_cell(opt: dict) -> str:
     if "torsion_deg_max" in b:
         extra += (f", torsion max {b['torsion_deg_max']:.2g}° / {b.get('torsion_mm_max', float('nan')):.2g} mm, "
                   f"{b['nodes_over_1deg']} of {b['nodes']} nodes > 1°")
-    return cell(b["result"]) + f" ({extra})"
+    return cell(b["result"], 320) + f" ({extra})"
 
 
 def table(records: list[dict], quick: bool) -> str:
@@ -462,8 +467,14 @@ def main(argv: list[str] | None = None) -> int:
                                             "printed)")
     ap.add_argument("--json", type=Path, help="also write the raw records as JSON")
     ap.add_argument("--ppfab", help="run this ppfab executable instead of this checkout's entry point")
+    ap.add_argument("--table-from", type=Path, metavar="JSON",
+                    help="only write the table from the records of an earlier --json run")
     ap.add_argument("--workdir", type=Path, help="keep optimised meshes, designs and builds here")
     args = ap.parse_args(argv)
+    if args.table_from:
+        records = json.loads(args.table_from.read_text())
+        (args.out or OUT_MD).write_text(table(records, args.quick))
+        return 0
     paths = sorted(p for d in (SHARED, LOCAL) for p in d.glob("*") if p.suffix.lower() in (".obj", ".off"))
     if args.only:
         paths = [p for p in paths if any(o in p.name for o in args.only)]
