@@ -116,7 +116,8 @@ class RhinoModel:
             m.Name = label
             m.DiffuseColor = _colour(layer)
             m.Transparency = 1.0 - COLOURS[layer][3]
-            self.materials[label] = self.f.Materials.Add(m)
+            self.materials[label] = len(self.f.Materials)     # (Add returns no index in rhino3dm 8.0)
+            self.f.Materials.Add(m)
         return self.materials[label]
 
     def _attributes(self, name: str, layer: str, props: dict[str, Any], key: str) -> Any:
@@ -129,14 +130,15 @@ class RhinoModel:
         return a
 
     def add(self, el: Element, material: str) -> None:
-        """One part as a closed extrusion of its outline along its frame normal from ``z0`` by its height."""
+        """One part as a closed extrusion of its outline along its frame normal from ``z0`` by its height
+        (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side)."""
         r = self.r
-        fr = el.frame
         base = el.base()
-        crv = r.PolylineCurve([r.Point3d(*map(float, p)) for p in list(base) + [base[0]]])
-        o = fr.origin + el.z0 * fr.normal
-        plane = r.Plane(r.Point3d(*map(float, o)), r.Vector3d(*map(float, fr.ex)), r.Vector3d(*map(float, fr.ey)))
-        ext = r.Extrusion.CreateWithPlane(crv, plane, float(el.height), True)
+        ring = r.Point3dList()                   # (a list of Point3d is not accepted by rhino3dm 8.0)
+        for p in list(base) + [base[0]]:
+            ring.Add(*map(float, p))
+        # the outline is counter-clockwise about the frame normal: Create extrudes it along that normal
+        ext = r.Extrusion.Create(r.PolylineCurve(ring), float(el.height), True)
         if ext is None:
             from ppfab.errors import FabricationError
 
