@@ -66,8 +66,9 @@ def check_ifc(v: Verification) -> None:
     ifcopenshell.validate.validate(f, log)
     for s in log.statements[:10]:
         text = " ".join(str(s.get("message", s)).split())
-        inst = s.get("instance")
-        v.error(rel, f"#{inst.id()}" if hasattr(inst, "id") else "", f"schema validation: {text[:240]}")
+        inst: Any = s.get("instance")
+        v.error(rel, f"#{inst.id()}" if inst is not None and hasattr(inst, "id") else "",
+                f"schema validation: {text[:240]}")
     scale = uu.calculate_unit_scale(f)
     if abs(scale - 1e-3) > 1e-12:
         v.error(rel, "units", f"length unit is {scale:g} m, expected millimetres")
