@@ -476,3 +476,15 @@ def test_exchange_files_of_a_real_mesh(tmp_path):
         (member,) = a.IsDecomposedBy[0].RelatedObjects
         assert member.Name == a.Name and member.GlobalId != a.GlobalId
     assert len(f.by_type("IfcPlate")) == len(b.panels.panels) == 56
+
+
+def test_a_coated_pane_cannot_be_mirrored(tmp_path, capsys):
+    p = tmp_path / "d.toml"
+    p.write_text(small_design(2, 2, extra="[panels]\ncoated_side = \"outside\"\nmirror_allowed = true\n"))
+    assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppfab: error:") and "coated on the outside cannot be turned over" in err
+    assert "Traceback" not in err and not (tmp_path / "o").exists()
+    p.write_text(small_design(2, 2, extra="[panels]\ncoated_side = \"top\"\n"))
+    assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
+    assert "'none', 'outside', 'inside'" in capsys.readouterr().err
