@@ -19,7 +19,20 @@ PARTS_KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "ty
 
 ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
                  "rotations", "mirror_allowed", "file"]
-"""Columns of ``glass_order.csv`` (one row per panel type)."""
+"""The first columns of ``glass_order.csv`` (one row per panel type); :data:`ORDER_SHAPE_COLUMNS` follow."""
+
+ORDER_CORNERS = 4
+"""Corners per pane in ``glass_order.csv`` (the panels of a quad mesh are quadrilaterals)."""
+
+ORDER_SHAPE_COLUMNS = (["weight_kg", "perimeter_mm", "edge_finish", "coated_side"]
+                       + [f"c{k}_{xy}_mm" for k in range(1, ORDER_CORNERS + 1) for xy in "xy"]
+                       + [f"edge_{k}{k % ORDER_CORNERS + 1}_mm" for k in range(1, ORDER_CORNERS + 1)]
+                       + ["diag_13_mm", "diag_24_mm"]
+                       + [f"angle_{k}_deg" for k in range(1, ORDER_CORNERS + 1)])
+"""The shape of a pane type as a processor checks it, after :data:`ORDER_COLUMNS`: weight of one pane, perimeter,
+edge work and coated side (``[panels]``), the corners 1–4 in the panel's own frame (the per-type DXF: corner 1 at
+the origin, edge 12 along +x, seen from outside, counter-clockwise), the edge lengths 12, 23, 34, 41, both
+diagonals and the interior corner angles."""
 
 PART_KINDS = ("panel", "beam")
 
@@ -52,6 +65,17 @@ XDATA_APPID = "PPFAB"
 
 XDATA_KEYS = ("part_id", "nest_tag", "kind", "type_id")
 """The ``key=value`` strings on a CUT outline, in this order (``part_id`` and ``nest_tag`` are the contract)."""
+
+
+DIM_LAYER, DIM_COLOUR = "DIM", 2
+"""The layer of the dimensions (edges and diagonals) in the per-type DXFs: annotation, never machined."""
+
+LEGACY_DXF = {"R12": "dxf_r12", "R2000": "dxf_r2000"}
+"""``[output] dxf_r12`` / ``dxf_r2000``: the DXF version → the folder holding a copy of every cutting sheet and
+per-type DXF in that version (same relative paths; R12 draws CUT outlines as closed POLYLINEs and has no
+``$INSUNITS``)."""
+
+R12_OLDEST = "AC1009"
 
 
 def xdata_strings(part_id: str, nest_tag: str, kind: str, type_id: str) -> list[tuple[int, str]]:
@@ -121,3 +145,35 @@ def sheet_file(prefix: str, sheet: int, sheets: int) -> str:
 def type_file(type_id: str, prefix: str = TYPE_PREFIX) -> str:
     """``type_T017.dxf``: the flat DXF of a panel type."""
     return f"{prefix}_{type_id}.dxf"
+
+
+# -- exchange models: IFC, Rhino, glTF; structure and colours of the STEP files ------------------------
+
+IFC_FILE, RHINO_FILE, GLB_FILE = "model.ifc", "model.3dm", "model.glb"
+
+FIXED_TIMESTAMP = "2000-01-01T00:00:00"
+"""The time stamp written into every file header that has one (STEP, IFC, Rhino): builds stay byte-identical."""
+
+IFC_SCHEMA = "IFC4"
+IFC_PSET = "PPFAB_Part"
+"""The property set on every IFC element; its properties are :data:`EXCHANGE_PROPERTIES` (the ``parts.csv``
+columns of the same name; ``weight_kg`` is ``mass_kg`` for beam plates)."""
+
+IFC_CLASSES = {"panel": ("IfcPlate", "CURTAIN_PANEL"), "beam": ("IfcMember", "MEMBER")}
+"""Part kind → IFC class and predefined type; a part of any other kind becomes an ``IfcMember``."""
+
+EXCHANGE_PROPERTIES = ("part_id", "kind", "nest_tag", "type_id", "sheet", "sheet_file", "material", "thickness_mm",
+                       "area_mm2", "weight_kg", "planarity_dev_mm", "beam_id", "family", "piece", "length_mm")
+"""Keys of the IFC property set and the Rhino user text of a part (those that apply to it)."""
+
+RHINO_LAYERS = ("glass", "beams", "beams::rows", "beams::cols", "nodes", "mesh")
+"""Layers of ``model.3dm`` (full paths): panels on ``glass``, beam plates on ``beams::<family>``, node axes on
+``nodes``, the quad mesh on ``mesh``."""
+
+COLOURS = {"glass": (0.55, 0.75, 0.90, 0.35), "rows": (0.80, 0.36, 0.12, 1.0), "cols": (0.16, 0.42, 0.68, 1.0),
+           "nodes": (0.15, 0.15, 0.15, 1.0), "mesh": (0.45, 0.45, 0.45, 1.0)}
+"""RGBA (0–1) of the glass, each beam family, the node axes and the mesh in STEP, IFC, Rhino and glTF."""
+
+STEP_GLASS_GROUP = "glass"
+"""The assembly of the panels in ``panels.step`` (below the design's assembly); in ``beams.step`` the design's
+assembly holds one assembly per family (``rows``, ``cols``), each one per beam (``B-U03``) holding its plates."""

@@ -54,6 +54,16 @@ class OutputSection:
     panels_step: bool = param(True, doc="also write panels.step (glass as thin solids, for clash checks)")
     report: bool = param(True, doc="write report.html")
     per_type_dxf: bool = param(True, doc="write one flat DXF per panel type")
+    type_dimensions: bool = param(True, doc="dimension the edges and both diagonals in the per-type DXFs "
+                                            "(layer DIM)")
+    dxf_r12: bool = param(False, doc="also write every cutting sheet and per-type DXF as DXF R12, in dxf_r12/ "
+                                     "(for legacy cutting tables)")
+    dxf_r2000: bool = param(False, doc="also write every cutting sheet and per-type DXF as DXF R2000, in dxf_r2000/")
+    ifc: bool = param(True, doc="write model.ifc (IFC4: an IfcPlate per pane, an IfcMember per beam plate, with "
+                                "property sets)")
+    rhino: bool = param(True, doc="write model.3dm (Rhino: layers per family, objects named by part id, user text, "
+                                  "node axes, the mesh)")
+    glb: bool = param(True, doc="write model.glb (glTF binary for viewing; node names are the part ids)")
 
 
 def _section_types() -> dict[str, Callable[[], type]]:

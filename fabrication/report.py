@@ -180,6 +180,11 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
               left=(0, 2, 6, 7))
     listed = sorted(k for k in files)
     rep.heading("Files")
+    models = [(files[k], what) for k, what in (("glb", "3D view (glTF: drop it into any glTF viewer)"),
+                                                ("ifc", "BIM (IFC4)"), ("rhino", "Rhino")) if k in files]
+    if models:
+        rep.raw("<p>" + " · ".join(f'<a href="{esc(str(f))}">{esc(str(f))}</a> {esc(what)}'
+                                   for f, what in models) + "</p>")
     rep.paragraph("This folder holds: " + ", ".join(listed) + ". See manifest.json for every file and its sha256.",
                   "muted")
     return rep.html()

@@ -49,7 +49,8 @@ def _inject(monkeypatch, stage: str, exc: BaseException) -> None:
         monkeypatch.setattr(pipeline, f"stage_{stage}", boom)
     else:
         writers.load_writers()
-        monkeypatch.setitem(writers.WRITERS, stage, dataclasses.replace(writers.WRITERS[stage], write=boom))
+        monkeypatch.setitem(writers.WRITERS, stage, dataclasses.replace(writers.WRITERS[stage], write=boom,
+                                                                        enabled=lambda design: True))
 
 
 def test_stage_list_names_the_stage_functions():

@@ -39,7 +39,15 @@ class PanelParams:
                                      "turns counter-clockwise about), 'reverse', or 'auto' (away from the mesh centroid)",
                          choices=("auto", "normal", "reverse"))
     mark_size: float = param(80.0, doc="length of the reference-corner mark on layer MARK, mm", min=0)
+    edge_finish: str = param("arrised", doc="edge work of the panes, written to the glass order (e.g. arrised, "
+                                            "ground, polished)")
+    coated_side: str = param("none", doc="the side of the pane that carries a coating or print, written to the "
+                                         "glass order; the per-type DXF shows the pane seen from outside",
+                             choices=("none", "outside", "inside"))
 
     def __post_init__(self):
         if min(self.min_size) > 0 and (max(self.min_size) > max(self.max_size) or min(self.min_size) > min(self.max_size)):
             raise DesignError("min_size", f"{list(self.min_size)} exceeds max_size {list(self.max_size)}")
+        if self.coated_side != "none" and self.mirror_allowed:
+            raise DesignError("mirror_allowed", f"a pane coated on the {self.coated_side} cannot be turned over: "
+                                                "set mirror_allowed = false or coated_side = 'none'")

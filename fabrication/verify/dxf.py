@@ -47,6 +47,7 @@ def check_dxf(v: Verification) -> None:
                 if not trim.contains(poly):
                     v.error(rel, pid, "outline leaves the usable (TRIM) area")
                 polys.append((pid, poly))
+                v.data.setdefault("dxf_outlines", {})[pid] = part.points      # sheet coordinates
                 if key == "glass_sheets" and mesh is not None and row is not None and row.get("face", "") != "":
                     face = int(row["face"])
                     ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))

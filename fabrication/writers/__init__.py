@@ -3,7 +3,8 @@
 A writer is a function ``write(build, out, files) -> str`` that writes its files into the (temporary) output
 folder ``out`` and records each under a key of ``files`` (the manifest's ``files`` table, in writing
 order); it returns a short note for the progress display.  Modules of this package register theirs with
-:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF 30, tables 50, report 80, manifest 90) and an
+:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF 30, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
+glTF 70, report 80, manifest 90) and an
 ``enabled(design)`` predicate for optional files; :func:`write_all` runs them in order.  Adding an output
 format is one new module.
 """

@@ -22,7 +22,7 @@ import contextlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -30,8 +30,8 @@ from ppfab.errors import VerificationError
 
 from . import Files, writer
 
-from ..contract import (DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, LAYERS,
-                        PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, sheet_file,
+from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DIR, GLASS_SHEET_PREFIX,
+                        LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, sheet_file,
                         type_file, xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
 
@@ -52,10 +52,10 @@ def _fixed_metadata():
         ezdxf.options.write_fixed_meta_data_for_testing = old
 
 
-def _new_doc():
+def _new_doc(version: str = DXF_VERSION):
     import ezdxf
 
-    doc = ezdxf.new(DXF_VERSION, setup=False)
+    doc = ezdxf.new(version, setup=False)
     doc.units = DXF_INSUNITS_MM                 # millimetres
     doc.header["$INSUNITS"] = DXF_INSUNITS_MM
     doc.header["$MEASUREMENT"] = 1              # metric
@@ -84,14 +84,18 @@ class CuttingSheet:
     sheet_size : (length, width) of the stock sheet, mm; ``None`` for a part file (no SHEET/TRIM)
     usable : (x0, y0, x1, y1) usable area after trim (layer TRIM), mm
     title : text written on LABEL below the sheet (sheet number, material)
+    version : the DXF version written: ``R2010`` (the contract), ``R2000``, or ``R12`` (built as R2010 and
+        written by the R12 exporter of :mod:`fabrication.writers._dxf_r12`)
     """
 
     def __init__(self, sheet_size: tuple[float, float] | None = None,
-                 usable: tuple[float, float, float, float] | None = None, title: str = ""):
+                 usable: tuple[float, float, float, float] | None = None, title: str = "",
+                 version: str = DXF_VERSION):
+        self.version = version
         self._ctx = _fixed_metadata()
         self._ctx.__enter__()
         try:
-            self.doc = _new_doc()
+            self.doc = _new_doc(DXF_VERSION if version == "R12" else version)
         finally:
             self._ctx.__exit__(None, None, None)
         self.msp = self.doc.modelspace()
@@ -151,12 +155,17 @@ class CuttingSheet:
         classes.classes.clear()
         classes.classes.update(ordered)
         with _fixed_metadata():
-            self.doc.saveas(path)
+            if self.version == "R12":
+                from ._dxf_r12 import save_r12
+
+                save_r12(self.doc, path)
+            else:
+                self.doc.saveas(path)
         return path
 
 
 def write_sheet_dxfs(parts: list[FlatPart], nesting, folder: str | os.PathLike, prefix: str = "sheet",
-                     title: str = "") -> list[Path]:
+                     title: str = "", version: str = DXF_VERSION) -> list[Path]:
     """One DXF per sheet of ``nesting`` (``{prefix}_01.dxf`` …) in ``folder``; returns the paths in sheet order."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -164,17 +173,23 @@ def write_sheet_dxfs(parts: list[FlatPart], nesting, folder: str | os.PathLike, 
     out = []
     for k, group in enumerate(nesting.by_sheet()):
         head = f"{title} sheet {k + 1}/{nesting.sheets}".strip()
-        builder = CuttingSheet(nesting.sheet_size, nesting.usable, head)
+        builder = CuttingSheet(nesting.sheet_size, nesting.usable, head, version)
         for pl in group:
             builder.add_part(by_id[pl.part_id], pl)
         out.append(builder.write(folder / sheet_file(prefix, k + 1, nesting.sheets)))
     return out
 
 
-def write_part_dxf(part: FlatPart, path: str | os.PathLike, title: str = "") -> Path:
-    """One part flat in its own coordinates (for processors whose optimiser re-nests)."""
-    builder = CuttingSheet(None, None, title)
+def write_part_dxf(part: FlatPart, path: str | os.PathLike, title: str = "", version: str = DXF_VERSION,
+                   dimensions: bool = False) -> Path:
+    """One part flat in its own coordinates (for processors whose optimiser re-nests); with ``dimensions`` its
+    edges and diagonals dimensioned on layer DIM (:mod:`fabrication.writers._dxf_dimensions`)."""
+    builder = CuttingSheet(None, None, title, version)
     builder.add_part(part, None)
+    if dimensions:
+        from ._dxf_dimensions import add_pane_dimensions
+
+        add_pane_dimensions(builder.doc, part.outline)
     return builder.write(path)
 
 
@@ -205,6 +220,7 @@ class DXFContent:
     marks: int
     audit_errors: list[str] = field(default_factory=list)
     other_entities: list[str] = field(default_factory=list)
+    dimensions: list[float] = field(default_factory=list)
 
 
 def _xdata(entity) -> dict:
@@ -220,23 +236,29 @@ def _xdata(entity) -> dict:
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     """Re-read a DXF with ``ezdxf.readfile``, audit it and extract parts, outlines, labels and marks."""
     import ezdxf
-    from ezdxf.entities import LWPolyline
+    from ezdxf.entities import LWPolyline, Polyline
 
     path = Path(path)
     doc = ezdxf.readfile(path)
     auditor = doc.audit()
     errors = [f"{e.code}: {e.message}" for e in auditor.errors]
-    parts, labels, marks, other = [], [], 0, []
+    parts, labels, marks, other, dims = [], [], 0, [], []
     sheet = trim = None
+    e: Any
     for e in doc.modelspace():
         layer = e.dxf.layer
         kind = e.dxftype()
-        if kind == "LWPOLYLINE":
+        if kind == "POLYLINE" and isinstance(e, Polyline) and not (e.is_3d_polyline or e.is_poly_face_mesh
+                                                                  or e.is_polygon_mesh):
+            kind = "LWPOLYLINE"                 # an R12 file: a 2D POLYLINE is what LWPOLYLINE is in R2000+
+            pts = np.array([(p[0], p[1]) for p in e.points()], dtype=float)
+        elif kind == "LWPOLYLINE":
             assert isinstance(e, LWPolyline), "ezdxf reads LWPOLYLINE entities as LWPolyline"
             pts = np.array([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
+        if kind == "LWPOLYLINE":
             if layer == "CUT":
                 x = _xdata(e)
-                parts.append(DXFPart(x.get("part_id", ""), x.get("nest_tag", ""), pts, bool(e.closed), x))
+                parts.append(DXFPart(x.get("part_id", ""), x.get("nest_tag", ""), pts, bool(e.is_closed), x))
             elif layer == "SHEET":
                 sheet = pts
             elif layer == "TRIM":
@@ -247,26 +269,28 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
                 other.append(f"LWPOLYLINE on {layer}")
         elif kind == "TEXT" and layer == "LABEL":
             labels.append(e.dxf.text)
+        elif kind == "DIMENSION" and layer == DIM_LAYER:
+            dims.append(float(e.get_measurement()))
         else:
             other.append(f"{kind} on {layer}")
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
-                      parts, sheet, trim, labels, marks, errors, other)
+                      parts, sheet, trim, labels, marks, errors, other, dims)
 
 
-def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True) -> DXFContent:
+def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
     """:func:`read_sheet_dxf` plus the contract: raises :class:`VerificationError` naming the first problem.
 
-    Audit without errors; R2000 or newer; ``$INSUNITS`` = 4; the five layers exist; every CUT
-    entity a closed LWPOLYLINE with ``part_id`` and (on a sheet) ``nest_tag`` XDATA; part ids
-    unique; nothing but LWPOLYLINE and TEXT; on a sheet, the SHEET and TRIM outlines present.
+    Audit without errors; ``oldest`` (R2000) or newer; ``$INSUNITS`` = 4 (R12 has none); the five layers exist;
+    every CUT entity a closed LWPOLYLINE (POLYLINE in R12) with ``part_id`` and (on a sheet) ``nest_tag`` XDATA;
+    part ids unique; nothing but those, TEXT and dimensions on DIM; on a sheet, the SHEET and TRIM outlines.
     """
     c = read_sheet_dxf(path)
     name = Path(path).name
     if c.audit_errors:
         raise VerificationError(f"{name}: ezdxf audit found {len(c.audit_errors)} error(s): {c.audit_errors[0]}")
-    if c.dxfversion < DXF_OLDEST:
-        raise VerificationError(f"{name}: DXF version {c.dxfversion} is older than R2000 (AC1015)")
-    if c.insunits != DXF_INSUNITS_MM:
+    if c.dxfversion < oldest:
+        raise VerificationError(f"{name}: DXF version {c.dxfversion} is older than {oldest}")
+    if c.insunits != DXF_INSUNITS_MM and c.dxfversion > "AC1009":
         raise VerificationError(f"{name}: $INSUNITS is {c.insunits}, expected 4 (mm)")
     missing = [la for la in LAYERS if la not in c.layers]
     if missing:
@@ -287,8 +311,10 @@ def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True) -> DXFC
     return c
 
 
-def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: str = TYPE_PREFIX) -> dict[str, str]:
-    """One flat DXF per type (its first part, in its own coordinates); returns ``type_id → file name``."""
+def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: str = TYPE_PREFIX,
+                    version: str = DXF_VERSION, dimensions: bool = False) -> dict[str, str]:
+    """One flat DXF per type (its first part, in its own coordinates, with ``dimensions`` its edges and
+    diagonals dimensioned); returns ``type_id → file name``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out: dict[str, str] = {}
@@ -298,7 +324,8 @@ def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: st
             continue
         name = type_file(tid, prefix)
         material = p.meta.get("material", "")
-        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id}) {material}".strip())
+        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id}) {material}".strip(), version=version,
+                       dimensions=dimensions)
         out[tid] = name
     return out
 
@@ -315,6 +342,7 @@ def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
     files["glass_sheets"] = [str(p.relative_to(out)) for p in glass]
     files["beam_sheets"] = [str(p.relative_to(out)) for p in plates]
     if build.design.output.per_type_dxf:
-        types = write_type_dxfs(list(nest.glass_parts), out / TYPE_DIR)
+        types = write_type_dxfs(list(nest.glass_parts), out / TYPE_DIR,
+                                dimensions=build.design.output.type_dimensions)
         files["panel_type_dxfs"] = [f"{TYPE_DIR}/{v}" for v in types.values()]
     return f"{len(glass)} glass + {len(plates)} plate sheets"

@@ -4,8 +4,17 @@ Each plate is one face built from its 2D outline (slots and end cuts already
 drawn in, see :mod:`fabrication.beams.joints`) at ``z = −t/2`` in the plate's own frame,
 extruded once by ``t`` and placed with ``Location(Plane(origin, x_dir, z_dir))``
 — no boolean cuts, and the polygon is exactly planar (a kernel rejects a face
-whose polygon is 1e-4 mm off its plane).  The STEP file is a flat ``Compound``
-of labelled solids (names survive one level deep) written without p-curves.
+whose polygon is 1e-4 mm off its plane).  The STEP file is an assembly written
+without p-curves; a reader sees the product tree (names survive every level)
+
+    beams.step                                panels.step
+    <design name>                             <design name>
+      rows | cols          one per family       glass
+        B-U03              one per beam           P-U07-V12 …   one solid per pane
+          B-U03-S00 …      one solid per plate
+
+with every solid coloured by its family (:data:`fabrication.contract.COLOURS`) and a header naming ppfab, its
+version and the design (:mod:`fabrication.writers._step_text`).
 
 build123d is imported inside the functions (≈3.5 s).
 """
@@ -24,7 +33,11 @@ from ppfab.errors import FabricationError
 
 from ppfab.frame import Frame
 
+from ppfab.topology import FAMILY_NAMES
+
 from ..beams.plates import BeamPlate
+from ..contract import COLOURS, FIXED_TIMESTAMP, STEP_GLASS_GROUP
+from ._step_text import canonical_styles, replace_header, step_label
 
 from . import Files, writer
 
@@ -51,10 +64,19 @@ def _placed_prism(outline: np.ndarray, frame: Frame, z0: float, height: float, l
     return solid
 
 
+def _colour(layer: str):
+    from build123d import Color
+
+    return Color(*COLOURS[layer])
+
+
 def plate_solid(plate: BeamPlate):
-    """The solid of one plate: its outline extruded once, thickness centred on the support plane."""
+    """The solid of one plate: its outline extruded once, thickness centred on the support plane, in the colour
+    of its family."""
     t = plate.thickness
-    return _placed_prism(plate.outline, plate.frame, -0.5 * t, t, plate.part_id)
+    solid = _placed_prism(plate.outline, plate.frame, -0.5 * t, t, plate.part_id)
+    solid.color = _colour(FAMILY_NAMES[plate.family])
+    return solid
 
 
 def build_solids(plates: Sequence[BeamPlate]) -> list:
@@ -66,41 +88,70 @@ def build_solids(plates: Sequence[BeamPlate]) -> list:
     return solids
 
 
-def export_step(solids: Sequence, path: str | os.PathLike) -> Path:
-    """Write solids as a flat compound of named solids to STEP (mm, no p-curves)."""
+def beam_assembly(plates: Sequence[BeamPlate], solids: Sequence, name: str):
+    """The product tree of ``beams.step``: ``name`` → family → beam id → the plate solids, in plate order."""
+    from build123d import Compound
+
+    families: dict[str, dict[str, list]] = {}
+    for plate, solid in zip(plates, solids):
+        families.setdefault(FAMILY_NAMES[plate.family], {}).setdefault(plate.beam_id, []).append(solid)
+    kids = []
+    for family, beams in families.items():
+        group = [Compound(children=members, label=beam) for beam, members in beams.items()]
+        for g in group:
+            g.color = _colour(family)
+        kids.append(Compound(children=group, label=family))
+    return Compound(children=kids, label=step_label(name))
+
+
+def export_step(shapes, path: str | os.PathLike, name: str = "", description: str = "") -> Path:
+    """Write an assembly, or a list of solids as one flat assembly named ``name``, to STEP (mm, no p-curves)
+    with a reproducible header naming ppfab and ``description``."""
     from build123d import Compound, Unit
     from build123d import export_step as _export
 
     path = Path(path)
-    compound = Compound(children=list(solids))
-    if not _export(compound, str(path), unit=Unit.MM, write_pcurves=False):
+    if isinstance(shapes, (list, tuple)):
+        shapes = Compound(children=list(shapes), label=step_label(name) if name else "")
+    if not _export(shapes, str(path), unit=Unit.MM, write_pcurves=False):
         raise FabricationError(f"{path}: writing the STEP file failed")
-    _make_reproducible(path)
+    _make_reproducible(path, description or name)
     return path
 
 
-STEP_TIMESTAMP = "2000-01-01T00:00:00"
+STEP_TIMESTAMP = FIXED_TIMESTAMP
 """The time stamp written into the STEP header (FILE_NAME)."""
 
 
-def _make_reproducible(path: Path) -> None:
-    """Make two exports of the same solids byte-identical.
+def _make_reproducible(path: Path, description: str = "") -> None:
+    """Make two exports of the same solids byte-identical, with ppfab's header.
 
     The kernel writes the wall-clock time into the header and numbers assembly occurrences
     (``NEXT_ASSEMBLY_USAGE_OCCURRENCE('43', …)``) with a counter that runs on across exports in one
     process; a fixed time stamp (as ``SOURCE_DATE_EPOCH`` does for other build tools) and occurrence
-    ids renumbered 1, 2, … in file order change nothing else.
+    ids renumbered 1, 2, … in file order change nothing else.  The colours, which the kernel writes in an
+    order that follows memory addresses, are put in a canonical order
+    (:func:`~fabrication.writers._step_text.canonical_styles`).  The header's ``FILE_DESCRIPTION`` and
+    ``FILE_NAME`` are ppfab's (:func:`~fabrication.writers._step_text.replace_header`).
     """
     import itertools
     import re
 
     data = path.read_bytes()
     head, sep, rest = data.partition(b"ENDSEC;")
-    head = re.sub(rb"(FILE_NAME\('[^']*',')[0-9T:\-]+(')", rb"\g<1>" + STEP_TIMESTAMP.encode() + rb"\2", head,
-                  count=1)
+    try:
+        head = replace_header(head, path.name, description)
+    except ValueError as exc:
+        raise FabricationError(f"{path}: {exc}") from None
     counter = itertools.count(1)
     rest = re.sub(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')[0-9]+(')",
                   lambda m: m.group(1) + str(next(counter)).encode() + m.group(2), rest)
+    before, data_sep, data = rest.partition(b"DATA;")
+    body, end_sep, after = data.partition(b"ENDSEC;")
+    try:
+        rest = before + data_sep + canonical_styles(body) + end_sep + after
+    except ValueError as exc:
+        raise FabricationError(f"{path}: {exc}") from None
     path.write_bytes(head + sep + rest)
 
 
@@ -236,23 +287,35 @@ def panel_solids(corners: np.ndarray, thickness: float, ids: Iterable[str]) -> l
 
 
 def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: float = 10.0,
-                       ids: Sequence[str] | None = None) -> Path:
-    """``panels.step``: glass panels as thin solids on the outside of the mesh, for clash checks."""
+                       ids: Sequence[str] | None = None, name: str = "") -> Path:
+    """``panels.step``: glass panels as thin solids on the outside of the mesh, for clash checks; the assembly
+    ``name`` → ``glass`` → one solid per pane, in the glass colour."""
+    from build123d import Compound
+
     ids = list(ids) if ids is not None else [f"P{k:04d}" for k in range(len(corners))]
     if len(ids) != len(corners):
         raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
-    return export_step(panel_solids(corners, thickness, ids), path)
+    solids = panel_solids(corners, thickness, ids)
+    for s in solids:
+        s.color = _colour("glass")
+    glass = Compound(children=solids, label=STEP_GLASS_GROUP)
+    root = Compound(children=[glass], label=step_label(name or "panels"))
+    return export_step(root, path, description=f"glass panels of {name}" if name else "glass panels")
 
 
 @writer("step", order=20)
 def write_step_files(build: "Build", out: Path, files: Files) -> str:
-    """``beams.step`` (one solid per beam plate) and, with ``[output] panels_step``, ``panels.step``."""
-    export_step(build_solids(list(build.beams.plates)), out / "beams.step")
+    """``beams.step`` (one solid per beam plate, grouped by family and beam) and, with ``[output] panels_step``,
+    ``panels.step``."""
+    name = build.design.info.name
+    plates = list(build.beams.plates)
+    export_step(beam_assembly(plates, build_solids(plates), name), out / "beams.step",
+                description=f"beam plates of {name}")
     files["beams_step"] = "beams.step"
     if build.design.output.panels_step:
         panels = build.panels.panels
         export_panels_step(np.array([p.corners_3d for p in panels]), out / "panels.step",
-                           build.design.panels.thickness, [p.part_id for p in panels])
+                           build.design.panels.thickness, [p.part_id for p in panels], name)
         files["panels_step"] = "panels.step"
         return "beams.step, panels.step"
     return "beams.step"

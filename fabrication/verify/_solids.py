@@ -1,0 +1,150 @@
+"""Checks shared by the exchange-model checks (IFC, Rhino, glTF): names, data and placement of part solids.
+
+A solid read back from a file is compared with the part's ``parts.csv`` row and the mesh (``mesh.obj``):
+
+* a panel lies on its mesh face: every vertex at a distance ``δ ∈ [−ε, t + ε]`` from the plane fitted to the
+  face's corners (oriented to the side the solid is on), ``t`` the glass thickness and ``ε`` the planarity
+  tolerance plus the file's precision, reaching ``t`` on one side and 0 on the other; its volume is the row's
+  ``area_mm2 × thickness_mm``;
+* a beam plate lies on its support plane (the row's ``plane``): every vertex at ``|δ| ≤ t/2 + ε``, reaching
+  ``±t/2`` on both sides; the mesh vertices of its nodes (the row's ``nodes``) on that plane within the beam
+  plane tolerance; its volume is ``area_mm2 × thickness_mm``;
+* and in its plane, its base polygon has the corners of the face inset by half the gap (a panel) or of its DXF
+  cutting outline mapped back through its placement and frame (a plate): :func:`check_outline_place`.
+"""
+
+from __future__ import annotations
+
+import ast
+
+import numpy as np
+
+from . import Verification
+
+
+def parse_list(text: str) -> list:
+    """A list written into ``parts.csv`` (``[0.99, -0.12, 0.0, 15709.2]``), or ``[]``."""
+    try:
+        value = ast.literal_eval(text) if text else []
+    except (ValueError, SyntaxError):
+        return []
+    return list(value) if isinstance(value, (list, tuple)) else []
+
+
+def polygon_area_3d(points: np.ndarray) -> float:
+    """Area of a planar polygon ``(k, 3)`` (half the norm of the sum of ``p_i × p_{i+1}``)."""
+    p = np.asarray(points, dtype=float)
+    p = p - p.mean(axis=0)
+    return 0.5 * float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)))
+
+
+def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None:
+    """Where a part's outline must be in 3D, ``(k, 3)`` mm, from files other than the one checked: a panel's mesh
+    face inset by half the gap in the face's plane; a beam plate's cutting outline on its DXF sheet mapped back
+    through its ``parts.csv`` placement (``p = M R(−rotation)(s − (x, y))``) and frame (``origin + p_x x_dir +
+    p_y y_dir``)."""
+    from .congruence import inset_face_2d
+
+    mesh = v.data.get("mesh")
+    fab = v.data.get("manifest", {}).get("fabrication", {})
+    if row["kind"] == "panel" and mesh is not None and row.get("face", "") != "":
+        corners = mesh.vertices[mesh.faces[int(row["face"])]]
+        c = corners.mean(axis=0)
+        vt = np.linalg.svd(corners - c)[2]
+        return c + inset_face_2d(corners, 0.5 * float(fab.get("panel_gap", 0.0))) @ vt[:2]
+    sheet = v.data.get("dxf_outlines", {}).get(row["part_id"])
+    frame = ast.literal_eval(row["frame"]) if row.get("frame", "").startswith("{") else None
+    if row["kind"] != "beam" or sheet is None or not isinstance(frame, dict):
+        return None
+    a = np.radians(float(row["rotation_deg"]))
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    q = (np.asarray(sheet, dtype=float) - [float(row["x"]), float(row["y"])]) @ rot    # R(−a) applied to rows
+    if row.get("mirrored") == "1":
+        q[:, 0] = -q[:, 0]
+    o, ex, ey = (np.asarray(frame[k], dtype=float) for k in ("origin", "x_dir", "y_dir"))
+    return o + q[:, :1] * ex + q[:, 1:2] * ey
+
+
+def check_outline_place(v: Verification, rel: str, row: dict[str, str], ring: np.ndarray, eps: float) -> None:
+    """The solid's base polygon ``ring (k, 3)`` has the corners of :func:`reference_outline`, seen along the
+    part's normal (each reference corner within ``eps`` of a corner of the ring)."""
+    ref = reference_outline(v, row)
+    if ref is None:
+        return
+    ring = np.asarray(ring, dtype=float)
+    c = ref.mean(axis=0)
+    n = np.linalg.svd(ref - c)[2][2]
+    flat = ring - np.outer((ring - c) @ n, n)
+    gap = float(np.linalg.norm(ref[:, None, :] - flat[None, :, :], axis=2).min(axis=1).max()) if len(flat) else np.inf
+    if len(ring) != len(ref) or gap > eps:
+        v.error(rel, row["part_id"], f"outline is {gap:.3g} mm from where "
+                                     f"{'its mesh face' if row['kind'] == 'panel' else 'its DXF outline'} puts it "
+                                     f"({len(ring)} corners, expected {len(ref)})")
+
+
+def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, volume: float,
+                     eps: float = 1e-6, volume_tol: float = 1e-6, ring: np.ndarray | None = None) -> None:
+    """The placement and volume of one part's solid (vertices ``points (n, 3)`` mm, ``volume`` mm³; with
+    ``ring``, its base polygon, also where it lies in its plane)."""
+    pid = row["part_id"]
+    if ring is not None:
+        check_outline_place(v, rel, row, ring, max(eps, 1e-4))
+    fab = v.data.get("manifest", {}).get("fabrication", {})
+    t = float(row.get("thickness_mm") or 0.0)
+    area = float(row.get("area_mm2") or 0.0)
+    pts = np.asarray(points, dtype=float)
+    if t > 0 and area > 0 and abs(volume - area * t) > volume_tol * area * t:
+        v.error(rel, pid, f"volume {volume:.6g} mm³ ≠ area × thickness {area * t:.6g} mm³")
+    mesh = v.data.get("mesh")
+    if row["kind"] == "panel" and mesh is not None and row.get("face", "") != "":
+        corners = mesh.vertices[mesh.faces[int(row["face"])]]
+        c = corners.mean(axis=0)
+        n = np.linalg.svd(corners - c)[2][2]
+        d = (pts - c) @ n
+        if abs(d.max()) < abs(d.min()):
+            d = -d
+        tol = float(fab.get("planarity_tolerance", 0.0)) + eps
+        if d.min() < -tol or d.max() > t + tol or abs(d.max() - t) > tol or abs(d.min()) > tol:
+            v.error(rel, pid, f"solid spans {d.min():.4g} … {d.max():.4g} mm from face {row['face']}'s plane, "
+                              f"expected 0 … {t:g} mm")
+    elif row["kind"] == "beam":
+        plane = parse_list(row.get("plane", ""))
+        if len(plane) != 4:
+            return
+        pn = np.asarray(plane, dtype=float)
+        scale = float(np.linalg.norm(pn[:3]))
+        d = (pts @ pn[:3] + pn[3]) / scale
+        if abs(np.abs(d).max() - 0.5 * t) > eps or d.max() < 0.5 * t - eps or d.min() > -0.5 * t + eps:
+            v.error(rel, pid, f"solid spans {d.min():.4g} … {d.max():.4g} mm about its support plane, "
+                              f"expected ±{0.5 * t:g} mm")
+        nodes = parse_list(row.get("nodes", ""))
+        if mesh is not None and nodes:
+            tol = float(fab.get("beam_plane_tolerance", 0.0)) + 1e-6
+            dn = (mesh.vertices[np.asarray(nodes, dtype=int)] @ pn[:3] + pn[3]) / scale
+            if np.abs(dn).max() > tol:
+                v.error(rel, pid, f"its support plane passes {np.abs(dn).max():.3g} mm from a mesh vertex of its "
+                                  f"nodes (tolerance {tol:g} mm)")
+
+
+def check_names(v: Verification, rel: str, found: list[str], kind_of: dict[str, str], what: str) -> None:
+    """Every part in ``parts.csv`` once among ``found`` (the names read from the file), nothing else."""
+    seen: set[str] = set()
+    for name in found:
+        if name in seen:
+            v.error(rel, name, f"more than one {what} carries this name")
+        seen.add(name)
+        if name not in kind_of:
+            v.error(rel, name or "(unnamed)", f"{what} is not a part in parts.csv")
+    for name in sorted(set(kind_of) - seen):
+        v.error(rel, name, f"part has no {what}")
+
+
+def same_value(text: str, value: object) -> bool:
+    """A ``parts.csv`` cell and a value read from another file agree (numbers to 1e-9 relative)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        try:
+            a = float(text)
+        except ValueError:
+            return False
+        return abs(a - float(value)) <= 1e-9 * max(1.0, abs(a))
+    return str(value) == text

@@ -1,0 +1,48 @@
+"""model.glb: one node per part, named by part id, each a closed mesh of the part's volume on its mesh face or
+support plane (glTF metres, +Y up, read back into the mm frame of the other files)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import Verification, check
+from ._solids import check_names, check_part_solid
+
+
+@check("glb", 74)
+def check_glb(v: Verification) -> None:
+    rel = v.data.get("manifest", {}).get("files", {}).get("glb")
+    if rel is None:
+        return
+    import trimesh
+
+    from ..writers.glb import MM_TO_GLTF
+
+    scene: Any
+    try:
+        scene = trimesh.load(str(v.folder / rel), force="scene", process=False)
+    except Exception as exc:  # noqa: BLE001 - reported as a finding
+        v.error(rel, "", f"cannot be read by trimesh ({exc})")
+        return
+    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    names = list(scene.graph.nodes_geometry)
+    check_names(v, rel, names, {k: r["kind"] for k, r in rows.items()}, "glTF node")
+    back = np.linalg.inv(MM_TO_GLTF)
+    for name in names:
+        row = rows.get(name)
+        if row is None:
+            continue
+        transform, geometry = scene.graph[name]
+        mesh = scene.geometry[geometry]
+        if not mesh.is_watertight:
+            v.error(rel, name, "mesh is not closed")
+            continue
+        pts = trimesh.transform_points(mesh.vertices, transform) @ back.T
+        # float32 vertices: about 1e-7 of the structure's size
+        eps = 2e-7 * float(np.abs(pts).max()) + 1e-6
+        volume = abs(float(mesh.volume)) * abs(np.linalg.det(transform[:3, :3])) * 1e9
+        # the writer's vertex order: the base ring, then the top ring
+        check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:len(pts) // 2])
+    v.checked.append("glb")

@@ -1,0 +1,96 @@
+"""model.3dm: the contract layers; one closed extrusion per part, named by part id, on its layer, with the
+parts.csv values as user text, on its mesh face or support plane; one axis line per node; the mesh."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..contract import EXCHANGE_PROPERTIES, RHINO_LAYERS
+from . import Verification, check, read_csv
+from ._solids import check_names, check_part_solid, polygon_area_3d
+
+
+def _points(curve) -> np.ndarray:
+    pts = np.array([[curve.Point(i).X, curve.Point(i).Y, curve.Point(i).Z] for i in range(curve.PointCount)])
+    return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
+
+
+@check("rhino", 72)
+def check_rhino(v: Verification) -> None:
+    m = v.data.get("manifest", {})
+    rel = m.get("files", {}).get("rhino")
+    if rel is None:
+        return
+    import rhino3dm as _rhino3dm
+
+    rhino3dm: Any = _rhino3dm                   # its stubs miss the iteration protocols
+    f = rhino3dm.File3dm.Read(str(v.folder / rel))
+    if f is None:
+        v.error(rel, "", "cannot be read by rhino3dm")
+        return
+    if f.Settings.ModelUnitSystem != rhino3dm.UnitSystem.Millimeters:
+        v.error(rel, "units", f"model units are {f.Settings.ModelUnitSystem}, expected millimetres")
+    layers = [la.FullPath for la in f.Layers]
+    for name in RHINO_LAYERS:
+        if name not in layers:
+            v.error(rel, name, "layer is missing")
+    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    parts, axes, meshes = [], [], []
+    for obj in f.Objects:
+        a = obj.Attributes
+        layer = layers[a.LayerIndex] if 0 <= a.LayerIndex < len(layers) else "?"
+        if layer == "nodes":
+            axes.append(obj)
+        elif layer == "mesh":
+            meshes.append(obj)
+        else:
+            parts.append((a.Name, layer, obj))
+    check_names(v, rel, [n for n, _, _ in parts], {k: r["kind"] for k, r in rows.items()}, "Rhino object")
+    for name, layer, obj in parts:
+        row = rows.get(name)
+        if row is None:
+            continue
+        want = "glass" if row["kind"] == "panel" else f"beams::{row.get('family', '')}"
+        if layer != want:
+            v.error(rel, name, f"is on layer {layer}, expected {want}")
+        text = dict(obj.Attributes.GetUserStrings())
+        for key in EXCHANGE_PROPERTIES:
+            cell = row.get(key, "") or (row.get("mass_kg", "") if key == "weight_kg" else "")
+            if cell and text.get(key) != cell:
+                v.error(rel, name, f"user text {key} is {text.get(key)!r}, parts.csv has {cell!r}")
+        g = obj.Geometry
+        if not isinstance(g, rhino3dm.Extrusion) or not g.IsSolid:
+            v.error(rel, name, "is not a closed extrusion")
+            continue
+        bottom, top = _points(g.Profile3d(0, 0.0)), _points(g.Profile3d(0, 1.0))
+        height = float(np.linalg.norm(top.mean(axis=0) - bottom.mean(axis=0)))
+        check_part_solid(v, rel, row, np.concatenate([bottom, top]), polygon_area_3d(bottom) * height, ring=bottom)
+    mesh = v.data.get("mesh")
+    nodes_rel = m.get("files", {}).get("nodes_csv")
+    if nodes_rel and mesh is not None:
+        nodes = {r["node_id"]: r for r in read_csv(v.folder / nodes_rel)}
+        check_names(v, rel, [a.Attributes.Name for a in axes], {k: "node" for k in nodes}, "node axis")
+        for obj in axes:
+            row = nodes.get(obj.Attributes.Name)
+            if row is None:
+                continue
+            g = obj.Geometry
+            start = np.array([g.PointAtStart.X, g.PointAtStart.Y, g.PointAtStart.Z])
+            end = np.array([g.PointAtEnd.X, g.PointAtEnd.Y, g.PointAtEnd.Z])
+            k = int(row["vertex"])
+            axis = np.array([float(row[c]) for c in ("axis_x", "axis_y", "axis_z")])
+            d = end - start
+            if np.abs(start - mesh.vertices[k]).max() > 1e-6 or np.linalg.norm(np.cross(d, axis)) > 1e-6 * max(
+                    1.0, float(np.linalg.norm(d))) or d @ axis <= 0:
+                v.error(rel, row["node_id"], "axis line does not start at its vertex along its node axis")
+    if len(meshes) != 1 or not isinstance(meshes[0].Geometry, rhino3dm.Mesh):
+        v.error(rel, "mesh", f"{len(meshes)} objects on layer mesh, expected the mesh")
+    elif mesh is not None:
+        g = meshes[0].Geometry
+        pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+        if len(pts) != len(mesh.vertices) or len(g.Faces) != len(mesh.faces) or \
+                np.abs(pts - mesh.vertices).max() > 1e-2:           # read back in single precision
+            v.error(rel, "mesh", f"{len(pts)} vertices, {len(g.Faces)} faces differ from mesh.obj")
+    v.checked.append("rhino")

@@ -1,0 +1,175 @@
+"""The parts as 3D elements for the exchange models (IFC, Rhino, glTF): one prism per part, with its data.
+
+Every part is a flat outline extruded once, so one record describes it for every format: the outline ``(k, 2)``
+(counter-clockwise, the flat outline of ``parts.csv`` and the DXF files) in a plane frame
+(:class:`ppfab.frame.Frame`: ``X = origin + x·ex + y·ey``, normal ``ex × ey``), extruded from ``z0`` to
+``z0 + height`` along the normal:
+
+* a glass panel: the inset outline in the panel frame (the face's least-squares plane, normal to the outside),
+  from ``z0 = 0`` to the glass thickness — the pane lies on the outside of the mesh, on the beams' top edges;
+* a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
+  ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane.
+
+The data of an element (:data:`fabrication.contract.EXCHANGE_PROPERTIES`) are the values of its ``parts.csv``
+row, so the IFC property sets and the Rhino user text agree with the parts list by construction; for a beam plate
+``weight_kg`` is the row's ``mass_kg`` and ``planarity_dev_mm`` the largest distance of its mesh vertices from
+the support plane.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ppfab.errors import FabricationError
+from ppfab.frame import Frame
+from ppfab.topology import FAMILY_NAMES
+
+from ..contract import EXCHANGE_PROPERTIES
+from . import Files
+from .tables import parts_table
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
+
+
+Value = str | int | float
+
+GUID_NAMESPACE = uuid.UUID("ace20579-3526-4925-9189-9184988e2125")
+"""The namespace of ppfab's name-based object ids (IFC GlobalIds, Rhino object and layer ids)."""
+
+
+def object_uuid(design: str, key: str) -> uuid.UUID:
+    """The id of ``key`` (a part id, ``layer/glass``, ``project`` …) in the design named ``design``: a name-based
+    UUID (RFC 4122 version 5), the same in every build of that design and different between designs.
+
+    >>> str(object_uuid("roof", "P-U00-V00")) == str(object_uuid("roof", "P-U00-V00"))
+    True
+    """
+    return uuid.uuid5(GUID_NAMESPACE, f"{design}\n{key}")
+
+
+@dataclass(frozen=True, eq=False)
+class Element:
+    """One part as a prism: ``outline (k, 2)`` in ``frame``, extruded from ``z0`` by ``height`` (mm).
+
+    ``layer`` is ``"glass"`` or the beam family (``"rows"``, ``"cols"``), ``group`` the beam id of a plate
+    (``""`` for a panel), ``props`` the part's data (the keys of ``EXCHANGE_PROPERTIES`` that apply).
+    """
+
+    part_id: str
+    kind: str
+    layer: str
+    group: str
+    outline: np.ndarray
+    frame: Frame
+    z0: float
+    height: float
+    props: dict[str, Value] = field(default_factory=dict)
+
+    def base(self, z: float | None = None) -> np.ndarray:
+        """``(k, 3)`` the outline in 3D at height ``z`` above the frame (default ``z0``), mm."""
+        h = self.z0 if z is None else z
+        return self.frame.to3d(np.asarray(self.outline, dtype=float)) + h * self.frame.normal
+
+    def prism_mesh(self) -> tuple[np.ndarray, np.ndarray]:
+        """The closed triangle mesh of the prism: vertices ``(2k, 3)`` (bottom ring, then top ring) and
+        faces ``(2(k − 2) + 2k, 3)`` oriented outwards (caps by a constrained Delaunay triangulation)."""
+        k = len(self.outline)
+        tri = cap_triangles(self.outline)
+        bottom, top = self.base(), self.base(self.z0 + self.height)
+        ring = np.arange(k)
+        nxt = np.roll(ring, -1)
+        sides = np.concatenate([np.stack([ring, nxt, nxt + k], axis=1), np.stack([ring, nxt + k, ring + k], axis=1)])
+        faces = np.concatenate([tri[:, ::-1], tri + k, sides])
+        return np.concatenate([bottom, top]), faces
+
+
+def cap_triangles(outline: np.ndarray) -> np.ndarray:
+    """``(k − 2, 3)`` counter-clockwise triangles of a simple polygon ``(k, 2)`` on its own vertices
+    (shapely's constrained Delaunay triangulation, mapped back to vertex indices)."""
+    import shapely
+
+    pts = np.asarray(outline, dtype=float)
+    index = {(float(x), float(y)): i for i, (x, y) in enumerate(pts)}
+    tris = []
+    for t in shapely.constrained_delaunay_triangles(shapely.Polygon(pts)).geoms:
+        try:
+            ids = [index[(float(x), float(y))] for x, y in list(t.exterior.coords)[:3]]
+        except KeyError:
+            raise FabricationError("a cap triangulation added a point to a part outline") from None
+        a, b, c = pts[ids]
+        if (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0:
+            ids = ids[::-1]
+        tris.append(ids)
+    out = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    if len(out) != len(pts) - 2:
+        raise FabricationError(f"triangulating a part outline of {len(pts)} corners gave {len(out)} triangles")
+    return out
+
+
+def _value(v: Any) -> Value | None:
+    if v is None or v == "":
+        return None
+    if isinstance(v, (bool, np.bool_)):
+        return int(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v)
+    return str(v)
+
+
+def elements(build: "Build", files: Files) -> list[Element]:
+    """The panels (in face order), then the beam plates (in plate order), as :class:`Element` records."""
+    rows = {r["part_id"]: r for r in parts_table(build, files)}
+    out = []
+    for p in build.panels.panels:
+        props = _props(rows[p.part_id])
+        out.append(Element(p.part_id, "panel", "glass", "", p.outline, p.frame, 0.0, float(p.thickness_mm), props))
+    for b in build.beams.plates:
+        row = dict(rows[b.part_id])
+        row["weight_kg"] = row.get("mass_kg", "")
+        row["planarity_dev_mm"] = round(float(b.plane_deviation), 4)
+        row.setdefault("family", FAMILY_NAMES[b.family])
+        t = float(b.thickness)
+        out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.outline, b.frame, -0.5 * t, t,
+                           _props(row)))
+    return out
+
+
+def _props(row: dict) -> dict[str, Value]:
+    out: dict[str, Value] = {}
+    for k in EXCHANGE_PROPERTIES:
+        v = _value(row.get(k))
+        if v is not None:
+            out[k] = v
+    return out
+
+
+@dataclass(frozen=True)
+class NodeAxis:
+    """A node axis as a line from the node (on the mesh) ``length`` mm along the unit axis, with its data."""
+
+    node_id: str
+    start: np.ndarray
+    end: np.ndarray
+    props: dict[str, Value]
+
+
+def node_axes(build: "Build") -> list[NodeAxis]:
+    """One line per node: from its position along its unit axis (into the structure) by the beam depth."""
+    depth = float(build.beams.params.depth)
+    out = []
+    for r in build.nodes.records:
+        start = np.asarray(r["position"], dtype=float)
+        axis = np.asarray(r["axis"], dtype=float)
+        props: dict[str, Value] = {"node_id": r["node_id"], "vertex": int(r["vertex"]),
+                                   "beams": ";".join(b["part_id"] for b in r["beams"]), "joint": str(r["joint"])}
+        if r.get("torsion_deg") is not None:
+            props["torsion_deg"] = round(float(r["torsion_deg"]), 6)
+        out.append(NodeAxis(r["node_id"], start, start + depth * axis, props))
+    return out

@@ -1,0 +1,53 @@
+"""``model.glb``: the whole structure as one binary glTF 2.0 file for viewing (any glTF viewer, most browsers'
+3D viewers, Blender, Windows 3D Viewer).
+
+One node per part, named by its part id, holding the closed triangle mesh of its prism
+(:meth:`fabrication.writers._elements.Element.prism_mesh`) with a material per layer: transparent glass and one
+colour per beam family (:data:`fabrication.contract.COLOURS`).  glTF's conventions hold: metres, +Y up, so a
+point ``(x, y, z)`` mm of the other files is ``(x, z, −y) / 1000`` here (a rotation, so the solids keep their
+orientation).  trimesh writes the file; it holds no time stamp.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..contract import COLOURS, GLB_FILE
+from . import Files, writer
+from ._elements import elements
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
+
+MM_TO_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]) * 1e-3
+"""``(3, 3)``: ppfab's mm, z up → glTF's metres, y up (row vectors: ``p_gltf = p_mm @ MM_TO_GLTF.T``)."""
+
+
+def glb_bytes(build: "Build", files: Files) -> bytes:
+    """The GLB of a build's panels and beam plates."""
+    import trimesh
+    from trimesh.visual.material import PBRMaterial
+
+    materials = {}
+    for layer, (r, g, b, a) in COLOURS.items():
+        materials[layer] = PBRMaterial(name=layer, baseColorFactor=[r, g, b, a], metallicFactor=0.0 if
+                                       layer == "glass" else 0.6, roughnessFactor=0.1 if layer == "glass" else 0.5,
+                                       alphaMode="BLEND" if a < 1.0 else "OPAQUE", doubleSided=False)
+    scene = trimesh.Scene()
+    for el in elements(build, files):
+        v, f = el.prism_mesh()
+        mesh = trimesh.Trimesh(v @ MM_TO_GLTF.T, f, process=False)
+        mesh.visual = trimesh.visual.TextureVisuals(material=materials[el.layer])
+        scene.add_geometry(mesh, node_name=el.part_id, geom_name=el.part_id)
+    return bytes(scene.export(file_type="glb"))
+
+
+@writer("glb", order=70, enabled=lambda design: design.output.glb)
+def write_glb(build: "Build", out: Path, files: Files) -> str:
+    data = glb_bytes(build, files)
+    (out / GLB_FILE).write_bytes(data)
+    files["glb"] = GLB_FILE
+    return f"{GLB_FILE}: {len(data) / 1e6:.1f} MB"

@@ -1,0 +1,274 @@
+"""``model.ifc``: the structure as IFC4 for BIM tools — an ``IfcPlate`` per pane, an ``IfcMember`` per beam plate.
+
+Spatial structure and decomposition (``IfcRelAggregates`` unless noted)::
+
+    IfcProject (the design's name; units mm, m², m³, kg, rad)
+      IfcSite → IfcBuilding → IfcBuildingStorey "Roof"
+        IfcRoof FREEFORM (the design's name)         (IfcRelContainedInSpatialStructure)
+          IfcPlate CURTAIN_PANEL  P-U07-V12 …        one per glass panel
+          IfcElementAssembly GIRDER  B-U03 …         one per beam
+            IfcMember MEMBER  B-U03-S00 …            one per plate of the beam
+
+Each element (:mod:`fabrication.writers._elements`) is one ``IfcExtrudedAreaSolid``: its flat outline as an
+``IfcArbitraryClosedProfileDef`` in its own placement (origin, normal, x direction of the part's frame), extruded
+along the local z from ``z0`` by its height, in millimetres — the same prism as ``beams.step`` and the DXF outline.
+It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.csv`` values of
+:data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
+``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
+the project units), its material (``[panels] makeup``, ``[beams] material``) and a surface style of its family's
+colour (:data:`~fabrication.contract.COLOURS`).
+
+Reproducible: every ``GlobalId`` is derived from the design's name and the element's key (its part id;
+``beam/B-U03`` for a beam's assembly, which may share its id with its only plate) by a name-based UUID
+(RFC 4122 version 5), there is no owner history, and the header time stamp is fixed.
+ifcopenshell is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ppfab import __version__
+
+from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
+from . import Files, writer
+from ._elements import Element, elements, object_uuid
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
+
+LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
+
+
+def ifc_guid(design: str, key: str) -> str:
+    """The 22-character IFC GlobalId of ``key`` (a part id, ``project``, …) in the design named ``design``.
+
+    >>> ifc_guid("roof", "P-U00-V00") == ifc_guid("roof", "P-U00-V00") != ifc_guid("roof", "P-U00-V01")
+    True
+    """
+    import ifcopenshell.guid
+
+    return str(ifcopenshell.guid.compress(object_uuid(design, key).hex))
+
+
+class IfcModel:
+    """Builder of ``model.ifc``: :meth:`add` elements into the roof, then :meth:`write`."""
+
+    def __init__(self, name: str, description: str = ""):
+        import ifcopenshell
+
+        self.name = name
+        f = self.f = ifcopenshell.file(schema=IFC_SCHEMA)  # type: ignore[arg-type]  # a Literal of the schemas
+        h = f.header
+        h.file_description.description = ("ViewDefinition [DesignTransferView]",)
+        h.file_name.name = IFC_FILE
+        h.file_name.time_stamp = FIXED_TIMESTAMP
+        h.file_name.author = ("ppfab",)
+        h.file_name.organization = ("",)
+        h.file_name.originating_system = f"ppfab {__version__}"
+        h.file_name.authorization = ""
+        self._dirs: dict[tuple[float, ...], Any] = {}
+        self.origin = self._placement3d((0.0, 0.0, 0.0))
+        self.mm2 = f.create_entity("IfcSIUnit", UnitType="AREAUNIT", Prefix="MILLI", Name="SQUARE_METRE")
+        units = f.create_entity("IfcUnitAssignment", Units=[
+            f.create_entity("IfcSIUnit", UnitType="LENGTHUNIT", Prefix="MILLI", Name="METRE"),
+            f.create_entity("IfcSIUnit", UnitType="AREAUNIT", Name="SQUARE_METRE"),
+            f.create_entity("IfcSIUnit", UnitType="VOLUMEUNIT", Name="CUBIC_METRE"),
+            f.create_entity("IfcSIUnit", UnitType="MASSUNIT", Prefix="KILO", Name="GRAM"),
+            f.create_entity("IfcSIUnit", UnitType="PLANEANGLEUNIT", Name="RADIAN")])
+        ctx = f.create_entity("IfcGeometricRepresentationContext", ContextType="Model", CoordinateSpaceDimension=3,
+                              Precision=1e-5, WorldCoordinateSystem=self.origin)
+        self.body = f.create_entity("IfcGeometricRepresentationSubContext", ContextIdentifier="Body",
+                                    ContextType="Model", ParentContext=ctx, TargetView="MODEL_VIEW")
+        project = f.create_entity("IfcProject", GlobalId=self.guid("project"), Name=name,
+                                  Description=description or None, RepresentationContexts=[ctx], UnitsInContext=units)
+        world = f.create_entity("IfcLocalPlacement", RelativePlacement=self.origin)
+        site = f.create_entity("IfcSite", GlobalId=self.guid("site"), Name="Site", ObjectPlacement=world,
+                               CompositionType="ELEMENT")
+        self.site_placement = world
+        building = f.create_entity("IfcBuilding", GlobalId=self.guid("building"), Name=name,
+                                   ObjectPlacement=self._local(world), CompositionType="ELEMENT")
+        storey = f.create_entity("IfcBuildingStorey", GlobalId=self.guid("storey"), Name="Roof",
+                                 ObjectPlacement=self._local(building.ObjectPlacement), CompositionType="ELEMENT",
+                                 Elevation=0.0)
+        self.roof = f.create_entity("IfcRoof", GlobalId=self.guid("roof"), Name=name,
+                                    ObjectPlacement=self._local(storey.ObjectPlacement), PredefinedType="FREEFORM")
+        self._aggregate("project", project, [site])
+        self._aggregate("site", site, [building])
+        self._aggregate("building", building, [storey])
+        f.create_entity("IfcRelContainedInSpatialStructure", GlobalId=self.guid("storey/contains"),
+                        RelatedElements=[self.roof], RelatingStructure=storey)
+        self._roof_parts: list[Any] = []
+        self._assemblies: dict[str, tuple[Any, list[Any]]] = {}
+        self._materials: dict[str, tuple[Any, list[Any]]] = {}
+        self._styles: dict[str, Any] = {}
+
+    # -- small entities ------------------------------------------------------------------------------
+    def guid(self, key: str) -> str:
+        return ifc_guid(self.name, key)
+
+    def _dir(self, v) -> Any:
+        key = tuple(float(x) for x in v)
+        if key not in self._dirs:
+            self._dirs[key] = self.f.create_entity("IfcDirection", DirectionRatios=key)
+        return self._dirs[key]
+
+    def _point(self, p) -> Any:
+        return self.f.create_entity("IfcCartesianPoint", Coordinates=tuple(float(x) for x in p))
+
+    def _placement3d(self, origin, axis=None, ref=None) -> Any:
+        return self.f.create_entity("IfcAxis2Placement3D", Location=self._point(origin),
+                                    Axis=None if axis is None else self._dir(axis),
+                                    RefDirection=None if ref is None else self._dir(ref))
+
+    def _local(self, parent, relative=None) -> Any:
+        return self.f.create_entity("IfcLocalPlacement", PlacementRelTo=parent,
+                                    RelativePlacement=relative or self.origin)
+
+    def _aggregate(self, key: str, whole, parts: list) -> None:
+        self.f.create_entity("IfcRelAggregates", GlobalId=self.guid(f"{key}/aggregates"), RelatingObject=whole,
+                             RelatedObjects=parts)
+
+    def _style(self, layer: str) -> Any:
+        if layer not in self._styles:
+            r, g, b, a = COLOURS.get(layer, COLOURS["rows"])
+            colour = self.f.create_entity("IfcColourRgb", Name=layer, Red=r, Green=g, Blue=b)
+            shading = self.f.create_entity("IfcSurfaceStyleShading", SurfaceColour=colour, Transparency=1.0 - a)
+            self._styles[layer] = self.f.create_entity("IfcSurfaceStyle", Name=layer, Side="BOTH", Styles=[shading])
+        return self._styles[layer]
+
+    def _value(self, key: str, value) -> Any:
+        f = self.f
+        if isinstance(value, int):
+            return f.create_entity("IfcInteger", value)
+        if isinstance(value, float):
+            if key == "weight_kg":
+                return f.create_entity("IfcMassMeasure", value)
+            if key == "area_mm2":
+                return f.create_entity("IfcAreaMeasure", value)
+            if key in LENGTH_KEYS:
+                return f.create_entity("IfcLengthMeasure", value)
+            return f.create_entity("IfcReal", value)
+        if key in ("part_id", "nest_tag", "type_id", "beam_id"):
+            return f.create_entity("IfcIdentifier", value)
+        return f.create_entity("IfcLabel", value)
+
+    # -- elements ------------------------------------------------------------------------------------
+    def add(self, el: Element, material: str, category: str | None) -> Any:
+        """One element: placement, extruded solid, style, property set, quantities, material, decomposition."""
+        f = self.f
+        fr = el.frame
+        parent = self.roof.ObjectPlacement
+        if el.kind == "beam" and el.group:
+            parent = self._assembly(el).ObjectPlacement
+        placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
+        pts = [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y))) for x, y in el.outline]
+        profile = f.create_entity("IfcArbitraryClosedProfileDef", ProfileType="AREA",
+                                  OuterCurve=f.create_entity("IfcPolyline", Points=pts + pts[:1]))
+        solid = f.create_entity("IfcExtrudedAreaSolid", SweptArea=profile,
+                                Position=self._placement3d((0.0, 0.0, el.z0)),
+                                ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
+        f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
+        shape = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
+                                RepresentationType="SweptSolid", Items=[solid])
+        cls, predefined = IFC_CLASSES.get(el.kind, ("IfcMember", "USERDEFINED"))
+        extra = {"ObjectType": el.kind} if predefined == "USERDEFINED" else {}
+        product = f.create_entity(cls, GlobalId=self.guid(el.part_id), Name=el.part_id,
+                                  Description=str(el.props.get("type_id", "")) or None, ObjectPlacement=placement,
+                                  Representation=f.create_entity("IfcProductDefinitionShape", Representations=[shape]),
+                                  Tag=el.part_id, PredefinedType=predefined, **extra)
+        props = []
+        for key, value in el.props.items():
+            props.append(f.create_entity("IfcPropertySingleValue", Name=key, NominalValue=self._value(key, value),
+                                         Unit=self.mm2 if key == "area_mm2" else None))
+        pset = f.create_entity("IfcPropertySet", GlobalId=self.guid(f"{el.part_id}/pset"), Name=IFC_PSET,
+                               HasProperties=props)
+        f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/pset/rel"),
+                        RelatedObjects=[product], RelatingPropertyDefinition=pset)
+        self._quantities(el, product)
+        mat = self._materials.setdefault(material, (f.create_entity("IfcMaterial", Name=material,
+                                                                    Category=category), []))
+        mat[1].append(product)
+        if el.kind == "beam" and el.group:
+            self._assemblies[el.group][1].append(product)
+        else:
+            self._roof_parts.append(product)
+        return product
+
+    def _quantities(self, el: Element, product) -> None:
+        f = self.f
+        area = float(el.props.get("area_mm2", 0.0))
+        weight = el.props.get("weight_kg")
+        q = [f.create_entity("IfcQuantityArea", Name="NetArea", AreaValue=area * 1e-6),
+             f.create_entity("IfcQuantityVolume", Name="NetVolume", VolumeValue=area * el.height * 1e-9)]
+        if isinstance(weight, float):
+            q.append(f.create_entity("IfcQuantityWeight", Name="NetWeight", WeightValue=weight))
+        if el.kind == "panel":
+            name = "Qto_PlateBaseQuantities"
+            q.insert(0, f.create_entity("IfcQuantityLength", Name="Width", LengthValue=el.height))
+        else:
+            name = "Qto_MemberBaseQuantities"
+            length = el.props.get("length_mm")
+            if isinstance(length, float):
+                q.insert(0, f.create_entity("IfcQuantityLength", Name="Length", LengthValue=length))
+        qto = f.create_entity("IfcElementQuantity", GlobalId=self.guid(f"{el.part_id}/qto"), Name=name, Quantities=q)
+        f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/qto/rel"),
+                        RelatedObjects=[product], RelatingPropertyDefinition=qto)
+
+    def _assembly(self, el: Element) -> Any:
+        if el.group not in self._assemblies:
+            a = self.f.create_entity("IfcElementAssembly", GlobalId=self.guid(f"beam/{el.group}"), Name=el.group,
+                                     Description=el.layer, ObjectPlacement=self._local(self.roof.ObjectPlacement),
+                                     Tag=el.group, AssemblyPlace="FACTORY", PredefinedType="GIRDER")
+            self._assemblies[el.group] = (a, [])
+            self._roof_parts.append(a)
+        return self._assemblies[el.group][0]
+
+    def write(self, path: Path) -> Path:
+        """Close the decompositions and material associations, then write the file."""
+        f = self.f
+        self._aggregate("roof", self.roof, self._roof_parts)
+        for beam, (assembly, members) in self._assemblies.items():
+            self._aggregate(f"beam/{beam}", assembly, members)
+        for name, (material, products) in self._materials.items():
+            f.create_entity("IfcRelAssociatesMaterial", GlobalId=self.guid(f"material/{name}"),
+                            RelatedObjects=products, RelatingMaterial=material)
+        f.write(str(path))
+        return path
+
+
+def material_category(name: str) -> str | None:
+    """The IFC material category a material name suggests (``steel``, ``aluminium``, ``wood``), else ``None``.
+
+    >>> material_category("S355 steel plate"), material_category("glulam GL24h")
+    ('steel', 'wood')
+    """
+    low = name.lower()
+    for category, words in (("steel", ("steel", "s235", "s275", "s355", "s460")), ("aluminium", ("alumin",)),
+                            ("wood", ("timber", "wood", "glulam", "lvl", "clt"))):
+        if any(w in low for w in words):
+            return category
+    return None
+
+
+def ifc_model(build: "Build", files: Files) -> IfcModel:
+    """The IFC model of a build (panels, then beams grouped by beam id)."""
+    design = build.design
+    model = IfcModel(design.info.name, design.info.description)
+    for el in elements(build, files):
+        if el.kind == "panel":
+            model.add(el, design.panels.makeup, "glass")
+        else:
+            model.add(el, design.beams.material, material_category(design.beams.material))
+    return model
+
+
+@writer("ifc", order=60, enabled=lambda design: design.output.ifc)
+def write_ifc(build: "Build", out: Path, files: Files) -> str:
+    model = ifc_model(build, files)
+    model.write(out / IFC_FILE)
+    files["ifc"] = IFC_FILE
+    plates = len(model.f.by_type("IfcPlate"))
+    members = len(model.f.by_type("IfcMember"))
+    return f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember"

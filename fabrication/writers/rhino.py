@@ -1,0 +1,195 @@
+"""``model.3dm``: the structure for Rhino — layers per family, objects named by part id, user text, node axes, mesh.
+
+Layers (:data:`fabrication.contract.RHINO_LAYERS`, colours :data:`~fabrication.contract.COLOURS`)::
+
+    glass          one closed extrusion per pane (its inset outline on the face plane, thickness outwards)
+    beams::rows    one closed extrusion per beam plate of the row family (centred on its support plane)
+    beams::cols    … of the column family
+    nodes          one line per node: from the node along its unit axis by the beam depth
+    mesh           the quad mesh
+
+Every object is named by its part id (node id for an axis, ``mesh`` for the mesh) and carries user text: the
+``parts.csv`` values of :data:`~fabrication.contract.EXCHANGE_PROPERTIES` (nest tag, type, sheet, weight,
+material, …) or, on an axis, the node's vertex, beams, joint and torsion.  Units are millimetres; the file is
+written as Rhino 7 (read by Rhino 7 and later).
+
+Reproducible: object and layer ids are name-based UUIDs of the design's name and the part id, the archive is
+encoded in memory (no file path inside), and the two time stamps of the revision history, which openNURBS sets
+to the wall clock on writing, are replaced by :data:`~fabrication.contract.FIXED_TIMESTAMP` with the chunk's
+CRC recomputed (:func:`fix_revision_times`).  rhino3dm is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+import base64
+import struct
+import zlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ppfab import __version__
+
+from ..contract import COLOURS, RHINO_FILE, RHINO_LAYERS
+from . import Files, writer
+from ._elements import Element, elements, node_axes, object_uuid
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
+
+RHINO_VERSION = 7
+"""The 3dm archive version written."""
+
+TCODE_REVISION_HISTORY = 0x20008021
+"""openNURBS chunk of the revision history (created / last edited by, and when)."""
+
+FIXED_TM = (0, 0, 0, 1, 0, 100, 6, 0)
+"""``struct tm`` of 2000-01-01 00:00:00 (sec, min, hour, mday, mon, year − 1900, wday, yday)."""
+
+
+def fix_revision_times(data: bytes) -> bytes:
+    """The 3dm archive ``data`` with both revision-history times set to :data:`FIXED_TM` and the chunk's CRC-32
+    recomputed (openNURBS: chunk = typecode (4) + length (8) + data, the last 4 bytes of data its CRC-32).
+
+    Layout of the chunk data: a version byte, the "created by" string (uint32 count of UTF-16 units including
+    the terminator, then the units), the creation time (8 int32), the "last edited by" string, the last-edit
+    time (8 int32), the revision count (int32), the CRC.
+    """
+    code = struct.pack("<I", TCODE_REVISION_HISTORY)
+    at = data.find(code)
+    if at < 0:
+        raise ValueError("no revision history chunk in the 3dm archive")
+    (length,) = struct.unpack_from("<q", data, at + 4)
+    start = at + 12
+    chunk = bytearray(data[start:start + length])
+    pos = 1
+    tm = struct.pack("<8i", *FIXED_TM)
+    for _ in range(2):
+        (count,) = struct.unpack_from("<I", chunk, pos)
+        pos += 4 + 2 * count
+        chunk[pos:pos + 32] = tm
+        pos += 32
+    if pos + 8 != len(chunk):
+        raise ValueError(f"unexpected revision history chunk ({len(chunk)} bytes)")
+    chunk[-4:] = struct.pack("<I", zlib.crc32(bytes(chunk[:-4])))
+    return data[:start] + bytes(chunk) + data[start + length:]
+
+
+def _colour(layer: str) -> tuple[int, int, int, int]:
+    r, g, b, a = COLOURS[layer]
+    return (round(255 * r), round(255 * g), round(255 * b), 255)
+
+
+class RhinoModel:
+    """Builder of ``model.3dm``: layers first, then :meth:`add` parts, :meth:`add_axis`, :meth:`add_mesh`."""
+
+    def __init__(self, name: str):
+        import rhino3dm
+
+        r: Any = rhino3dm                       # its stubs mark writable properties read-only
+        self.r = r
+        self.name = name
+        f: Any = r.File3dm()
+        self.f = f
+        f.Settings.ModelUnitSystem = r.UnitSystem.Millimeters
+        f.ApplicationName = "ppfab"
+        f.ApplicationDetails = f"ppfab {__version__}: {name}"
+        self.layers: dict[str, int] = {}
+        self.materials: dict[str, int] = {}
+        for path in RHINO_LAYERS:
+            layer = r.Layer()
+            parent, _, leaf = path.rpartition("::")
+            layer.Name = leaf
+            layer.Id = object_uuid(name, f"layer/{path}")
+            if parent:
+                layer.ParentLayerId = object_uuid(name, f"layer/{parent}")
+            key = leaf if leaf in COLOURS else "mesh"
+            layer.Color = _colour(key)
+            self.layers[path] = f.Layers.Add(layer)
+
+    def material(self, name: str, layer: str) -> int:
+        """The index of the render material ``name`` in the colour of ``layer`` (glass transparent); a beam
+        material gets one per family (``S355 steel plate (rows)``)."""
+        label = name if layer == "glass" else f"{name} ({layer})"
+        if label not in self.materials:
+            m = self.r.Material()
+            m.Id = object_uuid(self.name, f"material/{label}")
+            m.Name = label
+            m.DiffuseColor = _colour(layer)
+            m.Transparency = 1.0 - COLOURS[layer][3]
+            self.materials[label] = len(self.f.Materials)     # (Add returns no index in rhino3dm 8.0)
+            self.f.Materials.Add(m)
+        return self.materials[label]
+
+    def _attributes(self, name: str, layer: str, props: dict[str, Any], key: str) -> Any:
+        a = self.r.ObjectAttributes()
+        a.Name = name
+        a.LayerIndex = self.layers[layer]
+        a.Id = object_uuid(self.name, key)
+        for k, v in props.items():
+            a.SetUserString(k, str(v))
+        return a
+
+    def add(self, el: Element, material: str) -> None:
+        """One part as a closed extrusion of its outline along its frame normal from ``z0`` by its height
+        (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side)."""
+        r = self.r
+        base = el.base()
+        ring = r.Point3dList()                   # (a list of Point3d is not accepted by rhino3dm 8.0)
+        for p in list(base) + [base[0]]:
+            ring.Add(*map(float, p))
+        # the outline is counter-clockwise about the frame normal: Create extrudes it along that normal
+        ext = r.Extrusion.Create(r.PolylineCurve(ring), float(el.height), True)
+        if ext is None:
+            from ppfab.errors import FabricationError
+
+            raise FabricationError(f"{el.part_id}: the Rhino extrusion of its outline failed")
+        layer = "glass" if el.kind == "panel" else f"beams::{el.layer}"
+        attrs = self._attributes(el.part_id, layer, el.props, el.part_id)
+        attrs.MaterialIndex = self.material(material, "glass" if el.kind == "panel" else el.layer)
+        attrs.MaterialSource = r.ObjectMaterialSource.MaterialFromObject
+        self.f.Objects.AddExtrusion(ext, attrs)
+
+    def add_axis(self, node_id: str, start, end, props: dict[str, Any]) -> None:
+        r = self.r
+        line = r.LineCurve(r.Point3d(*map(float, start)), r.Point3d(*map(float, end)))
+        self.f.Objects.AddCurve(line, self._attributes(node_id, "nodes", props, f"node/{node_id}"))
+
+    def add_mesh(self, vertices, faces) -> None:
+        r = self.r
+        mesh = r.Mesh()
+        mesh.Vertices.UseDoublePrecisionVertices = True
+        for p in vertices:
+            mesh.Vertices.Add(*map(float, p))
+        for face in faces:
+            mesh.Faces.AddFace(*map(int, face))
+        mesh.Normals.ComputeNormals()
+        self.f.Objects.AddMesh(mesh, self._attributes("mesh", "mesh", {"design": self.name}, "mesh"))
+
+    def to_bytes(self) -> bytes:
+        """The archive (Rhino 7), with fixed revision times."""
+        options = self.r.File3dmWriteOptions()
+        options.Version = RHINO_VERSION
+        return fix_revision_times(base64.b64decode(self.f.Encode(options)))
+
+
+def rhino_model(build: "Build", files: Files) -> RhinoModel:
+    """The Rhino model of a build: panels, beam plates, node axes, the mesh."""
+    design = build.design
+    model = RhinoModel(design.info.name)
+    for el in elements(build, files):
+        model.add(el, design.panels.makeup if el.kind == "panel" else design.beams.material)
+    for axis in node_axes(build):
+        model.add_axis(axis.node_id, axis.start, axis.end, axis.props)
+    mesh = build.mesh
+    qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
+    model.add_mesh(qm.vertices, qm.faces)
+    return model
+
+
+@writer("rhino", order=65, enabled=lambda design: design.output.rhino)
+def write_rhino(build: "Build", out: Path, files: Files) -> str:
+    model = rhino_model(build, files)
+    (out / RHINO_FILE).write_bytes(model.to_bytes())
+    files["rhino"] = RHINO_FILE
+    return f"{RHINO_FILE}: {len(model.f.Objects)} objects"
+

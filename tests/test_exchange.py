@@ -1,0 +1,490 @@
+"""The exchange files reopened with their own libraries and compared with parts.csv, nodes.csv and the mesh:
+model.ifc (ifcopenshell), model.3dm (rhino3dm), beams.step / panels.step (the CAD kernel's reader and the STEP
+text), model.glb (trimesh), the glass order and its dimensioned per-type DXFs, and the R12 / R2000 copies (ezdxf).
+"""
+
+import csv
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from fabrication.cli import main
+from ppfab.io import load_mesh
+
+from conftest import small_design
+
+NAME = "exchange test Überdach"
+DESIGN = small_design(5, 4, name=NAME, extra="""
+[beams]
+depth = 150.0
+thickness = 12.0
+max_length = 5000.0
+material = "S355 steel plate"
+[panels]
+gap = 16.0
+edge_finish = "ground"
+[output]
+dxf_r12 = true
+dxf_r2000 = true
+""")
+
+
+def rows(path):
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("exchange")
+    design = root / "d.toml"
+    design.write_text(DESIGN, encoding="utf-8")
+    out = root / "out"
+    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def parts(built):
+    return {r["part_id"]: r for r in rows(built / "parts.csv")}
+
+
+@pytest.fixture(scope="module")
+def mesh(built):
+    return load_mesh(built / "mesh.obj")
+
+
+def test_manifest_lists_the_exchange_files(built):
+    m = json.loads((built / "manifest.json").read_text())
+    for key, name in (("ifc", "model.ifc"), ("rhino", "model.3dm"), ("glb", "model.glb")):
+        assert m["files"][key] == name and name in m["sha256"]
+    assert m["files"]["dxf_r12"] and all(f.startswith("dxf_r12/") for f in m["files"]["dxf_r12"])
+    assert len(m["files"]["dxf_r2000"]) == len(m["files"]["dxf_r12"]) == (
+        len(m["files"]["glass_sheets"]) + len(m["files"]["beam_sheets"]) + len(m["files"]["panel_type_dxfs"]))
+
+
+def test_verify_passes_on_every_file_kind(built, capsys):
+    assert main(["verify", str(built)]) == 0
+    out = capsys.readouterr().out
+    for name in ("glass_order", "dxf_legacy", "step", "ifc", "rhino", "glb"):
+        assert name in out
+
+
+# -- IFC --------------------------------------------------------------------------------------------------
+
+def test_ifc_reopens_with_one_element_per_part_and_the_parts_data(built, parts):
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+    import ifcopenshell.util.unit as uu
+    import ifcopenshell.validate
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    assert f.schema == "IFC4"
+    log = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(f, log)
+    assert log.statements == []
+    # units: millimetres, m², m³, kg
+    assert uu.calculate_unit_scale(f) == pytest.approx(1e-3)
+    for unit_type, name, prefix in (("LENGTHUNIT", "METRE", "MILLI"), ("AREAUNIT", "SQUARE_METRE", None),
+                                    ("VOLUMEUNIT", "CUBIC_METRE", None), ("MASSUNIT", "GRAM", "KILO")):
+        u = uu.get_project_unit(f, unit_type)
+        assert (u.Name, u.Prefix) == (name, prefix)
+    panels = {k: r for k, r in parts.items() if r["kind"] == "panel"}
+    beams = {k: r for k, r in parts.items() if r["kind"] == "beam"}
+    plates, members = f.by_type("IfcPlate"), f.by_type("IfcMember")
+    assert len(plates) == len(panels) and len(members) == len(beams)
+    assert {p.Name for p in plates} == set(panels) and {m.Name for m in members} == set(beams)
+    assert {p.PredefinedType for p in plates} == {"CURTAIN_PANEL"}
+    assert len({e.GlobalId for e in f.by_type("IfcRoot")}) == len(f.by_type("IfcRoot"))
+    for e in plates + members:
+        row = parts[e.Name]
+        ps = ue.get_psets(e)["PPFAB_Part"]
+        assert ps["part_id"] == e.Name and ps["nest_tag"] == row["nest_tag"] and ps["type_id"] == row["type_id"]
+        assert ps["sheet"] == int(row["sheet"]) and ps["material"] == row["material"]
+        weight = row["weight_kg"] or row["mass_kg"]
+        assert ps["weight_kg"] == pytest.approx(float(weight), rel=1e-12)
+        assert ps["area_mm2"] == pytest.approx(float(row["area_mm2"]), rel=1e-12)
+        if row["kind"] == "panel":
+            assert ps["planarity_dev_mm"] == pytest.approx(float(row["planarity_dev_mm"]), abs=1e-12)
+            qto = ue.get_psets(e)["Qto_PlateBaseQuantities"]
+            assert qto["Width"] == pytest.approx(float(row["thickness_mm"]))
+        else:
+            assert ps["beam_id"] == row["beam_id"] and ps["family"] == row["family"]
+            qto = ue.get_psets(e)["Qto_MemberBaseQuantities"]
+            assert qto["Length"] == pytest.approx(float(row["length_mm"]))
+        assert qto["NetArea"] == pytest.approx(float(row["area_mm2"]) * 1e-6, rel=1e-12)    # m²
+        assert ue.get_material(e).Name == row["material"]
+
+
+def test_ifc_spatial_structure_and_beam_assemblies(built, parts):
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    (project,) = f.by_type("IfcProject")
+    (roof,) = f.by_type("IfcRoof")
+    assert project.Name == NAME and roof.Name == NAME
+    storey = ue.get_container(roof)
+    assert storey.is_a("IfcBuildingStorey")
+    assert ue.get_aggregate(storey).is_a("IfcBuilding") and ue.get_aggregate(ue.get_aggregate(storey)).is_a("IfcSite")
+    assert ue.get_aggregate(ue.get_aggregate(ue.get_aggregate(storey))) == project
+    for plate in f.by_type("IfcPlate"):
+        assert ue.get_aggregate(plate) == roof and ue.get_container(plate) == storey
+    for member in f.by_type("IfcMember"):
+        assembly = ue.get_aggregate(member)
+        assert assembly.is_a("IfcElementAssembly") and assembly.Name == parts[member.Name]["beam_id"]
+        assert ue.get_aggregate(assembly) == roof
+    assert len(f.by_type("IfcElementAssembly")) == len({r["beam_id"] for r in parts.values() if r["kind"] == "beam"})
+
+
+def test_ifc_solids_have_the_parts_volume_where_the_mesh_is(built, parts, mesh):
+    """ifcopenshell's geometry kernel tessellates every element: its volume is area × thickness, a pane lies on
+    its mesh face, a plate on its support plane (independent of ppfab's own readers)."""
+    import ifcopenshell
+    import ifcopenshell.geom
+    import ifcopenshell.util.shape as us
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    it = ifcopenshell.geom.iterator(settings, f)
+    assert it.initialize()
+    seen = set()
+    while True:
+        shape = it.get()
+        name = f.by_id(shape.id).Name
+        row = parts[name]
+        seen.add(name)
+        t = float(row["thickness_mm"])
+        volume = us.get_volume(shape.geometry) * 1e9                    # the kernel works in metres
+        assert volume == pytest.approx(float(row["area_mm2"]) * t, rel=1e-7)
+        x = np.asarray(us.get_vertices(shape.geometry)) * 1e3
+        if row["kind"] == "panel":
+            c = mesh.vertices[mesh.faces[int(row["face"])]]
+            n = np.linalg.svd(c - c.mean(axis=0))[2][2]
+            d = np.sort((x - c.mean(axis=0)) @ n)
+            d = d if abs(d[-1]) > abs(d[0]) else -d[::-1]
+            assert d[0] == pytest.approx(0, abs=1e-6) and d[-1] == pytest.approx(t, abs=1e-6)
+        else:
+            plane = np.array(json.loads(row["plane"]))
+            d = x @ plane[:3] + plane[3]
+            assert np.abs(d).max() == pytest.approx(0.5 * t, abs=1e-6) and d.min() < 0 < d.max()
+        if not it.next():
+            break
+    assert seen == set(parts)
+
+
+@pytest.mark.slow
+def test_ifc_passes_the_express_rules(built):
+    import ifcopenshell
+    import ifcopenshell.validate
+
+    log = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(ifcopenshell.open(str(built / "model.ifc")), log, express_rules=True)
+    assert log.statements == []
+
+
+# -- Rhino ------------------------------------------------------------------------------------------------
+
+def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):
+    import rhino3dm
+
+    f = rhino3dm.File3dm.Read(str(built / "model.3dm"))
+    assert f.Settings.ModelUnitSystem == rhino3dm.UnitSystem.Millimeters
+    assert (f.Created.year, f.LastEdited.year) == (2000, 2000)            # fixed time stamps
+    layers = [la.FullPath for la in f.Layers]
+    assert layers == ["glass", "beams", "beams::rows", "beams::cols", "nodes", "mesh"]
+    nodes = rows(built / "nodes.csv")
+    objs = list(f.Objects)
+    assert len(objs) == len(parts) + len(nodes) + 1
+    by_name = {o.Attributes.Name: o for o in objs}
+    assert set(parts) <= set(by_name) and {n["node_id"] for n in nodes} <= set(by_name)
+    for pid, row in parts.items():
+        o = by_name[pid]
+        layer = layers[o.Attributes.LayerIndex]
+        assert layer == ("glass" if row["kind"] == "panel" else f"beams::{row['family']}")
+        text = dict(o.Attributes.GetUserStrings())
+        for key in ("part_id", "nest_tag", "type_id", "sheet", "material", "area_mm2"):
+            assert text[key] == row[key], (pid, key)
+        assert text["weight_kg"] == (row["weight_kg"] or row["mass_kg"])
+        g = o.Geometry
+        assert isinstance(g, rhino3dm.Extrusion) and g.IsSolid
+        bottom = g.Profile3d(0, 0.0)
+        pts = np.array([[bottom.Point(i).X, bottom.Point(i).Y, bottom.Point(i).Z] for i in range(bottom.PointCount)])
+        assert np.allclose(pts[0], pts[-1])                                # a closed profile
+        if row["kind"] == "panel":
+            assert len(pts) == 5
+    for n in nodes:
+        line = by_name[n["node_id"]].Geometry
+        start = np.array([line.PointAtStart.X, line.PointAtStart.Y, line.PointAtStart.Z])
+        end = np.array([line.PointAtEnd.X, line.PointAtEnd.Y, line.PointAtEnd.Z])
+        axis = np.array([float(n[c]) for c in ("axis_x", "axis_y", "axis_z")])
+        assert np.allclose(start, mesh.vertices[int(n["vertex"])], atol=1e-6)
+        assert np.allclose(end - start, 150.0 * axis, atol=1e-6)           # the beam depth along the axis
+        assert dict(by_name[n["node_id"]].Attributes.GetUserStrings())["beams"] == n["beams"]
+    m = by_name["mesh"].Geometry
+    assert len(m.Vertices) == len(mesh.vertices) and len(m.Faces) == len(mesh.faces) == m.Faces.QuadCount
+
+
+# -- STEP -------------------------------------------------------------------------------------------------
+
+def step_tree(path):
+    """The product tree of a STEP file read from its text (independent of the kernel): name → child names."""
+    data = path.read_text(encoding="ascii").partition("DATA;")[2]
+    ents = {int(m.group(1)): re.sub(r"\s+", " ", m.group(2))
+            for m in re.finditer(r"#(\d+)\s*=\s*(.*?);\s*(?=#\d+\s*=|ENDSEC)", data, re.S)}
+
+    def refs(text):
+        return [int(r) for r in re.findall(r"#(\d+)", text)]
+
+    product = {k: re.match(r"PRODUCT\('((?:[^']|'')*)'", t).group(1) for k, t in ents.items()
+               if t.startswith("PRODUCT(")}
+    formation = {k: refs(t)[0] for k, t in ents.items() if t.startswith("PRODUCT_DEFINITION_FORMATION(")}
+    definition = {k: product[formation[refs(t)[0]]] for k, t in ents.items() if t.startswith("PRODUCT_DEFINITION(")}
+    tree: dict[str, list[str]] = {}
+    children = set()
+    for t in ents.values():
+        if t.startswith("NEXT_ASSEMBLY_USAGE_OCCURRENCE("):
+            parent, child = refs(t)[:2]
+            tree.setdefault(definition[parent], []).append(definition[child])
+            children.add(definition[child])
+    roots = [n for n in tree if n not in children]
+    return tree, roots
+
+
+def test_beams_step_product_tree_as_a_reader_sees_it(built, parts):
+    from build123d import Solid, import_step
+
+    beams = {k: r for k, r in parts.items() if r["kind"] == "beam"}
+    # the STEP text: design → families → beams → plates
+    tree, roots = step_tree(built / "beams.step")
+    assert roots == ["exchange test Uberdach"]                     # the product name, folded to ASCII
+    assert sorted(tree[roots[0]]) == sorted({r["family"] for r in beams.values()})
+    for family in tree[roots[0]]:
+        for beam in tree[family]:
+            kids = tree.get(beam, [])
+            assert sorted(kids) == sorted(k for k, r in beams.items() if r["beam_id"] == beam)
+            assert all(beams[k]["family"] == family for k in kids)
+    assert sum(len(tree.get(b, [])) for f in tree[roots[0]] for b in tree[f]) == len(beams)
+    # the CAD kernel's reader: the same tree, the names, the colours by family
+    shape = import_step(str(built / "beams.step"))
+    assert shape.label == "exchange_test_Uberdach"                # build123d's reader writes spaces as _
+    colours = {}
+    for fam in shape.children:
+        for beam in fam.children:
+            for solid in beam.children:
+                assert isinstance(solid, Solid) and beams[solid.label]["beam_id"] == beam.label
+                assert beams[solid.label]["family"] == fam.label
+                colours.setdefault(fam.label, set()).add(tuple(round(c, 3) for c in tuple(solid.color)[:3]))
+                assert solid.volume == pytest.approx(float(beams[solid.label]["area_mm2"]) * 12.0, rel=1e-6)
+    assert all(len(c) == 1 for c in colours.values()) and len(set().union(*colours.values())) == len(colours)
+    head = (built / "beams.step").read_text(encoding="ascii").partition("ENDSEC;")[0]
+    assert r"'ppfab 0.1.0: beam plates of exchange test \X2\00DC\X0\berdach'" in head
+    assert "'2000-01-01T00:00:00'" in head and "'ppfab 0.1.0',''" in head and "Author" not in head
+
+
+def test_panels_step_product_tree(built, parts):
+    tree, roots = step_tree(built / "panels.step")
+    assert roots == ["exchange test Uberdach"] and tree[roots[0]] == ["glass"]
+    assert sorted(tree["glass"]) == sorted(k for k, r in parts.items() if r["kind"] == "panel")
+
+
+# -- GLB --------------------------------------------------------------------------------------------------
+
+def test_glb_node_names_and_bounds(built, parts):
+    import trimesh
+    from build123d import import_step
+
+    from fabrication.writers.step import named_solids
+
+    scene = trimesh.load(str(built / "model.glb"), force="scene")
+    assert sorted(scene.graph.nodes_geometry) == sorted(parts)
+    back = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]]) * 1e3            # glTF metres, y up → mm, z up
+    solids = dict(named_solids(import_step(str(built / "beams.step"))))
+    lo_all = []
+    for name in scene.graph.nodes_geometry:
+        transform, geom = scene.graph[name]
+        mesh = scene.geometry[geom]
+        pts = trimesh.transform_points(mesh.vertices, transform) @ back.T
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        lo_all.append((lo, hi))
+        row = parts[name]
+        assert mesh.is_watertight
+        assert abs(mesh.volume) * 1e9 == pytest.approx(float(row["area_mm2"]) * float(row["thickness_mm"]), rel=1e-4)
+        if row["kind"] == "beam":                                         # the same box as the STEP solid
+            bb = solids[name].bounding_box()
+            assert np.allclose(lo, [bb.min.X, bb.min.Y, bb.min.Z], atol=0.05)
+            assert np.allclose(hi, [bb.max.X, bb.max.Y, bb.max.Z], atol=0.05)
+    lo = np.min([a for a, _ in lo_all], axis=0)
+    hi = np.max([b for _, b in lo_all], axis=0)
+    sb = scene.bounds @ back.T
+    assert np.allclose(np.minimum(sb[0], sb[1]), lo, atol=0.05) and np.allclose(np.maximum(sb[0], sb[1]), hi,
+                                                                               atol=0.05)
+
+
+# -- glass order and DXF -----------------------------------------------------------------------------------
+
+def test_glass_order_shapes_check_out_by_independent_formulas(built, parts, mesh):
+    order = rows(built / "glass_order.csv")
+    assert sum(int(r["quantity"]) for r in order) == sum(r["kind"] == "panel" for r in parts.values())
+    for r in order:
+        c = np.array([[float(r[f"c{k}_x_mm"]), float(r[f"c{k}_y_mm"])] for k in range(1, 5)])
+        e = {k: float(r[f"edge_{k}{k % 4 + 1}_mm"]) for k in range(1, 5)}
+        d13, d24 = float(r["diag_13_mm"]), float(r["diag_24_mm"])
+        a = [float(r[f"angle_{k}_deg"]) for k in range(1, 5)]
+        # law of cosines in the triangles of the diagonals (angles from lengths only)
+        cos2 = (e[1] ** 2 + e[2] ** 2 - d13 ** 2) / (2 * e[1] * e[2])
+        cos4 = (e[3] ** 2 + e[4] ** 2 - d13 ** 2) / (2 * e[3] * e[4])
+        cos1 = (e[4] ** 2 + e[1] ** 2 - d24 ** 2) / (2 * e[4] * e[1])
+        assert np.degrees(np.arccos(cos2)) == pytest.approx(a[1], abs=2e-3)
+        assert np.degrees(np.arccos(cos4)) == pytest.approx(a[3], abs=2e-3)
+        assert np.degrees(np.arccos(cos1)) == pytest.approx(a[0], abs=2e-3)
+        assert sum(a) == pytest.approx(360.0, abs=2e-3)
+        assert c[0].tolist() == [0.0, 0.0] and c[1, 1] == 0.0 and c[1, 0] == pytest.approx(e[1], abs=0.01)
+        # the mesh face of the first pane, inset by half the gap: the same edges
+        first = parts[r["parts"].split(";")[0]]
+        face = mesh.vertices[mesh.faces[int(first["face"])]]
+        mid = face - face.mean(axis=0)
+        q = mid @ np.linalg.svd(mid)[2][:2].T
+        lengths = np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1)
+        assert sorted(lengths) == pytest.approx(sorted(e.values()), abs=30.0)        # inset by 8 mm per side
+        assert float(r["weight_kg"]) == pytest.approx(float(r["area_mm2"]) * 1e-6 * 10e-3 * 2500, rel=1e-3)
+        assert r["edge_finish"] == "ground" and r["coated_side"] == "none"
+
+
+def test_per_type_dxf_is_dimensioned_with_the_edges_and_diagonals(built):
+    import ezdxf
+
+    for r in rows(built / "glass_order.csv"):
+        doc = ezdxf.readfile(built / r["file"])
+        dims = [e for e in doc.modelspace() if e.dxftype() == "DIMENSION"]
+        assert {e.dxf.layer for e in dims} == {"DIM"} and len(dims) == 6
+        got = sorted(e.get_measurement() for e in dims)
+        want = sorted([float(r[f"edge_{k}{k % 4 + 1}_mm"]) for k in range(1, 5)] + [float(r["diag_13_mm"]),
+                                                                                    float(r["diag_24_mm"])])
+        assert np.allclose(got, want, atol=0.006)
+        (cut,) = [e for e in doc.modelspace() if e.dxftype() == "LWPOLYLINE" and e.dxf.layer == "CUT"]
+        pts = np.array(list(cut.get_points("xy")))
+        assert np.allclose(pts, [[float(r[f"c{k}_x_mm"]), float(r[f"c{k}_y_mm"])] for k in range(1, 5)],
+                           atol=0.006)
+
+
+@pytest.mark.parametrize("version, code", [("r12", "AC1009"), ("r2000", "AC1015")])
+def test_legacy_dxf_reopens_and_keeps_the_outlines(built, version, code):
+    import ezdxf
+
+    from fabrication.writers.dxf import read_sheet_dxf
+
+    m = json.loads((built / "manifest.json").read_text())
+    for rel in m["files"][f"dxf_{version}"]:
+        old = ezdxf.readfile(built / rel)
+        assert old.dxfversion == code and not old.audit().has_errors
+        main_rel = rel.split("/", 1)[1]
+        a, b = read_sheet_dxf(built / rel), read_sheet_dxf(built / main_rel)
+        assert [p.part_id for p in a.parts] == [p.part_id for p in b.parts]
+        assert [p.nest_tag for p in a.parts] == [p.nest_tag for p in b.parts]
+        for p, q in zip(a.parts, b.parts):
+            assert p.closed and np.array_equal(p.points, q.points)
+        assert a.labels == b.labels and a.marks == b.marks and np.allclose(a.dimensions, b.dimensions)
+        kinds = {e.dxftype() for e in old.modelspace()}
+        assert ("LWPOLYLINE" in kinds) == (version == "r2000") and ("POLYLINE" in kinds) == (version == "r12")
+
+
+# -- verify finds damage ---------------------------------------------------------------------------------------
+
+def test_verify_names_an_ifc_property_changed_and_a_3dm_object_moved(built, tmp_path, capsys):
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+    import rhino3dm
+
+    out = tmp_path / "copy"
+    shutil.copytree(built, out)
+    f = ifcopenshell.open(str(out / "model.ifc"))
+    plate = f.by_type("IfcPlate")[3]
+    pset = f.by_id(ue.get_psets(plate)["PPFAB_Part"]["id"])
+    for prop in pset.HasProperties:
+        if prop.Name == "nest_tag":
+            prop.NominalValue = f.create_entity("IfcIdentifier", "G99-999")
+    f.write(str(out / "model.ifc"))
+    model = rhino3dm.File3dm.Read(str(out / "model.3dm"))
+    moved = next(o for o in model.Objects if o.Attributes.Name.startswith("B-"))
+    moved.Geometry.Translate(rhino3dm.Vector3d(0.0, 0.0, 25.0))          # up, in the plate's own (upright) plane
+    model.Write(str(out / "model.3dm"), 7)
+    assert main(["verify", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"model.ifc: {plate.Name}: PPFAB_Part.nest_tag is 'G99-999'" in err
+    assert f"model.3dm: {moved.Attributes.Name}: outline is 25 mm from where its DXF outline puts it" in err
+
+
+# -- reproducibility and a real mesh ------------------------------------------------------------------------
+
+def test_two_builds_in_separate_processes_are_byte_identical(tmp_path):
+    """Different hash seeds and memory layouts: the STEP colours (written in address order by the kernel),
+    the IFC GlobalIds, the Rhino ids and time stamps, the R12 header dates must not change a byte."""
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    design = tmp_path / "tiny.toml"
+    design.write_text(small_design(3, 2, u_range=(-2.0, 2.0), v_range=(-1.5, 1.5), name="tiny",
+                                   extra="[output]\ndxf_r12 = true\n"), encoding="utf-8")
+    trees = []
+    for k, seed in enumerate(("1", "2")):
+        out = tmp_path / f"out{k}"
+        env = dict(os.environ, PYTHONHASHSEED=seed,
+                   PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+        code = "from fabrication.cli import main; raise SystemExit(main(['build', %r, '-o', %r, '--quiet']))"
+        subprocess.run([sys.executable, "-c", code % (str(design), str(out))], env=env, check=True)
+        trees.append({str(p.relative_to(out)): hashlib.sha256(p.read_bytes()).hexdigest()
+                      for p in sorted(out.rglob("*")) if p.is_file()})
+    assert trees[0].keys() == trees[1].keys()
+    assert {"model.ifc", "model.3dm", "model.glb", "beams.step", "panels.step"} <= set(trees[0])
+    assert sorted(k for k in trees[0] if trees[0][k] != trees[1][k]) == []
+
+
+def test_exchange_files_of_a_real_mesh(tmp_path):
+    """A patch of a real conical PP mesh (DOI rot4_def1_sparse_rot, 8 × 7 faces): every file verifies, beams
+    of one plate keep distinct GlobalIds from their assembly."""
+    import ifcopenshell
+
+    import fabrication
+    from fabrication.design import parse_design
+    from ppfab.io import write_obj
+    from ppfab.mesh import QuadGrid
+
+    from conftest import SHARED_DATA
+
+    grid = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj").to_grid()
+    write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 0:8])), tmp_path / "patch.obj")
+    doc = {"design": {"name": "rot4 patch"}, "geometry": {"mesh": str(tmp_path / "patch.obj"), "scale": 3000.0},
+           "nesting": {"time_budget": 0.5}, "beam_nesting": {"time_budget": 0.5}}
+    b = fabrication.build(parse_design(doc))
+    out = b.write(tmp_path / "out")
+    v = b.verify()
+    assert v.ok, [str(f) for f in v.findings[:5]]
+    assert {"ifc", "rhino", "glb", "glass_order", "step"} <= set(v.checked)
+    f = ifcopenshell.open(str(out / "model.ifc"))
+    single = [a for a in f.by_type("IfcElementAssembly") if len(a.IsDecomposedBy[0].RelatedObjects) == 1]
+    assert single, "the patch has beams of a single plate"
+    for a in single:
+        (member,) = a.IsDecomposedBy[0].RelatedObjects
+        assert member.Name == a.Name and member.GlobalId != a.GlobalId
+    assert len(f.by_type("IfcPlate")) == len(b.panels.panels) == 56
+
+
+def test_a_coated_pane_cannot_be_mirrored(tmp_path, capsys):
+    p = tmp_path / "d.toml"
+    p.write_text(small_design(2, 2, extra="[panels]\ncoated_side = \"outside\"\nmirror_allowed = true\n"))
+    assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppfab: error:") and "coated on the outside cannot be turned over" in err
+    assert "Traceback" not in err and not (tmp_path / "o").exists()
+    p.write_text(small_design(2, 2, extra="[panels]\ncoated_side = \"top\"\n"))
+    assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
+    assert "'none', 'outside', 'inside'" in capsys.readouterr().err
