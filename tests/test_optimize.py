@@ -426,7 +426,7 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
 
 @pytest.mark.parametrize("exact", [True, False], ids=["planes-exact", "planes-projected"])
 def test_schur_solve_equals_dense_damped_solve(exact):
-    """The block elimination of the face normals and the block ordering give the exact LM step."""
+    """The block elimination of the face normals, the nested-dissection ordering and the reused factor (CG after a change of μ) give the exact LM step."""
     from ppfab.optimize.linsolve import DampedSystem
 
     rng = np.random.default_rng(3)

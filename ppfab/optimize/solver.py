@@ -30,7 +30,7 @@ import numpy as np
 from ..metrics import face_planarity, pad_polylines, polyline_planarity
 from ..topology import Polyline
 from .guard import StepGuard
-from .linsolve import BlockOrdering, DampedSystem
+from .linsolve import DampedSystem, FactorCache
 from .residuals import Residuals
 
 
@@ -150,7 +150,7 @@ class LevenbergMarquardt:
         self.iteration = 0
         self.history: list[IterationRecord] = []
         self.t0 = time.perf_counter()
-        self.ordering = BlockOrdering()
+        self.cache = FactorCache()
         if on_stage is not None:
             on_stage(self.z)
         self._linearise()
@@ -164,7 +164,7 @@ class LevenbergMarquardt:
         self.r = self.p.residual(self.z, self.reg)
         self.energy = float(self.r @ self.r)
         self.system = DampedSystem(self.p.jacobian(self.z, self.reg), self.r, self.p.n_face_unknowns,
-                                   self.ordering)
+                                   self.cache)
         if self.mu is None:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
 
