@@ -197,14 +197,15 @@ class CreaseReport:
 def crease_report(angles: np.ndarray, reference: np.ndarray, limit: float) -> CreaseReport:
     """Compare dihedral angles ``(E,)`` with those of a reference ``(E,)`` (same edges), degrees.
 
-    An edge is a created crease when its angle exceeds ``limit`` and exceeds its reference angle
-    (an input crease that was already beyond the limit and did not grow is not counted).
+    An edge is a created crease when its angle exceeds ``limit`` (by more than 1e-6°, the rounding of a
+    guard that holds edges at the limit) and exceeds its reference angle (an input crease that was already
+    beyond the limit and did not grow is not counted).
     """
     a = np.asarray(angles, dtype=float)
     r = np.asarray(reference, dtype=float)
     change = a - r
     with np.errstate(invalid="ignore"):
-        bad = np.flatnonzero(np.isfinite(a) & (a > limit) & (change > 1e-9))
+        bad = np.flatnonzero(np.isfinite(a) & (a > limit + 1e-6) & (change > 1e-9))
     return CreaseReport(a, change, float(limit), bad[np.argsort(-a[bad])])
 
 

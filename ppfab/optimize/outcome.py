@@ -136,6 +136,12 @@ def message(o: Outcome) -> str:
                           for e in worst)
         parts.append(f"{len(o.creases.created)} edge(s) creased beyond {o.creases.limit:.1f}° (input max "
                      f"{o.crease_input_max:.1f}°): {names}")
+    elif o.rejected.get("crease") and not o.targets_met:
+        c = o.creases
+        k = int(np.nanargmax(np.where(np.isfinite(c.change), c.change, -np.inf)))
+        parts.append(f"largest crease {c.max:.1f}° (limit {c.limit:.1f}° = input max {o.crease_input_max:.1f}° "
+                     f"+ crease_limit); edge ({int(o.edges[k, 0])}, {int(o.edges[k, 1])}) grew by "
+                     f"{c.change[k]:.1f}° to {c.angles[k]:.1f}°")
     if o.returned == "best":
         parts.append(f"the last iterate was worse than the input, so the best iterate (iteration "
                      f"{o.best_iteration}) is returned")

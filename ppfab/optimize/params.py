@@ -46,7 +46,7 @@ class OptimizeParams:
                                           "the closest points, foot points updated each stage: vertices may "
                                           "slide along the surface), to the input vertices, or none",
                            choices=("surface", "vertices", "none"))
-    slide: float = param(0.1, doc="with closeness = surface: weight, relative to weight_close, of the pull "
+    slide: float = param(0.3, doc="with closeness = surface: weight, relative to weight_close, of the pull "
                                   "back to the input vertices (0 lets vertices slide freely along the surface)",
                          min=0.0)
     keep_conical: bool = param(False, doc="make the mesh conical, or keep it conical (§2.3.3, §4): adds E_conical "

@@ -67,7 +67,7 @@ class Weights:
     conical: float = 0.0
     orthogonal: float = 0.0
     axes: float = 0.0
-    slide: float = 0.1
+    slide: float = 0.3
 
 
 def _pattern(start: int, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
