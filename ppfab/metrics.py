@@ -104,8 +104,8 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def mesh_conical_residual(mesh: QuadMesh) -> np.ndarray:
     """Conical residual at every interior valence-4 vertex of a general quad mesh (NaN elsewhere)."""
     topo = mesh.topology
-    v = mesh.vertices
-    f = mesh.faces
+    v = np.asarray(mesh.vertices)
+    f = np.asarray(mesh.faces)
     # corner angle of every face corner and its vertex
     prev = np.roll(f, 1, axis=1)
     nxt = np.roll(f, -1, axis=1)
@@ -335,7 +335,7 @@ def family_planarity(mesh: QuadMesh, family: int) -> tuple[np.ndarray, int]:
         return polyline_planarity(pts), 0
     lines = mesh.family(family)
     keep = [p for p in lines if len(p) >= 3]
-    pts, w = pad_polylines(mesh.vertices, keep)
+    pts, w = pad_polylines(np.asarray(mesh.vertices), keep)
     return polyline_planarity(pts, w), len(lines) - len(keep)
 
 
@@ -362,7 +362,7 @@ def quality(mesh: QuadMesh | QuadGrid, degenerate_tol: float = 1e-9) -> Quality:
     crease = mesh_dihedral_angles(qm)
     corner_dev = np.abs(corner_angles(corners) - 90.0)
     return Quality(
-        faces=len(qm.faces),
+        faces=len(corners),
         delta_f_max=_stats(df)[0], delta_f_mean=_stats(df)[1],
         deviation_abs_max=_stats(dev)[0],
         delta_p_rows_max=_stats(rows)[0], delta_p_rows_mean=_stats(rows)[1],

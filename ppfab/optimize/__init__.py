@@ -234,6 +234,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     if not isinstance(qm, QuadMesh):
         raise GeometryError(f"optimize needs a QuadMesh or QuadGrid, got {type(mesh).__name__}")
     v = np.asarray(qm.vertices, dtype=float)
+    faces = np.asarray(qm.faces, dtype=np.int64)
     lengths = qm.edge_lengths()
     scale = float(lengths.mean()) if len(lengths) else 0.0
     if not scale > 0:
@@ -258,7 +259,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                       p.weight_shape, p.shape_ratio, p.weight_conical if p.keep_conical else 0.0,
                       p.weight_orthogonal, p.weight_axes, p.slide)
     topo = qm.topology
-    stars = conical_stars(qm.faces, len(v), ~topo.boundary_vertices) if p.keep_conical \
+    stars = conical_stars(faces, len(v), ~topo.boundary_vertices) if p.keep_conical \
         else np.zeros((0, 5), dtype=np.int64)
     if p.keep_conical and not len(stars):
         raise DesignError("optimize.keep_conical", "the mesh has no interior vertex with four faces: there is "
@@ -269,22 +270,22 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
         pairs = polyline_faces(sel.planar, edge_index, topo.edge_faces)
     fairness = p.fairness
     if fairness == "auto":
-        far = len(qm.faces) and float(face_planarity(v[qm.faces]).max()) > AUTO_FAIRNESS_DELTA_F
+        far = len(faces) and float(face_planarity(v[faces]).max()) > AUTO_FAIRNESS_DELTA_F
         fairness = "absolute" if far else "relative"
     exact = p.plane_solver == "exact" or (
         p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
-    res = Residuals(vn, qm.faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
+    res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
                     p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
                     axes_pairs=pairs)
-    nf, ns = _initial_normals(vn, qm.faces, sel.planar)
+    nf, ns = _initial_normals(vn, faces, sel.planar)
     z0 = res.pack(vn, ns, nf)
-    metrics = PlanarityMetrics(qm.faces, sel.planar, len(vn), stars)
-    c0 = vn[qm.faces]
+    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
+    c0 = vn[faces]
     crease0 = dihedral_angles(np.cross(c0[:, 2] - c0[:, 0], c0[:, 3] - c0[:, 1]), topo.edge_faces)
     finite = crease0[np.isfinite(crease0)]
     limit = min(180.0, (float(finite.max()) if finite.size else 0.0) + p.crease_limit)
-    guard = StepGuard(qm.faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
-    surface = ReferenceSurface(vn, qm.faces)
+    guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
+    surface = ReferenceSurface(vn, faces)
     ref = surface if p.closeness == "surface" else None
     return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref, fairness,
                    "exact" if exact else "projected", stars, pairs, crease0, limit, surface)
@@ -341,7 +342,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     dfm, dfa, dpm, dpa = prob.metrics(v)
     df0, _, dp0, _ = prob.metrics(v0)
     con = prob.metrics.conical_max(v)
-    c = v_n[prob.mesh.faces]
+    c = v_n[np.asarray(prob.mesh.faces)]
     creases = crease_report(dihedral_angles(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]),
                                             prob.mesh.topology.edge_faces), prob.crease0, prob.crease_limit)
     met = bool(dfm <= target_df and dpm <= p.target_delta_p and con <= target_c and not len(creases.created))
@@ -349,8 +350,9 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     q_in, q_out = quality(mesh), quality(out)
     foot, _ = prob.surface.closest(v_n) if prob.surface is not None else (v_n, None)
     dist = np.linalg.norm(v_n - foot, axis=1) * prob.scale
-    sup = support_panel_angles(v, prob.mesh.faces, planes, *_all_pairs(prob))
-    axis = axis_normal_angles(v, prob.mesh.faces, planes, prob.selection.planar)
+    faces = np.asarray(prob.mesh.faces, dtype=np.int64)
+    sup = support_panel_angles(v, faces, planes, *_all_pairs(prob))
+    axis = axis_normal_angles(v, faces, planes, prob.selection.planar)
     defect = conjugacy_defect(prob.mesh) if not met else 0.0
     crease_in = float(np.nanmax(prob.crease0)) if np.isfinite(prob.crease0).any() else 0.0
     outcome = Outcome(state.stopped_by, met, dfm, dpm, con, df0, dp0, target_df, p.target_delta_p, target_c,

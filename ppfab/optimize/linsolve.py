@@ -39,6 +39,8 @@ A rejected step only changes ``μ``: ``JᵀJ`` and ``Jᵀr`` are kept.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
@@ -92,7 +94,7 @@ class FactorCache:
         self.cg_maxiter = cg_maxiter
         self.reuse = reuse
         self.perm: np.ndarray | None = None
-        self.lu = None
+        self.lu: Any = None                  # scipy SuperLU of the last factorised system
         self.owner: object = None
         self.factorisations = 0
         self.cg_solves = 0

@@ -171,7 +171,7 @@ class LevenbergMarquardt:
         self.callback = callback
         self.reg = 1.0
         self.stage = 0
-        self.mu: float | None = None
+        self.mu = 0.0                            # set from the first linearisation (Madsen et al. τ)
         self.nu = 2.0
         self.rejections = 0
         self.iteration = 0
@@ -197,7 +197,7 @@ class LevenbergMarquardt:
         self.energy = float(self.r @ self.r)
         self.system = DampedSystem(self.p.jacobian(self.z, self.reg), self.r, self.p.n_face_unknowns,
                                    self.cache)
-        if self.mu is None:
+        if self.mu == 0.0:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
 
     def _score(self) -> float:

@@ -146,7 +146,7 @@ def polyline_faces(lines: list[Polyline], edge_index: dict[tuple[int, int], int]
         v = p.vertices
         a = v if p.closed else v[:-1]
         b = np.roll(v, -1) if p.closed else v[1:]
-        fs = set()
+        fs: set[int] = set()
         for x, y in zip(a.tolist(), b.tolist()):
             e = edge_index.get((min(x, y), max(x, y)))
             if e is not None:
