@@ -54,8 +54,8 @@ class OptimizeParams:
                                           "weight_conical, and max conical residual <= target_conical to the "
                                           "targets")
     weight_conical: float = param(1.0, doc="λ_c: weight of E_conical (used with keep_conical)", exclusive_min=0.0)
-    target_conical: float = param(1e-6, doc="with keep_conical: stop only when the max conical residual "
-                                            "|α1 − α2 + α3 − α4| (rad) is at most this", exclusive_min=0.0)
+    target_conical: float = param(1e-6, doc="with keep_conical: stop only when the conical residual "
+                                            "max abs(α1 − α2 + α3 − α4) (rad) is at most this", exclusive_min=0.0)
     weight_orthogonal: float = param(0.0, doc="λ_⊥: weight of E_orth on the cosines of the face corner angles "
                                               "(near-rectangular panels; 0 switches it off)", min=0.0)
     orthogonality: str = param("keep", doc="E_orth: keep (one-sided: no corner moves further from 90° than in "
@@ -87,8 +87,9 @@ class OptimizeParams:
                                   exclusive_min=0.0)
     max_iterations: int = param(500, doc="maximum number of Levenberg–Marquardt iterations "
                                          "(linear solves, rejected steps included)", min=1, max=100000)
-    reg_decay: float = param(0.1, doc="factor applied to the fairness and closeness weights when progress stalls "
-                                      "(1 keeps the paper's energy fixed)", exclusive_min=0.0, max=1.0)
+    reg_decay: float = param(0.1, doc="factor applied to the weights of the soft goals (fairness, closeness, "
+                                      "right angles, axes) when progress stalls (1 keeps the paper's energy "
+                                      "fixed)", exclusive_min=0.0, max=1.0)
     reg_min: float = param(1e-6, doc="smallest factor the regularisation weights are reduced to",
                            exclusive_min=0.0, max=1.0)
     stall: float = param(0.05, doc="a stage ends when an accepted step lowers the energy by less than "
