@@ -207,3 +207,49 @@ def test_surface_closeness_bounds_the_deviation_on_a_generated_surface():
     # the boundary does not shrink along the surface: corners stay within 2 % of the size
     corners = res.mesh.vertices[[0, 0, -1, -1], [0, -1, 0, -1]]
     assert np.abs(corners[:, :2] - g.vertices[[0, 0, -1, -1], [0, -1, 0, -1], :2]).max() < 0.04
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["fig23_enneper_pp_to_conical", "fig16_conical1_pp_conical"])
+def test_figure_examples_are_conical_pp(name):
+    """The examples of the paper's Fig. 16 (conical mesh made PP, staying conical) and Fig. 23 (PP mesh made
+    conical, staying PP): δ_f, δ_P of both families and the conical residual all at most 1e-6, measured on the
+    placed mesh (millimetres) with the independent metrics."""
+    from conftest import REPO
+
+    from ppfab.cli.design import load_design
+    from ppfab.cli.pipeline import build_geometry
+
+    g = build_geometry(load_design(REPO / "examples" / f"{name}.toml"))
+    q = quality(g.mesh)
+    assert g.planar_families == ("rows", "cols")
+    assert max(q.delta_f_max, q.delta_p_rows_max, q.delta_p_cols_max) <= 1e-6
+    assert q.conical_max <= 1e-6
+    assert g.optimize_result.targets_met and g.optimize_result.conical_max_input > 1e-4
+
+
+def test_reused_factor_after_a_rejected_step_gives_the_exact_step():
+    """Same linearisation, μ raised as after a rejected step: CG on the kept factor, checked against a dense
+    solve; the ordering is a permutation of the unknowns."""
+    from ppfab.optimize.linsolve import DampedSystem, FactorCache
+
+    rng = np.random.default_rng(2)
+    mesh = wavy_grid(7, 6).to_quadmesh()
+    sel = select_polylines(mesh, "both")
+    res = Residuals(mesh.vertices, mesh.faces, mesh.edges, sel.planar, sel.fair, np.ones(len(mesh.vertices), bool),
+                    Weights(), plane_unknowns=True)
+    z = res.pack(mesh.vertices, rng.normal(size=(res.n_planes, 3)), rng.normal(size=(res.n_faces, 3)))
+    jac, r = res.jacobian(z, 0.5), res.residual(z, 0.5)
+    cache = FactorCache()
+    system = DampedSystem(jac, r, res.n_face_unknowns, cache)
+    dense = jac.toarray()
+    for k, mu in enumerate((1e-3, 2e-3, 8e-3, 6.4e-2)):
+        h = system.solve(mu)
+        a = dense.T @ dense + mu * np.eye(dense.shape[1])
+        ref = np.linalg.solve(a, -dense.T @ r)
+        # the first solve is direct; the others stop CG at a relative residual of 1e-10 of the reduced system
+        assert np.linalg.norm(a @ h + dense.T @ r) <= 1e-7 * np.linalg.norm(dense.T @ r)
+        assert np.allclose(h, ref, rtol=1e-5, atol=1e-7 * np.abs(ref).max())
+    assert cache.cg_solves >= 1 and cache.factorisations + cache.cg_solves == 4
+    p = cache.perm
+    assert p is not None and np.array_equal(np.sort(p), np.arange(system.ny))

@@ -4,8 +4,15 @@
 from :func:`ppfab.io.load_mesh`, or a :class:`~ppfab.mesh.QuadGrid`) and moves
 its vertices so that faces become planar (``E_f``) and the selected polylines
 lie in planes (``E_P``), with unit-normal (``E_1``), fairness (``E_fair``) and
-closeness terms, by a sparse Levenberg–Marquardt method with an analytic
-Jacobian (:mod:`.residuals`, :mod:`.linsolve`, :mod:`.solver`).
+closeness terms (to the input surface by default), by a sparse
+Levenberg–Marquardt method with an analytic Jacobian (:mod:`.residuals`,
+:mod:`.linsolve`, :mod:`.solver`).  On request it keeps or makes the mesh
+conical (``keep_conical``, ``E_conical``), keeps panels near-rectangular
+(``E_orth``) and stands the support planes at right angles to the panels
+(``E_axes``, node axes along the normals) — :mod:`.terms`.  The result says what
+the run did to the design (:mod:`.outcome`): distance to the input surface,
+creases, conical residual, corner angles, refused steps; it is never worse than
+the input.
 
 Examples
 --------

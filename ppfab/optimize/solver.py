@@ -72,7 +72,8 @@ class IterationRecord:
         mark = "+" if self.accepted else f"x {self.rejected_by}"
         return (f"it {self.iteration:4d} st {self.stage} s={self.reg:.0e} E={self.energy:.3e} "
                 f"E_P={self.E_P:.2e} E_f={self.E_f:.2e} dF={self.delta_f_max:.2e}/{self.delta_f_mean:.2e} "
-                f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e} mu={self.mu:.1e} {mark}")
+                f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e}"
+                + (f" con={self.conical_max:.2e}" if self.conical_max else "") + f" mu={self.mu:.1e} {mark}")
 
 
 class PlanarityMetrics:
