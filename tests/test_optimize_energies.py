@@ -52,7 +52,8 @@ def test_each_energy_jacobian_equals_finite_differences(orthogonality, exact):
     pairs = polyline_faces(sel.planar, edge_index, topo.edge_faces)
     w = Weights(shape_ratio=0.9, conical=0.7, orthogonal=0.4, axes=0.3, slide=0.2)
     res = Residuals(mesh.vertices, mesh.faces, mesh.edges, sel.planar, sel.fair, free, w, closeness="surface",
-                    plane_unknowns=exact, stars=stars, orthogonality=orthogonality, axes_pairs=pairs)
+                    plane_unknowns=exact, stars=stars, orthogonality=orthogonality, axes_pairs=pairs,
+                    edge_faces=topo.edge_faces, crease_start=np.radians(8.0))
     res.set_reference(mesh.vertices + 0.01, rng.normal(size=mesh.vertices.shape))
     v = mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape)
     z = res.pack(v, rng.normal(size=(res.n_planes, 3)), rng.normal(size=(res.n_faces, 3)))
@@ -60,6 +61,9 @@ def test_each_energy_jacobian_equals_finite_differences(orthogonality, exact):
     sizes = dict(zip(BLOCKS, (len(b) for b in blocks)))
     assert sizes["E_conical"] == len(stars) == 12 and sizes["E_orth"] == 4 * len(mesh.faces)
     assert sizes["E_axes"] == len(pairs[0]) > 0 and sizes["E_slide"] == 3 * int(free.sum())
+    n_inner = int((topo.edge_faces >= 0).all(axis=1).sum())
+    crease = blocks[BLOCKS.index("E_crease")]
+    assert sizes["E_crease"] == n_inner and 0 < np.count_nonzero(crease) < n_inner      # barrier, active
     if orthogonality == "keep":
         assert 0 < np.count_nonzero(blocks[BLOCKS.index("E_orth")]) < sizes["E_orth"]   # one-sided, active
     jac = res.jacobian(z, 0.3).toarray()
@@ -253,3 +257,16 @@ def test_reused_factor_after_a_rejected_step_gives_the_exact_step():
     assert cache.cg_solves >= 1 and cache.factorisations + cache.cg_solves == 4
     p = cache.perm
     assert p is not None and np.array_equal(np.sort(p), np.arange(system.ny))
+
+
+def test_crease_barrier_angle_is_the_dihedral_angle():
+    """The barrier's angle per edge equals :func:`ppfab.metrics.mesh_dihedral_angles` (independent code)."""
+    from ppfab.metrics import mesh_dihedral_angles
+    from ppfab.optimize.terms import crease_stars, dihedral_and_grad
+
+    mesh = load_mesh(SHARED_DATA / "DOS__heart.obj")
+    verts, slot = crease_stars(mesh.faces, mesh.topology.edge_faces)
+    theta, _ = dihedral_and_grad(np.asarray(mesh.vertices), verts, slot)
+    ref = mesh_dihedral_angles(mesh)
+    assert len(theta) == np.isfinite(ref).sum()
+    assert np.allclose(np.sort(np.degrees(theta)), np.sort(ref[np.isfinite(ref)]), atol=1e-9)

@@ -58,6 +58,9 @@ log = logging.getLogger("ppfab")
 EXACT_PLANES_LIMIT = 150_000
 """``plane_solver = "auto"`` keeps support normals as unknowns while Σ (polyline length)² is at most this."""
 
+CREASE_MARGIN = 5.0
+"""The crease barrier ``E_crease`` acts from this many degrees below the crease limit of the step guard."""
+
 AUTO_FAIRNESS_DELTA_F = 1e-3
 """``fairness = "auto"`` uses the paper's absolute E_fair when the input's max δ_f exceeds this."""
 
@@ -281,16 +284,17 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
         fairness = "absolute" if far else "relative"
     exact = p.plane_solver == "exact" or (
         p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
-    res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
-                    p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
-                    axes_pairs=pairs)
-    nf, ns = _initial_normals(vn, faces, sel.planar)
-    z0 = res.pack(vn, ns, nf)
-    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
     c0 = vn[faces]
     crease0 = dihedral_angles(np.cross(c0[:, 2] - c0[:, 0], c0[:, 3] - c0[:, 1]), topo.edge_faces)
     finite = crease0[np.isfinite(crease0)]
     limit = min(180.0, (float(finite.max()) if finite.size else 0.0) + p.crease_limit)
+    start = np.radians(limit - min(CREASE_MARGIN, p.crease_limit / 3.0)) if limit < 180.0 else None
+    res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
+                    p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
+                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start)
+    nf, ns = _initial_normals(vn, faces, sel.planar)
+    z0 = res.pack(vn, ns, nf)
+    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
     guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
     surface = ReferenceSurface(vn, faces)
     ref = surface if p.closeness == "surface" else None

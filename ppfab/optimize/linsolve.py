@@ -170,6 +170,7 @@ class DampedSystem:
 
     def __init__(self, jac: sparse.spmatrix, r: np.ndarray, n_block: int = 0, cache: FactorCache | None = None):
         jac = sparse.csc_matrix(jac)
+        jac.eliminate_zeros()            # inactive barrier rows add no coupling to the factorised system
         self.jac = jac
         self.cache = cache or FactorCache()
         n = jac.shape[1]

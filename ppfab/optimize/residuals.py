@@ -24,6 +24,10 @@ residual vector ``r`` the total energy is ``E = ‖r‖²`` where
   iff every row vanishes) — rows ``√λ_c (α_0 − α_1 + α_2 − α_3)``, see :mod:`.terms`,
 * ``E_orth`` (near-rectangular panels, §4): per face corner ``c = cos α``; rows ``√(s λ_⊥) c`` (``"right"``) or
   ``√λ_⊥ max(0, |c| − |c⁰|)`` (``"keep"``: no corner moves further from 90° than in the input),
+* ``E_crease`` (a barrier, not in the paper): per interior edge, with ``θ_e`` the angle between the diagonal
+  normals of its two faces, rows ``√λ_shape max(0, θ_e − θ_b)`` (radians), ``θ_b`` a few degrees below the
+  crease limit of the step guard: the gradient turns the solver away from creasing an edge before the guard
+  has to refuse the step,
 * ``E_axes`` (right angles between support planes and panels, §2.3.2): ``Σ_σ Σ_{faces f along σ} ⟨n_σ, n_f⟩²``
   — rows ``√(s λ_axes) ⟨n_σ, n_f⟩``.  Zero when every support plane is normal to the panels it carries, which
   puts the node axis ``U_i ∩ W_j`` of a PP mesh along the surface normal,
@@ -47,10 +51,10 @@ from scipy import sparse
 
 from ..topology import Polyline
 from .selection import edge_pairs, triples
-from .terms import angle_balance, corner_cosines, face_corners_index
+from .terms import angle_balance, corner_cosines, crease_stars, dihedral_and_grad, face_corners_index
 
 BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge", "E_conical", "E_orth",
-          "E_axes", "E_slide")
+          "E_axes", "E_slide", "E_crease")
 
 
 @dataclass(frozen=True)
@@ -101,13 +105,15 @@ class Residuals:
     stars : (K, 5) int, conical stars ``[v, w_0..w_3]`` (:func:`.terms.conical_stars`) for ``E_conical``
     orthogonality : ``"right"`` or ``"keep"`` (``E_orth``)
     axes_pairs : ``(owner (P,), face (P,))`` support plane / face pairs of ``E_axes`` (:func:`.terms.polyline_faces`)
+    edge_faces, crease_start : ``(E, 2)`` faces of every edge and ``θ_b`` (radians) of ``E_crease`` (off if ``None``)
     """
 
     def __init__(self, vertices0: np.ndarray, faces: np.ndarray, edges: np.ndarray, planar: list[Polyline],
                  fair: list[Polyline], free: np.ndarray, weights: Weights, fairness: str = "relative",
                  closeness: str = "vertices", planar_faces: bool = True, plane_unknowns: bool = False,
                  stars: np.ndarray | None = None, orthogonality: str = "keep",
-                 axes_pairs: tuple[np.ndarray, np.ndarray] | None = None):
+                 axes_pairs: tuple[np.ndarray, np.ndarray] | None = None,
+                 edge_faces: np.ndarray | None = None, crease_start: float | None = None):
         v0 = np.asarray(vertices0, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
@@ -174,6 +180,11 @@ class Residuals:
         ao, af = axes_pairs if (axes_pairs is not None and weights.axes > 0 and ns and nf) else \
             (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self.axes_pairs = (np.asarray(ao, dtype=np.int64), np.asarray(af, dtype=np.int64))
+        if edge_faces is not None and crease_start is not None and weights.shape > 0:
+            self.crease_verts, self.crease_slot = crease_stars(faces, edge_faces)
+        else:
+            self.crease_verts, self.crease_slot = np.zeros((0, 6), dtype=np.int64), np.zeros((0, 4), dtype=np.int64)
+        self.crease_start = float(crease_start) if crease_start is not None else np.pi
         # -- Jacobian pattern, block by block in value order ------------------------------------------
         cv = self.close_vertices
         close_cols = vcol[cv].reshape(-1, 1) if closeness == "vertices" else vcol[cv]
@@ -190,6 +201,7 @@ class Residuals:
             vcol[self.corners].reshape(-1, 9),
             np.concatenate([scol[self.axes_pairs[0]], fcol[self.axes_pairs[1]]], axis=1),
             vcol[self.slide_vertices].reshape(-1, 1),
+            vcol[self.crease_verts].reshape(-1, 18),
         ]
         sizes = [len(c) for c in cols_per_block]
         self.block_starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -268,7 +280,7 @@ class Residuals:
         orth = s * w.orthogonal if self.orthogonality == "right" else w.orthogonal
         return [np.sqrt(w.faces), np.sqrt(w.planarity), np.sqrt(w.unit), np.sqrt(s * w.fair),
                 np.sqrt(s * w.close), np.sqrt(w.shape), np.sqrt(w.shape), np.sqrt(w.conical), np.sqrt(orth),
-                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide)]
+                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape)]
 
     def blocks(self, z: np.ndarray) -> list[np.ndarray]:
         """Unweighted residual blocks in the order of :data:`BLOCKS`."""
@@ -297,7 +309,9 @@ class Residuals:
         r_axes = np.einsum("ij,ij->i", ns[ao], nf[af])
         sv = self.slide_vertices
         r_slide = (v[sv] - self.vertices0[sv]).ravel()
-        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide]
+        theta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)[0]
+        r_crease = np.maximum(0.0, theta - self.crease_start)
+        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease]
 
     def residual(self, z: np.ndarray, s: float = 1.0) -> np.ndarray:
         """The weighted residual vector ``r (R,)``; ``‖r‖²`` is the total energy at regularisation ``s``."""
@@ -317,7 +331,7 @@ class Residuals:
     def jacobian(self, z: np.ndarray, s: float = 1.0) -> sparse.csc_matrix:
         """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring)."""
         v, ns, nf = self.unpack(z)
-        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide = self._sqrt_weights(s)
+        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease = self._sqrt_weights(s)
         vals = []
         for (ia, ib, own), normals, c in ((self.face_edges, nf, cf), (self.plane_edges, ns, cpl)):
             n = normals[own]
@@ -348,6 +362,8 @@ class Residuals:
         ao, af = self.axes_pairs
         vals.append(caxes * np.concatenate([nf[af], ns[ao]], axis=1))
         vals.append(np.full(3 * len(self.slide_vertices), cslide))
+        theta, dtheta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)
+        vals.append((ccrease * (theta > self.crease_start))[:, None] * dtheta.reshape(-1, 18))
         data = np.concatenate([np.ravel(x) for x in vals])[self._take]
         return sparse.csc_matrix((data, self._indices, self._indptr), shape=(self.n_residuals, self.n_unknowns))
 

@@ -154,3 +154,55 @@ def polyline_faces(lines: list[Polyline], edge_index: dict[tuple[int, int], int]
         owner.extend([s] * len(fs))
         face.extend(sorted(fs))
     return np.asarray(owner, dtype=np.int64), np.asarray(face, dtype=np.int64)
+
+
+def crease_stars(faces: np.ndarray, edge_faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The six vertices around every interior edge, for the crease barrier.
+
+    Returns ``verts (E', 6)`` — the 4 corners of the first face, then the 2 corners of the second face that
+    are not on the first — and ``slot_b (E', 4)``: the position in ``verts`` of each corner of the second face.
+    """
+    f = np.asarray(faces, dtype=np.int64)
+    ef = np.asarray(edge_faces, dtype=np.int64)
+    ef = ef[(ef >= 0).all(axis=1)]
+    fa, fb = f[ef[:, 0]], f[ef[:, 1]]
+    same = fb[:, :, None] == fa[:, None, :]                             # (E, 4 of b, 4 of a)
+    shared = same.any(axis=2)
+    slot = np.where(shared, np.argmax(same, axis=2), 4 + np.cumsum(~shared, axis=1) - 1)
+    ok = (shared.sum(axis=1) == 2)
+    verts = np.zeros((len(ef), 6), dtype=np.int64)
+    verts[:, :4] = fa
+    rows = np.arange(len(ef))
+    for k in range(4):
+        extra = ~shared[:, k] & ok
+        verts[rows[extra], slot[extra, k]] = fb[extra, k]
+    return verts[ok], slot[ok]
+
+
+def dihedral_and_grad(v: np.ndarray, verts: np.ndarray, slot_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Dihedral angle ``θ (E,)`` (radians) between the diagonal normals ``n = (c2 − c0) × (c3 − c1)`` of the two
+    faces of each edge, and ``∂θ/∂(6 vertices) (E, 6, 3)`` (see :func:`crease_stars`).
+
+    With ``g = ∂θ/∂n`` (:func:`_angle_and_grad`) and ``d1 = c2 − c0``, ``d2 = c3 − c1``:
+    ``∂θ/∂c2 = d2 × g = −∂θ/∂c0`` and ``∂θ/∂c3 = g × d1 = −∂θ/∂c1``.
+    """
+    e = len(verts)
+    if e == 0:
+        return np.zeros(0), np.zeros((0, 6, 3))
+    rows = np.arange(e)
+    ca = v[verts[:, :4]]
+    cb = v[verts[rows[:, None], slot_b]]
+    d1a, d2a = ca[:, 2] - ca[:, 0], ca[:, 3] - ca[:, 1]
+    d1b, d2b = cb[:, 2] - cb[:, 0], cb[:, 3] - cb[:, 1]
+    theta, ga, gb = _angle_and_grad(np.cross(d1a, d2a), np.cross(d1b, d2b))
+
+    def corners(g: np.ndarray, d1: np.ndarray, d2: np.ndarray) -> np.ndarray:
+        x, y = np.cross(d2, g), np.cross(g, d1)
+        return np.stack([-x, -y, x, y], axis=1)
+
+    jac = np.zeros((e, 6, 3))
+    jac[:, :4] += corners(ga, d1a, d2a)
+    cbj = corners(gb, d1b, d2b)
+    for k in range(4):
+        jac[rows, slot_b[:, k]] += cbj[:, k]
+    return theta, jac
