@@ -149,9 +149,7 @@ def message(o: Outcome) -> str:
         parts.append("no iterate was better than the input, so the input is returned unchanged")
     if not o.targets_met and o.delta_f_max > max(o.delta_f_input, o.target_delta_f) * 1.0001:
         parts.append(f"max δ_f rose from {o.delta_f_input:.2e} (input)")
-    stalled = not o.targets_met and (mostly_guard or o.delta_f_max > o.delta_f_input
-                                     or o.returned != "last" or o.stopped_by in ("stuck", "stationary"))
-    if stalled and o.conjugacy_defect is not None and o.conjugacy_defect > CONJUGACY_ADVICE:
+    if not o.targets_met and o.conjugacy_defect is not None and o.conjugacy_defect > CONJUGACY_ADVICE:
         parts.append(f"the polylines are far from a conjugate net (twist / normal curvature "
                      f"{o.conjugacy_defect:.2f}; a conjugate net has about 0): planar quads with planar "
                      f"polylines need other polylines — remesh along conjugate curves of the surface (e.g. "
