@@ -13,6 +13,12 @@
 * Folds: neighbouring faces whose oriented normals point in opposite
   directions (the mesh passes through a cuspidal edge), and faces whose
   corners turn the wrong way (non-convex or self-intersecting quads).
+* Creases: at every interior edge the dihedral angle ``θ_e ∈ [0°, 180°]``
+  between the oriented unit normals of its two faces (0° where the faces are
+  coplanar).  A fold is a crease past 90°.  A crease that an optimisation
+  *created* is measured against the input, edge by edge: ``θ_e − θ⁰_e``.
+* Corner angles: the deviation ``|α − 90°|`` of every face corner angle from a
+  right angle (near-rectangular panels, §4).
 """
 
 from __future__ import annotations
@@ -128,8 +134,8 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def mesh_conical_residual(mesh: QuadMesh) -> np.ndarray:
     """Conical residual at every interior valence-4 vertex of a general quad mesh (NaN elsewhere)."""
     topo = mesh.topology
-    v = mesh.vertices
-    f = mesh.faces
+    v = np.asarray(mesh.vertices)
+    f = np.asarray(mesh.faces)
     # corner angle of every face corner and its vertex
     prev = np.roll(f, 1, axis=1)
     nxt = np.roll(f, -1, axis=1)
@@ -152,6 +158,125 @@ def mesh_conical_residual(mesh: QuadMesh) -> np.ndarray:
             alphas.append(ang[corner_of[(fc, int(vv))]])
         res[vv] = abs(alphas[0] - alphas[1] + alphas[2] - alphas[3])
     return res
+
+
+def dihedral_angles(face_normals: np.ndarray, edge_faces: np.ndarray) -> np.ndarray:
+    """Dihedral angle ``θ_e`` in degrees ``(E,)`` between the two faces of each edge (NaN on the boundary).
+
+    Parameters
+    ----------
+    face_normals : (F, 3) oriented face normals (any length; zero-length normals give NaN)
+    edge_faces : (E, 2) int, the faces on either side of each edge, ``-1`` on the boundary
+
+    ``θ_e = atan2(‖n_a × n_b‖, n_a · n_b)``: 0° for coplanar faces, 90° for a right-angled ridge,
+    above 90° a fold (the faces turn back on each other).
+
+    Examples
+    --------
+    >>> n = np.array([[0.0, 0, 1], [0, 1, 1]])
+    >>> dihedral_angles(n, np.array([[0, 1], [0, -1]])).round(6).tolist()
+    [45.0, nan]
+    """
+    n = np.asarray(face_normals, dtype=float)
+    ef = np.asarray(edge_faces, dtype=np.int64)
+    out = np.full(len(ef), np.nan)
+    inner = (ef >= 0).all(axis=1)
+    a, b = n[ef[inner, 0]], n[ef[inner, 1]]
+    cr = np.linalg.norm(np.cross(a, b), axis=-1)
+    dot = np.einsum("ij,ij->i", a, b)
+    ok = (np.linalg.norm(a, axis=1) > 0) & (np.linalg.norm(b, axis=1) > 0)
+    out[np.flatnonzero(inner)] = np.where(ok, np.degrees(np.arctan2(cr, dot)), np.nan)
+    return out
+
+
+def mesh_dihedral_angles(mesh: QuadMesh | QuadGrid) -> np.ndarray:
+    """Dihedral angles ``(E,)`` in degrees at the edges of ``mesh.edges`` (NaN on the boundary), from the
+    diagonal normals ``(c2 − c0) × (c3 − c1)`` of the faces."""
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    return dihedral_angles(qm.face_planes[:, :3], qm.topology.edge_faces)
+
+
+@dataclass(frozen=True)
+class CreaseReport:
+    """Creases of a mesh measured against a reference (the input of an optimisation).
+
+    angles : (E,) dihedral angle of every edge, degrees (NaN on the boundary)
+    change : (E,) ``angles − angles of the reference`` (NaN on the boundary)
+    limit : degrees; an edge above it that was not above it in the reference is a *created* crease
+    created : (k,) indices into ``mesh.edges`` of the created creases, largest first
+    """
+
+    angles: np.ndarray
+    change: np.ndarray
+    limit: float
+    created: np.ndarray
+
+    @property
+    def max(self) -> float:
+        """Largest dihedral angle, degrees (0 for a mesh without interior edges)."""
+        a = self.angles[np.isfinite(self.angles)]
+        return float(a.max()) if a.size else 0.0
+
+    @property
+    def change_max(self) -> float:
+        """Largest increase of an edge's dihedral angle over the reference, degrees."""
+        c = self.change[np.isfinite(self.change)]
+        return float(max(c.max(), 0.0)) if c.size else 0.0
+
+
+def crease_report(angles: np.ndarray, reference: np.ndarray, limit: float) -> CreaseReport:
+    """Compare dihedral angles ``(E,)`` with those of a reference ``(E,)`` (same edges), degrees.
+
+    An edge is a created crease when its angle exceeds ``limit`` (by more than 1e-6°, the rounding of a
+    guard that holds edges at the limit) and exceeds its reference angle (an input crease that was already
+    beyond the limit and did not grow is not counted).
+    """
+    a = np.asarray(angles, dtype=float)
+    r = np.asarray(reference, dtype=float)
+    change = a - r
+    with np.errstate(invalid="ignore"):
+        bad = np.flatnonzero(np.isfinite(a) & (a > limit + 1e-6) & (change > 1e-9))
+    return CreaseReport(a, change, float(limit), bad[np.argsort(-a[bad])])
+
+
+def conjugacy_defect(mesh: QuadMesh | QuadGrid) -> float:
+    """How far the net is from a conjugate net, as a ratio of twist to normal curvature (dimensionless).
+
+    A quad mesh approximates a parametrisation; planar quads approximate a *conjugate* one (§2.3.1), whose
+    mixed second derivative is tangent.  Per face, the normal part of the mixed difference
+    ``t_f = |⟨n_f, c0 − c1 + c2 − c3⟩|`` (≈ the twist ``II(e1, e2)``, a length) is compared with the turning of
+    the surface across the face's edges, ``ℓ_f θ̄_f`` (mean edge length × mean dihedral angle in radians of its
+    interior edges, ≈ the normal curvatures ``II(e, e)``)::
+
+        defect = Σ_f t_f / Σ_f ℓ_f θ̄_f
+
+    About 0 for a conjugate net (planar quads: every ``t_f = 0``), of order 1 for a net at 45° to the
+    principal directions (a geodesic or S-net on a doubly curved surface), where planar faces with
+    planar polylines need new polylines along conjugate curves.  0 for a mesh without curvature.
+    """
+    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    c = qm.face_corners
+    if not len(c):
+        return 0.0
+    n = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    t = np.abs(np.einsum("ij,ij->i", n, c[:, 0] - c[:, 1] + c[:, 2] - c[:, 3]))
+    ell = np.linalg.norm(c - np.roll(c, -1, axis=1), axis=-1).mean(axis=1)
+    theta = np.radians(mesh_dihedral_angles(qm))
+    ef = qm.topology.edge_faces
+    inner = np.isfinite(theta)
+    sides = np.concatenate([ef[inner, 0], ef[inner, 1]])
+    total = np.bincount(sides, np.concatenate([theta[inner], theta[inner]]), minlength=len(c))
+    count = np.bincount(sides, minlength=len(c))
+    denom = float((ell * total / np.maximum(count, 1)).sum())
+    return float(t.sum() / denom) if denom > 0 else 0.0
+
+
+def corner_angles(corners: np.ndarray) -> np.ndarray:
+    """Corner angles ``(..., 4)`` in degrees of quads ``(..., 4, 3)`` (the angle at corner ``k`` between
+    the edges to corners ``k − 1`` and ``k + 1``)."""
+    c = np.asarray(corners, dtype=float)
+    return np.degrees(_angle(np.roll(c, 1, axis=-2) - c, np.roll(c, -1, axis=-2) - c))
 
 
 def flipped_edges(face_planes: np.ndarray, edge_faces: np.ndarray) -> np.ndarray:
@@ -190,6 +315,9 @@ class Quality:
     polylines_skipped: int
     conical_max: float
     conical_mean: float
+    crease_max: float
+    crease_edges_over_30: int
+    corner_deviation_max: float
     flipped_edges: int
     nonconvex_faces: int
     degenerate_edges: int
@@ -214,6 +342,8 @@ class Quality:
              f"{self.delta_p_cols_max:.3e} / {self.delta_p_cols_mean:.3e}"),
             ("polylines skipped (< 3 vertices)", f"{self.polylines_skipped}"),
             ("conical residual max / mean (rad)", f"{self.conical_max:.3e} / {self.conical_mean:.3e}"),
+            ("crease max (dihedral angle, deg) / edges > 30 deg", f"{self.crease_max:.2f} / {self.crease_edges_over_30}"),
+            ("corner angle max deviation from 90 deg", f"{self.corner_deviation_max:.2f}"),
             ("folds (flipped edges / non-convex faces)", f"{self.flipped_edges} / {self.nonconvex_faces}"),
             ("degenerate edges", f"{self.degenerate_edges}"),
         ]
@@ -235,7 +365,7 @@ def family_planarity(mesh: QuadMesh, family: int) -> tuple[np.ndarray, int]:
         return polyline_planarity(pts), 0
     lines = mesh.family(family)
     keep = [p for p in lines if len(p) >= 3]
-    pts, w = pad_polylines(mesh.vertices, keep)
+    pts, w = pad_polylines(np.asarray(mesh.vertices), keep)
     return polyline_planarity(pts, w), len(lines) - len(keep)
 
 
@@ -259,14 +389,18 @@ def quality(mesh: QuadMesh | QuadGrid, degenerate_tol: float = 1e-9) -> Quality:
         conical = mesh_conical_residual(qm)
     lengths = qm.edge_lengths()
     scale = float(np.mean(lengths)) if len(lengths) else 1.0
+    crease = mesh_dihedral_angles(qm)
+    corner_dev = np.abs(corner_angles(corners) - 90.0)
     return Quality(
-        faces=len(qm.faces),
+        faces=len(corners),
         delta_f_max=_stats(df)[0], delta_f_mean=_stats(df)[1],
         deviation_abs_max=_stats(dev)[0],
         delta_p_rows_max=_stats(rows)[0], delta_p_rows_mean=_stats(rows)[1],
         delta_p_cols_max=_stats(cols)[0], delta_p_cols_mean=_stats(cols)[1],
         polylines_rows=len(rows), polylines_cols=len(cols), polylines_skipped=skip0 + skip1,
         conical_max=_stats(conical)[0], conical_mean=_stats(conical)[1],
+        crease_max=_stats(crease)[0], crease_edges_over_30=int(np.sum(np.nan_to_num(crease) > 30.0)),
+        corner_deviation_max=_stats(corner_dev)[0],
         flipped_edges=len(flipped_edges(qm.face_planes, qm.topology.edge_faces)),
         nonconvex_faces=int(nonconvex_faces(corners).sum()),
         degenerate_edges=int((lengths <= degenerate_tol * scale).sum()),

@@ -153,8 +153,13 @@ def test_result_is_equivariant_under_a_similarity(noisy):
     b = optimize(moved, families="rows")
     assert a.iterations == b.iterations
     back = (b.mesh.vertices - shift) @ rot / scale
-    assert np.abs(back - a.mesh.vertices).max() < 1e-7
-    assert b.displacement_mean == pytest.approx(scale * a.displacement_mean, rel=1e-6)
+    # closeness to the input surface leaves the vertices freer along it than closeness to the input vertices,
+    # so rounding is amplified more: 1e-6 on a mesh of size 2 (a broken equivariance shows as >= 1e-3)
+    assert np.abs(back - a.mesh.vertices).max() < 1e-6
+    vert_a = optimize(noisy, families="rows", closeness="vertices")
+    vert_b = optimize(moved, families="rows", closeness="vertices")
+    assert np.abs((vert_b.mesh.vertices - shift) @ rot / scale - vert_a.mesh.vertices).max() < 1e-7
+    assert b.displacement_mean == pytest.approx(scale * a.displacement_mean, rel=1e-5)
 
 
 # -- fixed vertices, selection, skipped polylines ----------------------------------------------
@@ -426,7 +431,7 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
 
 @pytest.mark.parametrize("exact", [True, False], ids=["planes-exact", "planes-projected"])
 def test_schur_solve_equals_dense_damped_solve(exact):
-    """The block elimination of the face normals and the block ordering give the exact LM step."""
+    """The block elimination of the face normals, the nested-dissection ordering and the reused factor (CG after a change of μ) give the exact LM step."""
     from ppfab.optimize.linsolve import DampedSystem
 
     rng = np.random.default_rng(3)

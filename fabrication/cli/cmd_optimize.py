@@ -26,6 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="comma-separated indices (in QuadMesh.polylines order: family 0, then 1) of further "
                         "polylines to make planar")
     p.add_argument("--fix-boundary", action="store_true", help="keep boundary vertices in place")
+    p.add_argument("--keep-conical", action="store_true",
+                   help="make or keep the mesh conical (max conical residual <= target_conical, 1e-6 rad)")
     p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
     p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
     p.add_argument("--target-dp", type=float, default=None, help="target max δ_P (default 1e-6)")
@@ -95,6 +97,8 @@ def collect_params(args: argparse.Namespace) -> dict:
     table.update({k: v for k, v in direct.items() if v is not None})
     if args.fix_boundary:
         table["fix_boundary"] = True
+    if args.keep_conical:
+        table["keep_conical"] = True
     return table
 
 
@@ -133,4 +137,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {result.iterations} iterations, {result.time:.2f} s; mean displacement "
               f"{result.displacement_mean:.3g} ({result.displacement_rel:.2e} of the bounding-box diagonal); "
               f"δ_P rows {q.delta_p_rows_max:.2e}, cols {q.delta_p_cols_max:.2e}", file=sys.stderr)
+        print(f"  distance to the input surface max {result.surface_distance_max:.3g} / mean "
+              f"{result.surface_distance_mean:.3g}; crease max {result.crease_max_input:.1f}° -> "
+              f"{result.crease_max:.1f}°; conical residual max {result.conical_max_input:.2e} -> "
+              f"{result.conical_max:.2e} rad", file=sys.stderr)
     return 0 if result.targets_met else 1

@@ -4,8 +4,15 @@
 from :func:`ppfab.io.load_mesh`, or a :class:`~ppfab.mesh.QuadGrid`) and moves
 its vertices so that faces become planar (``E_f``) and the selected polylines
 lie in planes (``E_P``), with unit-normal (``E_1``), fairness (``E_fair``) and
-closeness terms, by a sparse Levenberg–Marquardt method with an analytic
-Jacobian (:mod:`.residuals`, :mod:`.linsolve`, :mod:`.solver`).
+closeness terms (to the input surface by default), by a sparse
+Levenberg–Marquardt method with an analytic Jacobian (:mod:`.residuals`,
+:mod:`.linsolve`, :mod:`.solver`).  On request it keeps or makes the mesh
+conical (``keep_conical``, ``E_conical``), keeps panels near-rectangular
+(``E_orth``) and stands the support planes at right angles to the panels
+(``E_axes``, node axes along the normals) — :mod:`.terms`.  The result says what
+the run did to the design (:mod:`.outcome`): distance to the input surface,
+creases, conical residual, corner angles, refused steps; it is never worse than
+the input.
 
 Examples
 --------
@@ -32,14 +39,17 @@ import numpy as np
 from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
 from ..mesh import QuadGrid, QuadMesh
-from ..metrics import Quality, face_planarity, quality
+from ..metrics import (CreaseReport, Quality, conjugacy_defect, crease_report, dihedral_angles, face_planarity,
+                       quality)
 from ..schema import as_plain, parse_params
 from .guard import StepGuard
+from .outcome import Outcome, axis_normal_angles, message, support_panel_angles
 from .params import OptimizeParams
 from .reference import ReferenceSurface
 from .residuals import Residuals, Weights
 from .selection import Selection, free_vertices, select_polylines
 from .solver import IterationRecord, LevenbergMarquardt, PlanarityMetrics, SolverControl
+from .terms import conical_stars, polyline_faces
 
 __all__ = ["optimize", "OptimizeParams", "OptimizeResult", "IterationRecord", "Problem", "build_problem"]
 
@@ -47,6 +57,9 @@ log = logging.getLogger("ppfab")
 
 EXACT_PLANES_LIMIT = 150_000
 """``plane_solver = "auto"`` keeps support normals as unknowns while Σ (polyline length)² is at most this."""
+
+CREASE_MARGIN = 5.0
+"""The crease barrier ``E_crease`` acts from this many degrees below the crease limit of the step guard."""
 
 AUTO_FAIRNESS_DELTA_F = 1e-3
 """``fairness = "auto"`` uses the paper's absolute E_fair when the input's max δ_f exceeds this."""
@@ -75,6 +88,23 @@ class OptimizeResult:
     excluded : polylines of the requested families left out because they pass twice through a vertex
     polyline_delta_p : (S,) δ_P of each polyline made planar (same order as ``polylines``)
     fairness, plane_solver : the modes ``"auto"`` resolved to
+    conical_max_input, conical_max : max conical residual ``|α1 − α2 + α3 − α4|`` (rad) before / after
+    corner_deviation_max_input, corner_deviation_max : max ``|corner angle − 90°|`` (degrees) before / after
+    surface_distance_max, surface_distance_mean : distance of the result's vertices to the input surface
+        (the input quads), mesh units
+    crease_max_input, crease_max : largest dihedral angle (degrees) before / after
+    crease_change_max : largest increase of an edge's dihedral angle (degrees)
+    crease_limit : the dihedral angle (degrees) beyond which an edge counts as a created crease
+    creases : :class:`~ppfab.metrics.CreaseReport` (angles and change per edge of ``mesh.edges``)
+    creased_edges : (k, 2) vertex pairs of the created creases, worst first (never with ``targets_met``)
+    support_angle_max : largest deviation from 90° between a support plane and a panel along it, degrees
+    axis_angle_max, axis_angle_mean : node axis (``U ∩ W``) vs vertex normal where two planes meet, degrees
+    rejected : refused steps by reason (``energy``, ``fold``, ``crease``, ``flip``, ``nonconvex``, ``collapse``,
+        ``nan``)
+    returned : ``"last"`` (the final iterate), ``"best"`` (the final iterate was worse than the input; the
+        best-scoring iterate is returned) or ``"input"`` (no iterate was better than the input)
+    factorisations, cg_solves : how the linear systems were solved
+    conjugacy_defect : :func:`ppfab.metrics.conjugacy_defect` of the input
     """
 
     mesh: QuadMesh | QuadGrid
@@ -100,6 +130,26 @@ class OptimizeResult:
     fairness: str = ""
     plane_solver: str = ""
     params: OptimizeParams = field(default_factory=OptimizeParams)
+    conical_max_input: float = 0.0
+    conical_max: float = 0.0
+    corner_deviation_max_input: float = 0.0
+    corner_deviation_max: float = 0.0
+    surface_distance_max: float = 0.0
+    surface_distance_mean: float = 0.0
+    crease_max_input: float = 0.0
+    crease_max: float = 0.0
+    crease_change_max: float = 0.0
+    crease_limit: float = 180.0
+    creases: CreaseReport | None = None
+    creased_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    support_angle_max: float = 0.0
+    axis_angle_max: float = 0.0
+    axis_angle_mean: float = 0.0
+    rejected: dict[str, int] = field(default_factory=dict)
+    returned: str = "last"
+    factorisations: int = 0
+    cg_solves: int = 0
+    conjugacy_defect: float = 0.0
 
     def summary(self) -> dict:
         """Plain-data summary (for ``--json`` and reports)."""
@@ -117,6 +167,17 @@ class OptimizeResult:
             "polylines": self.polylines.tolist(), "polyline_delta_p": self.polyline_delta_p.tolist(),
             "fairness": self.fairness, "plane_solver": self.plane_solver,
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
+            "conical_max_input": self.conical_max_input, "conical_max": self.conical_max,
+            "corner_deviation_max_input": self.corner_deviation_max_input,
+            "corner_deviation_max": self.corner_deviation_max,
+            "surface_distance_max": self.surface_distance_max, "surface_distance_mean": self.surface_distance_mean,
+            "crease_max_input": self.crease_max_input, "crease_max": self.crease_max,
+            "crease_change_max": self.crease_change_max, "crease_limit": self.crease_limit,
+            "creased_edges": self.creased_edges.tolist(),
+            "support_angle_max": self.support_angle_max, "axis_angle_max": self.axis_angle_max,
+            "axis_angle_mean": self.axis_angle_mean, "rejected": dict(self.rejected), "returned": self.returned,
+            "factorisations": self.factorisations, "cg_solves": self.cg_solves,
+            "conjugacy_defect": self.conjugacy_defect,
         }
 
 
@@ -149,6 +210,11 @@ class Problem:
     reference: ReferenceSurface | None
     fairness: str = "relative"            # the resolved E_fair mode
     plane_solver: str = "exact"           # the resolved support-normal treatment
+    stars: np.ndarray = field(default_factory=lambda: np.zeros((0, 5), dtype=np.int64))  # conical stars
+    axes_pairs: tuple = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))      # (polyline, face)
+    crease0: np.ndarray = field(default_factory=lambda: np.zeros(0))   # input dihedral angles, degrees
+    crease_limit: float = 180.0                                         # input max + params.crease_limit
+    surface: ReferenceSurface | None = None                             # the input surface (normalised)
 
     def on_stage(self, z: np.ndarray) -> None:
         """A stage begins: update the shape barrier's face normals and the surface foot points."""
@@ -178,6 +244,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     if not isinstance(qm, QuadMesh):
         raise GeometryError(f"optimize needs a QuadMesh or QuadGrid, got {type(mesh).__name__}")
     v = np.asarray(qm.vertices, dtype=float)
+    faces = np.asarray(qm.faces, dtype=np.int64)
     lengths = qm.edge_lengths()
     scale = float(lengths.mean()) if len(lengths) else 0.0
     if not scale > 0:
@@ -199,22 +266,40 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
         raise DesignError("optimize.fixed_vertices" if p.fixed_vertices else "optimize.fix_boundary",
                           f"all {len(free)} vertices are fixed: nothing can move")
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
-                      p.weight_shape, p.shape_ratio)
+                      p.weight_shape, p.shape_ratio, p.weight_conical if p.keep_conical else 0.0,
+                      p.weight_orthogonal, p.weight_axes, p.slide)
+    topo = qm.topology
+    stars = conical_stars(faces, len(v), ~topo.boundary_vertices) if p.keep_conical \
+        else np.zeros((0, 5), dtype=np.int64)
+    if p.keep_conical and not len(stars):
+        raise DesignError("optimize.keep_conical", "the mesh has no interior vertex with four faces: there is "
+                                                   "no conical condition to keep")
+    pairs = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+    if p.weight_axes > 0:
+        edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
+        pairs = polyline_faces(sel.planar, edge_index, topo.edge_faces)
     fairness = p.fairness
     if fairness == "auto":
-        far = len(qm.faces) and float(face_planarity(v[qm.faces]).max()) > AUTO_FAIRNESS_DELTA_F
+        far = len(faces) and float(face_planarity(v[faces]).max()) > AUTO_FAIRNESS_DELTA_F
         fairness = "absolute" if far else "relative"
     exact = p.plane_solver == "exact" or (
         p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
-    res = Residuals(vn, qm.faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
-                    p.planar_faces, plane_unknowns=exact)
-    nf, ns = _initial_normals(vn, qm.faces, sel.planar)
+    c0 = vn[faces]
+    crease0 = dihedral_angles(np.cross(c0[:, 2] - c0[:, 0], c0[:, 3] - c0[:, 1]), topo.edge_faces)
+    finite = crease0[np.isfinite(crease0)]
+    limit = min(180.0, (float(finite.max()) if finite.size else 0.0) + p.crease_limit)
+    start = np.radians(limit - min(CREASE_MARGIN, p.crease_limit / 3.0)) if limit < 180.0 else None
+    res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
+                    p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
+                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start)
+    nf, ns = _initial_normals(vn, faces, sel.planar)
     z0 = res.pack(vn, ns, nf)
-    metrics = PlanarityMetrics(qm.faces, sel.planar, len(vn))
-    guard = StepGuard(qm.faces, qm.edges, vn, p.min_edge_ratio, qm.topology.edge_faces)
-    ref = ReferenceSurface(vn, qm.faces) if p.closeness == "surface" else None
+    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
+    guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
+    surface = ReferenceSurface(vn, faces)
+    ref = surface if p.closeness == "surface" else None
     return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref, fairness,
-                   "exact" if exact else "projected")
+                   "exact" if exact else "projected", stars, pairs, crease0, limit, surface)
 
 
 def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
@@ -241,32 +326,80 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     prob = build_problem(mesh, params, **kw)
     p = prob.params
     target_df = p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf   # faces left free
-    control = SolverControl(target_df, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall)
+    target_c = p.target_conical if p.keep_conical else np.inf
+    control = SolverControl(target_df, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall,
+                            target_conical=target_c)
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
-    v_n = prob.residuals.unpack(state.z)[0]
+    v_last = prob.residuals.unpack(state.z)[0]
+    last_score = control.score(prob.metrics(v_last)[0], prob.metrics(v_last)[2], prob.metrics.conical_max(v_last))
+    returned = "last"
+    z_out = state.z
+    if last_score > state.start_score and state.best_z is not None:      # never hand back something worse
+        z_out = state.best_z
+        returned = "input" if state.best_iteration == 0 else "best"
+    v_n = prob.residuals.unpack(z_out)[0]
     v0 = np.asarray(prob.mesh.vertices)
     v = v0 + (v_n - prob.residuals.vertices0) * prob.scale         # unmoved vertices stay bit-identical
     v[~prob.free] = v0[~prob.free]
+    if returned == "input":
+        v = v0.copy()
+        v_n = prob.residuals.vertices0
     out_qm = prob.mesh.with_vertices(v)
     planes = _support_planes(v, prob.selection.planar)
     out = _as_input_type(mesh, out_qm, prob.selection, planes)
     disp = np.linalg.norm(v - v0, axis=1)
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
     dfm, dfa, dpm, dpa = prob.metrics(v)
-    met = dfm <= target_df and dpm <= p.target_delta_p
+    df0, _, dp0, _ = prob.metrics(v0)
+    con = prob.metrics.conical_max(v)
+    c = v_n[np.asarray(prob.mesh.faces)]
+    creases = crease_report(dihedral_angles(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]),
+                                            prob.mesh.topology.edge_faces), prob.crease0, prob.crease_limit)
+    met = bool(dfm <= target_df and dpm <= p.target_delta_p and con <= target_c and not len(creases.created))
     per_line = prob.metrics.per_polyline(v)
-    msg = _message(state.stopped_by, met, dfm, dpm, p, prob, per_line, target_df)
+    q_in, q_out = quality(mesh), quality(out)
+    foot, _ = prob.surface.closest(v_n) if prob.surface is not None else (v_n, None)
+    dist = np.linalg.norm(v_n - foot, axis=1) * prob.scale
+    faces = np.asarray(prob.mesh.faces, dtype=np.int64)
+    sup = support_panel_angles(v, faces, planes, *_all_pairs(prob))
+    axis = axis_normal_angles(v, faces, planes, prob.selection.planar)
+    defect = conjugacy_defect(prob.mesh) if not met else 0.0
+    crease_in = float(np.nanmax(prob.crease0)) if np.isfinite(prob.crease0).any() else 0.0
+    outcome = Outcome(state.stopped_by, met, dfm, dpm, con, df0, dp0, target_df, p.target_delta_p, target_c,
+                      state.iterations, p.max_iterations, state.rejected, returned, state.best_iteration,
+                      creases, crease_in, prob.mesh.edges, defect if not met else None)
+    msg = message(outcome) + _notes(p, prob, per_line)
     log.debug(msg)
     return OptimizeResult(
-        mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=bool(met),
+        mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=met,
         iterations=state.iterations, history=state.history, message=msg,
         displacement_mean=float(disp.mean()), displacement_rel=float(disp.mean() / diag) if diag > 0 else 0.0,
         displacement_max=float(disp.max()), planes=planes, polylines=prob.selection.planar_index,
-        skipped=prob.selection.skipped, quality=quality(out), time=time.perf_counter() - t0,
+        skipped=prob.selection.skipped, quality=q_out, time=time.perf_counter() - t0,
         delta_f_max=dfm, delta_f_mean=dfa, delta_p_max=dpm, delta_p_mean=dpa,
         excluded=prob.selection.crossing, polyline_delta_p=per_line, fairness=prob.fairness,
-        plane_solver=prob.plane_solver, params=p)
+        plane_solver=prob.plane_solver, params=p,
+        conical_max_input=q_in.conical_max, conical_max=q_out.conical_max,
+        corner_deviation_max_input=q_in.corner_deviation_max, corner_deviation_max=q_out.corner_deviation_max,
+        surface_distance_max=float(dist.max()) if len(dist) else 0.0,
+        surface_distance_mean=float(dist.mean()) if len(dist) else 0.0,
+        crease_max_input=crease_in, crease_max=creases.max, crease_change_max=creases.change_max,
+        crease_limit=prob.crease_limit, creases=creases, creased_edges=prob.mesh.edges[creases.created],
+        support_angle_max=float(sup.max()) if len(sup) else 0.0,
+        axis_angle_max=float(axis.max()) if len(axis) else 0.0,
+        axis_angle_mean=float(axis.mean()) if len(axis) else 0.0,
+        rejected=state.rejected, returned=returned, factorisations=state.factorisations,
+        cg_solves=state.cg_solves, conjugacy_defect=defect)
+
+
+def _all_pairs(prob: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """(polyline, face) pairs of every planar polyline (those of E_axes, or computed for the report)."""
+    if len(prob.axes_pairs[0]) or not prob.selection.planar:
+        return prob.axes_pairs
+    qm = prob.mesh
+    edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
+    return polyline_faces(prob.selection.planar, edge_index, qm.topology.edge_faces)
 
 
 def _support_planes(v: np.ndarray, lines) -> np.ndarray:
@@ -293,23 +426,17 @@ def _as_input_type(mesh, out_qm: QuadMesh, sel: Selection, planes: np.ndarray):
     return mesh.with_vertices(np.asarray(out_qm.vertices).reshape(m1, n1, 3), **support)
 
 
-def _message(stopped_by: str, met: bool, dfm: float, dpm: float, p: OptimizeParams, prob: Problem,
-             per_line: np.ndarray, target_df: float) -> str:
-    what = {"targets": "targets met", "stationary": "stationary point reached",
-            "max_iterations": f"iteration limit {p.max_iterations} reached",
-            "stuck": "no step lowers the energy without folding the mesh"}[stopped_by]
-    tail = "" if met else (f"; targets NOT met: max δ_f {dfm:.2e} (target {target_df:.0e}), "
-                           f"max δ_P {dpm:.2e} (target {p.target_delta_p:.0e})")
+def _notes(p: OptimizeParams, prob: Problem, per_line: np.ndarray) -> str:
+    """The worst polylines above the δ_P target, inconsistent families and polylines left out."""
+    tail = ""
     bad = np.flatnonzero(per_line > p.target_delta_p)
     if len(bad):
         worst = bad[np.argsort(-per_line[bad])][:5]
         tail += (f"; {len(bad)} polyline(s) above the δ_P target, worst: "
                  + ", ".join(f"{int(prob.selection.planar_index[k])} ({per_line[k]:.1e})" for k in worst))
-    note = ""
     if not prob.mesh.topology.families_consistent and p.families != "none" and prob.mesh.grid is None:
-        note = " (polyline families are not consistent on this mesh: family labels are per polyline)"
+        tail += " (polyline families are not consistent on this mesh: family labels are per polyline)"
     if len(prob.selection.crossing):
-        note += (f"; left out {len(prob.selection.crossing)} polyline(s) that pass twice through a vertex: "
+        tail += (f"; left out {len(prob.selection.crossing)} polyline(s) that pass twice through a vertex: "
                  f"{', '.join(map(str, prob.selection.crossing.tolist()))} (list them in 'polylines' to force)")
-    return (f"{what}: max δ_f {dfm:.2e}, max δ_P {dpm:.2e} over {len(prob.selection.planar)} polylines"
-            f"{tail}{note}")
+    return tail

@@ -9,56 +9,148 @@ bundle adjustment)::
     S = A_yy + μI − A_yz (A_zz + μI)⁻¹ A_zy,      S h_y = −g_y + A_yz (A_zz + μI)⁻¹ g_z,
     h_z = (A_zz + μI)⁻¹ (−g_z − A_zy h_y),
 
-leaving a system in the vertices (and support-plane normals, if they are
-unknowns) only, which is factorised with SuperLU (``scipy.sparse.linalg.splu``,
-no pivoting since ``S`` is symmetric positive definite).  The fill-reducing
-ordering is computed once per problem on the graph of 3 × 3 blocks (minimum
-degree on ``Aᵀ + A`` of the block graph, each vertex's three coordinates kept
-together), which gives less fill than ordering the scalar matrix, and reused
-for every factorisation since the sparsity pattern never changes.
+leaving a symmetric positive definite system ``S (n_y, n_y)`` in the vertices
+(and support-plane normals, if they are unknowns) only.
+
+How ``S`` is solved (:class:`FactorCache`):
+
+* **Ordering.** A nested-dissection ordering of the graph of ``3 × 3`` blocks
+  (level structures, :mod:`ppfab.optimize.ordering`; each vertex's three coordinates stay together) is
+  computed once per problem — the sparsity pattern of ``S`` never changes — and
+  reused for every factorisation.  No factorisation is spent on finding it.
+* **Factorisation.** ``S`` is factorised by SuperLU (``scipy.sparse.linalg.splu``
+  in symmetric mode, natural order on the permuted matrix, no pivoting: ``S`` is
+  SPD).  A sparse Cholesky was measured instead, side by side on the systems of
+  the 100 × 100 and 150 × 150 benchmark grids: CHOLMOD as packaged by
+  ``cholespy`` (AMD ordering) took 1.6–2.4× the time of this SuperLU
+  factorisation, so it is not used (``docs/optimisation.md``).
+* **Reuse after a rejected step.** A rejected step changes only ``μ`` (``JᵀJ`` and
+  ``Jᵀr`` are kept), and ``S(μ')`` differs from ``S(μ)`` by ``(μ' − μ) I`` plus a change
+  of the Schur term.  The factor of ``S(μ)`` is then used as the preconditioner of
+  conjugate gradients on ``S(μ')`` (Saad, *Iterative methods for sparse linear
+  systems*, Alg. 9.1); only when CG does not reach the relative residual
+  ``cg_tol`` within ``cg_maxiter`` iterations is ``S(μ')`` factorised afresh.  (Reusing
+  a factor across linearisations was measured too: every LM iteration of the
+  benchmark grids is a new continuation stage, and CG then needed about 20
+  iterations per solve, no faster than a new factorisation.)
+
 A rejected step only changes ``μ``: ``JᵀJ`` and ``Jᵀr`` are kept.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
 
 from ..errors import GeometryError
+from .ordering import level_set_dissection
 
 
-class BlockOrdering:
-    """A fill-reducing symmetric permutation of ``S``, computed on first use and then reused."""
+def nested_dissection(s: sparse.spmatrix, block: int = 3) -> np.ndarray:
+    """Fill-reducing permutation ``p`` of ``S (n, n)`` (``S[p][:, p]`` has little fill).
 
-    def __init__(self):
-        self.perm: np.ndarray | None = None
-
-    def get(self, s: sparse.spmatrix) -> np.ndarray:
-        if self.perm is None or len(self.perm) != s.shape[0]:
-            self.perm = block_ordering(s)
-        return self.perm
-
-
-def block_ordering(s: sparse.spmatrix, block: int = 3) -> np.ndarray:
-    """Permutation ``p`` (``S[p][:, p]`` has little fill) from minimum degree on the block graph of ``S``.
-
-    Unknowns are grouped in consecutive blocks of ``block`` (a vertex's coordinates, a normal); a
-    trailing group smaller than ``block`` keeps its own node.
+    Nested dissection (:func:`~ppfab.optimize.ordering.level_set_dissection`) on the graph whose nodes are
+    consecutive groups of ``block`` unknowns
+    (a vertex's coordinates, a normal) and whose edges are the nonzero ``block × block`` blocks of ``S``.
+    A trailing group smaller than ``block`` keeps its own node.
     """
     n = s.shape[0]
     nb = -(-n // block)
     coo = sparse.coo_matrix(s)
     g = sparse.coo_matrix((np.ones(coo.nnz), (coo.row // block, coo.col // block)), shape=(nb, nb)).tocsr()
-    g.data[:] = -1.0
-    g = g + g.T
+    g = (g + g.T).tocsr()
     g.setdiag(0.0)
-    deg = -np.asarray(g.sum(axis=1)).ravel()
-    lap = sparse.csc_matrix(g + sparse.diags(deg + 1.0))          # SPD with the block graph's pattern
-    lu = splu(lap, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    order = np.argsort(lu.perm_c)
+    g.eliminate_zeros()
+    g.sort_indices()
+    if nb < 2 or g.nnz == 0:
+        order = np.arange(nb)
+    else:
+        order = level_set_dissection(g)
     p = (block * order[:, None] + np.arange(block)).ravel()
     return p[p < n]
+
+
+class FactorCache:
+    """The ordering and the last factorisation of ``S``, shared by the iterations of one solve.
+
+    Parameters
+    ----------
+    cg_tol : relative residual ``‖S h − b‖ / ‖b‖`` at which a preconditioned CG solve is accepted
+    cg_maxiter : CG iterations before ``S`` is factorised afresh
+    reuse : keep factors for preconditioned CG (``False``: factorise every system, the direct method)
+
+    Counters ``factorisations``, ``cg_solves`` and ``cg_iterations`` say how the systems were solved.
+    """
+
+    def __init__(self, cg_tol: float = 1e-10, cg_maxiter: int = 12, reuse: bool = True):
+        self.cg_tol = cg_tol
+        self.cg_maxiter = cg_maxiter
+        self.reuse = reuse
+        self.perm: np.ndarray | None = None
+        self.lu: Any = None                  # scipy SuperLU of the last factorised system
+        self.owner: object = None
+        self.factorisations = 0
+        self.cg_solves = 0
+        self.cg_iterations = 0
+
+    def _ordering(self, s: sparse.csr_matrix) -> np.ndarray:
+        if self.perm is None or len(self.perm) != s.shape[0]:
+            self.perm = nested_dissection(s)
+            self.lu = None
+        return self.perm
+
+    def solve(self, s: sparse.spmatrix, rhs: np.ndarray, owner: object = None) -> np.ndarray:
+        """``h`` with ``S h = rhs`` for SPD ``S (n, n)``.
+
+        ``owner`` identifies the linearisation: the kept factor preconditions CG only for the same owner.
+        """
+        s = sparse.csr_matrix(s)
+        p = self._ordering(s)
+        sp = sparse.csr_matrix(s[p][:, p])
+        b = rhs[p]
+        reuse = self.reuse and self.lu is not None and owner is not None and owner is self.owner
+        x = self._pcg(sp, b) if reuse else None
+        self.owner = owner
+        if x is None:
+            self.lu = splu(sparse.csc_matrix(sp), permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+            self.factorisations += 1
+            x = self.lu.solve(b)
+        out = np.empty_like(rhs)
+        out[p] = x
+        return out
+
+    def _pcg(self, a: sparse.csr_matrix, b: np.ndarray) -> np.ndarray | None:
+        """Conjugate gradients on ``a x = b`` preconditioned by the kept factor; ``None`` if too slow."""
+        bn = float(np.linalg.norm(b))
+        if bn == 0.0:
+            return np.zeros_like(b)
+        lu = self.lu
+        x = lu.solve(b)                                   # the old factor's solution as the start
+        r = b - a @ x
+        z = lu.solve(r)
+        d = z.copy()
+        rz = float(r @ z)
+        for k in range(self.cg_maxiter + 1):
+            if np.linalg.norm(r) <= self.cg_tol * bn:
+                self.cg_solves += 1
+                self.cg_iterations += k
+                return x
+            if k == self.cg_maxiter or not rz > 0:
+                break
+            ad = a @ d
+            alpha = rz / float(d @ ad)
+            x += alpha * d
+            r -= alpha * ad
+            z = lu.solve(r)
+            rz_new = float(r @ z)
+            d = z + (rz_new / rz) * d
+            rz = rz_new
+        self.cg_iterations += self.cg_maxiter
+        return None
 
 
 class DampedSystem:
@@ -69,12 +161,14 @@ class DampedSystem:
     jac : (R, n) sparse Jacobian, the last ``n_block`` columns being ``3 × 3``-block-separable unknowns
     r : (R,) residual
     n_block : number of trailing unknowns eliminated by the Schur complement (multiple of 3)
+    cache : :class:`FactorCache` shared across linearisations (ordering, factor for reuse)
     """
 
-    def __init__(self, jac: sparse.spmatrix, r: np.ndarray, n_block: int = 0,
-                 ordering: BlockOrdering | None = None):
+    def __init__(self, jac: sparse.spmatrix, r: np.ndarray, n_block: int = 0, cache: FactorCache | None = None):
         jac = sparse.csc_matrix(jac)
-        self.ordering = ordering or BlockOrdering()
+        jac.eliminate_zeros()            # inactive barrier rows add no coupling to the factorised system
+        self.jac = jac
+        self.cache = cache or FactorCache()
         n = jac.shape[1]
         self.n = n
         self.ny = ny = n - n_block
@@ -107,21 +201,17 @@ class DampedSystem:
             s = s - (a_yz @ bd @ a_yz.T)
             g_z = self.g[ny:]
             rhs = rhs + a_yz @ (bd @ g_z)
-        h_y = self._factor_solve(s, rhs) if ny else np.zeros(0)
+        h_y = self.cache.solve(s, rhs, owner=self) if ny else np.zeros(0)
         if not self.nz:
             return h_y
         h_z = -np.einsum("fij,fj->fi", binv, (self.g[ny:] + self.a_yz.T @ h_y).reshape(-1, 3)).ravel()
         return np.concatenate([h_y, h_z])
 
-    def _factor_solve(self, s: sparse.spmatrix, rhs: np.ndarray) -> np.ndarray:
-        s = sparse.csr_matrix(s)
-        p = self.ordering.get(s)
-        sp = sparse.csc_matrix(s[p][:, p])
-        lu = splu(sp, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-        out = np.empty_like(rhs)
-        out[p] = lu.solve(rhs[p])
-        return out
+    def predicted_decrease(self, h: np.ndarray, mu: float = 0.0) -> float:
+        """``L(0) − L(h) = ‖r‖² − ‖r + J h‖² = −2 gᵀh − ‖J h‖²`` (Madsen et al. eq. 3.14, doubled).
 
-    def predicted_decrease(self, h: np.ndarray, mu: float) -> float:
-        """``L(0) − L(h) = hᵀ(μh − g)`` for the energy ``‖r‖²`` (Madsen et al. eq. 3.14, doubled)."""
-        return float(h @ (mu * h - self.g))
+        Computed from ``J h`` rather than from the normal equations, so it is exact also for a step
+        from an iterative solve.  (``mu`` is accepted for the old signature and not used.)
+        """
+        jh = self.jac @ h
+        return float(-2.0 * (self.g @ h) - jh @ jh)

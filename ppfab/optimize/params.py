@@ -42,9 +42,34 @@ class OptimizeParams:
                                       "auto: absolute when the input's max δ_f exceeds 1e-3 (far from planar "
                                       "quads), relative otherwise (a nearly finished design stays in place)",
                           choices=("auto", "absolute", "relative"))
-    closeness: str = param("vertices", doc="closeness to the input vertices, to the input surface "
-                                           "(distance to its tangent planes, foot points updated each stage), "
-                                           "or none", choices=("vertices", "surface", "none"))
+    closeness: str = param("surface", doc="closeness to the input surface (distance to its tangent planes at "
+                                          "the closest points, foot points updated each stage: vertices may "
+                                          "slide along the surface), to the input vertices, or none",
+                           choices=("surface", "vertices", "none"))
+    slide: float = param(0.3, doc="with closeness = surface: weight, relative to weight_close, of the pull "
+                                  "back to the input vertices (0 lets vertices slide freely along the surface)",
+                         min=0.0)
+    keep_conical: bool = param(False, doc="make the mesh conical, or keep it conical (§2.3.3, §4): adds E_conical "
+                                          "(angle balance at interior valence-4 vertices) with weight "
+                                          "weight_conical, and max conical residual <= target_conical to the "
+                                          "targets")
+    weight_conical: float = param(1.0, doc="λ_c: weight of E_conical (used with keep_conical)", exclusive_min=0.0)
+    target_conical: float = param(1e-6, doc="with keep_conical: stop only when the conical residual "
+                                            "max abs(α1 − α2 + α3 − α4) (rad) is at most this", exclusive_min=0.0)
+    weight_orthogonal: float = param(0.0, doc="λ_⊥: weight of E_orth on the cosines of the face corner angles "
+                                              "(near-rectangular panels; 0 switches it off)", min=0.0)
+    orthogonality: str = param("keep", doc="E_orth: keep (one-sided: no corner moves further from 90° than in "
+                                           "the input; does not bias a solution that keeps them) or right "
+                                           "(pull every corner towards 90°, fading with the regularisation)",
+                               choices=("keep", "right"))
+    weight_axes: float = param(0.0, doc="λ_axes: weight of E_axes, support planes at right angles to the panels "
+                                        "along them (§2.3.2), which brings the node axes of a PP mesh to the "
+                                        "surface normals; fades with the regularisation (0 switches it off)",
+                               min=0.0)
+    crease_limit: float = param(15.0, doc="degrees by which an edge's dihedral angle may exceed the input's "
+                                          "largest dihedral angle; a step that makes an edge crease beyond "
+                                          "(input max + crease_limit) is refused, and a result with such an "
+                                          "edge never counts as targets met", exclusive_min=0.0, max=180.0)
     weight_shape: float = param(1.0, doc="weight of the one-sided barrier that keeps every face corner at "
                                          "least shape_ratio of its input area (0 switches it off)", min=0.0)
     shape_ratio: float = param(0.25, doc="fraction of its input area a face corner triangle may shrink to "
@@ -62,8 +87,9 @@ class OptimizeParams:
                                   exclusive_min=0.0)
     max_iterations: int = param(500, doc="maximum number of Levenberg–Marquardt iterations "
                                          "(linear solves, rejected steps included)", min=1, max=100000)
-    reg_decay: float = param(0.1, doc="factor applied to the fairness and closeness weights when progress stalls "
-                                      "(1 keeps the paper's energy fixed)", exclusive_min=0.0, max=1.0)
+    reg_decay: float = param(0.1, doc="factor applied to the weights of the soft goals (fairness, closeness, "
+                                      "right angles, axes) when progress stalls (1 keeps the paper's energy "
+                                      "fixed)", exclusive_min=0.0, max=1.0)
     reg_min: float = param(1e-6, doc="smallest factor the regularisation weights are reduced to",
                            exclusive_min=0.0, max=1.0)
     stall: float = param(0.05, doc="a stage ends when an accepted step lowers the energy by less than "

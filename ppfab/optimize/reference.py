@@ -4,7 +4,12 @@ The reference is the input mesh, each quad split along its diagonal ``0–2``.
 Candidate triangles come from a k-d tree of triangle centroids; the exact
 closest point on each candidate is computed in one vectorised pass
 (Ericson, *Real-Time Collision Detection*, §5.1.5).  The returned normal is
-the unit normal of the quad containing the foot point.
+interpolated: the vertex normals of the reference (normalised sums of the unit
+normals of the quads around each vertex) blended with the barycentric
+coordinates of the foot point in its triangle and normalised.  It is therefore
+continuous across edges and vertices, where the closest triangle is not unique
+(every input vertex is its own foot point and lies on up to eight triangles),
+so the result does not depend on how such ties are broken.
 """
 
 from __future__ import annotations
@@ -65,6 +70,9 @@ class ReferenceSurface:
         self.corners = v[self.tri]                                  # (2F, 3, 3)
         n = np.cross(v[f[:, 2]] - v[f[:, 0]], v[f[:, 3]] - v[f[:, 1]])
         self.quad_normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        vn = np.zeros_like(v)
+        np.add.at(vn, f.ravel(), np.repeat(self.quad_normals, 4, axis=0))
+        self.vertex_normals = vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
         self.tree = cKDTree(self.corners.mean(axis=1))
         self.k = min(candidates, len(self.tri))
 
@@ -77,4 +85,28 @@ class ReferenceSurface:
         foot = closest_on_triangles(p[:, None, :], c[..., 0, :], c[..., 1, :], c[..., 2, :])
         best = np.argmin(np.linalg.norm(foot - p[:, None, :], axis=-1), axis=1)
         rows = np.arange(len(p))
-        return foot[rows, best], self.quad_normals[self.quad_of[cand[rows, best]]]
+        tri = cand[rows, best]
+        x = foot[rows, best]
+        a, b, c = (self.corners[tri, k] for k in range(3))
+        w = barycentric(x, a, b, c)
+        n = np.einsum("mk,mki->mi", w, self.vertex_normals[self.tri[tri]])
+        n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        return x, n
+
+
+def barycentric(x: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates ``(M, 3)`` of points ``x (M, 3)`` in triangles ``abc`` (each ``(M, 3)``),
+    clipped to the triangle (degenerate triangles: the first vertex)."""
+    v0, v1, v2 = b - a, c - a, x - a
+    d00 = np.einsum("ij,ij->i", v0, v0)
+    d01 = np.einsum("ij,ij->i", v0, v1)
+    d11 = np.einsum("ij,ij->i", v1, v1)
+    d20 = np.einsum("ij,ij->i", v2, v0)
+    d21 = np.einsum("ij,ij->i", v2, v1)
+    den = d00 * d11 - d01 * d01
+    ok = den > 0
+    den = np.where(ok, den, 1.0)
+    wb = np.where(ok, (d11 * d20 - d01 * d21) / den, 0.0)
+    wc = np.where(ok, (d00 * d21 - d01 * d20) / den, 0.0)
+    w = np.clip(np.stack([1.0 - wb - wc, wb, wc], axis=1), 0.0, 1.0)
+    return w / w.sum(axis=1, keepdims=True)

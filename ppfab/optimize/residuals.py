@@ -10,15 +10,30 @@ residual vector ``r`` the total energy is ``E = ‖r‖²`` where
 * ``E_fair = Σ_{triples uvw} ‖(u − v) − (v − w)‖²`` along polylines — rows ``√(s λ_fair) (u − 2v + w − t)``
   with ``t = 0`` (absolute, the paper) or ``t`` = the input's second difference (relative),
 * ``E_close = Σ_v ‖v − v⁰‖²`` (rows ``√(s λ_close) (v − v⁰)``) or, towards a reference surface,
-  ``Σ_v ⟨n⁰_v, v − p⁰_v⟩²`` with foot points ``p⁰`` and unit normals ``n⁰``,
+  ``Σ_v ⟨n⁰_v, v − p⁰_v⟩²`` with foot points ``p⁰`` and unit normals ``n⁰`` (rows ``√(s λ_close) ⟨n⁰, v − p⁰⟩``),
+  plus, towards a surface, ``E_slide = Σ_v ‖v − v⁰‖²`` with the small weight ``s λ_close ε`` (``ε`` = slide):
+  the vertices may slide along the surface, but not freely (absolute fairness would otherwise shrink the
+  mesh along its own surface and pull in its boundary),
 * ``E_shape`` (not in the paper): a one-sided barrier that keeps quads from degenerating.  For every
   face corner, ``a = ((v_k − v_{k−1}) × (v_{k+1} − v_k))·m_f / ℓ_f²`` is twice the signed area of the
   corner triangle measured against a reference unit normal ``m_f`` of the face (``ℓ_f`` = mean input edge
   length of the face); rows ``√λ_shape max(0, κ a⁰ − a)``.  For every edge, rows
   ``√λ_shape max(0, κ − ‖v − w‖² / ‖v⁰ − w⁰‖²)``.  Zero as long as every corner keeps the fraction ``κ``
   of its input area and every edge ``√κ`` of its input length, so it does not bias a good solution,
+* ``E_conical = Σ_v (α_0 − α_1 + α_2 − α_3)²`` over interior valence-4 vertices (§2.3.3; the mesh is conical
+  iff every row vanishes) — rows ``√λ_c (α_0 − α_1 + α_2 − α_3)``, see :mod:`.terms`,
+* ``E_orth`` (near-rectangular panels, §4): per face corner ``c = cos α``; rows ``√(s λ_⊥) c`` (``"right"``) or
+  ``√λ_⊥ max(0, |c| − |c⁰|)`` (``"keep"``: no corner moves further from 90° than in the input),
+* ``E_crease`` (a barrier, not in the paper): per interior edge, with ``θ_e`` the angle between the diagonal
+  normals of its two faces, rows ``√λ_shape max(0, θ_e − θ_b)`` (radians), ``θ_b`` a few degrees below the
+  crease limit of the step guard: the gradient turns the solver away from creasing an edge before the guard
+  has to refuse the step,
+* ``E_axes`` (right angles between support planes and panels, §2.3.2): ``Σ_σ Σ_{faces f along σ} ⟨n_σ, n_f⟩²``
+  — rows ``√(s λ_axes) ⟨n_σ, n_f⟩``.  Zero when every support plane is normal to the panels it carries, which
+  puts the node axis ``U_i ∩ W_j`` of a PP mesh along the surface normal,
 
-``s`` being the regularisation factor of the current stage (1 at the start).
+``s`` being the regularisation factor of the current stage (1 at the start): the soft goals (fairness,
+closeness, right angles, axes) fade with it, the constraints and barriers keep their weights.
 The paper's total energy is ``λ_P E_P + λ_f E_f + λ_1 E_1 + λ_fair E_fair``.
 
 The full state is one flat vector ``z = [V (N·3), N_σ (S·3), N_f (F·3)]``;
@@ -36,8 +51,10 @@ from scipy import sparse
 
 from ..topology import Polyline
 from .selection import edge_pairs, triples
+from .terms import angle_balance, corner_cosines, crease_stars, dihedral_and_grad, face_corners_index
 
-BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge")
+BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge", "E_conical", "E_orth",
+          "E_axes", "E_slide", "E_crease")
 
 
 @dataclass(frozen=True)
@@ -51,6 +68,10 @@ class Weights:
     close: float = 0.01
     shape: float = 1.0
     shape_ratio: float = 0.25
+    conical: float = 0.0
+    orthogonal: float = 0.0
+    axes: float = 0.0
+    slide: float = 0.3
 
 
 def _pattern(start: int, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -81,11 +102,18 @@ class Residuals:
     plane_unknowns : keep the support normals among the unknowns of the linear system; by default they
         are eliminated by variable projection instead (:meth:`project_normals` after every step), which
         keeps the system as sparse as the mesh (a support normal couples all vertices of its polyline)
+    stars : (K, 5) int, conical stars ``[v, w_0..w_3]`` (:func:`.terms.conical_stars`) for ``E_conical``
+    orthogonality : ``"right"`` or ``"keep"`` (``E_orth``)
+    axes_pairs : ``(owner (P,), face (P,))`` support plane / face pairs of ``E_axes`` (:func:`.terms.polyline_faces`)
+    edge_faces, crease_start : ``(E, 2)`` faces of every edge and ``θ_b`` (radians) of ``E_crease`` (off if ``None``)
     """
 
     def __init__(self, vertices0: np.ndarray, faces: np.ndarray, edges: np.ndarray, planar: list[Polyline],
                  fair: list[Polyline], free: np.ndarray, weights: Weights, fairness: str = "relative",
-                 closeness: str = "vertices", planar_faces: bool = True, plane_unknowns: bool = False):
+                 closeness: str = "vertices", planar_faces: bool = True, plane_unknowns: bool = False,
+                 stars: np.ndarray | None = None, orthogonality: str = "keep",
+                 axes_pairs: tuple[np.ndarray, np.ndarray] | None = None,
+                 edge_faces: np.ndarray | None = None, crease_start: float | None = None):
         v0 = np.asarray(vertices0, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
@@ -125,6 +153,8 @@ class Residuals:
             else np.zeros((len(self.triples), 3))
         use_close = closeness != "none" and weights.close > 0
         self.close_vertices = np.flatnonzero(self.free) if use_close else np.zeros(0, dtype=np.int64)
+        self.slide_vertices = self.close_vertices if (closeness == "surface" and weights.slide > 0) \
+            else np.zeros(0, dtype=np.int64)
         self.ref_points = v0.copy()
         self.ref_normals = np.zeros_like(v0)
         # shape barrier on corners and edges
@@ -140,6 +170,21 @@ class Residuals:
         self.shape_edges = edges if weights.shape > 0 else np.zeros((0, 2), dtype=np.int64)
         se = self.shape_edges
         self.edge_len2 = np.einsum("ij,ij->i", v0[se[:, 1]] - v0[se[:, 0]], v0[se[:, 1]] - v0[se[:, 0]])
+        # geometric goals: conical stars, corner angles, support planes normal to the panels
+        no_int = np.zeros((0, 5), dtype=np.int64)
+        self.stars = np.asarray(stars, dtype=np.int64).reshape(-1, 5) if (stars is not None and weights.conical > 0) \
+            else no_int
+        self.orthogonality = orthogonality
+        self.corners = face_corners_index(faces) if weights.orthogonal > 0 else np.zeros((0, 3), dtype=np.int64)
+        self.corner_cos0 = np.abs(corner_cosines(v0, self.corners)[0])
+        ao, af = axes_pairs if (axes_pairs is not None and weights.axes > 0 and ns and nf) else \
+            (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        self.axes_pairs = (np.asarray(ao, dtype=np.int64), np.asarray(af, dtype=np.int64))
+        if edge_faces is not None and crease_start is not None and weights.shape > 0:
+            self.crease_verts, self.crease_slot = crease_stars(faces, edge_faces)
+        else:
+            self.crease_verts, self.crease_slot = np.zeros((0, 6), dtype=np.int64), np.zeros((0, 4), dtype=np.int64)
+        self.crease_start = float(crease_start) if crease_start is not None else np.pi
         # -- Jacobian pattern, block by block in value order ------------------------------------------
         cv = self.close_vertices
         close_cols = vcol[cv].reshape(-1, 1) if closeness == "vertices" else vcol[cv]
@@ -152,6 +197,11 @@ class Residuals:
             close_cols,
             np.concatenate([vcol[cp], vcol[ck], vcol[cq]], axis=1),
             np.concatenate([vcol[se[:, 0]], vcol[se[:, 1]]], axis=1),
+            vcol[self.stars].reshape(-1, 15),
+            vcol[self.corners].reshape(-1, 9),
+            np.concatenate([scol[self.axes_pairs[0]], fcol[self.axes_pairs[1]]], axis=1),
+            vcol[self.slide_vertices].reshape(-1, 1),
+            vcol[self.crease_verts].reshape(-1, 18),
         ]
         sizes = [len(c) for c in cols_per_block]
         self.block_starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -227,8 +277,10 @@ class Residuals:
     # -- residuals ---------------------------------------------------------------------------
     def _sqrt_weights(self, s: float) -> list[float]:
         w = self.weights
+        orth = s * w.orthogonal if self.orthogonality == "right" else w.orthogonal
         return [np.sqrt(w.faces), np.sqrt(w.planarity), np.sqrt(w.unit), np.sqrt(s * w.fair),
-                np.sqrt(s * w.close), np.sqrt(w.shape), np.sqrt(w.shape)]
+                np.sqrt(s * w.close), np.sqrt(w.shape), np.sqrt(w.shape), np.sqrt(w.conical), np.sqrt(orth),
+                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape)]
 
     def blocks(self, z: np.ndarray) -> list[np.ndarray]:
         """Unweighted residual blocks in the order of :data:`BLOCKS`."""
@@ -250,7 +302,16 @@ class Residuals:
         se = self.shape_edges
         d = v[se[:, 1]] - v[se[:, 0]]
         r_edge = np.maximum(0.0, self.weights.shape_ratio - np.einsum("ij,ij->i", d, d) / self.edge_len2)
-        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge]
+        r_con = angle_balance(v, self.stars)[0]
+        cos = corner_cosines(v, self.corners)[0]
+        r_orth = cos if self.orthogonality == "right" else np.maximum(0.0, np.abs(cos) - self.corner_cos0)
+        ao, af = self.axes_pairs
+        r_axes = np.einsum("ij,ij->i", ns[ao], nf[af])
+        sv = self.slide_vertices
+        r_slide = (v[sv] - self.vertices0[sv]).ravel()
+        theta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)[0]
+        r_crease = np.maximum(0.0, theta - self.crease_start)
+        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease]
 
     def residual(self, z: np.ndarray, s: float = 1.0) -> np.ndarray:
         """The weighted residual vector ``r (R,)``; ``‖r‖²`` is the total energy at regularisation ``s``."""
@@ -263,13 +324,14 @@ class Residuals:
         weighted = sum(c * c * e for c, e in zip(self._sqrt_weights(s), sq))
         out = dict(zip(BLOCKS[:5], sq[:5]))
         out["E_shape"] = sq[5] + sq[6]
+        out.update(zip(BLOCKS[7:], sq[7:]))
         out["total"] = float(weighted)
         return out
 
     def jacobian(self, z: np.ndarray, s: float = 1.0) -> sparse.csc_matrix:
         """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring)."""
         v, ns, nf = self.unpack(z)
-        cf, cpl, c1, cfair, cclose, cshape, _ = self._sqrt_weights(s)
+        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease = self._sqrt_weights(s)
         vals = []
         for (ia, ib, own), normals, c in ((self.face_edges, nf, cf), (self.plane_edges, ns, cpl)):
             n = normals[own]
@@ -292,6 +354,16 @@ class Residuals:
         active = (self.weights.shape_ratio - np.einsum("ij,ij->i", d, d) / self.edge_len2) > 0
         g = (2.0 * cshape * active / self.edge_len2)[:, None] * d
         vals.append(np.concatenate([g, -g], axis=1))
+        vals.append(ccon * angle_balance(v, self.stars)[1].reshape(-1, 15))
+        cos, dcos = corner_cosines(v, self.corners)
+        if self.orthogonality == "keep":
+            dcos = dcos * (np.sign(cos) * (np.abs(cos) > self.corner_cos0))[:, None, None]
+        vals.append(corth * dcos.reshape(-1, 9))
+        ao, af = self.axes_pairs
+        vals.append(caxes * np.concatenate([nf[af], ns[ao]], axis=1))
+        vals.append(np.full(3 * len(self.slide_vertices), cslide))
+        theta, dtheta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)
+        vals.append((ccrease * (theta > self.crease_start))[:, None] * dtheta.reshape(-1, 18))
         data = np.concatenate([np.ravel(x) for x in vals])[self._take]
         return sparse.csc_matrix((data, self._indices, self._indptr), shape=(self.n_residuals, self.n_unknowns))
 

@@ -80,7 +80,7 @@ def free_vertices(mesh: QuadMesh, fix_boundary: bool, fixed: list[int] | tuple[i
 
     Raises :class:`DesignError` (key ``fixed_vertices[k]``) for an index out of range.
     """
-    n = len(mesh.vertices)
+    n = len(np.asarray(mesh.vertices))
     free = np.ones(n, dtype=bool)
     if fix_boundary:
         free &= ~mesh.topology.boundary_vertices

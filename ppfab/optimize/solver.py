@@ -30,8 +30,9 @@ import numpy as np
 from ..metrics import face_planarity, pad_polylines, polyline_planarity
 from ..topology import Polyline
 from .guard import StepGuard
-from .linsolve import BlockOrdering, DampedSystem
+from .linsolve import DampedSystem, FactorCache
 from .residuals import Residuals
+from .terms import angle_balance
 
 
 @dataclass(frozen=True)
@@ -61,20 +62,27 @@ class IterationRecord:
     delta_p_max: float
     delta_p_mean: float
     time: float
+    conical_max: float = 0.0
+    E_conical: float = 0.0
+    E_orth: float = 0.0
+    E_axes: float = 0.0
 
     def line(self) -> str:
         """One line for progress output."""
         mark = "+" if self.accepted else f"x {self.rejected_by}"
         return (f"it {self.iteration:4d} st {self.stage} s={self.reg:.0e} E={self.energy:.3e} "
                 f"E_P={self.E_P:.2e} E_f={self.E_f:.2e} dF={self.delta_f_max:.2e}/{self.delta_f_mean:.2e} "
-                f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e} mu={self.mu:.1e} {mark}")
+                f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e}"
+                + (f" con={self.conical_max:.2e}" if self.conical_max else "") + f" mu={self.mu:.1e} {mark}")
 
 
 class PlanarityMetrics:
     """``δ_f`` of all faces and ``δ_P`` of the selected polylines (§3.3), from vertices ``(N, 3)``."""
 
-    def __init__(self, faces: np.ndarray, polylines: list[Polyline], n_vertices: int):
+    def __init__(self, faces: np.ndarray, polylines: list[Polyline], n_vertices: int,
+                 stars: np.ndarray | None = None):
         self.faces = np.asarray(faces, dtype=np.int64)
+        self.stars = np.zeros((0, 5), dtype=np.int64) if stars is None else np.asarray(stars, dtype=np.int64)
         self.has_lines = bool(polylines)
         if polylines:
             idx, self.weights = pad_polylines(np.arange(n_vertices, dtype=float)[:, None], polylines)
@@ -92,6 +100,12 @@ class PlanarityMetrics:
         dp = polyline_planarity(vertices[self.index], self.weights) if self.has_lines else np.zeros(1)
         return float(df.max()), float(df.mean()), float(dp.max()), float(dp.mean())
 
+    def conical_max(self, vertices: np.ndarray) -> float:
+        """Largest conical residual ``|α_0 − α_1 + α_2 − α_3|`` (rad) over the stars (0 without stars)."""
+        if not len(self.stars):
+            return 0.0
+        return float(np.abs(angle_balance(vertices, self.stars)[0]).max())
+
 
 @dataclass
 class SolverControl:
@@ -105,6 +119,13 @@ class SolverControl:
     stall: float = 0.05
     tau: float = 1e-4
     max_rejections: int = 40
+    target_conical: float = np.inf
+
+    def score(self, dfm: float, dpm: float, conical: float) -> float:
+        """Worst target ratio of an iterate (``<= 1``: every target met)."""
+        ratios = [x / t for x, t in ((dfm, self.target_delta_f), (dpm, self.target_delta_p),
+                                     (conical, self.target_conical)) if np.isfinite(t)]
+        return float(max(ratios, default=0.0))
 
 
 @dataclass
@@ -115,6 +136,13 @@ class SolverState:
     iterations: int
     stopped_by: str           # "targets", "stationary", "max_iterations", "stuck"
     history: list[IterationRecord] = field(default_factory=list)
+    best_z: np.ndarray | None = None            # the best-scoring state seen (the start included)
+    best_iteration: int = 0                     # its iteration (0 = the start)
+    best_score: float = np.inf
+    start_score: float = np.inf
+    rejected: dict[str, int] = field(default_factory=dict)   # refused steps by reason
+    factorisations: int = 0
+    cg_solves: int = 0
 
 
 class LevenbergMarquardt:
@@ -131,7 +159,7 @@ class LevenbergMarquardt:
     callback : called with every :class:`IterationRecord`
     """
 
-    def __init__(self, problem: Residuals, z0: np.ndarray, metrics: Callable[[np.ndarray], tuple],
+    def __init__(self, problem: Residuals, z0: np.ndarray, metrics: PlanarityMetrics,
                  guard: StepGuard | None = None, control: SolverControl | None = None,
                  on_stage: Callable[[np.ndarray], None] | None = None,
                  callback: Callable[[IterationRecord], None] | None = None):
@@ -144,17 +172,22 @@ class LevenbergMarquardt:
         self.callback = callback
         self.reg = 1.0
         self.stage = 0
-        self.mu: float | None = None
+        self.mu = 0.0                            # set from the first linearisation (Madsen et al. τ)
         self.nu = 2.0
         self.rejections = 0
         self.iteration = 0
         self.history: list[IterationRecord] = []
         self.t0 = time.perf_counter()
-        self.ordering = BlockOrdering()
+        self.cache = FactorCache()
         if on_stage is not None:
             on_stage(self.z)
         self._linearise()
         self.current_metrics = metrics(self.vertices)
+        self.current_conical = metrics.conical_max(self.vertices)
+        self.start_score = self.best_score = self._score()
+        self.best_z = self.z.copy()
+        self.best_iteration = 0
+        self.rejected: dict[str, int] = {}
 
     @property
     def vertices(self) -> np.ndarray:
@@ -164,20 +197,25 @@ class LevenbergMarquardt:
         self.r = self.p.residual(self.z, self.reg)
         self.energy = float(self.r @ self.r)
         self.system = DampedSystem(self.p.jacobian(self.z, self.reg), self.r, self.p.n_face_unknowns,
-                                   self.ordering)
-        if self.mu is None:
+                                   self.cache)
+        if self.mu == 0.0:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
+
+    def _score(self) -> float:
+        return self.c.score(self.current_metrics[0], self.current_metrics[2], self.current_conical)
 
     def targets_met(self) -> bool:
         dfm, _, dpm, _ = self.current_metrics
-        return dfm <= self.c.target_delta_f and dpm <= self.c.target_delta_p
+        return (dfm <= self.c.target_delta_f and dpm <= self.c.target_delta_p
+                and self.current_conical <= self.c.target_conical)
 
     def _record(self, accepted: bool, reason: str, step: float) -> IterationRecord:
         e = self.p.energies(self.z, self.reg)
         m = self.current_metrics
         rec = IterationRecord(self.iteration, self.stage, self.reg, accepted, reason, float(self.mu), step,
                               e["total"], e["E_P"], e["E_f"], e["E_1"], e["E_fair"], e["E_close"],
-                              m[0], m[1], m[2], m[3], time.perf_counter() - self.t0)
+                              m[0], m[1], m[2], m[3], time.perf_counter() - self.t0, self.current_conical,
+                              e["E_conical"], e["E_orth"], e["E_axes"])
         self.history.append(rec)
         if self.callback is not None:
             self.callback(rec)
@@ -204,6 +242,7 @@ class LevenbergMarquardt:
             self.mu *= self.nu
             self.nu *= 2.0
             self.rejections += 1
+            self.rejected[reason] = self.rejected.get(reason, 0) + 1
             self._record(False, reason, step_norm)
             if self.rejections >= self.c.max_rejections:
                 return "stuck"
@@ -214,6 +253,10 @@ class LevenbergMarquardt:
         self.mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
         self.nu = 2.0
         self.current_metrics = self.metrics(self.vertices)
+        self.current_conical = self.metrics.conical_max(self.vertices)
+        score = self._score()
+        if score < self.best_score:
+            self.best_score, self.best_z, self.best_iteration = score, self.z.copy(), self.iteration
         self._record(True, "", step_norm)
         if self.targets_met():
             return "targets"
@@ -233,9 +276,9 @@ class LevenbergMarquardt:
 
     def run(self) -> SolverState:
         """Iterate until a stop criterion (see module docstring)."""
-        if self.targets_met():
-            return SolverState(self.z, 0, "targets", self.history)
-        reason = ""
+        reason = "targets" if self.targets_met() else ""
         while not reason:
             reason = self.step()
-        return SolverState(self.z, self.iteration, reason, self.history)
+        return SolverState(self.z, self.iteration, reason, self.history, self.best_z, self.best_iteration,
+                           self.best_score, self.start_score, dict(self.rejected), self.cache.factorisations,
+                           self.cache.cg_solves)
