@@ -78,15 +78,37 @@ def test_failure_never_damages_existing_folder(tmp_path, small_design, monkeypat
     assert leftovers(tmp_path) == []
 
 
-def test_existing_folder_needs_force(tmp_path, small_design, capsys):
+def test_existing_folder_needs_force_and_force_keeps_a_users_folder(tmp_path, small_design, capsys):
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 2
     assert "--force" in capsys.readouterr().err
     assert (out / "keep.txt").read_text() == "mine"
+    # --force replaces only a previous ppfab build: a folder holding someone's file is refused
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    err = capsys.readouterr().err
+    assert "is not a previous ppfab build" in err and err.count("\n") == 1
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"] and (out / "keep.txt").read_text() == "mine"
+    assert leftovers(tmp_path) == []
+
+
+def test_force_replaces_a_previous_build_and_nothing_else(tmp_path, small_design, capsys):
+    out = tmp_path / "out"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 0
+    before = tree(out)
     assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 0
-    assert not (out / "keep.txt").exists() and (out / "manifest.json").exists()
+    assert tree(out) == before and leftovers(tmp_path) == []
+    # a file added to the build, or a file of the build edited, makes it the user's folder
+    (out / "notes.txt").write_text("site notes")
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    assert "notes.txt, which ppfab did not write" in capsys.readouterr().err
+    (out / "notes.txt").unlink()
+    with open(out / "parts.csv", "a") as fh:
+        fh.write("# checked\n")
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    assert "parts.csv was changed after the build" in capsys.readouterr().err
+    assert (out / "parts.csv").read_text().endswith("# checked\n")
 
 
 def test_two_builds_are_byte_identical(tmp_path, small_design):

@@ -7,8 +7,11 @@ a new command is one new file.  Heavy imports (build123d, ezdxf, matplotlib)
 happen inside ``run`` so ``ppfab --version`` is instant.
 
 Errors derived from :class:`~ppfab.errors.PpfabError` print one line
-``ppfab: error: …`` and exit with their code (2 for bad input); Ctrl-C exits
-130.  No traceback reaches the user unless ``PPFAB_DEBUG=1``.
+``ppfab: error: …`` and exit with their code (2 for bad input); so does an operating-system error
+(disk full, permission denied: exit 1).  Ctrl-C, SIGTERM and SIGHUP stop a run the same way (an
+exception unwinds it, so output folders are cleaned up) and exit ``128 + signal`` (130, 143, 129).
+numpy's RuntimeWarnings (overflow, invalid value) go to the log (``--verbose``), never raw to stderr.
+No traceback reaches the user unless ``PPFAB_DEBUG=1``.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ import importlib
 import logging
 import os
 import pkgutil
+import signal
 import sys
+import warnings
 
 from ppfab import __version__
 from ppfab.errors import PpfabError
@@ -49,6 +54,33 @@ def make_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGTERM or SIGHUP, so a run unwinds exactly as on Ctrl-C."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+STOP_SIGNALS = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    for s in STOP_SIGNALS:               # a second signal must not interrupt the clean-up
+        signal.signal(s, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+def _showwarning(message, category, filename, lineno, file=None, line=None) -> None:
+    logging.getLogger("ppfab").info("%s: %s", category.__name__, message)
+
+
+def _os_error(exc: OSError) -> str:
+    what = f"{exc.filename}: " if exc.filename else ""
+    return f"{what}{exc.strerror or exc}" + (" (free some space or write elsewhere)"
+                                             if getattr(exc, "errno", None) == 28 else "")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = make_parser()
@@ -62,16 +94,40 @@ def main(argv: list[str] | None = None) -> int:
     elif getattr(args, "verbose", False):
         level = logging.INFO
     logging.basicConfig(level=level, format="%(message)s", stream=sys.stderr)
+    debug = bool(os.environ.get("PPFAB_DEBUG"))
+    previous = {}
+    if threading_main():
+        previous = {s: signal.signal(s, _on_signal) for s in STOP_SIGNALS}
     try:
-        return int(args._run(args) or 0)
+        with warnings.catch_warnings():
+            if not debug:
+                warnings.simplefilter("always", RuntimeWarning)
+                warnings.showwarning = _showwarning
+            return int(args._run(args) or 0)
     except PpfabError as exc:
-        if os.environ.get("PPFAB_DEBUG"):
+        if debug:
             raise
         print(f"ppfab: error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print("ppfab: interrupted", file=sys.stderr)
-        return 130
+    except OSError as exc:
+        if debug:
+            raise
+        print(f"ppfab: error: {_os_error(exc)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", signal.SIGINT)
+        print(f"ppfab: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + int(signum)
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def threading_main() -> bool:
+    """Signal handlers can only be installed from the main thread."""
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
 
 
 def entry() -> None:  # pragma: no cover - console script

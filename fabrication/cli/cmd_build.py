@@ -15,7 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("design", nargs="?", default=None,
                    help="design file (TOML); omitted: the bundled default example")
     p.add_argument("-o", "--out", required=True, help="output folder (written atomically)")
-    p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing output folder, if it is a previous ppfab build")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--json", action="store_true", help="print a machine-readable summary on stdout")
     p.add_argument("--allow-large", action="store_true",
@@ -24,15 +25,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..design import load_design
-    from ..pipeline.folder import AtomicFolder
+    from ..pipeline.folder import check_target
+    from ..pipeline.lock import OutputLock
     from ..pipeline.stages import build
     from ..pipeline.progress import Progress
 
     design = load_design(args.design)
     progress = Progress(quiet=args.quiet or args.json)
-    AtomicFolder.check_target(args.out, force=args.force)          # refuse before the work, not after
-    result = build(design, progress=progress, allow_large=args.allow_large)
-    out = result.write(args.out, force=args.force, progress=progress)
+    check_target(args.out, force=args.force, protect=design.input_files())    # refuse before the work
+    with OutputLock(args.out):                                                 # one run per output folder
+        result = build(design, progress=progress, allow_large=args.allow_large)
+        out = result.write(args.out, force=args.force, progress=progress)
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     if args.json:
         print(json.dumps({"out": str(args.out), "files": manifest["files"], "summary": manifest["summary"],

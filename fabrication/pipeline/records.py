@@ -109,14 +109,15 @@ class Build:
         """Write the output folder ``out`` atomically (see the README's output contract); returns its path.
 
         Every file goes into a temporary folder beside ``out`` that is renamed into place only when all
-        writers succeeded; with ``force`` an existing folder is replaced.
+        writers succeeded; with ``force`` an existing folder is replaced, but only when it is a previous
+        ppfab build (:func:`~fabrication.pipeline.folder.check_target`).
         """
         from ..writers import write_all
         from .folder import AtomicFolder
         from .progress import Progress
 
         prog = progress or Progress(quiet=True)
-        with AtomicFolder(out, force=force) as tmp:
+        with AtomicFolder(out, force=force, protect=self.design.input_files()) as tmp:
             write_all(self, tmp, prog)
         path = Path(out)
         self._written.append(path)
