@@ -83,8 +83,12 @@ class Panel:
         """The inset outline in 3D, ``(k, 3)`` mm, on the face's least-squares plane."""
         return self.frame.to3d(self.outline)
 
-    def flat_part(self) -> FlatPart:
-        """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF."""
+    def flat_part(self, shape: "Panel | None" = None) -> FlatPart:
+        """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF.
+
+        ``shape``: the panel whose outline and marks are cut — the first panel of this panel's type, so every
+        panel of a type is cut, listed and ordered as the same piece of glass (:func:`type_flat_parts`).
+        """
         meta = {
             "face": self.face,
             "material": self.makeup,
@@ -101,7 +105,8 @@ class Panel:
         if self.face_ij is not None:
             meta["face_i"], meta["face_j"] = self.face_ij
         meta.update(self.meta)
-        return FlatPart(part_id=self.part_id, kind="panel", outline=self.outline, marks=self.marks,
+        cut = shape or self
+        return FlatPart(part_id=self.part_id, kind="panel", outline=cut.outline, marks=cut.marks,
                         label=self.part_id, type_id=self.type_id, rotations=None,
                         mirror_allowed=self.mirror_allowed, meta=meta)
 
@@ -296,6 +301,19 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
             marks=_mark_polylines(o, float(used[f])),
         ))
     return panels
+
+
+def type_flat_parts(panels: list[Panel]) -> list[FlatPart]:
+    """The flat parts of the panels, each cut to the outline of the first panel of its type.
+
+    Panels of one type are congruent within ``congruence_tolerance``; the glass order lists one outline per
+    type (``glass/types/``), so the cutting sheets cut that outline too and ``x, y, rotation_deg, mirrored``
+    of ``parts.csv`` map the type's outline exactly onto each CUT polyline.
+    """
+    first: dict[str, Panel] = {}
+    for pnl in panels:
+        first.setdefault(pnl.type_id, pnl)
+    return [pnl.flat_part(first[pnl.type_id] if pnl.type_id else None) for pnl in panels]
 
 
 def panel_types(panels: list[Panel]) -> dict[str, list[str]]:

@@ -108,9 +108,11 @@ class Build:
     def write(self, out: str | Path, force: bool = False, progress: "Progress | None" = None) -> Path:
         """Write the output folder ``out`` atomically (see the README's output contract); returns its path.
 
-        Every file goes into a temporary folder beside ``out`` that is renamed into place only when all
-        writers succeeded; with ``force`` an existing folder is replaced, but only when it is a previous
-        ppfab build (:func:`~fabrication.pipeline.folder.check_target`).
+        Every file goes into a temporary folder beside ``out``; the checks of ``ppfab verify`` then re-read it,
+        and it is renamed into place only when all writers succeeded and verify found nothing (otherwise
+        :class:`~ppfab.errors.VerificationError` lists the findings and nothing is written).  With ``force``
+        an existing folder is replaced, but only when it is a previous ppfab build
+        (:func:`~fabrication.pipeline.folder.check_target`).
         """
         from ..writers import write_all
         from .folder import AtomicFolder
@@ -119,9 +121,26 @@ class Build:
         prog = progress or Progress(quiet=True)
         with AtomicFolder(out, force=force, protect=self.design.input_files()) as tmp:
             write_all(self, tmp, prog)
+            self._self_check(tmp, prog)
         path = Path(out)
         self._written.append(path)
         return path
+
+    def _self_check(self, folder: Path, progress: "Progress") -> None:
+        """Run ``ppfab verify``'s checks on the folder just written; raise if any finds a problem."""
+        from ppfab.errors import VerificationError
+
+        from ..verify import verify
+
+        progress.start("verify")
+        result = verify(folder)
+        if not result.ok:
+            progress.fail()
+            shown = "; ".join(str(f) for f in result.findings[:3])
+            more = f" (and {len(result.findings) - 3} more)" if len(result.findings) > 3 else ""
+            raise VerificationError(f"the files of this build fail ppfab verify, so none were written: "
+                                    f"{shown}{more}")
+        progress.done(f"{len(result.checked)} checks")
 
     def verify(self, out: str | Path | None = None) -> Any:
         """Re-read a folder this build wrote (the last one by default) with ``ppfab verify``'s checks."""

@@ -146,9 +146,10 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
 def stage_nesting(design: Design, panels: PanelSet, beams: BeamSet, progress: Progress) -> NestingSet:
     """Nest glass panels and beam plates on their stock sheets and verify every placement with shapely."""
     from ..nesting import nest, verify_nesting
+    from ..panels import type_flat_parts
 
     progress.start("nesting")
-    glass_parts = [p.flat_part() for p in panels.panels]
+    glass_parts = type_flat_parts(list(panels.panels))
     beam_parts = beams.flat_parts()
     nestings: list[Nesting] = []
     for parts, params, what in ((glass_parts, design.nesting, "glass"), (beam_parts, design.beam_nesting, "plates")):
