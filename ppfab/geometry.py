@@ -56,7 +56,7 @@ class GeometrySpec:
     params: dict = param({}, doc="parameters of the construction ([geometry.params])")
     scale: float = param(1.0, doc="factor from construction/mesh units to millimetres", exclusive_min=0)
     translate: list[float] = param([0.0, 0.0, 0.0], doc="translation in mm after scaling", length=3)
-    rotate_z_deg: float = param(0.0, doc="rotation about the vertical axis after scaling, degrees")
+    rotate_z_deg: float = param(0.0, doc="rotation about the vertical axis after scaling, degrees", min=-360, max=360)
     flip_orientation: bool = param(False, doc="reverse the face orientation (which side is outside)")
     planar_families: list[str] | None = param(None, doc="families the beams follow: 'rows', 'cols' "
                                                         "(default: what the construction keeps planar)")

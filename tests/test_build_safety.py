@@ -129,3 +129,59 @@ def test_very_large_grid_is_refused_before_work(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--allow-large" in err and "GiB" in err and "min" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_builds_are_identical_whatever_the_hash_seed_folder_and_path_spelling(tmp_path, small_design):
+    """Three separate processes: other PYTHONHASHSEED, other working folder, the design and -o spelled
+    relative, absolute, with '..' and a trailing slash — the same bytes, and no absolute path in the manifest."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    (tmp_path / "work").mkdir()
+    runs = [("0", tmp_path / "work", "../small.toml", "../out_a"),
+            ("12345", tmp_path, str(small_design), str(tmp_path / "nowhere" / ".." / "out_b") + "/"),
+            ("random", Path("/"), str(small_design), str(tmp_path / "out_c"))]
+    for seed, cwd, design, out in runs:
+        env = dict(os.environ, PYTHONHASHSEED=seed, OMP_NUM_THREADS="1",
+                   PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+        r = subprocess.run([sys.executable, "-m", "fabrication.cli", "build", design, "-o", out, "--quiet"],
+                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+    trees = [tree(tmp_path / name) for name in ("out_a", "out_b", "out_c")]
+    assert trees[0] == trees[1] == trees[2] and len(trees[0]) > 30
+    text = (tmp_path / "out_a" / "manifest.json").read_text()
+    assert str(tmp_path) not in text and str(REPO) not in text
+
+    def strings(o):
+        if isinstance(o, dict):
+            for k, x in o.items():
+                yield k
+                yield from strings(x)
+        elif isinstance(o, list):
+            for x in o:
+                yield from strings(x)
+        elif isinstance(o, str):
+            yield o
+
+    assert not [s for s in strings(json.loads(text)) if s.startswith("/") or s.startswith("\\\\") or s[1:3] == ":\\\\"]
+    assert json.loads(text)["design"]["source"] == "small.toml"
+    assert leftovers(tmp_path) == []
+
+
+def test_a_build_never_ships_files_its_own_verify_rejects(tmp_path, small_design, monkeypatch, capsys):
+    """A writer that puts the design name raw into mesh.obj (a newline makes an extra vertex line): the build's
+    own verify sees the OBJ disagree with the manifest and nothing is written."""
+    from ppfab.io import meshfile
+
+    text = small_design.read_text().replace('name = "small"', 'name = "roof\\nv 1 2 3"')
+    small_design.write_text(text)
+    monkeypatch.setattr(meshfile, "obj_comment", lambda s: s)
+    out = tmp_path / "out"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "the files of this build fail ppfab verify, so none were written" in err and "mesh.obj" in err
+    assert not out.exists() and leftovers(tmp_path) == []

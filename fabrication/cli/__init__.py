@@ -17,6 +17,7 @@ No traceback reaches the user unless ``PPFAB_DEBUG=1``.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import os
@@ -24,6 +25,7 @@ import pkgutil
 import signal
 import sys
 import warnings
+from typing import Any, Iterator
 
 from ppfab import __version__
 from ppfab.errors import PpfabError
@@ -65,10 +67,46 @@ class Interrupted(KeyboardInterrupt):
 STOP_SIGNALS = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
 
 
-def _on_signal(signum: int, frame: object) -> None:
-    for s in STOP_SIGNALS:               # a second signal must not interrupt the clean-up
+_SIGNALS: dict[str, Any] = {"defer": 0, "pending": None}
+
+
+def _stop(signum: int) -> None:
+    for s in STOP_SIGNALS + (signal.SIGINT,):       # a second signal must not interrupt the clean-up
         signal.signal(s, signal.SIG_IGN)
     raise Interrupted(signum)
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    if _SIGNALS["defer"]:
+        _SIGNALS["pending"] = signum
+        return
+    _stop(signum)
+
+
+@contextlib.contextmanager
+def deferred_signals() -> Iterator[None]:
+    """Hold SIGINT, SIGTERM and SIGHUP until the block is done (e.g. while a C extension initialises, which
+    would turn the interruption into an ImportError), then stop as if they had come after it."""
+    _SIGNALS["defer"] += 1
+    try:
+        yield
+    finally:
+        _SIGNALS["defer"] -= 1
+        pending, _SIGNALS["pending"] = _SIGNALS["pending"], None
+        if pending is not None and not _SIGNALS["defer"]:
+            _stop(pending)
+
+
+def _interrupted(exc: BaseException) -> int | None:
+    """The signal behind an exception that a library raised while it was interrupted, else ``None``."""
+    seen = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        if isinstance(e, KeyboardInterrupt):
+            return int(getattr(e, "signum", signal.SIGINT))
+        e = e.__cause__ or e.__context__
+    return None
 
 
 def _showwarning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -98,6 +136,8 @@ def main(argv: list[str] | None = None) -> int:
     previous = {}
     if threading_main():
         previous = {s: signal.signal(s, _on_signal) for s in STOP_SIGNALS}
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:      # not when started ignoring it
+            previous[signal.SIGINT] = signal.signal(signal.SIGINT, _on_signal)
     try:
         with warnings.catch_warnings():
             if not debug:
@@ -109,6 +149,12 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"ppfab: error: {exc}", file=sys.stderr)
         return exc.exit_code
+    except BrokenPipeError:                      # the reader of stdout went away (``ppfab … | head``)
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+        return 141
     except OSError as exc:
         if debug:
             raise
@@ -118,7 +164,14 @@ def main(argv: list[str] | None = None) -> int:
         signum = getattr(exc, "signum", signal.SIGINT)
         print(f"ppfab: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
         return 128 + int(signum)
+    except Exception as exc:
+        signum = _interrupted(exc)
+        if signum is None or debug:
+            raise
+        print(f"ppfab: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + signum
     finally:
+        _SIGNALS["defer"], _SIGNALS["pending"] = 0, None
         for s, handler in previous.items():
             signal.signal(s, handler)
 

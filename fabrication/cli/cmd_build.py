@@ -23,6 +23,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="proceed with meshes above geometry.max_vertices")
 
 
+def preload() -> None:
+    """Import the CAD kernel and the file libraries now, with signals held: an interruption inside a C
+    extension's initialisation would surface as an ImportError instead of a clean stop."""
+    from . import deferred_signals
+
+    with deferred_signals():
+        import build123d  # noqa: F401
+        import ezdxf  # noqa: F401
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot  # noqa: F401
+        import shapely  # noqa: F401
+
+
 def run(args: argparse.Namespace) -> int:
     from ..design import load_design
     from ..pipeline.folder import check_target
@@ -34,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet or args.json)
     check_target(args.out, force=args.force, protect=design.input_files())    # refuse before the work
     with OutputLock(args.out):                                                 # one run per output folder
+        preload()
         result = build(design, progress=progress, allow_large=args.allow_large)
         out = result.write(args.out, force=args.force, progress=progress)
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))

@@ -89,14 +89,16 @@ def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
                 raise IndexError
             faces.append(rec)
             pos += 1 + cnt
-        if pos < len(tokens):
-            raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces, but the file goes on "
-                                      f"after face {nf - 1} (line {token_line[pos]}): fix the counts in the header")
     except IndexError:
         raise MeshFileError(path, "OFF file is shorter than its header announces") from None
+    except MeshFileError:
+        raise
     except ValueError:
         raise MeshFileError(path, f"OFF record near line {token_line[min(pos, len(tokens) - 1)]} "
                                   "is not a list of numbers") from None
+    if pos < len(tokens):
+        raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces, but the file goes on "
+                                  f"after face {nf - 1} (line {token_line[pos]}): fix the counts in the header")
     return verts.reshape(-1, 3), faces, lines
 
 
