@@ -91,7 +91,7 @@ def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[
     ]
 
     def draw(values: Callable[[], np.ndarray], title: str, xlabel: str) -> Callable[[], bytes]:
-        return lambda: save(histogram(values(), title, xlabel))
+        return lambda: save(histogram(values(), title, xlabel)) or b""
 
     return [(draw(v, t, x), t) for v, t, x in figs]
 

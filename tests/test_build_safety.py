@@ -185,3 +185,54 @@ def test_a_build_never_ships_files_its_own_verify_rejects(tmp_path, small_design
     err = capsys.readouterr().err
     assert "the files of this build fail ppfab verify, so none were written" in err and "mesh.obj" in err
     assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_leftovers_of_killed_runs_are_recognised_safely(tmp_path, small_design):
+    """What the next run removes: temporary folders whose marker names a dead process, and previous builds
+    moved aside by a dead run (put back when no build took their place). A temporary folder without a
+    marker, or whose process still runs, and anything else are kept."""
+    import json
+    import subprocess
+    import sys
+
+    from fabrication.pipeline.folder import AtomicFolder, previous_build_problem
+    from fabrication.pipeline.lock import MARKER, process_record, remove_stale
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    pid = int(dead.stdout)
+    record = {**process_record(), "pid": pid, "start": ""}
+    out = tmp_path / "out"
+    stale = tmp_path / ".out.tmp-0000dead"
+    stale.mkdir()
+    (stale / MARKER).write_text(json.dumps(record))
+    (stale / "beams.step").write_text("half")
+    alive = tmp_path / ".out.tmp-0000a11e"
+    alive.mkdir()
+    (alive / MARKER).write_text(json.dumps(process_record()))
+    unmarked = tmp_path / ".out.tmp-00000000"
+    unmarked.mkdir()
+    (unmarked / "keep.txt").write_text("x")
+    other = tmp_path / ".other.tmp-0000dead"
+    other.mkdir()
+    (other / MARKER).write_text(json.dumps(record))
+    # a previous build moved aside by the dead run, and no build took its place
+    assert main(["build", str(small_design), "-o", str(tmp_path / "prev"), "--quiet"]) == 0
+    before = tree(tmp_path / "prev")
+    (tmp_path / "prev").rename(tmp_path / f".out.old-{pid}-0000beef")
+    removed = remove_stale(out.absolute(), previous_build_problem)
+    assert removed == [stale]
+    assert alive.exists() and unmarked.exists() and other.exists()
+    assert tree(out) == before                                        # put back, unchanged
+    # a full run removes the dead one's folder too and replaces the restored build (it is one)
+    (stale).mkdir()
+    (stale / MARKER).write_text(json.dumps(record))
+    with AtomicFolder(out, force=True) as tmp:
+        (tmp / "manifest.json").write_text(json.dumps({"generator": "ppfab", "sha256": {}}))
+    assert not stale.exists() and sorted(p.name for p in out.iterdir()) == ["manifest.json"]
+
+
+def test_a_failed_build_leaves_no_new_parent_folders(tmp_path, small_design, monkeypatch, capsys):
+    _inject(monkeypatch, "nesting", RuntimeError("injected failure in nesting"))
+    with pytest.raises(RuntimeError, match="injected"):
+        main(["build", str(small_design), "-o", str(tmp_path / "new" / "sub" / "out"), "--quiet"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["small.toml"]

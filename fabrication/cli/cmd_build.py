@@ -26,16 +26,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def preload() -> None:
     """Import the CAD kernel and the file libraries now, with signals held: an interruption inside a C
     extension's initialisation would surface as an ImportError instead of a clean stop."""
+    import importlib
+
     from . import deferred_signals
 
     with deferred_signals():
-        import build123d  # noqa: F401
-        import ezdxf  # noqa: F401
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot  # noqa: F401
-        import shapely  # noqa: F401
+        for name in ("build123d", "ezdxf", "shapely", "matplotlib"):
+            importlib.import_module(name)
+        importlib.import_module("matplotlib").use("Agg")
+        importlib.import_module("matplotlib.pyplot")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -59,7 +59,7 @@ def previous_build_problem(folder: str | os.PathLike) -> str | None:
         return "its manifest.json cannot be read"
     if not isinstance(doc, dict) or not str(doc.get("generator", "")).startswith("ppfab"):
         return "its manifest.json was not written by ppfab"
-    listed = doc.get("sha256") if isinstance(doc.get("sha256"), dict) else {}
+    listed: dict[str, str] = doc["sha256"] if isinstance(doc.get("sha256"), dict) else {}
     for p in sorted(root.rglob("*")):
         rel = p.relative_to(root).as_posix()
         if p.is_symlink():

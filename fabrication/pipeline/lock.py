@@ -10,8 +10,9 @@ A temporary folder carries :data:`MARKER`, a small JSON record ``{pid, host, sta
 it (``start`` is the process start time, so a recycled pid is not mistaken for the writer).
 :func:`remove_stale` deletes, while the lock is held, the temporary folders of ``NAME`` whose marker
 names a process of this host that no longer runs, and the ``.NAME.old-<pid>-…`` folders (a previous
-build moved aside during a replacement) of dead pids that are still complete ppfab builds.  Nothing
-without these signs is ever deleted.
+build moved aside during a replacement) of dead pids that are still complete ppfab builds — put back as
+``NAME`` when the run died before its own folder took that name.  Nothing without these signs is ever
+deleted.
 """
 
 from __future__ import annotations
@@ -109,6 +110,7 @@ class OutputLock:
     def __init__(self, target: str | os.PathLike):
         self.target = Path(os.path.abspath(target))
         self.path = lock_path(self.target)
+        self._made: list[Path] = []                 # parent folders created here (removed again if left empty)
 
     def __enter__(self) -> "OutputLock":
         held = _HELD.get(self.path)
@@ -119,7 +121,9 @@ class OutputLock:
             _HELD[self.path] = [None, 1]
             return self
         try:
+            missing = [p for p in [self.target.parent, *self.target.parent.parents] if not p.exists()]
             self.target.parent.mkdir(parents=True, exist_ok=True)
+            self._made = missing
         except OSError as exc:
             raise OutputBusyError(f"cannot create the folder {self.target.parent} ({exc.strerror})") from None
         while True:
@@ -167,6 +171,11 @@ class OutputLock:
         except OSError:
             pass
         fh.close()
+        for p in self._made:                    # innermost first; only empty ones go
+            try:
+                p.rmdir()
+            except OSError:
+                break
 
 
 def holds_lock(target: str | os.PathLike) -> bool:
@@ -179,7 +188,7 @@ def remove_stale(target: Path, is_build: Any) -> list[Path]:
 
     ``is_build(folder) -> str | None`` tells whether a folder is a complete ppfab build (``None``) or why not.
     """
-    removed = []
+    removed: list[Path] = []
     name = re.escape(target.name)
     tmp_re = re.compile(rf"^\.{name}\.tmp-[0-9a-f]+$")
     old_re = re.compile(rf"^\.{name}\.old-([0-9]+)-[0-9a-f]+$")
@@ -198,6 +207,10 @@ def remove_stale(target: Path, is_build: Any) -> list[Path]:
         else:
             m = old_re.match(p.name)
             if m is None or process_alive({"pid": int(m.group(1)), "host": host}) or is_build(p) is not None:
+                continue
+            if not target.exists():         # killed between moving the old build aside and the rename
+                os.replace(p, target)
+                log.info("restored %s from %s, left behind by a run that was killed", target, p)
                 continue
         shutil.rmtree(p, ignore_errors=True)
         log.info("removed %s, left behind by a run that was killed", p)

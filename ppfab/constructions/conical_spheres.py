@@ -147,6 +147,7 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     # the cone axes of the faces at each vertex (ghosts included at the boundary), turned against the
     # normals; on the channel mesh they pass through the sphere centres, after Step 4 (a parallel mesh:
     # the same normals) they are the same directions at the moved vertices — not the lines to the centres
+    assert grid is not None
     axes, _ = cone_axes(grid)
     degrees = np.degrees(th[1:] if closed else th[1:-1])
     strip_t = 0.5 * (tz[1:] + tz[:-1])
