@@ -1,14 +1,15 @@
-"""Write docs/bad-input.md: every class of bad input tried, and the message ppfab prints for it.
+"""Write docs/bad-input.md: every class of bad input tried, and what ppfab says or does for it.
 
     python docs/gen_bad_input.py
 
-The cases are those of ``tests/bad_inputs.py``; each row is also a test in ``tests/test_bad_input.py``.
+The cases are those of ``tests/bad_inputs.py``; each row is also a test in ``tests/test_bad_input.py``,
+run the same way (:func:`bad_inputs.run_case`: in-process, or in a separate process for FIFOs, devices,
+real signals, killed and concurrent runs).
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -18,29 +19,30 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 
 
 def main() -> None:
-    from bad_inputs import CASES
-
-    from fabrication.cli import main as ppfab
+    from bad_inputs import CASES, SHARED_DATA, run_case
 
     lines = ["# Bad input and what ppfab says", "",
              "Every class of bad input that was tried, and the one line ppfab prints for it (exit code in the "
-             "third column; paths shortened to `…/`). Each row is a test in `tests/test_bad_input.py`, generated "
-             "by `python docs/gen_bad_input.py`. No row writes an output folder.", "",
+             "third column; paths shortened to `…/`), or, for input that must be handled rather than refused, "
+             "what happens (in italics). Each row is a test in `tests/test_bad_input.py`, generated "
+             "by `python docs/gen_bad_input.py`; rows marked ⚙ run `ppfab` in a separate process (FIFOs and "
+             "devices, real signals sent to a running build, a build killed with SIGKILL and run again, two "
+             "builds at once). No refused row writes or damages an output folder.", "",
              "| input | what is wrong | exit | message |", "|---|---|---|---|"]
     for case in CASES:
         with tempfile.TemporaryDirectory() as tmp:
             d = Path(tmp)
-            for name, text in case.files.items():
-                (d / name).parent.mkdir(parents=True, exist_ok=True)
-                (d / name).write_text(text)
-            err = io.StringIO()
-            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-                code = ppfab(case.argv(d))
-            msg = err.getvalue().strip().splitlines()[-1].replace(str(d) + "/", "…/")
-            msg = msg.replace(str(HERE.parents[1] / "shared" / "data") + "/", "…/")
+            code, out, err = run_case(case, d)
+            text = (err.strip() or out.strip()).splitlines()
+            msg = text[-1] if text and case.code != 0 else ""
+            for root in (str(d.resolve()), str(d), str(SHARED_DATA)):
+                msg = msg.replace(root + "/", "…/")
+            msg = re.sub(r"pid [0-9]+", "pid …", msg)
         if len(msg) > 330:
             msg = msg[:330] + " …"
-        lines.append(f"| {case.kind} | {case.what} | {code} | `{msg.replace('|', '/')}` |")
+        shown = f"`{msg.replace('|', '/')}`" if msg else f"*{case.note}*"
+        mark = " ⚙" if case.process else ""
+        lines.append(f"| {case.kind} | {case.what}{mark} | {code} | {shown} |")
     (HERE / "bad-input.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     print(HERE / "bad-input.md")
 

@@ -7,6 +7,9 @@ The README's "Contract" section documents the same.
 
 from __future__ import annotations
 
+import math
+import re
+
 # -- parts.csv / parts.json -----------------------------------------------------------------------------
 
 PARTS_CONTRACT_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", "nest_tag", "area_mm2"]
@@ -177,3 +180,76 @@ COLOURS = {"glass": (0.55, 0.75, 0.90, 0.35), "rows": (0.80, 0.36, 0.12, 1.0), "
 STEP_GLASS_GROUP = "glass"
 """The assembly of the panels in ``panels.step`` (below the design's assembly); in ``beams.step`` the design's
 assembly holds one assembly per family (``rows``, ``cols``), each one per beam (``B-U03``) holding its plates."""
+
+
+# -- text in files ----------------------------------------------------------------------------------------
+# Text a designer typed (the design name, materials) reaches OBJ comments, DXF TEXT, CSV cells and JSON;
+# each format gets it in a form that cannot break the file or be executed by the program that opens it.
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+CSV_FORMULA_PREFIXES = ("=", "+", "-", "@", "\t", "\r")
+"""A text cell starting with one of these is read as a formula by spreadsheet programs (OWASP, "CSV
+injection"): such cells are written with a leading ``'``, which :func:`csv_value` removes again."""
+
+
+def one_line(text: str) -> str:
+    """``text`` with every control character and line separator replaced by a space."""
+    return _CONTROL.sub(" ", text)
+
+
+def dxf_text(text: str, limit: int = 250) -> str:
+    """The value of a DXF TEXT entity: one line without control characters (a NUL or a newline would end
+    the group value), at most ``limit`` characters.
+
+    >>> dxf_text("roof\\x00 A\\nB")
+    'roof  A B'
+    """
+    return one_line(text)[:limit]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def csv_cell(value: object) -> object:
+    """A CSV cell value: text on one line, and text that a spreadsheet would run as a formula (starting with
+    ``= + - @``, tab or CR) prefixed with ``'`` — numbers, and text that is a plain number, stay as they are.
+
+    >>> csv_cell("=HYPERLINK(1)"), csv_cell("-12.5"), csv_cell(-3), csv_cell("a\\nb")
+    ("'=HYPERLINK(1)", '-12.5', -3, 'a b')
+    """
+    if not isinstance(value, str):
+        return value
+    if value.startswith(CSV_FORMULA_PREFIXES) and not _is_number(value):
+        value = "'" + value
+    return one_line(value)
+
+
+def csv_value(cell: str) -> str:
+    """The text a :func:`csv_cell` stands for (the ``'`` before a formula character removed)."""
+    if len(cell) > 1 and cell[0] == "'" and cell[1:].startswith(CSV_FORMULA_PREFIXES):
+        return cell[1:]
+    return cell
+
+
+def json_safe(obj: object) -> object:
+    """``obj`` with every non-finite float (NaN, ±inf, which JSON cannot hold) replaced by ``None``; dicts,
+    lists, tuples and numpy arrays become plain copies.
+
+    >>> json_safe({"a": [1.0, float("nan")], "b": float("inf")})
+    {'a': [1.0, None], 'b': None}
+    """
+    if hasattr(obj, "tolist") and not isinstance(obj, (str, bytes)):      # numpy arrays and scalars
+        obj = obj.tolist()
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj

@@ -160,6 +160,27 @@ class Design:
         """The mesh file of ``[geometry] mesh``, relative to the design file's folder."""
         return self.geometry.mesh_path(self.base_dir)
 
+    def input_files(self) -> list[Path]:
+        """The files this design reads (the design file, the mesh file): an output folder must not hold them."""
+        out = [Path(self.source)] if self.sha256 else []
+        mesh = self.mesh_path()
+        return out + ([mesh] if mesh is not None else [])
+
+
+def _check_tag_prefixes(records: dict[str, Any]) -> None:
+    """Nest tags are ``<prefix><sheet>-<part>``: unique only when the glass and plate prefixes differ (also in
+    letter case, as a CAM program may ignore it) and neither ends in a digit (``G1`` + sheet 03 would read as
+    ``G`` + sheet 103)."""
+    prefixes = {name: records[name].tag_prefix for name in ("nesting", "beam_nesting") if name in records}
+    for name, prefix in prefixes.items():
+        if not prefix.isascii() or not prefix[-1:].isalpha():
+            raise DesignError(f"{name}.tag_prefix", f"must be ASCII letters and digits ending in a letter, got "
+                                                    f"{prefix!r} (the sheet number follows it)")
+    if len(prefixes) == 2 and prefixes["nesting"].lower() == prefixes["beam_nesting"].lower():
+        raise DesignError("beam_nesting.tag_prefix", f"{prefixes['beam_nesting']!r} is also the glass prefix "
+                                                     f"([nesting] tag_prefix {prefixes['nesting']!r}): nest tags "
+                                                     "would repeat; give the beam plates another prefix")
+
 
 def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: Path | None = None,
                  sections: tuple[str, ...] | None = None) -> Design:
@@ -180,6 +201,7 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
         for key, value in SECTION_DEFAULTS.get(name, {}).items():
             table.setdefault(key, value)
         records[name] = parse_params(types[name](), table, name)
+    _check_tag_prefixes(records)
     geometry: GeometrySpec = records["geometry"]
     if geometry.method is not None:
         from ppfab.constructions import get_construction
@@ -192,15 +214,37 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
                   info=records["design"], geometry=geometry, sections=records, raw=doc)
 
 
+MAX_DESIGN_BYTES = 16 << 20
+"""A design file is a few kB of TOML; anything above this is refused before it is parsed."""
+
+
+def _regular_design_file(p: Path) -> None:
+    """A design path must be a regular file: a FIFO or a device is refused before it is opened."""
+    from ppfab.errors import MeshFileError
+    from ppfab.io.meshfile import regular_file
+
+    try:
+        size = regular_file(p, "design file")
+    except MeshFileError as exc:
+        raise DesignError("", str(exc).replace("cannot read (", "cannot read design file (")) from None
+    if size > MAX_DESIGN_BYTES:
+        raise DesignError("", f"{p}: {size / 2**20:.0f} MiB is not a design file (at most "
+                              f"{MAX_DESIGN_BYTES // 2**20} MiB of TOML)")
+
+
 def load_design(path: str | Path | None = None, sections: tuple[str, ...] | None = None) -> Design:
     """Read and validate a design file; ``None`` loads the bundled default example."""
     p = DEFAULT_DESIGN if path is None else Path(path)
+    _regular_design_file(p)
     try:
         data = p.read_bytes()
     except OSError as exc:
         raise DesignError("", f"{p}: cannot read design file ({exc.strerror or exc})") from None
+    if len(data) > MAX_DESIGN_BYTES:
+        raise DesignError("", f"{p}: {len(data) / 2**20:.0f} MiB is not a design file (at most "
+                              f"{MAX_DESIGN_BYTES // 2**20} MiB of TOML)")
     try:
-        doc = tomllib.loads(data.decode("utf-8"))
+        doc = tomllib.loads(data.decode("utf-8-sig"))
     except UnicodeDecodeError:
         raise DesignError("", f"{p}: design file is not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:

@@ -1,7 +1,11 @@
 """Figures with matplotlib (Agg): 3D views of meshes and structures, cutting sheets, histograms.
 
 Every function writes a PNG (or returns SVG/PNG bytes) deterministically: fixed size, fixed view,
-no timestamps in the metadata.
+no timestamps in the metadata.  Polygons go to mplot3d as one array of equal-length polygons (shorter
+ones padded by repeating their last vertex): given polygons of different lengths, mplot3d pads them into
+``np.empty`` memory and its automatic limits read those uninitialised values — limits that change from
+run to run and, when the memory holds a NaN, "Axis limits cannot be NaN or Inf".  The limits are set
+from the data here, never automatically.
 """
 
 from __future__ import annotations
@@ -36,6 +40,14 @@ def _set_equal_3d(ax, pts: np.ndarray) -> None:
     ax.set_box_aspect(tuple(span), zoom=1.0)   # true proportions
 
 
+def padded_polygons(polygons: Iterable[np.ndarray]) -> np.ndarray:
+    """Polygons ``(k_i, 3)`` as one array ``(P, max k_i, 3)``, each padded by repeating its last vertex (the
+    drawn outline is the same: the extra edges have zero length)."""
+    polys = [np.asarray(p, dtype=float) for p in polygons]
+    k = max(len(p) for p in polys)
+    return np.stack([np.concatenate([p, np.repeat(p[-1:], k - len(p), axis=0)]) for p in polys])
+
+
 def mesh_figure(quads: np.ndarray, title: str = "", plates: Iterable[np.ndarray] = (),
                 axes_segments: np.ndarray | None = None, elev: float = 28, azim: float = -55,
                 size: tuple[float, float] = (7.5, 5.5)):
@@ -53,15 +65,16 @@ def mesh_figure(quads: np.ndarray, title: str = "", plates: Iterable[np.ndarray]
     shade = 0.55 + 0.45 * np.abs(n @ light)
     colours = np.column_stack([0.55 * shade, 0.72 * shade, 0.86 * shade, np.full(len(n), 0.85)])
     ax.add_collection3d(Poly3DCollection(quads, facecolors=colours, edgecolors=(0.15, 0.2, 0.3, 0.9),
-                                         linewidths=0.4))
+                                         linewidths=0.4), autolim=False)
     pts = [quads.reshape(-1, 3)]
     plates = list(plates)
     if plates:
-        ax.add_collection3d(Poly3DCollection(plates, facecolors=(0.75, 0.42, 0.2, 0.55),
-                                             edgecolors=(0.45, 0.22, 0.1, 0.9), linewidths=0.3))
+        ax.add_collection3d(Poly3DCollection(padded_polygons(plates), facecolors=(0.75, 0.42, 0.2, 0.55),
+                                             edgecolors=(0.45, 0.22, 0.1, 0.9), linewidths=0.3), autolim=False)
         pts.append(np.concatenate(plates))
     if axes_segments is not None and len(axes_segments):
-        ax.add_collection3d(Line3DCollection(axes_segments, colors=(0.8, 0.1, 0.1, 0.8), linewidths=0.6))
+        ax.add_collection3d(Line3DCollection(axes_segments, colors=(0.8, 0.1, 0.1, 0.8), linewidths=0.6),
+                            autolim=False)
     _set_equal_3d(ax, np.concatenate(pts))
     ax.view_init(elev=elev, azim=azim)
     ax.set_axis_off()
@@ -108,7 +121,13 @@ def histogram(values: np.ndarray, title: str, xlabel: str, bins: int = 30):
     fig, ax = plt.subplots(figsize=(4.2, 2.8), dpi=100)
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
-    ax.hist(v, bins=bins if len(v) > 1 else 1, color=(0.3, 0.5, 0.7), edgecolor="white", linewidth=0.5)
+    lo, hi = (float(v.min()), float(v.max())) if len(v) else (0.0, 1.0)
+    if hi - lo <= 1e-9 * max(abs(lo), abs(hi), 1e-300):
+        # (nearly) equal values: bins narrower than the float spacing do not exist ("Too many bins")
+        half = 0.5 * max(abs(lo), 1.0) * 1e-3
+        bins, lo, hi = 1, lo - half, hi + half
+    ax.hist(v, bins=bins if len(v) > 1 else 1, range=(lo, hi), color=(0.3, 0.5, 0.7), edgecolor="white",
+            linewidth=0.5)
     ax.set_title(title, fontsize=9)
     ax.set_xlabel(xlabel, fontsize=8)
     ax.set_ylabel("count", fontsize=8)

@@ -139,7 +139,7 @@ def write_nodes_csv(path: str | os.PathLike, records: list[dict]) -> Path:
         w = csv.writer(fh)
         w.writerow(contract.NODES_COLUMNS)
         for r in records:
-            w.writerow(_csv_row(r))
+            w.writerow([contract.csv_cell(c) for c in _csv_row(r)])
     return path
 
 
@@ -147,7 +147,7 @@ def write_nodes_json(path: str | os.PathLike, records: list[dict], meta: dict | 
     """Write ``nodes.json``: ``{"units": "mm", "angles": "degrees", "columns": …, "nodes": [...]}``."""
     path = Path(path)
     doc = {"units": "mm", "angles": "degrees", "count": len(records), **(meta or {}), "nodes": records}
-    path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    path.write_text(json.dumps(contract.json_safe(doc), indent=1, allow_nan=False) + "\n", encoding="utf-8")
     return path
 
 

@@ -19,7 +19,7 @@ import json
 import os
 from pathlib import Path
 
-from .contract import ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS, PARTS_KNOWN_COLUMNS
+from .contract import ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS, PARTS_KNOWN_COLUMNS, csv_cell, json_safe
 from .flatpart import FlatPart, Placement
 
 
@@ -64,13 +64,13 @@ def columns(rows: list[dict]) -> list[str]:
 
 
 def csv_text(rows: list[dict], cols: list[str] | None = None) -> str:
-    """CSV with ``\\n`` line ends (deterministic)."""
+    """CSV with ``\\n`` line ends (deterministic); text cells made safe by :func:`~fabrication.contract.csv_cell`."""
     cols = cols or columns(rows)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
     for r in rows:
-        w.writerow({c: r.get(c, "") for c in cols})
+        w.writerow({c: csv_cell(r.get(c, "")) for c in cols})
     return buf.getvalue()
 
 
@@ -86,7 +86,8 @@ def write_parts_json(rows: list[dict], path: str | os.PathLike, extra: dict | No
     path = Path(path)
     doc = {"units": "mm", "columns": columns(rows), "parts": rows}
     doc.update(extra or {})
-    path.write_text(json.dumps(doc, indent=1, sort_keys=True, ensure_ascii=False) + "\n", encoding="utf-8")
+    path.write_text(json.dumps(json_safe(doc), indent=1, sort_keys=True, ensure_ascii=False, allow_nan=False) + "\n",
+                    encoding="utf-8")
     return path
 
 

@@ -9,7 +9,8 @@ the parts and node tables with nest tags.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import logging
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -18,6 +19,8 @@ from .htmlreport import HtmlReport, esc
 
 if TYPE_CHECKING:  # pragma: no cover
     from .pipeline.records import Build
+
+log = logging.getLogger("ppfab")
 
 
 def sheet_svg(sheet_size: tuple[float, float], usable: tuple[float, float, float, float],
@@ -74,17 +77,35 @@ def structure_below_png(mesh_corners: np.ndarray, plates: list, title: str) -> b
     return save(mesh_figure(mesh_corners, title, plates=polys, size=(6.4, 4.2), elev=-32, azim=-60))
 
 
-def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[tuple[bytes, str]]:
+def histograms(panels: list, beam_records: list, node_rows: list[dict]) -> list[tuple[Callable[[], bytes], str]]:
+    """The histograms of the report as ``(draw, title)``: ``draw()`` returns the PNG."""
     from .figures import histogram, save
 
     figs = [
-        (np.array([p.area_mm2 for p in panels]) / 1e6, "Panel areas", "area [m²]"),
-        (np.concatenate([np.asarray(p.corner_angles_deg) for p in panels]), "Panel corner angles", "angle [°]"),
-        (np.array([r.length_mm for r in beam_records]) / 1000, "Beam plate lengths", "length [m]"),
-        (np.array([float(r["dihedral_deg"]) for r in node_rows if r.get("dihedral_deg") is not None]),
+        (lambda: np.array([p.area_mm2 for p in panels]) / 1e6, "Panel areas", "area [m²]"),
+        (lambda: np.concatenate([np.asarray(p.corner_angles_deg) for p in panels]), "Panel corner angles",
+         "angle [°]"),
+        (lambda: np.array([r.length_mm for r in beam_records]) / 1000, "Beam plate lengths", "length [m]"),
+        (lambda: np.array([float(r["dihedral_deg"]) for r in node_rows if r.get("dihedral_deg") is not None]),
          "Node dihedral angles (between the two beam planes)", "angle [°]"),
     ]
-    return [(save(histogram(v, t, x)), t) for v, t, x in figs]
+
+    def draw(values: Callable[[], np.ndarray], title: str, xlabel: str) -> Callable[[], bytes]:
+        return lambda: save(histogram(values(), title, xlabel)) or b""
+
+    return [(draw(v, t, x), t) for v, t, x in figs]
+
+
+def drawn_figures(figures: list[tuple[Callable[[], bytes], str]]) -> tuple[list[tuple[bytes, str]], list[str]]:
+    """Draw each figure; one that cannot be drawn becomes a note (a figure never stops a build)."""
+    out, notes = [], []
+    for draw, caption in figures:
+        try:
+            out.append((draw(), caption))
+        except Exception as exc:  # noqa: BLE001 - any failure of a plotting library becomes a note
+            notes.append(f"The figure “{caption}” could not be drawn ({type(exc).__name__}: {exc}).")
+            log.warning("report: figure %r could not be drawn (%s: %s)", caption, type(exc).__name__, exc)
+    return out, notes
 
 
 def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) -> str:
@@ -144,12 +165,15 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
     rep.heading("Figures")
     mesh = build.mesh
     qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
-    figs = [(structure_png(qm.face_corners, list(beams.plates), "panels and beam plates"), "3D structure, above"),
-            (structure_below_png(qm.face_corners, list(beams.plates), "beam plates from below"),
-             "3D structure, below")]
+    plates = list(beams.plates)
     node_rows = list(build.nodes.records)
-    figs += histograms(panels, list(beams.report.records), node_rows)
+    figs, notes = drawn_figures(
+        [(lambda: structure_png(qm.face_corners, plates, "panels and beam plates"), "3D structure, above"),
+         (lambda: structure_below_png(qm.face_corners, plates, "beam plates from below"), "3D structure, below")]
+        + histograms(panels, list(beams.report.records), node_rows))
     rep.figures(figs)
+    for note in notes:
+        rep.paragraph(note, "muted")
 
     nest = build.nesting
     rep.heading("Cutting sheets — glass")

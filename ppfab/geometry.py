@@ -36,6 +36,9 @@ log = logging.getLogger("ppfab")
 # fabrication pipeline, and bytes of memory per vertex; used to warn before very large builds
 SECONDS_PER_PANEL = 0.02
 BYTES_PER_VERTEX = 20_000
+MESH_FILE_BYTES_PER_VERTEX = 1024
+"""A generous bound on the bytes of a text mesh file per vertex (a ``v`` line, its share of ``f`` lines, normals
+and texture coordinates): a larger file is refused from its size, before it is read."""
 
 class TooLargeError(PpfabError):
     """The design makes more vertices than ``geometry.max_vertices`` (checked before the expensive work)."""
@@ -53,7 +56,7 @@ class GeometrySpec:
     params: dict = param({}, doc="parameters of the construction ([geometry.params])")
     scale: float = param(1.0, doc="factor from construction/mesh units to millimetres", exclusive_min=0)
     translate: list[float] = param([0.0, 0.0, 0.0], doc="translation in mm after scaling", length=3)
-    rotate_z_deg: float = param(0.0, doc="rotation about the vertical axis after scaling, degrees")
+    rotate_z_deg: float = param(0.0, doc="rotation about the vertical axis after scaling, degrees", min=-360, max=360)
     flip_orientation: bool = param(False, doc="reverse the face orientation (which side is outside)")
     planar_families: list[str] | None = param(None, doc="families the beams follow: 'rows', 'cols' "
                                                         "(default: what the construction keeps planar)")
@@ -124,7 +127,8 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
     else:
         path = spec.mesh_path(base_dir)
         assert path is not None
-        mesh = load_mesh(path)
+        check_file_size(path, spec.max_vertices, allow_large)
+        mesh = load_mesh(path, None if allow_large else lambda n: check_size(n, spec.max_vertices, False))
         optimised = families_of(getattr(optimize, "families", "")) if optimize is not None else ()
         families = tuple(spec.planar_families or optimised)
         source = f"mesh:{spec.mesh}"
@@ -146,6 +150,18 @@ def vertex_count(mesh: QuadGrid | QuadMesh) -> int:
     """Number of vertices of a grid ``(m+1)(n+1)`` or of a quad mesh ``N``."""
     v = mesh.vertices
     return int(v.shape[0] * (v.shape[1] if v.ndim == 3 else 1))
+
+
+def check_file_size(path: Path, limit: int, allow_large: bool) -> None:
+    """Refuse, from its size alone and before reading it, a mesh file too large to hold ``limit`` vertices
+    (and anything that is not a regular file: a FIFO, a device)."""
+    from .io.meshfile import regular_file
+
+    size = regular_file(path, "mesh file")
+    most = MESH_FILE_BYTES_PER_VERTEX * limit + (1 << 20)
+    if size > most and not allow_large:
+        raise TooLargeError(f"{path}: the file has {size / 2**20:.0f} MiB, more than a mesh of geometry.max_vertices "
+                            f"= {limit} vertices needs (at most {most / 2**20:.0f} MiB) — pass --allow-large to proceed")
 
 
 def check_size(nverts: int, limit: int, allow_large: bool) -> None:

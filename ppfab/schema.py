@@ -94,12 +94,16 @@ def _convert(value: Any, tp: Any, path: str) -> Any:
             raise DesignError(path, f"expected a number, got {type(value).__name__} {value!r:.60}")
         if not math.isfinite(value):
             raise DesignError(path, f"expected a finite number, got {value!r}")
+        if abs(value) > MAX_MAGNITUDE:
+            raise DesignError(path, f"{value:g} is out of range (numbers up to {MAX_MAGNITUDE:g} in size)")
         return float(value)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            if isinstance(value, float) and value.is_integer():
+            if isinstance(value, float) and value.is_integer() and abs(value) <= MAX_MAGNITUDE:
                 return int(value)
             raise DesignError(path, f"expected an integer, got {type(value).__name__} {value!r:.60}")
+        if abs(value) > MAX_MAGNITUDE:
+            raise DesignError(path, f"{value} is out of range (numbers up to {MAX_MAGNITUDE:g} in size)")
         return value
     if tp is str:
         if not isinstance(value, str):
@@ -112,6 +116,11 @@ def _convert(value: Any, tp: Any, path: str) -> Any:
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return parse_params(tp, value, path)
     return value
+
+
+MAX_MAGNITUDE = 1e15
+"""Largest magnitude of a number in a design file: beyond it squares and sums of lengths overflow or lose
+every digit (a design value of 1e308 would otherwise surface as inf deep inside a construction)."""
 
 
 def _check_limits(value: Any, meta: Mapping[str, Any], path: str) -> None:

@@ -79,15 +79,37 @@ def test_failure_never_damages_existing_folder(tmp_path, small_design, monkeypat
     assert leftovers(tmp_path) == []
 
 
-def test_existing_folder_needs_force(tmp_path, small_design, capsys):
+def test_existing_folder_needs_force_and_force_keeps_a_users_folder(tmp_path, small_design, capsys):
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 2
     assert "--force" in capsys.readouterr().err
     assert (out / "keep.txt").read_text() == "mine"
+    # --force replaces only a previous ppfab build: a folder holding someone's file is refused
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    err = capsys.readouterr().err
+    assert "is not a previous ppfab build" in err and err.count("\n") == 1
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"] and (out / "keep.txt").read_text() == "mine"
+    assert leftovers(tmp_path) == []
+
+
+def test_force_replaces_a_previous_build_and_nothing_else(tmp_path, small_design, capsys):
+    out = tmp_path / "out"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 0
+    before = tree(out)
     assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 0
-    assert not (out / "keep.txt").exists() and (out / "manifest.json").exists()
+    assert tree(out) == before and leftovers(tmp_path) == []
+    # a file added to the build, or a file of the build edited, makes it the user's folder
+    (out / "notes.txt").write_text("site notes")
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    assert "notes.txt, which ppfab did not write" in capsys.readouterr().err
+    (out / "notes.txt").unlink()
+    with open(out / "parts.csv", "a") as fh:
+        fh.write("# checked\n")
+    assert main(["build", str(small_design), "-o", str(out), "--quiet", "--force"]) == 2
+    assert "parts.csv was changed after the build" in capsys.readouterr().err
+    assert (out / "parts.csv").read_text().endswith("# checked\n")
 
 
 def test_two_builds_are_byte_identical(tmp_path, small_design):
@@ -108,3 +130,110 @@ def test_very_large_grid_is_refused_before_work(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--allow-large" in err and "GiB" in err and "min" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_builds_are_identical_whatever_the_hash_seed_folder_and_path_spelling(tmp_path, small_design):
+    """Three separate processes: other PYTHONHASHSEED, other working folder, the design and -o spelled
+    relative, absolute, with '..' and a trailing slash — the same bytes, and no absolute path in the manifest."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    (tmp_path / "work").mkdir()
+    runs = [("0", tmp_path / "work", "../small.toml", "../out_a"),
+            ("12345", tmp_path, str(small_design), str(tmp_path / "nowhere" / ".." / "out_b") + "/"),
+            ("random", Path("/"), str(small_design), str(tmp_path / "out_c"))]
+    for seed, cwd, design, out in runs:
+        env = dict(os.environ, PYTHONHASHSEED=seed, OMP_NUM_THREADS="1",
+                   PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+        r = subprocess.run([sys.executable, "-m", "fabrication.cli", "build", design, "-o", out, "--quiet"],
+                           cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+    trees = [tree(tmp_path / name) for name in ("out_a", "out_b", "out_c")]
+    assert trees[0] == trees[1] == trees[2] and len(trees[0]) > 30
+    text = (tmp_path / "out_a" / "manifest.json").read_text()
+    assert str(tmp_path) not in text and str(REPO) not in text
+
+    def strings(o):
+        if isinstance(o, dict):
+            for k, x in o.items():
+                yield k
+                yield from strings(x)
+        elif isinstance(o, list):
+            for x in o:
+                yield from strings(x)
+        elif isinstance(o, str):
+            yield o
+
+    assert not [s for s in strings(json.loads(text)) if s.startswith("/") or s.startswith("\\\\") or s[1:3] == ":\\\\"]
+    assert json.loads(text)["design"]["source"] == "small.toml"
+    assert leftovers(tmp_path) == []
+
+
+def test_a_build_never_ships_files_its_own_verify_rejects(tmp_path, small_design, monkeypatch, capsys):
+    """A writer that puts the design name raw into mesh.obj (a newline makes an extra vertex line): the build's
+    own verify sees the OBJ disagree with the manifest and nothing is written."""
+    from ppfab.io import meshfile
+
+    text = small_design.read_text().replace('name = "small"', 'name = "roof\\nv 1 2 3"')
+    small_design.write_text(text)
+    monkeypatch.setattr(meshfile, "obj_comment", lambda s: s)
+    out = tmp_path / "out"
+    assert main(["build", str(small_design), "-o", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "the files of this build fail ppfab verify, so none were written" in err and "mesh.obj" in err
+    assert not out.exists() and leftovers(tmp_path) == []
+
+
+def test_leftovers_of_killed_runs_are_recognised_safely(tmp_path, small_design):
+    """What the next run removes: temporary folders whose marker names a dead process, and previous builds
+    moved aside by a dead run (put back when no build took their place). A temporary folder without a
+    marker, or whose process still runs, and anything else are kept."""
+    import json
+    import subprocess
+    import sys
+
+    from fabrication.pipeline.folder import AtomicFolder, previous_build_problem
+    from fabrication.pipeline.lock import MARKER, process_record, remove_stale
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    pid = int(dead.stdout)
+    record = {**process_record(), "pid": pid, "start": ""}
+    out = tmp_path / "out"
+    stale = tmp_path / ".out.tmp-0000dead"
+    stale.mkdir()
+    (stale / MARKER).write_text(json.dumps(record))
+    (stale / "beams.step").write_text("half")
+    alive = tmp_path / ".out.tmp-0000a11e"
+    alive.mkdir()
+    (alive / MARKER).write_text(json.dumps(process_record()))
+    unmarked = tmp_path / ".out.tmp-00000000"
+    unmarked.mkdir()
+    (unmarked / "keep.txt").write_text("x")
+    other = tmp_path / ".other.tmp-0000dead"
+    other.mkdir()
+    (other / MARKER).write_text(json.dumps(record))
+    # a previous build moved aside by the dead run, and no build took its place
+    assert main(["build", str(small_design), "-o", str(tmp_path / "prev"), "--quiet"]) == 0
+    before = tree(tmp_path / "prev")
+    (tmp_path / "prev").rename(tmp_path / f".out.old-{pid}-0000beef")
+    removed = remove_stale(out.absolute(), previous_build_problem)
+    assert removed == [stale]
+    assert alive.exists() and unmarked.exists() and other.exists()
+    assert tree(out) == before                                        # put back, unchanged
+    # a full run removes the dead one's folder too and replaces the restored build (it is one)
+    (stale).mkdir()
+    (stale / MARKER).write_text(json.dumps(record))
+    with AtomicFolder(out, force=True) as tmp:
+        (tmp / "manifest.json").write_text(json.dumps({"generator": "ppfab", "sha256": {}}))
+    assert not stale.exists() and sorted(p.name for p in out.iterdir()) == ["manifest.json"]
+
+
+def test_a_failed_build_leaves_no_new_parent_folders(tmp_path, small_design, monkeypatch, capsys):
+    _inject(monkeypatch, "nesting", RuntimeError("injected failure in nesting"))
+    with pytest.raises(RuntimeError, match="injected"):
+        main(["build", str(small_design), "-o", str(tmp_path / "new" / "sub" / "out"), "--quiet"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["small.toml"]

@@ -88,3 +88,19 @@ def test_largest_valid_block_and_folded_faces():
     v = grid.vertices.copy()
     v[2, 2], v[3, 2] = grid.vertices[3, 2], grid.vertices[2, 2]                  # swap two vertices: a fold
     assert folded_faces(grid.with_vertices(v), grid.face_image).sum() >= 2
+
+
+def test_offset_refuses_a_mesh_that_is_not_conical():
+    """A PP mesh with planar faces that is not conical has no constant-distance offset: moving its vertices
+    along fitted axes would bend the faces (δ_f from 1e-15 to ~1e-6); offset_faces says so instead."""
+    from conftest import smooth_face_image
+    from ppfab.faceimage import pp_from_face_image
+    from ppfab.metrics import face_planarity
+
+    grid = pp_from_face_image(*smooth_face_image(6, 5, seed=3))
+    assert face_planarity(grid.face_corners).max() < 1e-12
+    residual = concyclic_residual(grid)
+    assert residual.max() > 1e-4                                  # independent: the normals are not concyclic
+    with pytest.raises(GeometryError, match=r"not conical, so no offset at constant face distance exists") as err:
+        offset_faces(grid, 0.1)
+    assert err.value.value == pytest.approx(residual.max())

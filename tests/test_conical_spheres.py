@@ -203,3 +203,22 @@ def test_examples_build(path):
     edges = np.concatenate([np.linalg.norm(grid.edges_u(), axis=-1).ravel(),
                             np.linalg.norm(grid.edges_v(), axis=-1).ravel()])
     assert 0.8 < edges.min() and edges.max() < 2.2
+
+
+@pytest.mark.parametrize("plane", [0, 8])
+def test_axes_after_a_profile_change_are_the_torsion_free_cone_axes(plane):
+    """Step 4 moves the vertices but keeps the normals: the grid's axes are the cone axes of its faces
+    (equal angles with the four unit normals), not the lines to the sphere centres, and the support
+    structure has no torsion along them."""
+    from ppfab.support.structure import torsion
+
+    prof = PlanarCurve.from_points(ELLIPSE, closed=True, name="profile")
+    grid = channel_mesh(**SETS["wavy-open"], profile=prof, profile_plane=plane)
+    n = grid.extended_face_planes[..., :3] / np.linalg.norm(grid.extended_face_planes[..., :3], axis=-1, keepdims=True)
+    around = np.stack([n[:-1, :-1], n[1:, :-1], n[1:, 1:], n[:-1, 1:]], axis=-2)        # (rows, cols, 4, 3)
+    cosines = np.einsum("ijkl,ijl->ijk", around, grid.axes)
+    assert np.ptp(cosines, axis=-1).max() < 1e-9                                          # equal angles
+    to_centre = grid.meta["spheres"][:, None, :3] - grid.vertices
+    to_centre /= np.linalg.norm(to_centre, axis=-1, keepdims=True)
+    assert np.degrees(np.arccos(np.clip(np.einsum("ijk,ijk->ij", grid.axes, to_centre), -1, 1))).max() > 1.0
+    assert torsion(grid, grid.axes.reshape(-1, 3)).max() < 1e-8

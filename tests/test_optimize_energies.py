@@ -8,7 +8,7 @@ import pytest
 from conftest import FULL, SHARED_DATA, conical_zoo
 
 from ppfab.io import load_mesh
-from ppfab.mesh import QuadGrid, QuadMesh
+from ppfab.mesh import QuadGrid
 from ppfab.metrics import grid_conical_residual, mesh_conical_residual, quality
 from ppfab.optimize import optimize
 from ppfab.optimize.reference import ReferenceSurface

@@ -15,24 +15,42 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("design", nargs="?", default=None,
                    help="design file (TOML); omitted: the bundled default example")
     p.add_argument("-o", "--out", required=True, help="output folder (written atomically)")
-    p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing output folder, if it is a previous ppfab build")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.add_argument("--json", action="store_true", help="print a machine-readable summary on stdout")
     p.add_argument("--allow-large", action="store_true",
                    help="proceed with meshes above geometry.max_vertices")
 
 
+def preload() -> None:
+    """Import the CAD kernel and the file libraries now, with signals held: an interruption inside a C
+    extension's initialisation would surface as an ImportError instead of a clean stop."""
+    import importlib
+
+    from . import deferred_signals
+
+    with deferred_signals():
+        for name in ("build123d", "ezdxf", "shapely", "matplotlib"):
+            importlib.import_module(name)
+        importlib.import_module("matplotlib").use("Agg")
+        importlib.import_module("matplotlib.pyplot")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..design import load_design
-    from ..pipeline.folder import AtomicFolder
+    from ..pipeline.folder import check_target
+    from ..pipeline.lock import OutputLock
     from ..pipeline.stages import build
     from ..pipeline.progress import Progress
 
     design = load_design(args.design)
     progress = Progress(quiet=args.quiet or args.json)
-    AtomicFolder.check_target(args.out, force=args.force)          # refuse before the work, not after
-    result = build(design, progress=progress, allow_large=args.allow_large)
-    out = result.write(args.out, force=args.force, progress=progress)
+    check_target(args.out, force=args.force, protect=design.input_files())    # refuse before the work
+    with OutputLock(args.out):                                                 # one run per output folder
+        preload()
+        result = build(design, progress=progress, allow_large=args.allow_large)
+        out = result.write(args.out, force=args.force, progress=progress)
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     if args.json:
         print(json.dumps({"out": str(args.out), "files": manifest["files"], "summary": manifest["summary"],

@@ -111,6 +111,8 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.progress import Progress
 
     out = Path(args.out)
+    if out.is_dir():
+        raise MeshFileError(str(out), "is a folder; give the path of the mesh file to write (.obj or .off)")
     if out.suffix.lower() not in (".obj", ".off"):
         raise MeshFileError(str(out), f"unknown mesh format '{out.suffix}' (use .obj or .off)")
     if not out.parent.exists():

@@ -10,8 +10,8 @@
 """
 
 from .congruence import congruence_distance, group_congruent
-from .panel import Panel, make_panels, panel_types
+from .panel import Panel, make_panels, panel_types, type_flat_parts
 from .params import PanelParams
 
-__all__ = ["Panel", "PanelParams", "make_panels", "panel_types", "group_congruent",
+__all__ = ["Panel", "PanelParams", "make_panels", "panel_types", "type_flat_parts", "group_congruent",
            "congruence_distance"]

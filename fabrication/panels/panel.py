@@ -17,6 +17,7 @@ One panel per face.  For every face (vectorised over all faces):
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 
@@ -31,6 +32,8 @@ from .. import contract
 from . import geometry as geo
 from .congruence import group_congruent
 from .params import PanelParams
+
+log = logging.getLogger("ppfab")
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,8 +83,12 @@ class Panel:
         """The inset outline in 3D, ``(k, 3)`` mm, on the face's least-squares plane."""
         return self.frame.to3d(self.outline)
 
-    def flat_part(self) -> FlatPart:
-        """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF."""
+    def flat_part(self, shape: "Panel | None" = None) -> FlatPart:
+        """This panel as a :class:`~fabrication.flatpart.FlatPart` (``kind="panel"``) for nesting and DXF.
+
+        ``shape``: the panel whose outline and marks are cut — the first panel of this panel's type, so every
+        panel of a type is cut, listed and ordered as the same piece of glass (:func:`type_flat_parts`).
+        """
         meta = {
             "face": self.face,
             "material": self.makeup,
@@ -98,7 +105,8 @@ class Panel:
         if self.face_ij is not None:
             meta["face_i"], meta["face_j"] = self.face_ij
         meta.update(self.meta)
-        return FlatPart(part_id=self.part_id, kind="panel", outline=self.outline, marks=self.marks,
+        cut = shape or self
+        return FlatPart(part_id=self.part_id, kind="panel", outline=cut.outline, marks=cut.marks,
                         label=self.part_id, type_id=self.type_id, rotations=None,
                         mirror_allowed=self.mirror_allowed, meta=meta)
 
@@ -153,20 +161,42 @@ def _face_layout(mesh: QuadMesh | QuadGrid) -> tuple[np.ndarray, np.ndarray | No
 
 
 def _mark_polylines(outline: np.ndarray, size: float) -> tuple:
-    """An L at the reference corner (long leg along the reference edge), inside the outline."""
+    """An L at the reference corner (long leg along the reference edge), inside the outline.
+
+    The L sits ``size / 4`` inside the corner; on a panel too small for that, ``size`` is reduced to the
+    largest that fits (halving, then bisection), so every panel keeps its mark (:func:`mark_size_used`).
+    """
     if size <= 0:
         return ()
     e = geo.edge_vectors(outline[None])[0]
     lengths = np.linalg.norm(e, axis=1)
+    size = mark_size_used(outline, size)
     inner, shrink = geo.inset_polygons(outline[None], 0.25 * size)
-    if not shrink[0] > 0.5:
-        return ()
     a = inner[0, 0]
     along = e[0] / lengths[0]
     back = -e[-1] / lengths[-1]
     long_leg = min(size, 0.3 * lengths[0])
     short_leg = min(0.5 * size, 0.3 * lengths[-1])
     return (np.array([a + long_leg * along, a, a + short_leg * back]),)
+
+
+def mark_size_used(outline: np.ndarray, size: float) -> float:
+    """``size``, or the largest mark size below it whose inset (``size / 4``) still leaves ``outline`` a polygon."""
+    def fits(s: float) -> bool:
+        return bool(geo.inset_polygons(outline[None], 0.25 * s)[1][0] > 0.5)
+
+    if fits(size):
+        return size
+    lo, hi = 0.0, size
+    while hi > 1e-6 and not fits(hi):
+        lo, hi = hi / 2, hi / 2
+    if hi <= 1e-6:
+        return 0.0
+    lo, hi = hi, 2 * hi                  # fits(lo), not fits(hi)
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
+    return lo
 
 
 def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *, scale: float = 1.0) -> list[Panel]:
@@ -230,6 +260,12 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
     weight = area * 1e-6 * p.thickness * 1e-3 * p.density
     long_max, short_max = max(p.max_size), min(p.max_size)
     long_min, short_min = max(p.min_size), min(p.min_size)
+    used = np.array([mark_size_used(o, p.mark_size) if p.mark_size > 0 else 0.0 for o in outline])
+    if np.any(used < p.mark_size):
+        small = np.flatnonzero(used < p.mark_size)
+        k = int(small[np.argmin(used[small])])
+        log.warning("panels.mark_size %g mm does not fit %d panel(s): their reference marks are drawn smaller, "
+                    "down to %.3g mm on %s", p.mark_size, len(small), used[k], ids[k])
     types = group_congruent(list(outline), p.congruence_tolerance, p.mirror_allowed)
     wt = max(3, len(str(int(types.max()) + 1)))
     panels: list[Panel] = []
@@ -263,9 +299,22 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
             thickness_mm=p.thickness,
             mirror_allowed=p.mirror_allowed,
             type_id=f"T{int(types[f]) + 1:0{wt}d}",
-            marks=_mark_polylines(o, p.mark_size),
+            marks=_mark_polylines(o, float(used[f])),
         ))
     return panels
+
+
+def type_flat_parts(panels: list[Panel]) -> list[FlatPart]:
+    """The flat parts of the panels, each cut to the outline of the first panel of its type.
+
+    Panels of one type are congruent within ``congruence_tolerance``; the glass order lists one outline per
+    type (``glass/types/``), so the cutting sheets cut that outline too and ``x, y, rotation_deg, mirrored``
+    of ``parts.csv`` map the type's outline exactly onto each CUT polyline.
+    """
+    first: dict[str, Panel] = {}
+    for pnl in panels:
+        first.setdefault(pnl.type_id, pnl)
+    return [pnl.flat_part(first[pnl.type_id] if pnl.type_id else None) for pnl in panels]
 
 
 def panel_types(panels: list[Panel]) -> dict[str, list[str]]:

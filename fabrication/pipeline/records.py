@@ -8,6 +8,7 @@ from there.
 
 from __future__ import annotations
 
+import errno
 import html
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -24,6 +25,16 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..panels import Panel
     from ..design import Design
     from .progress import Progress
+
+
+def _output_error(exc: OSError, tmp: Path, out: Path) -> Exception:
+    """An operating-system error while writing into the temporary folder ``tmp``, as one line about ``out``."""
+    from ppfab.errors import FabricationError
+
+    name = str(exc.filename or "")
+    where = str(out / Path(name).relative_to(tmp)) if name.startswith(str(tmp)) else (name or str(out))
+    hint = "; free some space or write elsewhere" if exc.errno == errno.ENOSPC else ""
+    return FabricationError(f"cannot write {where}: {exc.strerror or exc}{hint} (nothing was written)")
 
 
 @dataclass(frozen=True)
@@ -106,21 +117,46 @@ class Build:
         return self.geometry.mesh
 
     def write(self, out: str | Path, force: bool = False, progress: "Progress | None" = None) -> Path:
-        """Write the output folder ``out`` atomically (see the README's output contract); returns its path.
+        """Write the output folder ``out`` atomically (see the README's output contract); returns its absolute
+        path.
 
-        Every file goes into a temporary folder beside ``out`` that is renamed into place only when all
-        writers succeeded; with ``force`` an existing folder is replaced.
+        Every file goes into a temporary folder beside ``out``; the checks of ``ppfab verify`` then re-read it,
+        and it is renamed into place only when all writers succeeded and verify found nothing (otherwise
+        :class:`~ppfab.errors.VerificationError` lists the findings and nothing is written).  With ``force``
+        an existing folder is replaced, but only when it is a previous ppfab build
+        (:func:`~fabrication.pipeline.folder.check_target`).
         """
         from ..writers import write_all
         from .folder import AtomicFolder
         from .progress import Progress
 
         prog = progress or Progress(quiet=True)
-        with AtomicFolder(out, force=force) as tmp:
-            write_all(self, tmp, prog)
-        path = Path(out)
+        folder = AtomicFolder(out, force=force, protect=self.design.input_files())
+        with folder as tmp:
+            try:
+                write_all(self, tmp, prog)
+            except OSError as exc:              # disk full, permissions: name the file as the user knows it
+                raise _output_error(exc, tmp, Path(out)) from None
+            self._self_check(tmp, prog)
+        path = folder.target                    # absolute: "a/../b" is b even when a does not exist
         self._written.append(path)
         return path
+
+    def _self_check(self, folder: Path, progress: "Progress") -> None:
+        """Run ``ppfab verify``'s checks on the folder just written; raise if any finds a problem."""
+        from ppfab.errors import VerificationError
+
+        from ..verify import verify
+
+        progress.start("verify")
+        result = verify(folder)
+        if not result.ok:
+            progress.fail()
+            shown = "; ".join(str(f) for f in result.findings[:3])
+            more = f" (and {len(result.findings) - 3} more)" if len(result.findings) > 3 else ""
+            raise VerificationError(f"the files of this build fail ppfab verify, so none were written: "
+                                    f"{shown}{more}")
+        progress.done(f"{len(result.checked)} checks")
 
     def verify(self, out: str | Path | None = None) -> Any:
         """Re-read a folder this build wrote (the last one by default) with ``ppfab verify``'s checks."""

@@ -69,11 +69,29 @@ def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geo
     return g
 
 
+MAX_EXTENT_MM = 1e9
+"""A placed mesh reaching further than this from the origin (1000 km) has wrong units: refused."""
+
+
 def stage_quality(geometry: Geometry, progress: Progress) -> Quality:
-    """Measure δ_f, δ_P, deviation (mm), conical residual and folds; a folded mesh stops the build."""
+    """Measure δ_f, δ_P, deviation (mm), conical residual and folds; a folded or self-intersecting mesh, or one
+    placed absurdly far out (wrong units), stops the build."""
+    from ppfab.intersections import self_intersections
     from ppfab.metrics import quality
 
     progress.start("quality")
+    v = np.asarray(geometry.mesh.vertices, dtype=float)
+    reach = float(np.abs(v).max()) if np.all(np.isfinite(v)) else float("inf")
+    if not reach <= MAX_EXTENT_MM:
+        raise GeometryError(f"the placed mesh reaches {reach:.3g} mm from the origin (more than {MAX_EXTENT_MM:.0e} mm): "
+                            "check [geometry] scale (mesh units to millimetres) and translate", element="mesh",
+                            value=reach)
+    meet = self_intersections(geometry.mesh)
+    if len(meet):
+        f, g = (int(k) for k in meet[0])
+        raise GeometryError(f"the mesh passes through itself: faces {f} and {g} (OBJ order) meet though they share no "
+                            f"corner ({len(meet)} such pair(s)); it cannot be built", element=f"faces {f}, {g}",
+                            value=float(len(meet)))
     q = quality(geometry.mesh)
     if q.flipped_edges:
         raise GeometryError(f"the mesh is folded: {q.flipped_edges} edge(s) join faces with opposite normals "
@@ -128,9 +146,10 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
 def stage_nesting(design: Design, panels: PanelSet, beams: BeamSet, progress: Progress) -> NestingSet:
     """Nest glass panels and beam plates on their stock sheets and verify every placement with shapely."""
     from ..nesting import nest, verify_nesting
+    from ..panels import type_flat_parts
 
     progress.start("nesting")
-    glass_parts = [p.flat_part() for p in panels.panels]
+    glass_parts = type_flat_parts(list(panels.panels))
     beam_parts = beams.flat_parts()
     nestings: list[Nesting] = []
     for parts, params, what in ((glass_parts, design.nesting, "glass"), (beam_parts, design.beam_nesting, "plates")):

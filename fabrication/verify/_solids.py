@@ -93,7 +93,13 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
     t = float(row.get("thickness_mm") or 0.0)
     area = float(row.get("area_mm2") or 0.0)
     pts = np.asarray(points, dtype=float)
-    if t > 0 and area > 0 and abs(volume - area * t) > volume_tol * area * t:
+    allowed = volume_tol * area * t
+    if row["kind"] == "panel":
+        # a pane is modelled on its own face while its area_mm2 is that of its type's outline, which is cut:
+        # congruent within congruence_tolerance, so the two areas differ by at most perimeter × tolerance
+        tol = float(fab.get("panels", {}).get("congruence_tolerance", 0.0))
+        allowed = max(allowed, float(row.get("perimeter_mm") or 0.0) * tol * t)
+    if t > 0 and area > 0 and abs(volume - area * t) > allowed:
         v.error(rel, pid, f"volume {volume:.6g} mm³ ≠ area × thickness {area * t:.6g} mm³")
     mesh = v.data.get("mesh")
     if row["kind"] == "panel" and mesh is not None and row.get("face", "") != "":

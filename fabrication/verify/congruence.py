@@ -49,3 +49,11 @@ def congruence_error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
             if dl + da < best[0] + best[1]:
                 best = (dl, da)
     return best
+
+
+def congruence_limits(reference: np.ndarray, tol: float) -> tuple[float, float]:
+    """The largest edge-length and angle differences (mm, rad) of :func:`congruence_error` for an outline whose
+    corners lie within ``tol`` of those of ``reference`` (a corner moved by ``tol`` changes an edge by up to
+    ``2 tol`` and an angle by up to about ``2 tol`` over each of its two edges), plus 1e-6 for rounding."""
+    lengths, _ = shape_signature(reference)
+    return 2.0 * tol + 1e-6, 4.0 * tol / max(float(lengths.min()), 1e-9) + 1e-6

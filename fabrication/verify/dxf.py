@@ -1,8 +1,10 @@
-"""The DXF cutting sheets: audit, layers, parts once, inside TRIM, spacing, parts.csv, panel congruence."""
+"""The DXF cutting sheets: audit, layers, parts once, inside TRIM, spacing, parts.csv, panel congruence, labels
+and marks.  The outlines found are kept in ``data["cut"]`` (part id → sheet file, outline) for later checks."""
 
 from __future__ import annotations
 
-from .congruence import congruence_error, inset_face_2d
+from .. import contract
+from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
 
 
@@ -19,7 +21,11 @@ def check_dxf(v: Verification) -> None:
     fab = m.get("fabrication", {})
     parts = {r["part_id"]: r for r in v.data.get("parts", [])}
     mesh = v.data.get("mesh")
+    panels_fab = fab.get("panels", {})
+    ctol = float(panels_fab.get("congruence_tolerance", 0.0))
+    marks_wanted = float(panels_fab.get("mark_size", 0.0)) > 0
     seen: dict[str, str] = {}
+    cut = v.data.setdefault("cut", {})
     for key, spacing_key in (("glass_sheets", "nesting"), ("beam_sheets", "beam_nesting")):
         spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
         for sheet_no, rel in enumerate(files.get(key, []), start=1):
@@ -30,11 +36,18 @@ def check_dxf(v: Verification) -> None:
                 continue
             polys = []
             trim = Polygon(content.trim_outline).buffer(1e-6)
+            for label in content.labels:
+                if contract.one_line(label) != label:
+                    v.error(rel, "LABEL", f"text {label!r} holds control characters")
+            if key == "glass_sheets" and marks_wanted and content.marks < len(content.parts):
+                v.error(rel, "MARK", f"{content.marks} reference marks for {len(content.parts)} panels "
+                                     f"(panels.mark_size {panels_fab.get('mark_size')} mm)")
             for part in content.parts:
                 pid = part.part_id
                 if pid in seen:
                     v.error(rel, pid, f"part is also cut on {seen[pid]}")
                 seen[pid] = rel
+                cut[pid] = (rel, part.points)
                 row = parts.get(pid)
                 if row is None:
                     v.error(rel, pid, "part is not in parts.csv")
@@ -52,9 +65,11 @@ def check_dxf(v: Verification) -> None:
                     face = int(row["face"])
                     ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))
                     dl, da = congruence_error(ref, part.points)
-                    if dl > 1e-6 or da > 1e-6:
-                        v.error(rel, pid, f"outline is not the face {face} inset by half the gap "
-                                          f"(edge lengths differ by {dl:.3g} mm, angles by {da:.3g} rad)")
+                    tl, ta = congruence_limits(ref, ctol)
+                    if dl > tl or da > ta:
+                        v.error(rel, pid, f"outline is not the face {face} inset by half the gap within the "
+                                          f"congruence tolerance {ctol:g} mm (edge lengths differ by {dl:.3g} mm, "
+                                          f"angles by {da:.3g} rad)")
             tree = STRtree([p for _, p in polys])
             for i, (pid, poly) in enumerate(polys):
                 for j in tree.query(poly, predicate="dwithin", distance=max(spacing - 1e-6, 0.0)):

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA
+from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
 from ._solids import check_names, check_part_solid, same_value
 
@@ -87,7 +87,7 @@ def check_ifc(v: Verification) -> None:
             v.error(rel, p.Name, f"has no property set {IFC_PSET}")
         else:
             for key in EXCHANGE_PROPERTIES:
-                cell = row.get(key, "")
+                cell = csv_value(row.get(key, ""))
                 if key == "weight_kg" and not cell:
                     cell = row.get("mass_kg", "")
                 if cell == "":

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import EXCHANGE_PROPERTIES, RHINO_LAYERS
+from ..contract import EXCHANGE_PROPERTIES, RHINO_LAYERS, csv_value
 from . import Verification, check, read_csv
 from ._solids import check_names, check_part_solid, polygon_area_3d
 
@@ -57,7 +57,7 @@ def check_rhino(v: Verification) -> None:
             v.error(rel, name, f"is on layer {layer}, expected {want}")
         text = dict(obj.Attributes.GetUserStrings())
         for key in EXCHANGE_PROPERTIES:
-            cell = row.get(key, "") or (row.get("mass_kg", "") if key == "weight_kg" else "")
+            cell = csv_value(row.get(key, "") or (row.get("mass_kg", "") if key == "weight_kg" else ""))
             if cell and text.get(key) != cell:
                 v.error(rel, name, f"user text {key} is {text.get(key)!r}, parts.csv has {cell!r}")
         g = obj.Geometry

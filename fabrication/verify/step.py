@@ -27,6 +27,7 @@ def check_step(v: Verification) -> None:
     except Exception as exc:  # noqa: BLE001
         v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
         return
+    v.data["beam_solids"] = {name: solid for name, solid in reversed(pairs)}
     beams = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "beam"}
     t = float(v.data["manifest"].get("fabrication", {}).get("beam_thickness", 0.0))
     names = [n for n, _ in pairs]

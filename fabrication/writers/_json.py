@@ -8,10 +8,13 @@ from typing import Any
 
 import numpy as np
 
+from ..contract import json_safe
+
 
 def json_text(obj: Any) -> str:
-    """``obj`` as indented JSON with a final newline (arrays become lists, paths strings)."""
-    return json.dumps(obj, indent=2, sort_keys=False, default=_plain) + "\n"
+    """``obj`` as indented JSON with a final newline (arrays become lists, paths strings, NaN and ±inf
+    ``null``: JSON has no such numbers)."""
+    return json.dumps(json_safe(obj), indent=2, sort_keys=False, default=_plain, allow_nan=False) + "\n"
 
 
 def _plain(o: Any) -> Any:

@@ -31,8 +31,8 @@ from ppfab.errors import VerificationError
 from . import Files, writer
 
 from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DIR, GLASS_SHEET_PREFIX,
-                        LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, sheet_file,
-                        type_file, xdata_strings)
+                        LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text,
+                        sheet_file, type_file, xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -107,7 +107,7 @@ class CuttingSheet:
             self.msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
                                     dxfattribs={"layer": "TRIM"})
         if title:
-            self.msp.add_text(title, height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+            self.msp.add_text(dxf_text(title), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
 
     def add_part(self, part: FlatPart, placement: Placement | None = None) -> None:
         """The part's outline on CUT (with XDATA), its label on LABEL, its marks on MARK.
@@ -131,12 +131,12 @@ class CuttingSheet:
         rot = float(placement.rotation_deg) if placement is not None else 0.0
         from ezdxf.enums import TextEntityAlignment
 
-        label = self.msp.add_text(part.label or part.part_id, height=height,
+        label = self.msp.add_text(dxf_text(part.label or part.part_id), height=height,
                                   dxfattribs={"layer": "LABEL", "rotation": rot})
         label.set_placement(tuple(map(float, centre)), align=TextEntityAlignment.MIDDLE_CENTER)
         if tag:
             off = np.array([-np.sin(np.radians(rot)), np.cos(np.radians(rot))]) * (-1.4 * height)
-            sub = self.msp.add_text(tag, height=0.6 * height, dxfattribs={"layer": "LABEL", "rotation": rot})
+            sub = self.msp.add_text(dxf_text(tag), height=0.6 * height, dxfattribs={"layer": "LABEL", "rotation": rot})
             sub.set_placement(tuple(map(float, centre + off)), align=TextEntityAlignment.MIDDLE_CENTER)
         for mark in part.marks:
             pts = to_sheet(mark)

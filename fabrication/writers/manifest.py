@@ -1,5 +1,6 @@
 """``manifest.json``: generator, units, design, mesh, fabrication parameters, files, quality, summary and the
-sha256 of every file listed — written last."""
+sha256 of every file listed — written last.  It holds no absolute path: the design file by its name (with
+its sha256, and the mesh file's), so a build does not depend on where it ran."""
 
 from __future__ import annotations
 
@@ -66,13 +67,21 @@ def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
     qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
     mesh_entry.update(vertices=int(len(qm.vertices)), faces=int(len(qm.faces)))
     design = build.design
+    geometry = as_plain(design.geometry)
+    entry: dict[str, Any] = {"name": design.info.name, "method": design.geometry.method or "mesh",
+                             "source": "bundled default" if design.source == str(DEFAULT_DESIGN)
+                             else Path(design.source).name, "sha256": design.sha256}
+    mesh_file = design.mesh_path()
+    if mesh_file is not None:
+        # only relative paths: the folder must not depend on where it was built (byte-identical builds)
+        if Path(str(geometry["mesh"])).is_absolute():
+            geometry["mesh"] = mesh_file.name
+        entry["mesh_sha256"] = sha256_of(mesh_file)
+    entry["geometry"] = geometry
     doc: dict[str, Any] = {
         "generator": f"ppfab {__version__}",
         "units": "mm",
-        "design": {"name": design.info.name, "method": design.geometry.method or "mesh",
-                   "source": design.source if design.source != str(DEFAULT_DESIGN) else "bundled default",
-                   "sha256": design.sha256,
-                   "geometry": as_plain(design.geometry)},
+        "design": entry,
         "mesh": mesh_entry,
         "fabrication": fabrication_params(design),
         "files": files,

@@ -405,7 +405,13 @@ def concyclic_residual(grid: QuadGrid) -> np.ndarray:
 
 # -- offsets ----------------------------------------------------------------------------------
 
-def offset_faces(grid: QuadGrid, distance: float) -> QuadGrid:
+CONICAL_TOLERANCE = 1e-5
+"""Largest distance (radians, to first order) of the unit face normals at a vertex from their common
+circle for :func:`offset_faces` to treat a grid as conical: above the precision of published conical
+meshes stored as text (5.7e-6 for ``DOS__conical1.obj``), far below a mesh that is not conical (1e-3)."""
+
+
+def offset_faces(grid: QuadGrid, distance: float, tol: float = CONICAL_TOLERANCE) -> QuadGrid:
     """The offset of a conical grid at constant face–face distance ``distance`` (§2.1.3).
 
     Every face plane moves by ``distance`` along its unit normal; vertex ``v``
@@ -418,12 +424,19 @@ def offset_faces(grid: QuadGrid, distance: float) -> QuadGrid:
     ``extended_face_planes``; they pass through the new vertices.
 
     Raises :class:`GeometryError` when a cone degenerates (``a·n ≤ 0.05``) or the
-    offset planes do not meet at a vertex (the input is not conical).
+    offset planes do not meet at a vertex: the input is not conical, the four unit normals at some vertex
+    lie further than ``tol`` from a circle (:func:`concyclic_residual`), and moving the vertices along
+    the fitted axes would bend the faces out of plane.
     """
     d = float(distance)
     E = extended_planes(grid)
     P = vertex_planes(grid, E)
     a, c, res = axis_of_normals(P[..., :3])
+    if np.any(res > tol):
+        idx = tuple(int(k) for k in np.unravel_index(int(np.argmax(res)), res.shape))
+        raise GeometryError(f"vertex {idx}: the face normals around it are {float(res.max()):.2e} from a common circle "
+                            f"(> {tol:g}); the mesh is not conical, so no offset at constant face distance exists",
+                            element=f"vertex {idx}", value=float(res.max()))
     if np.any(c <= 0.05):
         idx = tuple(int(k) for k in np.argwhere(c <= 0.05)[0])
         raise GeometryError(f"vertex {idx}: its faces make {np.degrees(np.arccos(np.clip(c[idx], -1, 1))):.1f}° "

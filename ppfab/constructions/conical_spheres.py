@@ -38,6 +38,7 @@ from ..mesh import QuadGrid
 from ..schema import param
 from ..frame import Frame
 from ..curves import PlanarCurve, support_values
+from ppfab.conical.cones import cone_axes
 from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
 from .registry import construction
 
@@ -108,8 +109,9 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     Returns
     -------
     QuadGrid ``(N+1, faces_profile + 1)`` (``(N+1, faces_profile)`` closed) with ``support_u = W``,
-    unit face planes as ``face_image``, ``extended_face_planes`` (ghosts included), cone axes
-    through the sphere centres, and ``meta`` with the sampled spheres ``Z``, their parameters and ``H``.
+    unit face planes as ``face_image``, ``extended_face_planes`` (ghosts included), the cone axes
+    (:func:`ppfab.conical.cones.cone_axes`: through the sphere centres on the channel mesh, the same
+    directions after Step 4), and ``meta`` with the sampled spheres ``Z``, their parameters and ``H``.
     """
     if faces_spine < 1 or faces_profile < (3 if closed else 1):
         raise GeometryError(f"need at least 1 face along the spine and {3 if closed else 1} around the profile")
@@ -142,9 +144,11 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
         s = orientation_sign(grid, inner)
         if (s > 0).sum() >= (s < 0).sum():
             break
-    axes = Z[:, None, :3] - v
-    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
-    axes *= np.sign(np.einsum("ijk,ijk->ij", axes, _mean_normals(E)))[..., None] * -1.0
+    # the cone axes of the faces at each vertex (ghosts included at the boundary), turned against the
+    # normals; on the channel mesh they pass through the sphere centres, after Step 4 (a parallel mesh:
+    # the same normals) they are the same directions at the moved vertices — not the lines to the centres
+    assert grid is not None
+    axes, _ = cone_axes(grid)
     degrees = np.degrees(th[1:] if closed else th[1:-1])
     strip_t = 0.5 * (tz[1:] + tz[:-1])
     meta = {"spheres": Z, "sphere_t": tz, "H": H, "profile_plane": k0,
@@ -155,11 +159,6 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
         check_folds(grid, strip_t, degrees, reference=inner, context="conical_spheres",
                     names=("spine t", "profile angle"))
     return grid
-
-
-def _mean_normals(E: np.ndarray) -> np.ndarray:
-    n = E[..., :3]
-    return n[:-1, :-1] + n[1:, :-1] + n[1:, 1:] + n[:-1, 1:]
 
 
 def _vertices(E: np.ndarray, W: np.ndarray, closed: bool) -> np.ndarray:

@@ -1,21 +1,29 @@
 """OBJ and OFF reading and writing for all-quad meshes.
 
 Reading validates what a fabrication tool relies on and names the first
-offence: non-quad faces (with their line), indices out of range, NaN/inf
-coordinates, repeated corners, duplicate faces, coincident (unwelded)
-vertices, zero-area faces, non-manifold edges (used by more than two faces)
-and inconsistent orientation (an edge used twice in the same direction).  Writing a :class:`QuadGrid` uses row-major order:
-vertex ``v[i, j]`` is line ``i·(n+1) + j``, face ``f[i, j]`` row-major.
+offence: a path that is not a regular file (a FIFO, a device, a folder — refused before
+anything is read), more vertices than the caller allows (counted from the OFF header or the
+OBJ ``v`` lines before parsing), an OFF file holding more or fewer records than its header
+announces, non-quad faces (with their line), indices out of range, NaN/inf or absurdly large
+coordinates, repeated corners, duplicate faces, coincident (unwelded) vertices — allowed only
+in pairs along a seam, where the boundary edges coincide too, never as a single point where the
+surface touches itself — zero-area faces, non-manifold edges (used by more than two faces)
+and inconsistent orientation (an edge used twice in the same direction).  A UTF-8 byte-order
+mark is skipped.  Writing a :class:`QuadGrid` uses row-major order:
+vertex ``v[i, j]`` is line ``i·(n+1) + j``, face ``f[i, j]`` row-major; the OBJ header comment
+is kept on one line (:func:`obj_comment`).
 """
 
 from __future__ import annotations
 
+import logging
 import os
+import re
+import stat
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
-
-import logging
 
 from ..errors import MeshFileError
 from ..mesh import QuadGrid, QuadMesh
@@ -65,6 +73,8 @@ def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
     pos = 1
     try:
         nv, nf = int(tokens[1]), int(tokens[2])
+        if nv < 0 or nf < 0:
+            raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces")
         pos = 4
         verts = np.array([float(t) for t in tokens[pos:pos + 3 * nv]], dtype=float)
         if len(verts) != 3 * nv:
@@ -81,9 +91,14 @@ def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
             pos += 1 + cnt
     except IndexError:
         raise MeshFileError(path, "OFF file is shorter than its header announces") from None
+    except MeshFileError:
+        raise
     except ValueError:
         raise MeshFileError(path, f"OFF record near line {token_line[min(pos, len(tokens) - 1)]} "
                                   "is not a list of numbers") from None
+    if pos < len(tokens):
+        raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces, but the file goes on "
+                                  f"after face {nf - 1} (line {token_line[pos]}): fix the counts in the header")
     return verts.reshape(-1, 3), faces, lines
 
 
@@ -95,6 +110,11 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
     bad = np.argwhere(~np.isfinite(v))
     if len(bad):
         raise MeshFileError(path, f"vertex {int(bad[0][0])} has a non-finite coordinate (NaN or inf)")
+    big = np.argwhere(np.abs(v) > MAX_COORDINATE)
+    if len(big):
+        k = int(big[0][0])
+        raise MeshFileError(path, f"vertex {k} has a coordinate of {float(np.abs(v[k]).max()):.3g}, beyond "
+                                  f"±{MAX_COORDINATE:.0e} (check the file's units)")
     sizes = np.array([len(f) for f in faces])
     if np.any(sizes != 4):
         k = int(np.flatnonzero(sizes != 4)[0])
@@ -137,8 +157,10 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
 
 
 def _check_coincident(path: str, v: np.ndarray, f: np.ndarray, used: np.ndarray, size: float) -> None:
-    """Coincident vertices are an error unless both lie on the boundary (a seam where a closed
-    surface was cut open, as in surfaces of revolution) — those are kept and logged."""
+    """Coincident vertices are an error unless both lie on the boundary along a seam (where a closed
+    surface was cut open, as in surfaces of revolution): there each of the two has a boundary edge that
+    coincides with a boundary edge of the other.  Seams are kept and logged; a pair without such an edge
+    is a point where the surface touches itself (a figure 8) and is refused."""
     key = np.round(v[used] / (1e-9 * size)).astype(np.int64)
     _, first, inverse, counts = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
@@ -148,23 +170,80 @@ def _check_coincident(path: str, v: np.ndarray, f: np.ndarray, used: np.ndarray,
     he = np.sort(np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1), axis=1)
     e, cnt = np.unique(he, axis=0, return_counts=True)
     boundary = np.zeros(len(v), dtype=bool)
-    boundary[e[cnt == 1].ravel()] = True
+    bedges = e[cnt == 1]
+    boundary[bedges.ravel()] = True
+    weld = np.arange(len(v))                          # vertex → the first vertex at its position
+    weld[used] = used[first[inverse]]
+    welded, twins = np.unique(np.sort(weld[bedges], axis=1), axis=0, return_counts=True)
+    on_seam = np.zeros(len(v), dtype=bool)            # welded vertex on a boundary edge that has a twin
+    on_seam[welded[twins > 1].ravel()] = True
     for k in dup:
         a, b = int(used[first[inverse[k]]]), int(used[k])
-        if a != b and not (boundary[a] and boundary[b]):
+        if a == b:
+            continue
+        if not (boundary[a] and boundary[b]):
             raise MeshFileError(path, f"vertices {a} and {b} coincide at {v[a].tolist()} (duplicate vertices "
                                       "inside the mesh: weld them before use)")
+        if not on_seam[weld[b]]:
+            raise MeshFileError(path, f"boundary vertices {a} and {b} coincide at {v[a].tolist()} with no boundary "
+                                      "edge in common: the surface touches itself in a point (a figure 8); "
+                                      "move them apart or weld them")
     log.info("%s: %d boundary vertices coincide with others (a seam; kept)", path, len(dup) - len(set(inverse[dup])))
 
 
-def read_mesh(path: str | os.PathLike) -> QuadMesh:
-    """Read an OBJ or OFF file as a :class:`QuadMesh` (quads kept, checked; see module doc)."""
-    p = Path(path)
+MAX_COORDINATE = 1e12
+"""Largest coordinate magnitude a mesh file may hold (beyond it squared lengths lose all precision)."""
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def regular_file(path: str | os.PathLike, what: str = "file") -> int:
+    """The size in bytes of ``path`` if it is a regular file (symbolic links followed); otherwise
+    :class:`MeshFileError` — decided from ``stat`` alone, so a FIFO or a device is never opened."""
     try:
-        text = p.read_text(encoding="utf-8", errors="replace")
+        st = os.stat(path)
     except OSError as exc:
         raise MeshFileError(str(path), f"cannot read ({exc.strerror or exc})") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = next((name for test, name in _KINDS if test(st.st_mode)), "not a regular file")
+        link = f" (a symbolic link to {os.path.realpath(path)})" if os.path.islink(path) else ""
+        raise MeshFileError(str(path), f"is {kind}{link}, not a regular {what}; give the path of a {what}")
+    return int(st.st_size)
+
+
+_OBJ_VERTEX = re.compile(rb"^[ \t]*v[ \t]", re.MULTILINE)
+
+
+def announced_vertices(data: bytes, suffix: str) -> int:
+    """The number of vertices a mesh file holds, counted without parsing it: the OFF header's count, or the
+    OBJ ``v`` lines (``-1`` when an OFF header cannot be read; the parser then says why)."""
+    head = data[:4096].decode("utf-8-sig", errors="replace")
+    if suffix == ".off" or head.lstrip().startswith("OFF"):
+        tokens = " ".join(line.split("#", 1)[0] for line in head.splitlines()).split()
+        try:
+            return int(tokens[1])
+        except (IndexError, ValueError):
+            return -1
+    return len(_OBJ_VERTEX.findall(data))
+
+
+def read_mesh(path: str | os.PathLike, vertex_limit: Callable[[int], None] | None = None) -> QuadMesh:
+    """Read an OBJ or OFF file as a :class:`QuadMesh` (quads kept, checked; see module doc).
+
+    ``vertex_limit(n)`` is called with the number of vertices the file holds (:func:`announced_vertices`)
+    before it is parsed, and may raise to refuse it.
+    """
+    p = Path(path)
+    regular_file(p, "mesh file")
     suffix = p.suffix.lower()
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise MeshFileError(str(path), f"cannot read ({exc.strerror or exc})") from None
+    if vertex_limit is not None:
+        vertex_limit(announced_vertices(data, suffix))
+    text = data.decode("utf-8-sig", errors="replace")
     if suffix == ".off" or text.lstrip().startswith("OFF"):
         v, faces, lines = _parse_off(text, str(path))
     elif suffix == ".obj":
@@ -175,13 +254,13 @@ def read_mesh(path: str | os.PathLike) -> QuadMesh:
     return QuadMesh(v, f)
 
 
-def load_mesh(path: str | os.PathLike) -> QuadMesh:
+def load_mesh(path: str | os.PathLike, vertex_limit: Callable[[int], None] | None = None) -> QuadMesh:
     """:func:`read_mesh`, with the grid recovered when the mesh is a regular patch.
 
     The returned mesh keeps the file's own vertex and face order; ``mesh.grid``
     is the recovered :class:`QuadGrid` (with ``vertex_ids`` into the file) or ``None``.
     """
-    mesh = read_mesh(path)
+    mesh = read_mesh(path, vertex_limit)
     grid = mesh.try_grid()
     if grid is None:
         return mesh
@@ -192,8 +271,21 @@ def _fmt(x: float) -> str:
     return np.format_float_positional(x, precision=12, unique=True, trim="-") if abs(x) < 1e15 else repr(float(x))
 
 
+_LINE_BREAKS = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def obj_comment(text: str) -> str:
+    """``text`` as one OBJ comment line: control characters and every character a reader may take for a
+    line break (``str.splitlines`` does for ``\\x1c``–``\\x1e``, ``\\x85``, U+2028, U+2029) become spaces.
+
+    >>> obj_comment("roof\\nv 1 2 3")
+    'roof v 1 2 3'
+    """
+    return _LINE_BREAKS.sub(" ", text)
+
+
 def _obj_text(vertices: np.ndarray, faces: np.ndarray, header: str) -> str:
-    out = [f"# {header}"] if header else []
+    out = [f"# {obj_comment(header)}"] if header else []
     out += ["v " + " ".join(repr(float(c)) for c in row) for row in vertices]
     out += ["f " + " ".join(str(int(i) + 1) for i in row) for row in faces]
     return "\n".join(out) + "\n"

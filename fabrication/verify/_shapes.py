@@ -1,0 +1,131 @@
+"""Shared readers of the verify checks: rows of the CSV tables, plate frames, solid outlines, point matching.
+
+Not a check (the leading underscore keeps it out of the registry).
+"""
+
+from __future__ import annotations
+
+import ast
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+
+def number(text: Any, default: float = float("nan")) -> float:
+    """A CSV cell as a float (``default`` when empty or not a number)."""
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return default
+
+
+def literal(text: str) -> Any:
+    """A cell holding a Python/JSON literal (``[0, 1]``, ``{'origin': …}``), or ``None`` when it does not."""
+    try:
+        return ast.literal_eval(text) if text else None
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
+        return None
+
+
+def frame_of(row: dict[str, str]) -> dict[str, np.ndarray] | None:
+    """The plate frame of a ``parts.csv`` beam row: ``origin``, ``x_dir``, ``y_dir``, ``normal`` (unit)."""
+    doc = literal(row.get("frame", ""))
+    if not isinstance(doc, dict):
+        return None
+    try:
+        return {k: np.asarray(doc[k], dtype=float).reshape(3) for k in ("origin", "x_dir", "y_dir", "normal")}
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def to_frame(points: np.ndarray, frame: dict[str, np.ndarray]) -> np.ndarray:
+    """3D points ``(k, 3)`` in a plate frame: ``(k, 3)`` columns x, y (in the plate), z (across it)."""
+    d = np.asarray(points, dtype=float) - frame["origin"]
+    return np.stack([d @ frame["x_dir"], d @ frame["y_dir"], d @ frame["normal"]], axis=1)
+
+
+def torsion_tolerance(manifest: dict[str, Any]) -> tuple[float, str]:
+    """The torsion a build may have, mm at beam depth, and the key it comes from: ``beams.max_torsion_mm``
+    when the design has it, else ``beams.plane_tolerance`` (how far a vertex may be off its beam's plane)."""
+    beams = manifest.get("fabrication", {}).get("beams", {})
+    if beams.get("max_torsion_mm") is not None:
+        return float(beams["max_torsion_mm"]), "beams.max_torsion_mm"
+    return float(beams.get("plane_tolerance", manifest.get("fabrication", {}).get("beam_plane_tolerance", 0.5))), \
+        "beams.plane_tolerance"
+
+
+def solid_points(solid: Any) -> np.ndarray:
+    """``(k, 3)`` vertices of a CAD solid."""
+    return np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
+
+
+def face_outline(solid: Any, normal: np.ndarray) -> np.ndarray | None:
+    """The ordered outer boundary ``(k, 3)`` of the planar face of ``solid`` facing ``normal`` (a plate's top or
+    bottom face), from the chain of its edges; ``None`` when the solid has no such face."""
+    n = np.asarray(normal, dtype=float)
+    for face in solid.faces():
+        try:
+            fn = np.array(tuple(face.normal_at()), dtype=float)
+        except Exception:  # noqa: BLE001 - a non-planar face
+            continue
+        if abs(float(fn @ n)) < 1.0 - 1e-9:
+            continue
+        segs = [(np.array(tuple(e.start_point())), np.array(tuple(e.end_point()))) for e in face.outer_wire().edges()]
+        return _chain(segs)
+    return None
+
+
+def _chain(segs: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray | None:
+    if not segs:
+        return None
+    pts = [segs[0][0], segs[0][1]]
+    rest = segs[1:]
+    while rest:
+        end = pts[-1]
+        k = min(range(len(rest)), key=lambda i: min(np.linalg.norm(rest[i][0] - end), np.linalg.norm(rest[i][1] - end)))
+        a, b = rest.pop(k)
+        pts.append(b if np.linalg.norm(a - end) <= np.linalg.norm(b - end) else a)
+    return np.array(pts[:-1])
+
+
+def set_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest distance from a point of either set to the nearest point of the other (``inf`` if counts differ)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if len(a) != len(b) or len(a) == 0:
+        return float("inf")
+    return float(max(cKDTree(b).query(a)[0].max(), cKDTree(a).query(b)[0].max()))
+
+
+def cyclic_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Smallest largest corner distance between polygons ``a`` and ``b`` over cyclic relabellings and reversal
+    of ``b`` (``inf`` when their corner counts differ)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape or len(a) == 0:
+        return float("inf")
+    best = float("inf")
+    for poly in (b, b[::-1]):
+        for k in range(len(poly)):
+            best = min(best, float(np.linalg.norm(np.roll(poly, k, axis=0) - a, axis=1).max()))
+    return best
+
+
+def boundary_distance(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """``(m,)`` distance of 2D points from the boundary of a polygon ``(k, 2)``."""
+    p = np.asarray(points, dtype=float)[:, None, :]
+    a = np.asarray(polygon, dtype=float)
+    b = np.roll(a, -1, axis=0)
+    e = b - a
+    t = np.clip(np.einsum("mki,ki->mk", p - a, e) / np.maximum(np.einsum("ki,ki->k", e, e), 1e-300), 0.0, 1.0)
+    foot = a + t[..., None] * e
+    return np.linalg.norm(p - foot, axis=-1).min(axis=1)
+
+
+def edges_on_line(polygon: np.ndarray, point: np.ndarray, direction: np.ndarray, tol: float) -> bool:
+    """Whether some edge of a 2D polygon lies on the line ``point + s·direction`` (both ends within ``tol``)."""
+    a = np.asarray(polygon, dtype=float)
+    d = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    nrm = np.array([-d[1], d[0]])
+    off = (a - point) @ nrm
+    on = np.abs(off) <= tol
+    return bool(np.any(on & np.roll(on, -1)))

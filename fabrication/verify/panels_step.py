@@ -1,0 +1,48 @@
+"""panels.step against the mesh: one solid per panel, named by its part id, whose vertices are the face's
+corners on its least-squares plane and the same moved by the glass thickness along the face normal."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import Verification, check
+from ._shapes import set_distance, solid_points
+
+
+@check("panels_step", 62)
+def check_panels_step(v: Verification) -> None:
+    m = v.data.get("manifest", {})
+    rel = m.get("files", {}).get("panels_step")
+    mesh = v.data.get("mesh")
+    if rel is None or mesh is None:
+        return
+    from build123d import import_step
+
+    from ..writers.step import named_solids
+
+    try:
+        pairs = named_solids(import_step(str(v.folder / rel)))
+    except Exception as exc:  # noqa: BLE001
+        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+        return
+    t = float(m.get("fabrication", {}).get("glass_thickness", 0.0))
+    panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
+    names = [n for n, _ in pairs]
+    for name in sorted(set(panels) - set(names)):
+        v.error(rel, name, "panel has no solid")
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        v.error(rel, name, "more than one solid carries this name")
+    for name, solid in pairs:
+        row = panels.get(name)
+        if row is None:
+            v.error(rel, name or "(unnamed)", "solid is not a panel of parts.csv")
+            continue
+        c = mesh.vertices[mesh.faces[int(row["face"])]]
+        centre = c.mean(axis=0)
+        n = np.linalg.svd(c - centre)[2][2]
+        proj = c - np.outer((c - centre) @ n, n)
+        pts = solid_points(solid)
+        err = min(set_distance(pts, np.concatenate([proj, proj + s * t * n])) for s in (1.0, -1.0))
+        if not err <= 1e-6:
+            v.error(rel, name, f"solid is {err:.3g} mm from face {row['face']} of mesh.obj and its {t:g} mm offset")
+    v.checked.append("panels_step")

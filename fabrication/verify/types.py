@@ -1,0 +1,62 @@
+"""The per-type DXFs (the files the glass order sends the supplier): one flat outline each, congruent, within
+the congruence tolerance, with the 3D face (inset by half the gap) of every panel of its type.
+
+The outlines are kept in ``data["type_outlines"]`` (type id → outline) for the placement check.
+"""
+
+from __future__ import annotations
+
+from ..contract import csv_value
+from .congruence import congruence_error, congruence_limits, inset_face_2d
+from . import Verification, check
+
+
+@check("types", 52)
+def check_types(v: Verification) -> None:
+    from ..writers.dxf import check_sheet_dxf
+
+    m = v.data.get("manifest", {})
+    files = m.get("files", {})
+    mesh = v.data.get("mesh")
+    parts = v.data.get("parts", [])
+    fab = m.get("fabrication", {})
+    ctol = float(fab.get("panels", {}).get("congruence_tolerance", 0.0))
+    gap = float(fab.get("panel_gap", 0.0))
+    by_type: dict[str, list[dict]] = {}
+    for p in parts:
+        if p["kind"] == "panel":
+            by_type.setdefault(csv_value(p["type_id"]), []).append(p)
+    outlines = v.data.setdefault("type_outlines", {})
+    for rel in files.get("panel_type_dxfs", []):
+        try:
+            content = check_sheet_dxf(v.folder / rel, require_sheet=False)
+        except Exception as exc:  # noqa: BLE001 - reported as a finding
+            v.error(rel, "", str(exc))
+            continue
+        if len(content.parts) != 1:
+            v.error(rel, "", f"holds {len(content.parts)} CUT outlines, expected one")
+            continue
+        part = content.parts[0]
+        tid = part.xdata.get("type_id", "")
+        members = by_type.get(tid)
+        if not members:
+            v.error(rel, tid or part.part_id, "type is not a panel type of parts.csv")
+            continue
+        outlines[tid] = part.points
+        if mesh is None:
+            continue
+        for row in members:
+            if row.get("face", "") == "":
+                continue
+            face = int(row["face"])
+            ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * gap)
+            dl, da = congruence_error(ref, part.points)
+            tl, ta = congruence_limits(ref, ctol)
+            if dl > tl or da > ta:
+                v.error(rel, tid, f"outline is not congruent with face {face} ({row['part_id']}) inset by half the gap: "
+                                  f"edge lengths differ by {dl:.3g} mm, angles by {da:.3g} rad (congruence "
+                                  f"tolerance {ctol:g} mm)")
+    for tid in sorted(set(by_type) - set(outlines)):
+        if files.get("panel_type_dxfs"):
+            v.error("glass/types", tid, "panel type has no per-type DXF")
+    v.checked.append("types")

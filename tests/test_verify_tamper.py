@@ -1,0 +1,273 @@
+"""Tamper matrix: each realistic mistake in a delivered folder, made after the build and with the manifest's
+sha256 updated (so only the geometric and cross-file checks can catch it), is named by ``ppfab verify`` —
+file and element."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from fabrication.cli import main
+
+from conftest import small_design
+
+DESIGN = small_design(6, 4, u_range=(-4.5, 4.5), name="tamper", extra="""
+[beams]
+depth = 150.0
+thickness = 12.0
+joint = "halflap"
+max_length = 5000.0
+[panels]
+gap = 16.0
+""")
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("tamper")
+    (root / "d.toml").write_text(DESIGN)
+    out = root / "out"
+    assert main(["build", str(root / "d.toml"), "-o", str(out), "--quiet"]) == 0
+    return out
+
+
+@pytest.fixture
+def copy(built, tmp_path):
+    out = tmp_path / "copy"
+    shutil.copytree(built, out)
+    return out
+
+
+def reseal(folder, *names):
+    """Update the manifest's sha256 of the tampered files, as someone covering their tracks would."""
+    m = json.loads((folder / "manifest.json").read_text())
+    for name in names:
+        m["sha256"][name] = hashlib.sha256((folder / name).read_bytes()).hexdigest()
+    (folder / "manifest.json").write_text(json.dumps(m, indent=2))
+
+
+def findings(folder, capsys) -> str:
+    capsys.readouterr()
+    assert main(["verify", str(folder), "--quiet"]) == 1
+    return capsys.readouterr().err
+
+
+def read_rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def write_rows(path, rows):
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    path.write_text(buf.getvalue())
+
+
+def manifest(folder):
+    return json.loads((folder / "manifest.json").read_text())
+
+
+def cut_outline(folder, kind):
+    """(sheet file, doc, entity) of the first CUT outline of a panel ("glass") or plate ("beam") sheet."""
+    import ezdxf
+
+    rel = manifest(folder)["files"]["glass_sheets" if kind == "glass" else "beam_sheets"][0]
+    doc = ezdxf.readfile(folder / rel)
+    ent = next(e for e in doc.modelspace() if e.dxftype() == "LWPOLYLINE" and e.dxf.layer == "CUT")
+    return rel, doc, ent
+
+
+def part_of(ent):
+    return next(v.split("=", 1)[1] for c, v in ent.get_xdata("PPFAB") if v.startswith("part_id="))
+
+
+def test_untampered_copy_verifies(copy, capsys):
+    assert main(["verify", str(copy), "--quiet"]) == 0
+
+
+def test_panel_outline_moved_half_a_millimetre_in_a_dxf(copy, capsys):
+    rel, doc, ent = cut_outline(copy, "glass")
+    pid = part_of(ent)
+    ent.set_points([(x + 0.5, y) for x, y, *_ in ent.get_points("xyseb")], format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: {pid}: parts.csv placement" in err and "0.5 mm from the CUT polyline" in err
+
+
+@pytest.mark.parametrize("change", ["rotation+180,x+100", "mirrored"])
+def test_parts_csv_placement_changed(copy, capsys, change):
+    rows = read_rows(copy / "parts.csv")
+    row = next(r for r in rows if r["kind"] == "panel")
+    if change == "mirrored":
+        row["mirrored"] = "1" if row["mirrored"] == "0" else "0"
+    else:
+        row["rotation_deg"] = str(float(row["rotation_deg"]) + 180.0)
+        row["x"] = str(float(row["x"]) + 100.0)
+    write_rows(copy / "parts.csv", rows)
+    reseal(copy, "parts.csv")
+    err = findings(copy, capsys)
+    assert f": {row['part_id']}: parts.csv placement" in err and "from the CUT polyline" in err
+
+
+def _turn(a, degrees, about):
+    about = about / np.linalg.norm(about)
+    t = np.radians(degrees)
+    return a * np.cos(t) + np.cross(about, a) * np.sin(t) + about * (about @ a) * (1 - np.cos(t))
+
+
+def test_node_axis_turned_five_degrees(copy, capsys):
+    rows = read_rows(copy / "nodes.csv")
+    r = rows[len(rows) // 2]
+    a = np.array([float(r[c]) for c in ("axis_x", "axis_y", "axis_z")])
+    b = _turn(a, 5.0, np.cross(a, [1.0, 0.3, 0.0]))
+    for c, x in zip(("axis_x", "axis_y", "axis_z"), b):
+        r[c] = f"{x:.9f}"
+    write_rows(copy / "nodes.csv", rows)
+    reseal(copy, "nodes.csv")
+    err = findings(copy, capsys)
+    node = r["node_id"]
+    assert f"nodes.csv: {node}: axis differs from nodes.json" in err
+    assert f"mesh.json: {node}: axis" in err
+    assert f"{node}" in err and "leaves the plate's plane" in err
+
+
+def test_node_beam_list_replaced(copy, capsys):
+    rows = read_rows(copy / "nodes.csv")
+    inner = [r for r in rows if r["boundary"] == "0"]
+    r, other = inner[0], inner[-1]
+    assert r["beams"] != other["beams"]
+    r["beams"] = other["beams"]
+    write_rows(copy / "nodes.csv", rows)
+    reseal(copy, "nodes.csv")
+    err = findings(copy, capsys)
+    assert f"nodes.csv: {r['node_id']}: beam list does not match the plates of parts.csv" in err
+
+
+def test_per_type_dxf_scaled(copy, capsys):
+    import ezdxf
+
+    rel = manifest(copy)["files"]["panel_type_dxfs"][0]
+    doc = ezdxf.readfile(copy / rel)
+    for e in doc.modelspace():
+        if e.dxftype() == "LWPOLYLINE":
+            e.set_points([(1.01 * x, 1.01 * y) for x, y, *_ in e.get_points("xyseb")], format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    tid = rel.rsplit("_", 1)[1].removesuffix(".dxf")
+    assert f"{rel}: {tid}: outline is not congruent with face" in err
+
+
+def test_order_quantity_changed(copy, capsys):
+    rows = read_rows(copy / "glass_order.csv")
+    rows[0]["quantity"] = str(int(rows[0]["quantity"]) + 5)
+    write_rows(copy / "glass_order.csv", rows)
+    reseal(copy, "glass_order.csv")
+    err = findings(copy, capsys)
+    assert f"glass_order.csv: {rows[0]['type_id']}: quantity" in err
+
+
+def test_parts_json_changed(copy, capsys):
+    doc = json.loads((copy / "parts.json").read_text())
+    part = doc["parts"][3]
+    part["area_mm2"] += 1000.0
+    (copy / "parts.json").write_text(json.dumps(doc, indent=1, sort_keys=True))
+    reseal(copy, "parts.json")
+    err = findings(copy, capsys)
+    assert f"parts.json: {part['part_id']}: area_mm2 is" in err
+
+
+def _rewrite_step(folder, name, change):
+    from build123d import Compound, export_step, import_step
+
+    from fabrication.writers.step import named_solids
+
+    pairs = named_solids(import_step(str(folder / name)))
+    target = next(n for n, _ in pairs if n.startswith("B-W") or n.startswith("P-")) if name == "panels.step" \
+        else next(n for n, _ in pairs if n.startswith("B-W"))
+    solids = []
+    for n, s in pairs:
+        if n == target:
+            s = change(s)
+        s.label = n
+        solids.append(s)
+    export_step(Compound(children=solids), str(folder / name))
+    reseal(folder, name)
+    return target
+
+
+@pytest.mark.parametrize("change", ["moved 50 mm", "rotated 3°"])
+def test_step_beam_solid_moved_or_rotated(copy, capsys, change):
+    from build123d import Axis, Pos
+
+    def move(s):
+        if change == "moved 50 mm":
+            return s.moved(Pos(30.0, 40.0, 0.0))
+        c = s.center()
+        return s.rotate(Axis((c.X, c.Y, c.Z), (0.3, 0.2, 1.0)), 3.0)
+
+    pid = _rewrite_step(copy, "beams.step", move)
+    err = findings(copy, capsys)
+    assert f"beams.step: {pid}: solid is not the plate of its frame" in err or f"beams.step: {pid} at N" in err
+
+
+def test_panels_step_changed(copy, capsys):
+    from build123d import Pos
+
+    pid = _rewrite_step(copy, "panels.step", lambda s: s.moved(Pos(0.0, 0.0, 5.0)))
+    err = findings(copy, capsys)
+    assert f"panels.step: {pid}: solid is 5 mm from face" in err
+
+
+def test_plate_outline_changed_by_two_millimetres(copy, capsys):
+    rel, doc, ent = cut_outline(copy, "beam")
+    pid = part_of(ent)
+    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
+    # the vertex with the largest y: on the plate's outer edge, where no neighbour is near
+    k = max(range(len(pts)), key=lambda i: pts[i][1])
+    pts[k] = (pts[k][0], pts[k][1] + 2.0)
+    ent.set_points(pts, format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: {pid}: parts.csv placement" in err and "2 mm from the CUT polyline" in err
+
+
+def test_torsion_beyond_tolerance(copy, capsys):
+    """One axis turned by 0.5° in every file that carries it (nodes.csv, nodes.json, mesh.json): the files
+    agree, only the torsion of its edges (0.5° at 150 mm depth is 1.3 mm) shows it; a design tolerance
+    ``beams.max_torsion_mm`` above that accepts it."""
+    rows = read_rows(copy / "nodes.csv")
+    r = rows[len(rows) // 2]
+    k = int(r["vertex"])
+    a = np.array([float(r[c]) for c in ("axis_x", "axis_y", "axis_z")])
+    b = _turn(a, 0.5, np.cross(a, [1.0, 0.3, 0.0]))
+    for c, x in zip(("axis_x", "axis_y", "axis_z"), b):
+        r[c] = repr(float(x))
+    write_rows(copy / "nodes.csv", rows)
+    nodes = json.loads((copy / "nodes.json").read_text())
+    nodes["nodes"][k]["axis"] = b.tolist()
+    (copy / "nodes.json").write_text(json.dumps(nodes, indent=1))
+    grid = json.loads((copy / "mesh.json").read_text())
+    grid["axes"][int(r["i"])][int(r["j"])] = b.tolist()
+    (copy / "mesh.json").write_text(json.dumps(grid, indent=2))
+    reseal(copy, "nodes.csv", "nodes.json", "mesh.json")
+    err = findings(copy, capsys)
+    assert f"edge N{k:04d}-" in err or f"-N{k:04d}: torsion" in err
+    assert "(> beams.plane_tolerance 0.5 mm)" in err
+    assert "axis differs" not in err
+    m = manifest(copy)
+    m["fabrication"]["beams"]["max_torsion_mm"] = 2.0
+    (copy / "manifest.json").write_text(json.dumps(m, indent=2))
+    capsys.readouterr()
+    main(["verify", str(copy), "--quiet"])
+    assert "at beam depth 150 mm (>" not in capsys.readouterr().err
