@@ -17,7 +17,7 @@ from ppfab.errors import NestingError
 
 from ..flatpart import FlatPart
 from .params import NestingParams
-from .shapes import Orient, free_angles, orientations
+from .shapes import Orient, free_angles, halos, orientations, unique_angles
 
 
 @dataclass(eq=False)
@@ -50,28 +50,48 @@ class Catalog:
         return len(self.parts)
 
 
-def _check_outline(part: FlatPart) -> np.ndarray:
-    outline = np.asarray(part.outline, dtype=float)
-    if outline.ndim != 2 or outline.shape[1] != 2 or len(outline) < 3 or not np.all(np.isfinite(outline)):
-        raise NestingError(f"part {part.part_id}: outline must be a finite (k>=3, 2) polygon, got shape {outline.shape}")
-    if part.area <= 0:
-        raise NestingError(f"part {part.part_id}: outline is not counter-clockwise or has no area "
-                           f"(area {part.area:.3g} mm²)")
-    from shapely.geometry import Polygon
+def _check_outlines(parts: list[FlatPart]) -> list[np.ndarray]:
+    """The outlines as float arrays; a malformed, clockwise or self-crossing one is named."""
+    import shapely
     from shapely.validation import explain_validity
 
-    poly = Polygon(outline)
-    if not poly.is_valid:      # a self-crossing outline has no well-defined halo: spacing could not be kept
-        raise NestingError(f"part {part.part_id}: outline is not a simple polygon ({explain_validity(poly)})")
-    return outline
+    outlines = []
+    for part in parts:
+        outline = np.asarray(part.outline, dtype=float)
+        if outline.ndim != 2 or outline.shape[1] != 2 or len(outline) < 3 or not np.all(np.isfinite(outline)):
+            raise NestingError(f"part {part.part_id}: outline must be a finite (k>=3, 2) polygon, got shape {outline.shape}")
+        if part.area <= 0:
+            raise NestingError(f"part {part.part_id}: outline is not counter-clockwise or has no area "
+                               f"(area {part.area:.3g} mm²)")
+        outlines.append(outline)
+    polys = np.array([shapely.Polygon(o) for o in outlines], dtype=object)
+    valid = shapely.is_valid(polys)
+    if not valid.all():       # a self-crossing outline has no well-defined halo: spacing could not be kept
+        k = int(np.flatnonzero(~valid)[0])
+        raise NestingError(f"part {parts[k].part_id}: outline is not a simple polygon ({explain_validity(polys[k])})")
+    return outlines
+
+
+def rotation_policy(part: FlatPart, params: NestingParams) -> tuple[bool, list[float]]:
+    """``(free, angles)`` for ``part``: free rotation, else the allowed angles (degrees).
+
+    The part's own policy wins (``free_rotation``, then ``rotations``); a part without one takes the
+    nesting's (``free_rotation``, ``rotations``).  For a free part ``angles`` are the preferred ones.
+    """
+    if part.free_rotation:
+        return True, [float(r) for r in params.rotations]
+    if part.rotations is not None:
+        return False, [float(r) for r in part.rotations]
+    return bool(params.free_rotation), [float(r) for r in params.rotations]
 
 
 def part_rotations(part: FlatPart, params: NestingParams) -> list[float]:
-    """Rotations allowed for ``part``: its own, else the nesting's (plus edge-aligning angles when free)."""
-    rots = list(part.rotations) if part.rotations is not None else list(params.rotations)
-    if params.free_rotation and part.rotations is None:
-        rots = sorted(set(float(r) % 360.0 for r in rots) | set(free_angles(np.asarray(part.outline, dtype=float))))
-    return [float(r) % 360.0 for r in rots]
+    """Rotations tried for ``part``: the allowed ones, or for a free part its preferred ones, the angles
+    that lay each (longest) hull edge along the bottom or the top, and its minimum-area rectangle frame."""
+    free, rots = rotation_policy(part, params)
+    if free:
+        rots = rots + free_angles(np.asarray(part.outline, dtype=float))
+    return unique_angles(rots)
 
 
 def build_catalog(parts: list[FlatPart], params: NestingParams) -> Catalog:
@@ -83,21 +103,26 @@ def build_catalog(parts: list[FlatPart], params: NestingParams) -> Catalog:
     s = float(params.spacing)
     x0, y0, x1, y1 = params.usable()
     L, H = (x1 - x0) + s, (y1 - y0) + s
-    orients: list[Orient] = []
-    starts = [0]
     seen: set[str] = set()
-    for i, part in enumerate(parts):
+    for part in parts:
         if part.part_id in seen:
             raise NestingError(f"part id {part.part_id!r} occurs twice in the parts to nest")
         seen.add(part.part_id)
-        outline = _check_outline(part)
+    outlines = _check_outlines(parts)
+    part_halos = halos(outlines, s)
+    orients: list[Orient] = []
+    starts = [0]
+    for i, part in enumerate(parts):
+        outline = outlines[i]
         rots = part_rotations(part, params)
-        poses = [o for o in orientations(i, outline, rots, bool(part.mirror_allowed), s)
+        poses = [o for o in orientations(i, outline, rots, bool(part.mirror_allowed), s, part_halos[i])
                  if o.w + s <= L + 1e-9 and o.h + s <= H + 1e-9]
         if not poses:
             w, h = np.ptp(outline, axis=0)
+            free, _ = rotation_policy(part, params)
+            what = "any rotation" if free else f"rotations {rots}"
             raise NestingError(f"part {part.part_id} ({w:.1f} x {h:.1f} mm) fits no sheet: usable area is "
-                               f"{x1 - x0:.1f} x {y1 - y0:.1f} mm, rotations {rots}")
+                               f"{x1 - x0:.1f} x {y1 - y0:.1f} mm, {what}")
         orients.extend(poses)
         starts.append(len(orients))
     part_start = np.array(starts, dtype=np.int64)

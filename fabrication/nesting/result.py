@@ -58,10 +58,10 @@ def placed_outline(part: FlatPart, placement: Placement) -> np.ndarray:
 
 
 def _allowed_rotation(part: FlatPart, rot: float, params: NestingParams) -> bool:
-    if params.free_rotation and part.rotations is None:
-        return True
-    allowed = list(part.rotations) if part.rotations is not None else list(params.rotations)
-    return any(abs(((rot - a) + 180.0) % 360.0 - 180.0) < 1e-6 for a in allowed)
+    from .catalog import rotation_policy
+
+    free, allowed = rotation_policy(part, params)
+    return free or any(abs(((rot - a) + 180.0) % 360.0 - 180.0) < 1e-6 for a in allowed)
 
 
 def verify_nesting(parts: list[FlatPart], nesting: Nesting, params: NestingParams, tol: float = 1e-6) -> None:

@@ -61,29 +61,91 @@ def ccw(points: np.ndarray) -> np.ndarray:
 
 def halo(poly: np.ndarray, spacing: float) -> np.ndarray:
     """Outline offset outwards by ``spacing`` (mitred, limit 1.1: contains the round offset), ``(b, 2)``."""
+    return halos([poly], spacing)[0]
+
+
+def halos(polys: list[np.ndarray], spacing: float) -> list[np.ndarray]:
+    """:func:`halo` of many outlines at once (one vectorised shapely call), each ``(b_i, 2)`` counter-clockwise.
+
+    The halo of a rotated outline is the rotated halo, so a part's halo is made once and turned
+    with each of its poses.
+    """
     if spacing <= 0:
-        return ccw(poly)
-    from shapely.geometry import Polygon
+        return [ccw(p) for p in polys]
+    import shapely
 
-    g = Polygon(poly).buffer(spacing + HALO_EXTRA, join_style="mitre", mitre_limit=1.1)
-    return ccw(np.asarray(g.exterior.coords, dtype=float)[:-1])
+    geoms = [shapely.Polygon(p) for p in polys]
+    out = shapely.buffer(np.array(geoms, dtype=object), spacing + HALO_EXTRA, join_style="mitre", mitre_limit=1.1)
+    return [ccw(np.asarray(shapely.get_exterior_ring(g).coords, dtype=float)[:-1]) for g in out]
 
 
-def free_angles(outline: np.ndarray) -> list[float]:
-    """Rotations (degrees, in [0, 360)) that lay each convex-hull edge of ``outline`` along +x."""
+def hull_edge_angles(outline: np.ndarray, most: int = 8) -> list[float]:
+    """Rotations (degrees, in [0, 360)) that lay a convex-hull edge of ``outline`` along +x.
+
+    An edge ``e`` of a counter-clockwise hull laid along +x has the part above it (the edge at the
+    bottom); ``+ 180°`` puts it on top.  Only the ``most`` longest hull edges are used.
+    """
     from shapely.geometry import MultiPoint
 
     hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
     e = np.diff(hull, axis=0)
-    ang = (-np.degrees(np.arctan2(e[:, 1], e[:, 0]))) % 360.0
-    return sorted(set(round(float(a), 9) % 360.0 for a in ang))
+    keep = np.argsort(-np.hypot(e[:, 0], e[:, 1]), kind="stable")[:most]
+    ang = (-np.degrees(np.arctan2(e[keep, 1], e[keep, 0]))) % 360.0
+    return [float(a) for a in ang]
+
+
+def free_angles(outline: np.ndarray) -> list[float]:
+    """Rotations tried for a part that may turn freely, degrees in [0, 360).
+
+    Every (longest) hull edge along +x at the bottom and at the top of the part, and the frame of
+    the part's minimum-area rectangle in its four quarter turns (lying and standing).
+    """
+    edge = hull_edge_angles(outline)
+    rect = min_rect_angle(outline)
+    angles = edge + [(a + 180.0) % 360.0 for a in edge] + [(rect + 90.0 * k) % 360.0 for k in range(4)]
+    return unique_angles(angles)
+
+
+def min_rect_angle(outline: np.ndarray) -> float:
+    """Rotation (degrees) that lays the long side of the minimum-area rectangle of ``outline`` along +x.
+
+    The optimum has a side on the convex hull (Freeman & Shapira), so every hull edge direction is tried.
+    """
+    from shapely.geometry import MultiPoint
+
+    hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
+    e = np.diff(hull, axis=0)
+    ang = np.arctan2(e[:, 1], e[:, 0])
+    c, s = np.cos(ang), np.sin(ang)
+    px = hull[None, :, 0] * c[:, None] + hull[None, :, 1] * s[:, None]
+    py = -hull[None, :, 0] * s[:, None] + hull[None, :, 1] * c[:, None]
+    w, h = np.ptp(px, axis=1), np.ptp(py, axis=1)
+    k = int(np.argmin(w * h))
+    a = -math.degrees(ang[k]) + (0.0 if w[k] >= h[k] else 90.0)
+    return a % 360.0
+
+
+def unique_angles(angles: list[float], tol: float = 1e-6) -> list[float]:
+    """Angles modulo 360 without near-duplicates (within ``tol`` degrees), sorted."""
+    out: list[float] = []
+    for a in sorted(float(x) % 360.0 for x in angles):
+        if not out or a - out[-1] > tol:
+            out.append(a)
+    if len(out) > 1 and out[0] + 360.0 - out[-1] <= tol:
+        out.pop()
+    return out
 
 
 def orientations(part_index: int, outline: np.ndarray, rotations: list[float], mirror: bool,
-                 spacing: float) -> list[Orient]:
-    """All poses of a part (duplicates of the same polygon removed)."""
+                 spacing: float, part_halo: np.ndarray | None = None) -> list[Orient]:
+    """All poses of a part (duplicates of the same polygon removed).
+
+    ``part_halo`` is the halo of ``outline`` (made here when not given); each pose's halo is it
+    turned with the pose.
+    """
     out: list[Orient] = []
     seen: set = set()
+    hl = halo(outline, spacing) if part_halo is None else part_halo
     for mirrored in ([False, True] if mirror else [False]):
         for rot in rotations:
             r = float(rot) % 360.0
@@ -95,7 +157,8 @@ def orientations(part_index: int, outline: np.ndarray, rotations: list[float], m
                 continue
             seen.add(key)
             w, h = poly.max(axis=0)
-            out.append(Orient(part_index, r, mirrored, poly, -lo, float(w), float(h), halo(poly, spacing)))
+            out.append(Orient(part_index, r, mirrored, poly, -lo, float(w), float(h),
+                              ccw(rotate(hl, r, mirrored)) - lo))
     return out
 
 
