@@ -36,7 +36,11 @@ UNITS_PER_SECOND = 215_000.0    # work units per second of budget (measured on a
 STRIP_SHARE = 0.9               # irregular mode stacks strips alone when they hold this share of the part area
 
 
-def _filler(cat: Catalog, kind: str, work: Work) -> SheetFiller | StackFiller:
+def _filler(cat: Catalog, kind: str, work: Work):
+    if kind in ("bands", "bands_guillotine"):
+        from .bands import BandFiller
+
+        return BandFiller(cat, work, guillotine=kind == "bands_guillotine")
     return StackFiller(cat, work) if kind == "stack" else SheetFiller(cat, kind == "rows", work)
 
 
