@@ -45,15 +45,17 @@ import numpy as np
 
 from .catalog import Catalog
 from .reach import fillable
-from .rows import Piece, Sheet, Work
+from .budget import Work
+from .rows import Piece, Sheet
 from .shapes import HALO_EXTRA, slide_distance
 from .stack import column_extents
 
 END_Q = 10.0                  # grid of the look-ahead over row lengths and sheet heights, mm
 SLABS = 40                    # slabs over the median pose height
 SHORTLIST = 48                # candidates evaluated exactly per batch (the ones closest below the row height)
-# work units (≈ 5 µs each on the reference machine)
-COST_STEP, COST_CELL, COST_SLIDE, COST_ROW, COST_REACH = 25.0, 1.0 / 400.0, 60.0, 20.0, 100.0
+# work units (≈ 1 µs each on the reference machine)
+COST_STEP, COST_CELL, COST_SLIDE, COST_ROW, COST_REACH = 40.0, 1.55 / 400.0, 93.0, 31.0, 155.0
+COST_PROFILE = 40.0            # per pose: slab profiles and the filler's arrays
 
 
 @dataclass(eq=False)
@@ -94,7 +96,7 @@ class BandConfig:
     alpha: float = 1.0          # part values: area^alpha (shared search interface)
     bonus: float = 0.05         # waste bonus per unit of (part area / mean part area): larger parts first
     jitter: float = 0.0         # random perturbation of the waste scores
-    heights: int = 5            # row heights tried per row
+    heights: int = 3            # row heights tried per row
     spread: float = 0.6         # quantile range of remaining pose heights the row heights come from
     shortlist: int = SHORTLIST
     ends: float = 1.0           # weight of the row-end look-ahead (length no remaining part can fill)
@@ -108,7 +110,10 @@ class BandFiller:
         self.cat = cat
         self.work = work
         self.guillotine = guillotine
-        self.prof = profiles if profiles is not None else build_band_profiles(cat)
+        if profiles is None:
+            profiles = build_band_profiles(cat)
+            work.add(COST_PROFILE * len(cat.orients))
+        self.prof = profiles
         self.Lu = cat.L - cat.spacing
         self.Hu = cat.H - cat.spacing
         self.s = cat.spacing
@@ -122,8 +127,15 @@ class BandFiller:
         self.rtop = P.rx[np.arange(len(P.nk)), top]                       # rightmost halo point at a pose's top slab
         self.rtop = np.where(np.isfinite(self.rtop), self.rtop, self.o_w + self.s)
         self.k = k
+        # halo right extents aligned with the pose's slabs, the space above its top counted as taken: (O, K)
+        K = P.lx.shape[1]
+        rxa = np.full((len(P.nk), K), -np.inf)
+        m = min(K, P.rx.shape[1] - P.r)
+        rxa[:, :m] = P.rx[:, P.r:P.r + m]
+        self.rxa = np.where(k[None, :] >= P.nk[:, None], np.maximum(rxa, self.rtop[:, None]), rxa)
         self.row_gap = self.s + HALO_EXTRA + 1e-3        # a row starts above the halos of the row below
         self.halo_box = np.array([[*o.halo.min(axis=0), *o.halo.max(axis=0)] for o in cat.orients])
+        self.w_base = self.o_w - np.where(np.isfinite(P.lx[:, 0]), P.lx[:, 0], 0.0)
         self.by_h = np.argsort(self.o_h, kind="stable")
         self.h_sorted = self.o_h[self.by_h]
         self.tol = 0.01
@@ -140,7 +152,7 @@ class BandFiller:
     def random_config(self, rng: np.random.Generator) -> BandConfig:
         return BandConfig(bonus=float(rng.choice([0.0, 0.02, 0.05, 0.1, 0.2])),
                           jitter=float(rng.choice([0.0, 0.0, 0.02, 0.05])),
-                          heights=int(rng.choice([3, 5, 8])),
+                          heights=int(rng.choice([2, 3, 5])),
                           spread=float(rng.choice([0.3, 0.6, 1.0])))
 
     # -- one row --------------------------------------------------------------------------------
@@ -164,13 +176,14 @@ class BandFiller:
         """
         c = self.cat
         room = self.Lu - float(F.min())
+        room0 = self.Lu - float(F[0])          # every pose stands on slab 0: it ends at least w − lx[0] right of F[0]
         end = int(np.searchsorted(self.h_sorted, hr + 1e-9, side="right"))
         m = cfg.shortlist
         win = 4 * m
         while end > 0:
             start = max(end - win, 0)
             idx = self.by_h[start:end][::-1]
-            ok = idx[rem[c.o_part[idx]] & (self.o_w[idx] <= room + 1e-9)]
+            ok = idx[rem[c.o_part[idx]] & (self.o_w[idx] <= room + 1e-9) & (self.w_base[idx] <= room0 + 1e-9)]
             self.work.add(COST_CELL * (end - start) * 20)
             for i in range(0, len(ok), m):
                 yield ok[i: i + m]
@@ -183,18 +196,13 @@ class BandFiller:
         """Rest positions ``x (C,)`` and scores ``(C,)`` (``inf`` where the pose does not fit the row)."""
         P = self.prof
         lx = P.lx[o, :nr]
-        x = np.maximum((F[None, :lx.shape[1]] - lx).max(axis=1), 0.0)
-        rx = np.full((len(o), nr), -np.inf)
-        m = min(nr, P.rx.shape[1] - P.r)
-        rx[:, :m] = P.rx[o, P.r:P.r + m]
-        above = self.k[None, :nr] >= P.nk[o][:, None]
-        rx = np.where(above, np.maximum(rx, self.rtop[o][:, None]), rx)
-        Fn = np.maximum(F[None, :], x[:, None] + rx)
-        consumed = (Fn - F[None, :]).sum(axis=1) * P.q
+        x = np.maximum((F[None, :] - lx).max(axis=1), 0.0)
+        Fn = np.maximum(F[None, :], x[:, None] + self.rxa[o, :nr])
+        consumed = (Fn.sum(axis=1) - F.sum()) * P.q
         area = self.o_area[o]
         score = consumed / area - cfg.bonus * area / self.mean_area
         if ends is not None:            # the row length left after this part, and how much of it others can fill
-            left = np.clip(self.Lu - Fn.mean(axis=1), 0.0, self.Lu)
+            left = np.clip(self.Lu - (F.sum() + consumed / P.q) / nr, 0.0, self.Lu)
             cell = np.minimum((left / END_Q).astype(np.int64), len(ends) - 1)
             score = score + cfg.ends * (left - ends[cell]) * hr / area
         if cfg.jitter > 0 and rng is not None:
@@ -285,11 +293,7 @@ class BandFiller:
             row.append(Piece(o, float(x), float(yb)))
             rem[c.o_part[o]] = False
             area += float(self.o_area[o])
-            rx = np.full(nr, -np.inf)
-            m = min(nr, P.rx.shape[1] - P.r)
-            rx[:m] = P.rx[o, P.r:P.r + m]
-            rx = np.where(self.k[:nr] >= P.nk[o], np.maximum(rx, self.rtop[o]), rx)
-            F = np.maximum(F, x + rx)
+            F = np.maximum(F, x + self.rxa[o, :nr])
             if self.guillotine:
                 ys = yb + (np.arange(nr) + 1.0) * P.q
                 cut = np.maximum(self._cut_x(o, x, yb, ys), self._cut_x(o, x, yb, ys - P.q))

@@ -27,26 +27,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .budget import Work
 from .catalog import Catalog
 from .shapes import pair_gains, slide_distance
 
-# work units (≈ 5 µs each on the reference machine) charged per operation: see Work
-COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 30, 1.0, 60, 150, 40
-
-
-@dataclass
-class Work:
-    """Deterministic work counter: the currency of the time budget.
-
-    Every knapsack, sliding test and gain matrix charges a fixed number of units (about
-    5 µs each on the machine the constants were measured on), so a search that stops after
-    a number of units does the same thing on any machine.
-    """
-
-    units: float = 0.0
-
-    def add(self, n: float) -> None:
-        self.units += n
+# work units (≈ 1 µs each on the reference machine) charged per operation: see .budget
+COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 140.0, 4.65, 280.0, 700.0, 186.0
 
 
 @dataclass
@@ -234,7 +220,7 @@ class SheetFiller:
         if any((a, b) not in self._gains for a in poses for b in poses):
             G = pair_gains([c.orients[o].halo for o in poses], np.array([c.orients[o].w for o in poses]),
                            [c.orients[o].poly for o in poses], c.spacing)
-            self.work.add(COST_GAINS + n * n)
+            self.work.add(COST_GAINS + 4.65 * n * n)
             for i, a in enumerate(poses):
                 for j, b in enumerate(poses):
                     self._gains[(a, b)] = float(G[i, j])

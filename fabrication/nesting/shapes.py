@@ -55,8 +55,17 @@ def ccw(points: np.ndarray) -> np.ndarray:
     """The polygon in counter-clockwise order (a mirrored outline turns clockwise)."""
     p = np.asarray(points, dtype=float)
     x, y = p[:, 0], p[:, 1]
-    area = 0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-    return p if area >= 0 else p[::-1].copy()
+    area2 = float(x[:-1] @ y[1:] - y[:-1] @ x[1:] + x[-1] * y[0] - y[-1] * x[0])
+    return p if area2 >= 0 else p[::-1].copy()
+
+
+def rotations_matrix(degrees: np.ndarray) -> np.ndarray:
+    """Matrices ``(R, 2, 2)`` acting on row vectors: ``p @ M[r]`` is ``p`` turned by ``degrees[r]``."""
+    a = np.radians(np.asarray(degrees, dtype=float))
+    c, s = np.cos(a), np.sin(a)
+    quarter = np.abs(np.asarray(degrees, dtype=float) % 90.0) < 1e-12      # exact quarter turns
+    c, s = np.where(quarter, np.round(c), c), np.where(quarter, np.round(s), s)
+    return np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], -2)
 
 
 def halo(poly: np.ndarray, spacing: float) -> np.ndarray:
@@ -137,28 +146,35 @@ def unique_angles(angles: list[float], tol: float = 1e-6) -> list[float]:
 
 
 def orientations(part_index: int, outline: np.ndarray, rotations: list[float], mirror: bool,
-                 spacing: float, part_halo: np.ndarray | None = None) -> list[Orient]:
-    """All poses of a part (duplicates of the same polygon removed).
+                 spacing: float, part_halo: np.ndarray | None = None, dedupe: bool = True) -> list[Orient]:
+    """All poses of a part (with ``dedupe``, duplicates of the same polygon removed).
 
     ``part_halo`` is the halo of ``outline`` (made here when not given); each pose's halo is it
-    turned with the pose.
+    turned with the pose.  All rotations are applied at once (one matrix product per mirror side).
     """
     out: list[Orient] = []
     seen: set = set()
     hl = halo(outline, spacing) if part_halo is None else part_halo
+    rots = np.array([float(r) % 360.0 for r in rotations])
+    M = rotations_matrix(rots)
     for mirrored in ([False, True] if mirror else [False]):
-        for rot in rotations:
-            r = float(rot) % 360.0
-            p = ccw(rotate(outline, r, mirrored))
-            lo = p.min(axis=0)
-            poly = p - lo
-            key = tuple(sorted(map(tuple, np.round(poly, 6).tolist())))    # the same point set = the same pose
-            if key in seen:
-                continue
-            seen.add(key)
-            w, h = poly.max(axis=0)
-            out.append(Orient(part_index, r, mirrored, poly, -lo, float(w), float(h),
-                              ccw(rotate(hl, r, mirrored)) - lo))
+        flip = np.array([-1.0, 1.0]) if mirrored else np.array([1.0, 1.0])
+        P = np.einsum("kj,rji->rki", outline * flip, M)             # (R, k, 2)
+        Hh = np.einsum("kj,rji->rki", hl * flip, M)
+        lo = P.min(axis=1)
+        P = P - lo[:, None, :]
+        Hh = Hh - lo[:, None, :]
+        size = P.max(axis=1)
+        if mirrored:                                                  # mirroring reverses the orientation
+            P, Hh = P[:, ::-1], Hh[:, ::-1]
+        for r in range(len(rots)):
+            if dedupe:
+                key = tuple(sorted(map(tuple, np.round(P[r], 6).tolist())))    # the same point set = the same pose
+                if key in seen:
+                    continue
+                seen.add(key)
+            out.append(Orient(part_index, float(rots[r]), mirrored, P[r], -lo[r], float(size[r, 0]),
+                              float(size[r, 1]), Hh[r]))
     return out
 
 
@@ -208,10 +224,10 @@ def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple
         return math.inf
     d = np.asarray(direction, dtype=float)
     m = np.asarray(moving, dtype=float)
-    fa = np.concatenate([np.asarray(f, dtype=float) for f in fixed])
-    fb = np.concatenate([np.roll(np.asarray(f, dtype=float), -1, axis=0) for f in fixed])
+    fa = np.concatenate(fixed) if len(fixed) > 1 else np.asarray(fixed[0], dtype=float)
+    fb = np.concatenate([np.concatenate([f[1:], f[:1]]) for f in fixed])
     t1 = _ray_hits(m[:, None, :], d, fa[None], fb[None], tol).min(initial=math.inf)
-    t2 = _ray_hits(fa[:, None, :], -d, m[None], np.roll(m, -1, axis=0)[None], tol).min(initial=math.inf)
+    t2 = _ray_hits(fa[:, None, :], -d, m[None], np.concatenate([m[1:], m[:1]])[None], tol).min(initial=math.inf)
     return float(min(t1, t2))
 
 

@@ -48,13 +48,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .catalog import Catalog
-from .rows import Piece, Sheet, Work
+from .budget import Work
+from .rows import Piece, Sheet
 from .shapes import slide_distance
 
 CELLS = 300                     # column cells across the usable length (q = L / CELLS)
 ELONGATION = 6.0                # a part whose narrowest box is this many times longer than deep is a strip
-# work units (≈ 5 µs each on the reference machine): per candidate cell evaluated, per step, per exact slide
-COST_CELL, COST_STEP, COST_SLIDE = 1.0 / 220.0, 40.0, 60.0
+# work units (≈ 1 µs each on the reference machine): per candidate cell evaluated, per step, per exact slide
+COST_CELL, COST_STEP, COST_SLIDE = 4.65 / 220.0, 186.0, 280.0
+COST_PROFILE = 60.0             # per pose: column profiles and the filler's arrays
 STRIDE, SHORTLIST = 4, 32      # short-listing: every 4th cell for all candidates, all cells for the best 32
 
 
@@ -189,7 +191,10 @@ class StackFiller:
     def __init__(self, cat: Catalog, work: Work, profiles: Profiles | None = None):
         self.cat = cat
         self.work = work
-        self.prof = profiles if profiles is not None else build_profiles(cat)
+        if profiles is None:
+            profiles = build_profiles(cat)
+            work.add(COST_PROFILE * len(cat.orients))
+        self.prof = profiles
         self.Hu = cat.H - cat.spacing
         self.o_h = np.array([o.h for o in cat.orients])
         self.halo_box = np.array([[*o.halo.min(axis=0), *o.halo.max(axis=0)] for o in cat.orients])   # (O, 4)
