@@ -88,16 +88,26 @@ def halos(polys: list[np.ndarray], spacing: float) -> list[np.ndarray]:
     return [ccw(np.asarray(shapely.get_exterior_ring(g).coords, dtype=float)[:-1]) for g in out]
 
 
+def convex_hull(outline: np.ndarray) -> np.ndarray:
+    """Counter-clockwise convex hull ``(h, 2)`` of a polygon (the polygon itself when it is convex)."""
+    p = np.asarray(outline, dtype=float)
+    e_in = p - np.concatenate([p[-1:], p[:-1]])
+    e_out = np.concatenate([p[1:], p[:1]]) - p
+    if np.all(e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0] >= 0):
+        return p
+    from shapely.geometry import MultiPoint
+
+    return ccw(np.asarray(MultiPoint([tuple(q) for q in p]).convex_hull.exterior.coords, dtype=float)[:-1])
+
+
 def hull_edge_angles(outline: np.ndarray, most: int = 8) -> list[float]:
     """Rotations (degrees, in [0, 360)) that lay a convex-hull edge of ``outline`` along +x.
 
     An edge ``e`` of a counter-clockwise hull laid along +x has the part above it (the edge at the
     bottom); ``+ 180°`` puts it on top.  Only the ``most`` longest hull edges are used.
     """
-    from shapely.geometry import MultiPoint
-
-    hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
-    e = np.diff(hull, axis=0)
+    hull = convex_hull(outline)
+    e = np.concatenate([hull[1:], hull[:1]]) - hull
     keep = np.argsort(-np.hypot(e[:, 0], e[:, 1]), kind="stable")[:most]
     ang = (-np.degrees(np.arctan2(e[keep, 1], e[keep, 0]))) % 360.0
     return [float(a) for a in ang]
@@ -120,10 +130,8 @@ def min_rect_angle(outline: np.ndarray) -> float:
 
     The optimum has a side on the convex hull (Freeman & Shapira), so every hull edge direction is tried.
     """
-    from shapely.geometry import MultiPoint
-
-    hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
-    e = np.diff(hull, axis=0)
+    hull = convex_hull(outline)
+    e = np.concatenate([hull[1:], hull[:1]]) - hull
     ang = np.arctan2(e[:, 1], e[:, 0])
     c, s = np.cos(ang), np.sin(ang)
     px = hull[None, :, 0] * c[:, None] + hull[None, :, 1] * s[:, None]

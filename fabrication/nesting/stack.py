@@ -76,8 +76,11 @@ def column_extents(polys: list[np.ndarray], q: float, x_from: np.ndarray,
         its edges cross the slab's sides, and those are the points examined.
     """
     k = np.array([len(p) for p in polys])
-    a = np.concatenate([np.asarray(p, dtype=float) for p in polys])
-    b = np.concatenate([np.roll(np.asarray(p, dtype=float), -1, axis=0) for p in polys])
+    a = np.concatenate(polys).astype(float, copy=False)
+    start = np.cumsum(k) - k
+    nxt = np.arange(len(a)) + 1
+    nxt[start + k - 1] = start                      # each polygon's last vertex joins its first
+    b = a[nxt]
     pid = np.repeat(np.arange(len(polys)), k)
     x0 = np.asarray(x_from, dtype=float)[pid]
     nn = np.asarray(n, dtype=np.int64)
