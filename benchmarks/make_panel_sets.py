@@ -21,6 +21,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -34,12 +35,13 @@ sys.path.insert(0, str(REPO))
 
 SETS = {
     # name: (file, repository, path in it, commit, families to make planar, scale mesh units -> mm)
+    # commit: as far as the data README records it; the sha256 of the file read is stored with each set
     "conjugate_roof_P": ("compas_libigl__inspired_mesh_quads_Conjugate.off", "compas-dev/compas_libigl",
                          "data/libigl-tutorial-data/inspired_mesh_quads_Conjugate.off", "",
                          "rows", 1900.0),
     "gitter_PP": ("libhedra__gitter.off", "avaxman/libhedra", "examples/data/gitter.off", "9e660fb2",
                   "both", 12500.0),
-    "conical1_PP": ("DOS__conical1.obj", "WWmore/DOS", "objs/obj_pq/conical1.obj", "f15cff51", "both", 1500.0),
+    "conical1_PP": ("DOS__conical1.obj", "WWmore/DOS", "objs/obj_pq/conical1.obj", "", "both", 1500.0),
 }
 
 
@@ -51,13 +53,14 @@ def make_set(name: str) -> dict:
     file, repo, path, commit, families, scale = SETS[name]
     mesh = load_mesh(DATA / file)
     res = optimize(mesh, families=families, target_delta_f=1e-6, target_delta_p=1e-6, max_iterations=300)
-    params = PanelParams(gap=20.0, planarity_tolerance=0.5)
+    params = PanelParams(gap=20.0, planarity_tolerance=0.5, rotation="quarter")      # reference-edge frame
     panels = make_panels(res.mesh, params, scale=scale)
     outlines = [np.round(p.outline, 3).tolist() for p in panels]
     area = sum(p.area_mm2 for p in panels) / 1e6
     return {
         "name": name,
-        "source": {"repository": repo, "path": path, "commit": commit, "file": file},
+        "source": {"repository": repo, "path": path, "commit": commit, "file": file,
+                   "sha256": hashlib.sha256((DATA / file).read_bytes()).hexdigest()},
         "made_with": {"optimize": {"families": families, "target_delta_f": 1e-6, "target_delta_p": 1e-6,
                                    "delta_f_max": res.delta_f_max, "delta_p_max": res.delta_p_max,
                                    "targets_met": res.targets_met},
@@ -73,7 +76,7 @@ def make_set(name: str) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("names", nargs="*", choices=[*SETS, []], help="sets to make (default: all)")
+    ap.add_argument("names", nargs="*", help=f"sets to make (default: all of {', '.join(SETS)})")
     args = ap.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     for name in args.names or list(SETS):
