@@ -25,9 +25,13 @@ ppfab: every strategy of the table on its own budget (``--budget`` s, the defaul
 each result checked by ``verify_nesting``.  Columns: sheets, utilisation (part area / area of the
 sheets used), seconds (wall; CPU in parentheses), and the note.
 
+``--budget-check`` instead times the whole nesting stage (``nest`` and ``verify_nesting``) of the
+default design's glass at 22x15, 44x30, 66x45 and 88x60 faces against the budget.
+
 Usage::
 
     python benchmarks/nesting.py                  # everything (about 25 min on 2 cores)
+    python benchmarks/nesting.py --budget-check 3 6
     python benchmarks/nesting.py --budget 10 --only bench_panels_500 conical1_PP
 """
 
@@ -78,6 +82,35 @@ def default_design():
     s = support_structure(g.mesh, d.section("support"), planar_families=g.planar_families)
     plates = build_beams(s, d.section("beams")).flat_parts()
     return glass, d.section("nesting"), plates, d.section("beam_nesting")
+
+
+def default_glass_at(faces_u: int, faces_v: int) -> tuple[list[FlatPart], NestingParams]:
+    """The default design's glass with ``faces_u x faces_v`` faces (same surface: smaller panels) and its [nesting]."""
+    from fabrication.panels import make_panels
+    from ppfab.cli.design import load_design
+    from ppfab.cli.pipeline import build_geometry
+
+    d = load_design(None)
+    geo = replace(d.geometry, params={**d.geometry.params, "faces_u": faces_u, "faces_v": faces_v})
+    g = build_geometry(replace(d, geometry=geo))
+    return [p.flat_part() for p in make_panels(g.mesh, d.section("panels"))], d.section("nesting")
+
+
+def budget_check(budgets: list[float], sizes: list[tuple[int, int]]) -> None:
+    """Wall and CPU time of the nesting stage (nest + verify_nesting) against ``time_budget``, per size."""
+    print(f"{'faces':>8s} {'panels':>6s} {'mode':>10s} {'budget s':>8s} {'wall s':>7s} {'cpu s':>7s} "
+          f"{'wall/budget':>11s} {'units/budget':>12s} {'sheets':>6s}")
+    for fu, fv in sizes:
+        parts, params = default_glass_at(fu, fv)
+        for mode in ("auto", "rectangles", "guillotine", "irregular"):
+            for b in budgets:
+                p = replace(params, time_budget=b, mode=mode)
+                t, c = time.perf_counter(), time.process_time()
+                res = nest(parts, p)
+                verify_nesting(parts, res, p)
+                wall, cpu = time.perf_counter() - t, time.process_time() - c
+                print(f"{fu:>4d}x{fv:<3d} {len(parts):6d} {mode:>10s} {b:8.1f} {wall:7.2f} {cpu:7.2f} "
+                      f"{wall / b:11.2f} {res.work_units / res.work_budget:12.2f} {res.sheets:6d}", flush=True)
 
 
 def rect_sizes(parts: list[FlatPart], params: NestingParams) -> list[tuple[float, float]]:
@@ -174,7 +207,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--spyrrow", type=int, default=30, help="spyrrow seconds per set (0: skip)")
     ap.add_argument("--only", nargs="*", default=None, help="data sets to run (names as printed)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--budget-check", nargs="*", type=float, default=None, metavar="SECONDS",
+                    help="instead: time the nesting stage against these budgets at 22x15 ... 88x60 faces")
     args = ap.parse_args(argv)
+    if args.budget_check is not None:
+        budget_check(args.budget_check or [3.0, 6.0], [(22, 15), (44, 30), (66, 45), (88, 60)])
+        return 0
     ref = NestingParams(sheet=[6000.0, 3210.0], margin=0.0, spacing=10.0, rotations=[0.0, 90.0, 180.0, 270.0],
                         time_budget=args.budget, seed=args.seed)
     sets: list[tuple[str, object, NestingParams, float | None]] = [
