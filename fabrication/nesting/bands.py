@@ -39,7 +39,7 @@ crosses it.  A convex part is then trimmed out of its cell by its own edge lines
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -52,6 +52,7 @@ from .stack import column_extents
 
 END_Q = 10.0                  # grid of the look-ahead over row lengths and sheet heights, mm
 SLABS = 40                    # slabs over the median pose height
+LEAN_WINDOW = 1024            # the tallest poses searched for a left side parallel to the frontier
 SHORTLIST = 48                # candidates evaluated exactly per batch (the ones closest below the row height)
 # work units (≈ 1 µs each on the reference machine)
 COST_STEP, COST_CELL, COST_SLIDE, COST_ROW, COST_REACH = 40.0, 1.55 / 400.0, 93.0, 31.0, 155.0
@@ -100,6 +101,8 @@ class BandConfig:
     spread: float = 0.6         # quantile range of remaining pose heights the row heights come from
     shortlist: int = SHORTLIST
     ends: float = 1.0           # weight of the row-end look-ahead (length no remaining part can fill)
+    lean: int = 32              # poses added to the first batch for the best match of lean (0: none)
+    first: int = 4              # first-row heights for which the whole sheet is completed (the fullest kept)
     tops: float = 1.0           # weight of the sheet-top look-ahead (height no remaining row can fill)
 
 
@@ -136,6 +139,9 @@ class BandFiller:
         self.row_gap = self.s + HALO_EXTRA + 1e-3        # a row starts above the halos of the row below
         self.halo_box = np.array([[*o.halo.min(axis=0), *o.halo.max(axis=0)] for o in cat.orients])
         self.w_base = self.o_w - np.where(np.isfinite(P.lx[:, 0]), P.lx[:, 0], 0.0)
+        top = np.maximum(P.nk - 1, 0)
+        lx_top = P.lx[np.arange(len(P.nk)), top]
+        self.left_lean = np.where(P.nk > 1, (lx_top - P.lx[:, 0]) / np.maximum(P.nk - 1, 1), 0.0)   # slope per slab
         self.by_h = np.argsort(self.o_h, kind="stable")
         self.h_sorted = self.o_h[self.by_h]
         self.tol = 0.01
@@ -153,7 +159,8 @@ class BandFiller:
         return BandConfig(bonus=float(rng.choice([0.0, 0.02, 0.05, 0.1, 0.2])),
                           jitter=float(rng.choice([0.0, 0.0, 0.02, 0.05])),
                           heights=int(rng.choice([2, 3, 5])),
-                          spread=float(rng.choice([0.3, 0.6, 1.0])))
+                          spread=float(rng.choice([0.3, 0.6, 1.0])),
+                          first=int(rng.choice([2, 4, 6])))
 
     # -- one row --------------------------------------------------------------------------------
     def _row_heights(self, rem: np.ndarray, h_left: float, cfg: BandConfig, rng: np.random.Generator | None) -> list[float]:
@@ -172,7 +179,10 @@ class BandFiller:
         """Batches of poses to evaluate for a row of height ``hr``: the tallest that fit below ``hr`` first.
 
         Poses are kept sorted by height, so the candidates are read backwards from the row height in
-        windows that double until a batch is full (removed parts and too-wide poses skipped).
+        windows that double until a batch is full (removed parts and too-wide poses skipped).  The first
+        batch also holds the poses, among the :data:`LEAN_WINDOW` tallest, whose left side runs most
+        nearly parallel to the row's frontier (a sheared quad after one leaning the same way, a
+        trapezoid turned 180° after one upright): the pairs that meet along their slanted edges.
         """
         c = self.cat
         room = self.Lu - float(F.min())
@@ -180,11 +190,27 @@ class BandFiller:
         end = int(np.searchsorted(self.h_sorted, hr + 1e-9, side="right"))
         m = cfg.shortlist
         win = 4 * m
+        first = True
         while end > 0:
-            start = max(end - win, 0)
+            start = max(end - (max(win, LEAN_WINDOW) if first else win), 0)
             idx = self.by_h[start:end][::-1]
             ok = idx[rem[c.o_part[idx]] & (self.o_w[idx] <= room + 1e-9) & (self.w_base[idx] <= room0 + 1e-9)]
             self.work.add(COST_CELL * (end - start) * 20)
+            if first and len(ok) > m and cfg.lean > 0:
+                n = len(F)
+                lean = (F[n - 1] - F[0]) / max(n - 1, 1)            # frontier slope per slab
+                key = np.abs(self.left_lean[ok] - lean)
+                near = np.argpartition(key, cfg.lean - 1)[: cfg.lean] if len(ok) > cfg.lean else np.arange(len(ok))
+                head = np.unique(np.r_[ok[:m], ok[near]])
+                yield head
+                ok = ok[~np.isin(ok, head)]
+                end = start
+                win = 2 * max(win, LEAN_WINDOW)
+                first = False
+                for i in range(0, len(ok), m):
+                    yield ok[i: i + m]
+                continue
+            first = False
             for i in range(0, len(ok), m):
                 yield ok[i: i + m]
             end = start
@@ -327,22 +353,19 @@ class BandFiller:
             out.append(Piece(p.orient, p.X, p.Y - float(min(t, p.Y))))
         return out
 
-    def fill_sheet(self, rem: np.ndarray, cfg: BandConfig, values: np.ndarray,
-                   rng: np.random.Generator | None) -> Sheet | None:
-        """Rows of parts from ``rem`` on one empty sheet (``rem`` is updated); ``None`` if none fits.
-
-        Each row is the best of a few trial heights: its part area plus the area the rows above can be
-        expected to hold (the row efficiency of the trials times the sheet height still fillable by
-        stacking remaining pose heights, :func:`~.reach.fillable`).
-        """
+    def _complete(self, rem: np.ndarray, cfg: BandConfig, rng: np.random.Generator | None,
+                  first: float | None) -> list[Piece]:
+        """Rows from the bottom of an empty sheet to its top (``rem`` updated); the first row of height
+        at most ``first`` when given, every other row the best of a few trial heights."""
         c = self.cat
-        sheet = Sheet()
+        pieces: list[Piece] = []
         yb = 0.0
         while True:
             h_left = self.Hu - yb
+            heights = [first] if (first is not None and not pieces) else self._row_heights(rem, h_left, cfg, rng)
             trials = []
-            for hr in self._row_heights(rem, h_left, cfg, rng):
-                row, area = self.fill_row(rem, yb, hr, cfg, rng, sheet.pieces)
+            for hr in heights:
+                row, area = self.fill_row(rem, yb, hr, cfg, rng, pieces)
                 self.work.add(COST_ROW)
                 if row:
                     top = max(p.Y + self.o_h[p.orient] for p in row) - yb
@@ -362,14 +385,36 @@ class BandFiller:
                 row = max(trials, key=value)[2]
             else:
                 row = max(trials, key=lambda tr: tr[0] / ((tr[1] + self.row_gap) * self.Lu))[2]
-            if not self.guillotine and sheet.pieces:
-                row = self._drop(row, sheet.pieces)
-            sheet.pieces.extend(row)
+            if not self.guillotine and pieces:
+                row = self._drop(row, pieces)
+            pieces.extend(row)
             rem[c.o_part[[p.orient for p in row]]] = False
             yb = max(p.Y + self.halo_box[p.orient, 3] for p in row) + 1e-3     # above every halo below
             if yb >= self.Hu:
                 break
-        if not sheet.pieces:
+        return pieces
+
+    def fill_sheet(self, rem: np.ndarray, cfg: BandConfig, values: np.ndarray,
+                   rng: np.random.Generator | None) -> Sheet | None:
+        """Rows of parts from ``rem`` on one empty sheet (``rem`` is updated); ``None`` if none fits.
+
+        The sheet is completed for each of ``cfg.first`` first-row heights and the fullest is kept.
+        Every further row is the best of a few trial heights: its part area plus the area the rows
+        above can be expected to hold (the row efficiency of the trials times the sheet height still
+        fillable by stacking remaining pose heights, :func:`~.reach.fillable`).
+        """
+        c = self.cat
+        firsts: list[float | None] = [None]
+        if cfg.first > 1:
+            firsts = list(self._row_heights(rem, self.Hu, replace(cfg, heights=cfg.first), rng)) or [None]
+        best: tuple[float, list[Piece], np.ndarray] | None = None
+        for h1 in firsts:
+            r = rem.copy()
+            pieces = self._complete(r, cfg, rng, h1)
+            area = float(c.part_area[[c.o_part[p.orient] for p in pieces]].sum()) if pieces else 0.0
+            if pieces and (best is None or area > best[0] + 1e-9):
+                best = (area, pieces, r)
+        if best is None:
             return None
-        sheet.area = float(c.part_area[[c.o_part[p.orient] for p in sheet.pieces]].sum())
-        return sheet
+        rem[:] = best[2]
+        return Sheet(best[1], best[0])
