@@ -133,7 +133,7 @@ def test_the_strategy_table():
 
     @strategy("boxes_test", "box rows (test)", rank=9)
     def boxes_test(cat, params):
-        return [Run(lambda c, w: SheetFiller(c, False, w), "boxes_test", 1.0)]
+        return [Run(lambda c, w: SheetFiller(c, w), "boxes_test", 1.0)]
 
     try:
         parts = freeform_parts("conical1_PP", 30)

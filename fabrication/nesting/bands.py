@@ -103,6 +103,8 @@ class BandConfig:
     ends: float = 1.0           # weight of the row-end look-ahead (length no remaining part can fill)
     lean: int = 32              # poses added to the first batch for the best match of lean (0: none)
     first: int = 4              # first-row heights for which the whole sheet is completed (the fullest kept)
+    exact: bool = True          # settle parts by exact sliding (left along the row, rows dropped); else the
+                                # slab positions (conservative, a few mm looser) are kept
     tops: float = 1.0           # weight of the sheet-top look-ahead (height no remaining row can fill)
 
 
@@ -154,6 +156,14 @@ class BandFiller:
 
     def initial_config(self) -> BandConfig:
         return BandConfig()
+
+    def cheaper(self, cfg: BandConfig) -> BandConfig | None:
+        """The next configuration down the cost ladder (fewer trials, then no exact settling), or ``None``."""
+        for step in (BandConfig(first=2, heights=2), BandConfig(first=1, heights=1),
+                     BandConfig(first=1, heights=1, exact=False, ends=0.0, tops=0.0, lean=0, shortlist=24)):
+            if (step.first, step.heights, step.exact, step.shortlist) < (cfg.first, cfg.heights, cfg.exact, cfg.shortlist):
+                return replace(step, bonus=cfg.bonus, jitter=cfg.jitter)
+        return None
 
     def random_config(self, rng: np.random.Generator) -> BandConfig:
         return BandConfig(bonus=float(rng.choice([0.0, 0.02, 0.05, 0.1, 0.2])),
@@ -304,7 +314,7 @@ class BandFiller:
             if best is None:
                 break
             o, x = best
-            halos = self._halos_in(row, yb, yb + hr)
+            halos = self._halos_in(row, yb, yb + hr) if cfg.exact else []
             if halos:
                 t = slide_distance(c.orients[o].poly + np.array([x, yb]), halos, (-1.0, 0.0), self.tol)
                 self.work.add(COST_SLIDE)
@@ -385,7 +395,7 @@ class BandFiller:
                 row = max(trials, key=value)[2]
             else:
                 row = max(trials, key=lambda tr: tr[0] / ((tr[1] + self.row_gap) * self.Lu))[2]
-            if not self.guillotine and pieces:
+            if not self.guillotine and pieces and cfg.exact:
                 row = self._drop(row, pieces)
             pieces.extend(row)
             rem[c.o_part[[p.orient for p in row]]] = False

@@ -18,8 +18,8 @@ UNITS_PER_SECOND = 1_000_000.0
 """Work units per second of ``time_budget`` on the reference machine."""
 
 # fixed costs of a nesting, units
-COST_PART = 120.0          # catalog: checks, halo, angles of one part
-COST_POSE = 25.0           # catalog: one pose (turned outline and halo, box)
+COST_PART = 150.0          # catalog: checks, halo, angles of one part
+COST_POSE = 18.0           # catalog: one pose (turned outline and halo, box)
 COST_VERIFY_PART = 150.0   # verify_nesting and the placements: per part
 
 

@@ -33,7 +33,7 @@ def _solve(cat: Catalog, run: Run, units: float, seed: int, stream: int, lb: int
     """One run: the filler's greedy sheets, improved until ``units`` are spent (or the bound is met)."""
     work = Work()
     filler = run.make(cat, work)
-    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None)
+    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None, units)
     history = [(work.units, len(sheets))]
     rng = np.random.default_rng([seed, stream])
     sheets = improve(filler, sheets, units, rng, history=history, target=lb)

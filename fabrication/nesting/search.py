@@ -24,13 +24,32 @@ from .rows import PlanConfig, Sheet, SheetFiller
 from .stack import StackConfig, StackFiller
 
 
+GREEDY_SHARE = 0.6     # a first solution projected to cost more than this share of its budget goes cheaper
+
+
 def fill_all(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
-             rng: np.random.Generator | None) -> list[Sheet]:
-    """Fill sheets one after another until every part in ``rem`` is placed (``rem`` is consumed)."""
+             rng: np.random.Generator | None, budget_units: float | None = None) -> list[Sheet]:
+    """Fill sheets one after another until every part in ``rem`` is placed (``rem`` is consumed).
+
+    With ``budget_units`` (a first solution): after each sheet the work per part placed so far
+    projects the cost of the rest; while it would pass :data:`GREEDY_SHARE` of the budget the filler's
+    next cheaper configuration (``filler.cheaper``) fills the following sheets — counted in work
+    units, so the switch happens at the same sheet on any machine.
+    """
     cat = filler.cat
     values = filler.part_values(cfg, rng)
     sheets: list[Sheet] = []
+    n0, u0 = int(rem.sum()), filler.work.units
     while rem.any():
+        if budget_units is not None and sheets:
+            done = n0 - int(rem.sum())
+            projected = filler.work.units + (filler.work.units - u0) / max(done, 1) * int(rem.sum())
+            if projected > GREEDY_SHARE * budget_units:
+                nxt = filler.cheaper(cfg)
+                if nxt is not None:
+                    cfg = nxt
+                    values = filler.part_values(cfg, rng)
+                    n0, u0 = int(rem.sum()), filler.work.units
         before = int(rem.sum())
         sheet = filler.fill_sheet(rem, cfg, values, rng)
         if sheet is None:

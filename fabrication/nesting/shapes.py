@@ -176,8 +176,9 @@ def orientations(part_index: int, outline: np.ndarray, rotations: list[float], m
         if mirrored:                                                  # mirroring reverses the orientation
             P, Hh = P[:, ::-1], Hh[:, ::-1]
         for r in range(len(rots)):
-            if dedupe:
-                key = tuple(sorted(map(tuple, np.round(P[r], 6).tolist())))    # the same point set = the same pose
+            if dedupe:                                                # the same point set = the same pose
+                q = np.round(P[r], 6) + 0.0
+                key = q[np.lexsort((q[:, 1], q[:, 0]))].tobytes()
                 if key in seen:
                     continue
                 seen.add(key)
@@ -237,32 +238,3 @@ def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple
     t1 = _ray_hits(m[:, None, :], d, fa[None], fb[None], tol).min(initial=math.inf)
     t2 = _ray_hits(fa[:, None, :], -d, m[None], np.concatenate([m[1:], m[:1]])[None], tol).min(initial=math.inf)
     return float(min(t1, t2))
-
-
-def pair_gains(halos: list[np.ndarray], widths: np.ndarray, polys: list[np.ndarray], spacing: float) -> np.ndarray:
-    """Nestling along a row: how much closer than their boxes allow piece ``b`` can follow piece ``a``.
-
-    Piece ``a`` (its halo) sits with its box at ``[0, w_a]``; piece ``b`` starts on the same base
-    line right of the halo and slides along ``−x`` until it meets it.  Entry ``[a, b]`` is how far
-    left of the box position ``w_a + spacing`` it ends (at least 0: the box position is always
-    allowed) — the length the pair saves over two boxes.  Vectorised over all pairs; ``(A, B)``.
-    """
-    if not halos or not polys:
-        return np.zeros((len(halos), len(polys)))
-    ha, hb = pad(halos)                         # (A, h, 2)
-    pa, pb = pad(polys)                         # (B, k, 2)
-    box = np.asarray(widths, dtype=float) + spacing
-    start = np.maximum(box, ha[..., 0].max(axis=1) + 1e-3)                                  # (A,)
-    off = start[:, None, None, None] * np.array([1.0, 0.0])                                 # (A,1,1,2)
-    d = np.array([-1.0, 0.0])
-    tol = 0.01
-    # vertices of b (at the start offset of a) against edges of halo a
-    p = pa[None, :, :, None, :] + off[:, :, :, None, :]                                    # (A, B, k, 1, 2)
-    t1 = _ray_hits(p, d, ha[:, None, None, :, :], hb[:, None, None, :, :], tol).min(axis=(2, 3))
-    # vertices of halo a against edges of b, moving by +x
-    q = ha[:, None, :, None, :]                                                            # (A, 1, h, 1, 2)
-    ea = pa[None, :, None, :, :] + off[:, :, :, None, :]                                  # (A, B, 1, k, 2)
-    eb = pb[None, :, None, :, :] + off[:, :, :, None, :]
-    t2 = _ray_hits(q, -d, ea, eb, tol).min(axis=(2, 3))
-    t = np.minimum(np.minimum(t1, t2), start[:, None])
-    return np.maximum(box[:, None] - (start[:, None] - t), 0.0)

@@ -214,6 +214,10 @@ class StackFiller:
                            height=float(rng.choice([0.0, 0.1, 0.3, 1.0])),
                            first=str(rng.choice(["longest", "best", "random"])))
 
+    def cheaper(self, cfg: StackConfig) -> StackConfig | None:
+        """There is no cheaper stack: ``None``."""
+        return None
+
     def initial_config(self) -> StackConfig:
         return StackConfig()
 

@@ -12,7 +12,7 @@ from ..rows import SheetFiller
 
 def boxes(cat, work) -> SheetFiller:
     """The box-row filler."""
-    return SheetFiller(cat, False, work)
+    return SheetFiller(cat, work)
 
 
 @strategy("rectangles", "bounding rectangles in rows; every cut parallel to the sheet edges, edge to edge", rank=0)
