@@ -58,8 +58,8 @@ def test_trapezoids_pair_by_half_turns_where_boxes_cannot():
 
 
 def test_freeform_panels_need_fewer_sheets_as_true_shapes_than_as_rectangles():
-    """120 sheared quads of the P-optimised conjugate roof: true-shape rows beat bounding rectangles."""
-    parts = freeform_parts("conjugate_roof_P", 120)
+    """300 sheared quads of the P-optimised conjugate roof: true-shape rows beat bounding rectangles."""
+    parts = freeform_parts("conjugate_roof_P", 300)
     params = NestingParams(time_budget=2.0)
     rect = nest(parts, replace(params, mode="rectangles"))
     shape = nest(parts, replace(params, mode="irregular"))

@@ -98,7 +98,7 @@ def test_irregular_mode_picks_stacks_for_strips_and_rows_for_panels():
     assert runs_of(strips, params, "irregular") == [("stacks", "irregular", 1.0)]
     assert runs_of(strips + small, params, "irregular") == [("bands", "irregular", 0.5), ("stacks", "irregular", 0.5)]
     # strips are not convex: no straight-cut rows, auto runs rectangles and stacks
-    assert runs_of(strips, params, "auto") == [("boxes", "rectangles", 0.285714), ("stacks", "irregular", 0.714286)]
+    assert runs_of(strips, params, "auto") == [("stacks", "irregular", 0.714286), ("boxes", "rectangles", 0.285714)]
     assert runs_of(strips, params, "guillotine") == [("boxes", "rectangles", 1.0)]
     assert runs_of(panels, NestingParams(), "guillotine") == [("cut_bands", "guillotine", 1.0)]
 

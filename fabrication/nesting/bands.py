@@ -157,11 +157,16 @@ class BandFiller:
     def initial_config(self) -> BandConfig:
         return BandConfig()
 
+    @staticmethod
+    def cost_key(cfg: BandConfig) -> tuple:
+        """Configurations compare by cost in this order (larger = dearer)."""
+        return (cfg.first, cfg.heights, cfg.exact, cfg.shortlist)
+
     def cheaper(self, cfg: BandConfig) -> BandConfig | None:
         """The next configuration down the cost ladder (fewer trials, then no exact settling), or ``None``."""
         for step in (BandConfig(first=2, heights=2), BandConfig(first=1, heights=1),
                      BandConfig(first=1, heights=1, exact=False, ends=0.0, tops=0.0, lean=0, shortlist=24)):
-            if (step.first, step.heights, step.exact, step.shortlist) < (cfg.first, cfg.heights, cfg.exact, cfg.shortlist):
+            if self.cost_key(step) < self.cost_key(cfg):
                 return replace(step, bonus=cfg.bonus, jitter=cfg.jitter)
         return None
 

@@ -26,17 +26,17 @@ from .params import NestingParams
 from .registry import Run, get_strategy, rank_of
 from .result import Nesting
 from .rows import Sheet
-from .search import fill_all, improve
+from .search import first_solution, improve
 
 
 def _solve(cat: Catalog, run: Run, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
     """One run: the filler's greedy sheets, improved until ``units`` are spent (or the bound is met)."""
     work = Work()
     filler = run.make(cat, work)
-    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None, units)
+    sheets, reached = first_solution(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None, units)
     history = [(work.units, len(sheets))]
     rng = np.random.default_rng([seed, stream])
-    sheets = improve(filler, sheets, units, rng, history=history, target=lb)
+    sheets = improve(filler, sheets, units, rng, history=history, target=lb, cap=reached)
     return sheets, work, history
 
 
@@ -100,7 +100,10 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     best = None
     for k, run in enumerate(runs):
         share = run.share / sum(r.share for r in runs[k:])
-        sheets, work, history = _solve(cat, run, share * max(budget - spent, 0.0), p.seed, k, lb_usable)
+        units = share * max(budget - spent, 0.0)
+        if best is not None and run.floor is not None and run.floor(cat) > units:
+            continue                    # cannot pay even its cheapest first solution: left out
+        sheets, work, history = _solve(cat, run, units, p.seed, k, lb_usable)
         spent += work.units
         key = (len(sheets), rank_of(run.mode))
         if best is None or key < best[0]:

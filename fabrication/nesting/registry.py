@@ -28,16 +28,22 @@ class Filler(Protocol):
     def part_values(self, cfg: Any, rng: np.random.Generator | None) -> np.ndarray: ...
     def initial_config(self) -> Any: ...
     def cheaper(self, cfg: Any) -> Any | None: ...
+    def cost_key(self, cfg: Any) -> tuple: ...
     def random_config(self, rng: np.random.Generator) -> Any: ...
 
 
 @dataclass(frozen=True)
 class Run:
-    """One filler run of a strategy: ``make(catalog, work) -> filler``, the mode it reports, its budget share."""
+    """One filler run of a strategy: ``make(catalog, work) -> filler``, the mode it reports, its budget share.
+
+    ``floor(catalog)`` estimates the work units of the filler's cheapest first solution: a run that is
+    not the first is skipped when its share of the budget cannot pay that.
+    """
 
     make: Callable[[Any, Any], Filler]
     mode: str
     share: float
+    floor: Callable[[Any], float] | None = None
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,8 @@ from .budget import Work
 from .catalog import Catalog
 
 # work units (≈ 1 µs each on the reference machine) charged per operation: see .budget
-COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 140.0, 4.65, 280.0, 700.0, 186.0
+COST_DP_CALL, COST_DP_ITEM = 140.0, 4.65
+COST_SCAN = 0.02            # per pose scanned for a row's candidates
 
 
 @dataclass
@@ -60,18 +61,26 @@ class SheetFiller:
     def __init__(self, cat: Catalog, work: Work):
         self.cat = cat
         self.work = work
+        self.order = np.lexsort((-cat.o_h, cat.o_w, cat.o_part))
+        self.o_part_s, self.o_w_s, self.o_h_s = cat.o_part[self.order], cat.o_w[self.order], cat.o_h[self.order]
+        work.add(COST_SCAN * 10 * len(self.order))
 
     # -- knapsack rows ------------------------------------------------------------------------
     def _row_poses(self, rem: np.ndarray, hc: float, cap: float) -> np.ndarray:
-        """The narrowest pose of height <= hc of every remaining part (pose indices)."""
+        """The narrowest pose of height <= hc of every remaining part (pose indices).
+
+        Poses are kept sorted by (part, width, −height) once, so a call is one pass over them.
+        """
         c = self.cat
-        fit = rem[c.o_part] & (c.o_h <= hc + 1e-9) & (c.o_w <= cap + 1e-9)
+        srt = self.order
+        fit = rem[self.o_part_s] & (self.o_h_s <= hc + 1e-9) & (self.o_w_s <= cap + 1e-9)
+        self.work.add(COST_SCAN * len(srt))
         idx = np.flatnonzero(fit)
         if len(idx) == 0:
             return idx
-        srt = idx[np.lexsort((-c.o_h[idx], c.o_w[idx], c.o_part[idx]))]
-        first = np.r_[True, c.o_part[srt][1:] != c.o_part[srt][:-1]]
-        return srt[first]
+        parts = self.o_part_s[idx]
+        first = np.r_[True, parts[1:] != parts[:-1]]
+        return srt[idx[first]]
 
     def best_row(self, rem: np.ndarray, hc: float, cap: float, cfg: PlanConfig,
                  values: np.ndarray) -> tuple[float, list[int]]:
@@ -168,6 +177,11 @@ class SheetFiller:
 
     def initial_config(self) -> PlanConfig:
         return PlanConfig()
+
+    @staticmethod
+    def cost_key(cfg: PlanConfig) -> tuple:
+        """Configurations compare by cost in this order (larger = dearer)."""
+        return (cfg.n_heights, cfg.top_k)
 
     def cheaper(self, cfg: PlanConfig) -> PlanConfig | None:
         """The next configuration down the cost ladder (fewer first-row heights, smaller knapsacks), or ``None``."""

@@ -29,6 +29,12 @@ GREEDY_SHARE = 0.6     # a first solution projected to cost more than this share
 
 def fill_all(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
              rng: np.random.Generator | None, budget_units: float | None = None) -> list[Sheet]:
+    """:func:`first_solution` without the configuration reached."""
+    return first_solution(filler, rem, cfg, rng, budget_units)[0]
+
+
+def first_solution(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
+                   rng: np.random.Generator | None, budget_units: float | None = None) -> tuple[list[Sheet], object]:
     """Fill sheets one after another until every part in ``rem`` is placed (``rem`` is consumed).
 
     With ``budget_units`` (a first solution): after each sheet the work per part placed so far
@@ -58,7 +64,7 @@ def fill_all(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig
         if int(rem.sum()) >= before or not sheet.pieces:
             raise NestingError("nesting made no progress on an empty sheet (internal error)")
         sheets.append(sheet)
-    return sheets
+    return sheets, cfg
 
 
 def _score(sheets: list[Sheet], norm: float) -> float:
@@ -66,12 +72,20 @@ def _score(sheets: list[Sheet], norm: float) -> float:
 
 
 def improve(filler: SheetFiller | StackFiller, sheets: list[Sheet], budget_units: float, rng: np.random.Generator,
-            history: list[tuple[float, int]] | None = None, target: int = 1) -> list[Sheet]:
-    """Ruin and recreate until ``filler.work.units`` reaches ``budget_units`` or the sheets reach ``target``."""
+            history: list[tuple[float, int]] | None = None, target: int = 1, cap: object = None) -> list[Sheet]:
+    """Ruin and recreate until ``filler.work.units`` reaches ``budget_units`` or the sheets reach ``target``.
+
+    A step is not begun when the mean cost of the steps so far would take the count past the
+    budget; with ``cap`` (the configuration the first solution ended on) the random knobs of a step
+    are stepped down the filler's cost ladder to no more than it.
+    """
     cat: Catalog = filler.cat
     norm = cat.L * cat.H
     sheets = list(sheets)
+    steps, start = 0, filler.work.units
     while filler.work.units < budget_units and len(sheets) > max(target, 1):
+        if steps and filler.work.units + (filler.work.units - start) / steps > budget_units:
+            break
         k = int(min(len(sheets), rng.choice([2, 2, 3, 3, 4])))
         fills = np.array([s.area for s in sheets])
         worst = int(np.argmin(fills))
@@ -83,7 +97,14 @@ def improve(filler: SheetFiller | StackFiller, sheets: list[Sheet], budget_units
             for p in sheets[i].pieces:
                 rem[cat.o_part[p.orient]] = True
         cfg = filler.random_config(rng)
+        if cap is not None:
+            while filler.cost_key(cfg) > filler.cost_key(cap):
+                lower = filler.cheaper(cfg)
+                if lower is None:
+                    break
+                cfg = lower
         new = fill_all(filler, rem, cfg, rng)
+        steps += 1
         old = [sheets[i] for i in sel]
         if len(new) < len(old) or (len(new) == len(old) and _score(new, norm) > _score(old, norm) + 1e-12):
             sheets = [s for i, s in enumerate(sheets) if i not in sel] + new

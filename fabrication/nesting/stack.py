@@ -214,6 +214,11 @@ class StackFiller:
                            height=float(rng.choice([0.0, 0.1, 0.3, 1.0])),
                            first=str(rng.choice(["longest", "best", "random"])))
 
+    @staticmethod
+    def cost_key(cfg: StackConfig) -> tuple:
+        """One cost level."""
+        return ()
+
     def cheaper(self, cfg: StackConfig) -> StackConfig | None:
         """There is no cheaper stack: ``None``."""
         return None

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bands import BandFiller
+from ..bands import COST_PROFILE, BandFiller
 from ..registry import Run, strategy
-from .rectangles import boxes
+from .rectangles import boxes, boxes_floor
 
 
 def all_convex(cat) -> bool:
@@ -31,9 +31,14 @@ def cut_bands(cat, work) -> BandFiller:
     return BandFiller(cat, work, guillotine=True)
 
 
+def bands_floor(cat) -> float:
+    """Work units of the cheapest first solution of true-shape rows, estimated."""
+    return COST_PROFILE * len(cat.orients) + 600.0 * cat.n_parts
+
+
 @strategy("guillotine", "true shapes in rows; straight edge-to-edge cuts, slanted between neighbours "
                         "(rectangles when a part is not convex)", rank=1)
 def guillotine(cat, params) -> list[Run]:
     if all_convex(cat):
-        return [Run(cut_bands, "guillotine", 1.0)]
-    return [Run(boxes, "rectangles", 1.0)]
+        return [Run(cut_bands, "guillotine", 1.0, bands_floor)]
+    return [Run(boxes, "rectangles", 1.0, boxes_floor)]

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 from ..bands import BandFiller
 from ..registry import Run, strategy
+from ..stack import COST_PROFILE as STACK_PROFILE
 from ..stack import StackFiller, strip_parts
+from .guillotine import bands_floor
 
 STRIP_SHARE = 0.9               # stacks alone when strips hold this share of the part area
 
@@ -26,12 +28,17 @@ def stacks(cat, work) -> StackFiller:
     return StackFiller(cat, work)
 
 
+def stacks_floor(cat) -> float:
+    """Work units of a first solution of strip stacks, estimated."""
+    return STACK_PROFILE * len(cat.orients) + 4000.0 * cat.n_parts
+
+
 @strategy("irregular", "true shapes nestled: rows pushed together and dropped onto each other; "
                        "long thin plates stacked bend into bend", rank=2)
 def irregular(cat, params) -> list[Run]:
     frac = float(cat.part_area[strip_parts(cat)].sum() / cat.part_area.sum())
     if frac <= 0.0:
-        return [Run(bands, "irregular", 1.0)]
+        return [Run(bands, "irregular", 1.0, bands_floor)]
     if frac >= STRIP_SHARE:
-        return [Run(stacks, "irregular", 1.0)]
-    return [Run(bands, "irregular", 0.5), Run(stacks, "irregular", 0.5)]
+        return [Run(stacks, "irregular", 1.0, stacks_floor)]
+    return [Run(bands, "irregular", 0.5, bands_floor), Run(stacks, "irregular", 0.5, stacks_floor)]
