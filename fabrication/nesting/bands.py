@@ -55,8 +55,8 @@ SLABS = 40                    # slabs over the median pose height
 LEAN_WINDOW = 1024            # the tallest poses searched for a left side parallel to the frontier
 SHORTLIST = 48                # candidates evaluated exactly per batch (the ones closest below the row height)
 # work units (≈ 1 µs each on the reference machine)
-COST_STEP, COST_CELL, COST_SLIDE, COST_ROW, COST_REACH = 40.0, 1.55 / 400.0, 93.0, 31.0, 155.0
-COST_PROFILE = 40.0            # per pose: slab profiles and the filler's arrays
+COST_STEP, COST_CELL, COST_SLIDE, COST_ROW, COST_REACH = 30.0, 1.16 / 400.0, 70.0, 23.0, 116.0
+COST_PROFILE = 30.0            # per pose: slab profiles and the filler's arrays
 
 
 @dataclass(eq=False)
@@ -352,19 +352,24 @@ class BandFiller:
         """
         c = self.cat
         out: list[Piece] = []
-
-        def near(q: Piece, p: Piece, w: float) -> bool:
-            hb = self.halo_box[q.orient]
-            return q.X + hb[0] < p.X + w + self.s and q.X + hb[2] > p.X - self.s
-
+        below = list(placed)
+        bo = np.array([q.orient for q in below], dtype=np.int64)
+        bx = np.array([q.X for q in below])
+        lo_b = bx + self.halo_box[bo, 0] if len(below) else np.zeros(0)
+        hi_b = bx + self.halo_box[bo, 2] if len(below) else np.zeros(0)
         for i, p in enumerate(row):
             po = c.orients[p.orient]
             at = np.array([p.X, p.Y])
-            before = [c.orients[q.orient].halo + np.array([q.X, q.Y]) for q in placed + out if near(q, p, po.w)]
-            after = [c.orients[q.orient].poly + np.array([q.X, q.Y]) for q in row[i + 1:] if near(q, p, po.w)]
+            x0, x1 = p.X - self.s, p.X + po.w + self.s
+            near = np.flatnonzero((lo_b < x1) & (hi_b > x0))
+            before = [c.orients[below[k].orient].halo + np.array([below[k].X, below[k].Y]) for k in near]
+            before += [c.orients[q.orient].halo + np.array([q.X, q.Y]) for q in out
+                       if q.X + self.halo_box[q.orient, 0] < x1 and q.X + self.halo_box[q.orient, 2] > x0]
+            after = [c.orients[q.orient].poly + np.array([q.X, q.Y]) for q in row[i + 1:]
+                     if q.X + self.halo_box[q.orient, 0] < x1 and q.X + self.halo_box[q.orient, 2] > x0]
             t = min(slide_distance(po.poly + at, before, (0.0, -1.0), self.tol),
                     slide_distance(po.halo + at, after, (0.0, -1.0), self.tol))
-            self.work.add(2 * COST_SLIDE)
+            self.work.add(2 * COST_SLIDE + COST_CELL * 20 * len(below))
             out.append(Piece(p.orient, p.X, p.Y - float(min(t, p.Y))))
         return out
 
@@ -404,7 +409,8 @@ class BandFiller:
                 row = self._drop(row, pieces)
             pieces.extend(row)
             rem[c.o_part[[p.orient for p in row]]] = False
-            yb = max(p.Y + self.halo_box[p.orient, 3] for p in row) + 1e-3     # above every halo below
+            # the next row starts above every halo on the sheet (a lowered row may end below a tall part under it)
+            yb = max(yb, max(p.Y + self.halo_box[p.orient, 3] for p in row) + 1e-3)
             if yb >= self.Hu:
                 break
         return pieces

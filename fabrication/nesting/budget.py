@@ -20,7 +20,7 @@ UNITS_PER_SECOND = 1_000_000.0
 # fixed costs of a nesting, units
 COST_PART = 150.0          # catalog: checks, halo, angles of one part
 COST_POSE = 18.0           # catalog: one pose (turned outline and halo, box)
-COST_VERIFY_PART = 150.0   # verify_nesting and the placements: per part
+COST_VERIFY_PART = 60.0    # verify_nesting and the placements: per part
 
 
 @dataclass

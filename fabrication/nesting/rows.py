@@ -23,8 +23,8 @@ from .budget import Work
 from .catalog import Catalog
 
 # work units (≈ 1 µs each on the reference machine) charged per operation: see .budget
-COST_DP_CALL, COST_DP_ITEM = 140.0, 4.65
-COST_SCAN = 0.02            # per pose scanned for a row's candidates
+COST_DP_CALL, COST_DP_ITEM = 66.0, 2.2
+COST_SCAN = 0.0094            # per pose scanned for a row's candidates
 
 
 @dataclass

@@ -55,8 +55,8 @@ from .shapes import slide_distance
 CELLS = 300                     # column cells across the usable length (q = L / CELLS)
 ELONGATION = 6.0                # a part whose narrowest box is this many times longer than deep is a strip
 # work units (≈ 1 µs each on the reference machine): per candidate cell evaluated, per step, per exact slide
-COST_CELL, COST_STEP, COST_SLIDE = 4.65 / 220.0, 186.0, 280.0
-COST_PROFILE = 60.0             # per pose: column profiles and the filler's arrays
+COST_CELL, COST_STEP, COST_SLIDE = 3.0 / 220.0, 121.0, 182.0
+COST_PROFILE = 39.0             # per pose: column profiles and the filler's arrays
 STRIDE, SHORTLIST = 4, 32      # short-listing: every 4th cell for all candidates, all cells for the best 32
 
 
