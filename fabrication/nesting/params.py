@@ -25,9 +25,11 @@ class NestingParams:
     margin: float | list[float] = param(0.0, doc="edge trim per side, mm: one number or [left, right, bottom, top]",
                                         min=0)
     spacing: float = param(10.0, doc="smallest distance between two parts, mm", min=0)
-    rotations: list[float] = param([0.0, 90.0, 180.0, 270.0], doc="allowed rotations, degrees (parts may "
-                                   "narrow this)", min_length=1)
-    free_rotation: bool = param(False, doc="also try the angles that align each outline edge with the sheet")
+    rotations: list[float] = param([0.0, 90.0, 180.0, 270.0], doc="allowed rotations, degrees, of parts without "
+                                   "a rotation policy of their own (beam plates: e.g. [0, 180] keeps the rolling "
+                                   "direction along the plate; glass panels follow [panels] rotation)", min_length=1)
+    free_rotation: bool = param(False, doc="parts without a rotation policy of their own may turn to any angle "
+                                           "(tried: each long hull edge along the sheet, the minimum-area frame)")
     mode: str = param("auto", doc="nesting strategy: 'rectangles' (bounding rectangles in rows, every cut "
                                   "parallel to the sheet edges), 'guillotine' (true shapes in rows, every cut "
                                   "straight and edge to edge, slanted between neighbours, as glass is scored and "
