@@ -225,13 +225,14 @@ def main(argv: list[str] | None = None) -> int:
                  ("default plates", lambda: plates, replace(bp, seed=args.seed), None)]
     sets += [(n, (lambda n=n: set_parts(n)), ref, args.budget) for n in FREEFORM]
     rows = []
+    print(f"{'data':24s} {'method':32s} {'sheets':>6s} {'util':>7s} {'time s':>14s}  note", flush=True)
     for name, parts, params, budget in sets:
         if want is not None and name not in want:
             continue
-        rows += run(name, parts(), params, budget, args.spyrrow)
-    print(f"{'data':24s} {'method':32s} {'sheets':>6s} {'util':>7s} {'time s':>14s}  note")
-    for data, method, sheets, util, sec, cpu, note in rows:
-        print(f"{data:24s} {method:32s} {sheets:6d} {100 * util:6.1f}% {sec:7.1f} ({cpu:5.1f})  {note}")
+        got = run(name, parts(), params, budget, args.spyrrow)
+        for data, method, sheets, util, sec, cpu, note in got:
+            print(f"{data:24s} {method:32s} {sheets:6d} {100 * util:6.1f}% {sec:7.1f} ({cpu:5.1f})  {note}", flush=True)
+        rows += got
     print()
     for data in dict.fromkeys(r[0] for r in rows):
         rp = next(r[2] for r in rows if r[0] == data and r[1].startswith("rectpack"))
