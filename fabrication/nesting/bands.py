@@ -311,10 +311,10 @@ class BandFiller:
         while True:
             best = None
             for batch in self._candidates(rem, hr, F, cfg):
-                x, score = self._evaluate(batch, F, nr, cfg, rng, ends, hr)
+                xs, score = self._evaluate(batch, F, nr, cfg, rng, ends, hr)
                 if np.isfinite(score).any():
                     b = int(np.argmin(score))
-                    best = (int(batch[b]), float(x[b]))
+                    best = (int(batch[b]), float(xs[b]))
                     break
             if best is None:
                 break

@@ -19,6 +19,8 @@ import time
 
 import numpy as np
 
+from ppfab.errors import NestingError
+
 from ..flatpart import FlatPart, Placement
 from .budget import COST_PART, COST_POSE, COST_VERIFY_PART, UNITS_PER_SECOND, Work
 from .catalog import Catalog, build_catalog
@@ -108,6 +110,8 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
         key = (len(sheets), rank_of(run.mode))
         if best is None or key < best[0]:
             best = (key, run.mode, sheets, history)
+    if best is None:                     # every strategy has at least one run, and the first always runs
+        raise NestingError(f"nesting strategy {strategy.name!r} made no run (internal error)")
     _, mode, sheets, history = best
     placements = _placements(cat, sheets, p)
     fills = sorted((s.area / sheet_area for s in sheets), reverse=True)

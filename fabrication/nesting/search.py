@@ -19,22 +19,24 @@ import numpy as np
 
 from ppfab.errors import NestingError
 
+from typing import Any
+
 from .catalog import Catalog
-from .rows import PlanConfig, Sheet, SheetFiller
-from .stack import StackConfig, StackFiller
+from .registry import Filler
+from .rows import Sheet
 
 
 GREEDY_SHARE = 0.6     # a first solution projected to cost more than this share of its budget goes cheaper
 
 
-def fill_all(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
+def fill_all(filler: Filler, rem: np.ndarray, cfg: Any,
              rng: np.random.Generator | None, budget_units: float | None = None) -> list[Sheet]:
     """:func:`first_solution` without the configuration reached."""
     return first_solution(filler, rem, cfg, rng, budget_units)[0]
 
 
-def first_solution(filler: SheetFiller | StackFiller, rem: np.ndarray, cfg: PlanConfig | StackConfig,
-                   rng: np.random.Generator | None, budget_units: float | None = None) -> tuple[list[Sheet], object]:
+def first_solution(filler: Filler, rem: np.ndarray, cfg: Any,
+                   rng: np.random.Generator | None, budget_units: float | None = None) -> tuple[list[Sheet], Any]:
     """Fill sheets one after another until every part in ``rem`` is placed (``rem`` is consumed).
 
     With ``budget_units`` (a first solution): after each sheet the work per part placed so far
@@ -71,8 +73,8 @@ def _score(sheets: list[Sheet], norm: float) -> float:
     return float(sum((s.area / norm) ** 2 for s in sheets))
 
 
-def improve(filler: SheetFiller | StackFiller, sheets: list[Sheet], budget_units: float, rng: np.random.Generator,
-            history: list[tuple[float, int]] | None = None, target: int = 1, cap: object = None) -> list[Sheet]:
+def improve(filler: Filler, sheets: list[Sheet], budget_units: float, rng: np.random.Generator,
+            history: list[tuple[float, int]] | None = None, target: int = 1, cap: Any = None) -> list[Sheet]:
     """Ruin and recreate until ``filler.work.units`` reaches ``budget_units`` or the sheets reach ``target``.
 
     A step is not begun when the mean cost of the steps so far would take the count past the
