@@ -28,6 +28,8 @@ class FlatPart:
     label : text written on layer ``LABEL`` (defaults to ``part_id``)
     type_id : congruence class (identical parts share it)
     rotations : allowed rotations in degrees, ``None`` = the nesting default
+    free_rotation : any rotation is allowed (a material without grain or pattern, e.g. float glass);
+        ``rotations`` is then ignored
     mirror_allowed : may be placed mirrored
     meta : free data carried into the parts list (material, thickness, …)
     """
@@ -41,6 +43,7 @@ class FlatPart:
     rotations: tuple[float, ...] | None = None
     mirror_allowed: bool = False
     meta: dict = field(default_factory=dict)
+    free_rotation: bool = False
 
     @property
     def area(self) -> float:

@@ -2,8 +2,9 @@
 
 A glass processor checks a free-form pane by its edge lengths and both diagonals (a quadrilateral is fixed by its
 four edges and one diagonal; the second diagonal checks the first), and cuts it from the corner coordinates.
-For each type the representative pane's flat outline — in the panel's own frame, as drawn in the per-type DXF:
-corner 1 (the reference corner) at the origin, edge 12 along +x, seen from outside, counter-clockwise — gives
+For each type the representative pane's flat outline — seen from outside, counter-clockwise, moved into the
+order's reference frame: corner 1 (the reference corner) at the origin, edge 12 along +x (the per-type DXF draws
+the same outline in its nesting frame, which is only a rigid motion away) — gives
 
 * corners ``c_k = (x_k, y_k)``, ``k = 1 … 4``;
 * edges ``e_k,k+1 = |c_{k+1} − c_k|`` and diagonals ``d_13 = |c_3 − c_1|``, ``d_24 = |c_4 − c_2|``;
@@ -59,6 +60,21 @@ def pane_shape(outline: np.ndarray) -> dict[str, np.ndarray]:
     return {"corners": c, "edges": edges, "diagonals": diagonals, "angles_deg": angles}
 
 
+def reference_frame(outline: np.ndarray) -> np.ndarray:
+    """``outline (n, 2)`` moved rigidly so that its corner 1 is the origin and its edge 12 runs along +x.
+
+    >>> reference_frame(np.array([[1.0, 1.0], [1.0, 3.0], [0.0, 3.0]])).round(9).tolist()
+    [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]]
+    """
+    c = np.asarray(outline, dtype=float) - np.asarray(outline, dtype=float)[0]
+    t = np.arctan2(c[1, 1], c[1, 0])
+    rot = np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]])
+    out = c @ rot.T
+    out[0] = 0.0
+    out[1, 1] = 0.0
+    return out
+
+
 def _r(v: float, digits: int) -> float:
     r = round(float(v), digits)
     return 0.0 if r == 0 else r
@@ -66,7 +82,7 @@ def _r(v: float, digits: int) -> float:
 
 def shape_columns(part: FlatPart) -> dict[str, float]:
     """The corner, edge, diagonal and angle columns of one pane (lengths to 0.01 mm, angles to 0.001°)."""
-    s = pane_shape(part.outline)
+    s = pane_shape(reference_frame(part.outline))
     row: dict[str, float] = {}
     for k in range(ORDER_CORNERS):
         row[f"c{k + 1}_x_mm"], row[f"c{k + 1}_y_mm"] = (_r(v, 2) for v in s["corners"][k])

@@ -438,7 +438,7 @@ CASES = [
          build(), 1, "B-U00-S00 and B-W00-S00 meet at node 0 at 86.3° (< min_angle_deg 89.5°)"),
     Case("geometry", "a part larger than the stock sheet",
          design(GEOMETRY + "[nesting]\nsheet = [1500.0, 1000.0]\ntime_budget = 0.3\n", False), build(), 1,
-         "part P-U00-V00 (2185.7 x 2059.7 mm) fits no sheet: usable area is 1500.0 x 1000.0 mm"),
+         "part P-U00-V00 (2161.2 x 2061.4 mm) fits no sheet: usable area is 1500.0 x 1000.0 mm, any rotation"),
     # text that goes into files
     Case("text", "a design name with a newline and an OBJ vertex line", design(GEOMETRY.replace(
         'name = "small"', 'name = "roof\\nv 1 2 3\\u2028f 1 2 3 4"')), build(), 0, "", check=_verified(_obj_one_header_line),

@@ -49,7 +49,31 @@ def guillotine_separable(boxes: list[tuple[float, float, float, float]]) -> bool
     return False
 
 
-@pytest.mark.parametrize("mode", ["guillotine", "irregular", "auto"])
+def straight_cut_separable(polys: list[np.ndarray], depth: int = 0) -> bool:
+    """Whether convex polygons are cut apart by recursive straight edge-to-edge cuts (any direction).
+
+    A cut along direction ``d`` exists when the polygons' extents across ``d`` leave a gap; the
+    directions tried are the horizontal and every edge direction of the polygons (a separating
+    line of two convex groups can be taken along one of the polygons' edges in these layouts).
+    """
+    if len(polys) <= 1:
+        return True
+    dirs = [np.array([1.0, 0.0])] + [e / np.linalg.norm(e) for q in polys for e in (np.roll(q, -1, 0) - q)
+                                     if np.linalg.norm(e) > 1e-9]
+    for d in dirs:
+        n = np.array([-d[1], d[0]])
+        ext = sorted(((float((q @ n).min()), float((q @ n).max()), k) for k, q in enumerate(polys)))
+        reach = -np.inf
+        for i in range(len(ext) - 1):
+            reach = max(reach, ext[i][1])
+            if reach <= ext[i + 1][0] + 1e-6:
+                lo = [polys[e[2]] for e in ext[:i + 1]]
+                hi = [polys[e[2]] for e in ext[i + 1:]]
+                return straight_cut_separable(lo, depth + 1) and straight_cut_separable(hi, depth + 1)
+    return False
+
+
+@pytest.mark.parametrize("mode", ["rectangles", "guillotine", "irregular", "auto"])
 def test_panels_nest_and_verify(mode):
     parts = bench_parts(40)
     params = NestingParams(mode=mode, time_budget=1.0, margin=[15, 10, 20, 5])
@@ -60,15 +84,17 @@ def test_panels_nest_and_verify(mode):
     assert res.utilisation == pytest.approx(sum(p.area for p in parts) / (res.sheets * 6000 * 3210))
     assert len({p.nest_tag for p in res.placements}) == len(parts)
     assert all(p.rotation_deg in (0.0, 90.0, 180.0, 270.0) and not p.mirrored for p in res.placements)
-    assert res.mode in ("guillotine", "irregular")
-    if res.mode == "guillotine":
-        by_id = {p.part_id: p for p in parts}
-        for group in res.by_sheet():
-            boxes = []
-            for pl in group:
-                q = place_points(by_id[pl.part_id].outline, pl)
-                boxes.append((*(q.min(0) - 5.0), *(q.max(0) + 5.0)))   # box plus half the spacing
+    assert res.mode in ("rectangles", "guillotine", "irregular")
+    if mode != "auto":
+        assert res.mode == mode
+    by_id = {p.part_id: p for p in parts}
+    for group in res.by_sheet():
+        placed = [place_points(by_id[pl.part_id].outline, pl) for pl in group]
+        if res.mode == "rectangles":
+            boxes = [(*(q.min(0) - 5.0), *(q.max(0) + 5.0)) for q in placed]   # box plus half the spacing
             assert guillotine_separable(boxes)
+        if res.mode == "guillotine":
+            assert straight_cut_separable(placed)
 
 
 def test_deterministic_for_seed_and_budget():

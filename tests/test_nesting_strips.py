@@ -14,7 +14,7 @@ from conftest import FULL
 from fabrication.flatpart import FlatPart
 from fabrication.nesting import NestingParams, nest, placed_outline, verify_nesting
 from fabrication.nesting.catalog import build_catalog
-from fabrication.nesting.engine import strategies
+from fabrication.nesting.registry import get_strategy
 from fabrication.nesting.stack import column_extents
 from ppfab.errors import NestingError
 
@@ -58,8 +58,8 @@ def test_bent_strips_stack_closer_than_their_boxes():
     res = nest(parts, params)
     verify_nesting(parts, res, params)
     assert res.sheets == 1 and res.mode == "irregular"
-    guillotine = replace(params, mode="guillotine")
-    assert nest(parts, guillotine).sheets >= 2
+    rectangles = replace(params, mode="rectangles")
+    assert nest(parts, rectangles).sheets >= 2
 
     by_id = {p.part_id: p for p in parts}
     placed = sorted((placed_outline(by_id[pl.part_id], pl) for pl in res.placements), key=lambda q: q[:, 1].min())
@@ -84,18 +84,23 @@ def test_bent_strips_stack_closer_than_their_boxes():
         assert 10.0 - 1e-6 <= min(gaps) and max(gaps) < 10.0 + 12.0
 
 
+def runs_of(parts, params, mode):
+    cat = build_catalog(parts, params)
+    return [(r.make.__name__, r.mode, round(r.share, 6)) for r in get_strategy(mode).runs(cat, params)]
+
+
 def test_irregular_mode_picks_stacks_for_strips_and_rows_for_panels():
     params = NestingParams(sheet=[2500, 1250], spacing=5)
     strips = [arc_strip(f"S{k}", 1500 + 50 * k, 80, 60) for k in range(6)]
     panels = bench_parts(6)
     small = [FlatPart(f"Q{k}", "panel", np.array([[0, 0], [300, 0], [300, 300], [0, 300]], float)) for k in range(6)]
-    assert strategies(build_catalog(panels, NestingParams()), "irregular") == [("rows", "irregular", 1.0)]
-    assert strategies(build_catalog(strips, params), "irregular") == [("stack", "irregular", 1.0)]
-    assert strategies(build_catalog(strips + small, params), "irregular") == [("rows", "irregular", 0.5),
-                                                                              ("stack", "irregular", 0.5)]
-    assert strategies(build_catalog(strips, params), "auto") == [("guillotine", "guillotine", 0.25),
-                                                                 ("stack", "irregular", 0.75)]
-    assert strategies(build_catalog(strips, params), "guillotine") == [("guillotine", "guillotine", 1.0)]
+    assert runs_of(panels, NestingParams(), "irregular") == [("bands", "irregular", 1.0)]
+    assert runs_of(strips, params, "irregular") == [("stacks", "irregular", 1.0)]
+    assert runs_of(strips + small, params, "irregular") == [("bands", "irregular", 0.5), ("stacks", "irregular", 0.5)]
+    # strips are not convex: no straight-cut rows, auto runs rectangles and stacks
+    assert runs_of(strips, params, "auto") == [("stacks", "irregular", 0.714286), ("boxes", "rectangles", 0.285714)]
+    assert runs_of(strips, params, "guillotine") == [("boxes", "rectangles", 1.0)]
+    assert runs_of(panels, NestingParams(), "guillotine") == [("cut_bands", "guillotine", 1.0)]
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -161,8 +166,9 @@ def test_row_piece_nestled_under_an_overhang_does_not_pull_the_next_into_it(spac
     verify_nesting(parts, res, params)
     pos = {p.part_id: p for p in res.placements}
     assert res.sheets == 1
-    assert pos["S"].x < 600 - 100                       # the square did nestle under the arm
-    assert pos["K"].x >= 600 + spacing - 1e-6
+    g, sq = pos["G"], pos["S"]
+    assert g.x + 50 + spacing - 1e-6 <= sq.x and sq.x + 100 <= g.x + 600   # the square did nestle under the arm
+    assert sq.y + 100 + spacing <= g.y + 250 + 1e-6
 
 
 @pytest.mark.slow

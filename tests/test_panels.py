@@ -43,11 +43,14 @@ def shape_measures(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lengths, np.arccos(np.clip(cosang, -1, 1))
 
 
-@pytest.mark.parametrize("outside", ["normal", "reverse", "auto"])
-def test_outline_is_the_face_inset_by_half_the_gap(outside):
+@pytest.mark.parametrize("outside,rotation", [("normal", "quarter"), ("reverse", "grain"), ("auto", "free"),
+                                              ("normal", "free")])
+def test_outline_is_the_face_inset_by_half_the_gap(outside, rotation):
+    from shapely.geometry import Polygon
+
     grid = pp_grid()
     gap = 12.0
-    panels = make_panels(grid, PanelParams(gap=gap, outside=outside), scale=4000.0)
+    panels = make_panels(grid, PanelParams(gap=gap, outside=outside, rotation=rotation), scale=4000.0)
     assert len(panels) == grid.n_faces
     corners = grid.face_corners.reshape(-1, 4, 3) * 4000.0
     for p in panels:
@@ -65,7 +68,12 @@ def test_outline_is_the_face_inset_by_half_the_gap(outside):
         assert np.allclose(p.frame.to2d(p.outline_3d()), p.outline, atol=1e-9)
         F = np.stack([p.frame.ex, p.frame.ey, p.frame.normal])
         assert np.allclose(F @ F.T, np.eye(3), atol=1e-12)
-        assert p.outline[0] == pytest.approx([0, 0]) and abs(p.outline[1, 1]) < 1e-9 and p.outline[1, 0] > 0
+        if rotation == "free":      # laid out in its minimum-area rectangle (shapely's, independently), long side on x
+            w, h = np.ptp(p.outline, axis=0)
+            assert p.outline.min(axis=0) == pytest.approx([0, 0], abs=1e-9) and w >= h - 1e-9
+            assert w * h == pytest.approx(Polygon(p.outline).minimum_rotated_rectangle.area, rel=1e-9)
+        else:                       # reference corner at the origin, reference edge along +x
+            assert p.outline[0] == pytest.approx([0, 0]) and abs(p.outline[1, 1]) < 1e-9 and p.outline[1, 0] > 0
         x, y = p.outline.T
         assert 0.5 * (x @ np.roll(y, -1) - y @ np.roll(x, -1)) == pytest.approx(p.area_mm2)
         assert p.area_mm2 > 0

@@ -7,8 +7,11 @@ sheets used, utilisation, area lower bound); :func:`verify_nesting` re-checks an
 with shapely and raises :class:`~ppfab.errors.NestingError` naming the part at fault.
 """
 
-from .engine import UNITS_PER_SECOND, nest
+from .budget import UNITS_PER_SECOND
+from .engine import nest, work_budget
 from .params import NestingParams
+from .registry import STRATEGIES, get_strategy, strategy
 from .result import Nesting, lower_bound, placed_outline, verify_nesting
 
-__all__ = ["NestingParams", "Nesting", "nest", "verify_nesting", "placed_outline", "lower_bound", "UNITS_PER_SECOND"]
+__all__ = ["NestingParams", "Nesting", "nest", "verify_nesting", "placed_outline", "lower_bound", "UNITS_PER_SECOND",
+           "work_budget", "STRATEGIES", "get_strategy", "strategy"]

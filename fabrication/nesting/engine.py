@@ -1,20 +1,15 @@
 """``nest(parts, params)``: parts on as few stock sheets as the search finds within its budget.
 
-Modes (``NestingParams.mode``):
+``NestingParams.mode`` names a strategy of :mod:`.registry` (``rectangles``, ``guillotine``,
+``irregular``, ``auto``; one module each in :mod:`.strategies`).  A strategy lists sheet-filler
+runs with their shares of the budget; each run makes a greedy first solution and then ruins and
+recreates sheets (:mod:`.search`).  The result with the fewest sheets is kept (a tie goes to the
+strategy easier to cut).
 
-* ``guillotine`` — bounding boxes in rows across the sheet (:mod:`.rows`): every cut runs
-  edge to edge (rows, then parts within a row, then the trims of each part), as glass is
-  scored and broken.
-* ``irregular`` — the same rows, but the outlines nestle: neighbours are turned (e.g. 180°)
-  and slid together along the row, and the length saved is filled again.  When the parts are
-  mostly strips (long and thin, like beam plates), they are stacked instead, each dropped onto
-  the ones below and nestling into them (:mod:`.stack`); see :func:`strategies`.
-* ``auto`` — both, each with its share of the budget; fewer sheets wins, a tie goes to
-  guillotine (cheaper to cut).
-
-Both run a greedy first solution and then ruin and recreate (:mod:`.search`).  The budget
-is counted in deterministic work units (``time_budget`` × :data:`UNITS_PER_SECOND`), so a
-result depends on the parts, the parameters and the seed only.
+The budget is a work count (:mod:`.budget`): ``time_budget`` × :data:`UNITS_PER_SECOND` units
+cover the whole stage — the catalog of poses, every run, the placements and the check by
+:func:`~.result.verify_nesting` (reserved up front) — and each run gets its share of what is left
+when it starts.  A result depends on the parts, the parameters, the seed and that count only.
 """
 
 from __future__ import annotations
@@ -24,52 +19,27 @@ import time
 
 import numpy as np
 
+from ppfab.errors import NestingError
+
 from ..flatpart import FlatPart, Placement
+from .budget import COST_PART, COST_POSE, COST_VERIFY_PART, UNITS_PER_SECOND, Work
 from .catalog import Catalog, build_catalog
 from .params import NestingParams
+from .registry import Run, get_strategy, rank_of
 from .result import Nesting
-from .rows import Sheet, SheetFiller, Work
-from .search import fill_all, improve
-from .stack import StackFiller, strip_parts
-
-UNITS_PER_SECOND = 215_000.0    # work units per second of budget (measured on a 2-core reference machine)
-STRIP_SHARE = 0.9               # irregular mode stacks strips alone when they hold this share of the part area
+from .rows import Sheet
+from .search import first_solution, improve
 
 
-def _filler(cat: Catalog, kind: str, work: Work) -> SheetFiller | StackFiller:
-    return StackFiller(cat, work) if kind == "stack" else SheetFiller(cat, kind == "rows", work)
-
-
-def _solve(cat: Catalog, kind: str, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
+def _solve(cat: Catalog, run: Run, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
+    """One run: the filler's greedy sheets, improved until ``units`` are spent (or the bound is met)."""
     work = Work()
-    filler = _filler(cat, kind, work)
-    sheets = fill_all(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None)
+    filler = run.make(cat, work)
+    sheets, reached = first_solution(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None, units)
     history = [(work.units, len(sheets))]
     rng = np.random.default_rng([seed, stream])
-    sheets = improve(filler, sheets, units, rng, history=history, target=lb)
+    sheets = improve(filler, sheets, units, rng, history=history, target=lb, cap=reached)
     return sheets, work, history
-
-
-def strategies(cat: Catalog, mode: str) -> list[tuple[str, str, float]]:
-    """The sheet fillers a mode runs: ``(filler, reported mode, share of the budget)``.
-
-    ``guillotine`` runs the box rows; ``irregular`` runs the nestled rows when no part is a strip,
-    the strip stacks (:mod:`.stack`) when strips hold at least :data:`STRIP_SHARE` of the part
-    area, and both (half the budget each) in between; ``auto`` runs guillotine on a quarter of
-    the budget and irregular on the rest.
-    """
-    frac = float(cat.part_area[strip_parts(cat)].sum() / cat.part_area.sum())
-    if frac <= 0.0:
-        irregular = [("rows", "irregular", 1.0)]
-    elif frac >= STRIP_SHARE:
-        irregular = [("stack", "irregular", 1.0)]
-    else:
-        irregular = [("rows", "irregular", 0.5), ("stack", "irregular", 0.5)]
-    if mode == "guillotine":
-        return [("guillotine", "guillotine", 1.0)]
-    if mode == "irregular":
-        return irregular
-    return [("guillotine", "guillotine", 0.25)] + [(k, m, 0.75 * f) for k, m, f in irregular]
 
 
 def _placements(cat: Catalog, sheets: list[Sheet], params: NestingParams) -> list[Placement]:
@@ -89,6 +59,11 @@ def _placements(cat: Catalog, sheets: list[Sheet], params: NestingParams) -> lis
     return [out[i] for i in range(cat.n_parts)]
 
 
+def work_budget(params: NestingParams) -> float:
+    """The work count ``time_budget`` buys, units."""
+    return float(params.time_budget) * UNITS_PER_SECOND
+
+
 def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     """Place every part on stock sheets (see the module docstring).
 
@@ -100,7 +75,8 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     Returns
     -------
     Nesting : one placement per part (in the order given), the number of sheets, the
-        utilisation (part area / area of the sheets used) and the area lower bound
+        utilisation (part area / area of the sheets used), the area lower bound, and the work
+        count spent (``work_units``) out of the budget (``work_budget``)
 
     Raises
     ------
@@ -110,20 +86,33 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     p = params or NestingParams()
     t0 = time.perf_counter()
     sheet_area = float(p.sheet[0]) * float(p.sheet[1])
+    budget = work_budget(p)
+    strategy = get_strategy(p.mode)
     if not parts:
-        return Nesting([], 0, 0.0, 0, p.mode if p.mode != "auto" else "guillotine",
-                       (float(p.sheet[0]), float(p.sheet[1])), p.usable())
+        return Nesting([], 0, 0.0, 0, strategy.name if strategy.name != "auto" else "rectangles",
+                       (float(p.sheet[0]), float(p.sheet[1])), p.usable(), work_budget=budget, seed=p.seed)
+    fixed = Work()
     cat = build_catalog(parts, p)
+    fixed.add(COST_PART * cat.n_parts + COST_POSE * len(cat.orients) + COST_VERIFY_PART * cat.n_parts)
     total = float(cat.part_area.sum())
     x0, y0, x1, y1 = p.usable()
     lb_usable = int(math.ceil(total / ((x1 - x0) * (y1 - y0)) - 1e-12))
-    budget = float(p.time_budget) * UNITS_PER_SECOND
+    runs = strategy.runs(cat, p)
+    spent = fixed.units
     best = None
-    for stream, (kind, mode, share) in enumerate(strategies(cat, p.mode)):
-        sheets, work, history = _solve(cat, kind, share * budget, p.seed, stream, lb_usable)
-        if best is None or len(sheets) < len(best[1]):
-            best = (mode, sheets, work, history)
-    mode, sheets, work, history = best
+    for k, run in enumerate(runs):
+        share = run.share / sum(r.share for r in runs[k:])
+        units = share * max(budget - spent, 0.0)
+        if best is not None and run.floor is not None and run.floor(cat) > units:
+            continue                    # cannot pay even its cheapest first solution: left out
+        sheets, work, history = _solve(cat, run, units, p.seed, k, lb_usable)
+        spent += work.units
+        key = (len(sheets), rank_of(run.mode))
+        if best is None or key < best[0]:
+            best = (key, run.mode, sheets, history)
+    if best is None:                     # every strategy has at least one run, and the first always runs
+        raise NestingError(f"nesting strategy {strategy.name!r} made no run (internal error)")
+    _, mode, sheets, history = best
     placements = _placements(cat, sheets, p)
     fills = sorted((s.area / sheet_area for s in sheets), reverse=True)
     return Nesting(
@@ -135,7 +124,9 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
         sheet_size=(float(p.sheet[0]), float(p.sheet[1])),
         usable=p.usable(),
         sheet_fill=tuple(fills),
-        work_units=work.units,
+        work_units=spent,
+        work_budget=budget,
+        seed=p.seed,
         seconds=time.perf_counter() - t0,
         history=tuple(history),
     )

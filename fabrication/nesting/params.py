@@ -25,15 +25,21 @@ class NestingParams:
     margin: float | list[float] = param(0.0, doc="edge trim per side, mm: one number or [left, right, bottom, top]",
                                         min=0)
     spacing: float = param(10.0, doc="smallest distance between two parts, mm", min=0)
-    rotations: list[float] = param([0.0, 90.0, 180.0, 270.0], doc="allowed rotations, degrees (parts may "
-                                   "narrow this)", min_length=1)
-    free_rotation: bool = param(False, doc="also try the angles that align each outline edge with the sheet")
-    mode: str = param("auto", doc="'guillotine' (bounding rectangles in rows: edge-to-edge cuts), "
-                                  "'irregular' (outlines nestled along rows; long thin beam plates stacked bend into bend), "
-                                  "or 'auto' (both; fewer sheets wins, ties go to guillotine)",
-                      choices=("auto", "guillotine", "irregular"))
-    time_budget: float = param(20.0, doc="search budget, seconds of nominal work (the result depends only on "
-                                         "the budget and the seed, never on the machine's speed)", min=0)
+    rotations: list[float] = param([0.0, 90.0, 180.0, 270.0], doc="allowed rotations, degrees, of parts without "
+                                   "a rotation policy of their own (beam plates: e.g. [0, 180] keeps the rolling "
+                                   "direction along the plate; glass panels follow [panels] rotation)", min_length=1)
+    free_rotation: bool = param(False, doc="parts without a rotation policy of their own may turn to any angle "
+                                           "(tried: each long hull edge along the sheet, the minimum-area frame)")
+    mode: str = param("auto", doc="nesting strategy: 'rectangles' (bounding rectangles in rows, every cut "
+                                  "parallel to the sheet edges), 'guillotine' (true shapes in rows, every cut "
+                                  "straight and edge to edge, slanted between neighbours, as glass is scored and "
+                                  "broken), 'irregular' (true shapes nestled freely; long thin beam plates stacked "
+                                  "bend into bend), or 'auto' (all three; fewest sheets wins, ties go to the "
+                                  "easier cut)")
+    time_budget: float = param(20.0, doc="wall time of the whole nesting (poses, search, placements, check), "
+                                         "seconds on the reference machine; it buys a fixed work count "
+                                         "(1e6 units a second), so the layout depends only on the parts, the "
+                                         "parameters and the seed, never on the machine's speed", min=0)
     seed: int = param(0, doc="seed of the randomised search", min=0)
     tag_prefix: str = param("S", doc="first letters of the nest tags (``S03-017`` = sheet 3, part 17); glass and "
                                      "beam plates use different prefixes so every tag is unique")
@@ -50,6 +56,9 @@ class NestingParams:
         if self.spacing >= min(x1 - x0, y1 - y0):
             raise DesignError("spacing", f"part spacing {self.spacing:g} mm is not smaller than the usable "
                                          f"sheet ({x1 - x0:g} x {y1 - y0:g} mm)")
+        from .registry import get_strategy
+
+        get_strategy(self.mode, "mode")
         if not self.tag_prefix.isalnum():
             raise DesignError("tag_prefix", f"must be letters or digits, got {self.tag_prefix!r}")
 

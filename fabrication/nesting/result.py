@@ -23,9 +23,14 @@ class Nesting:
     sheets : number of sheets used
     utilisation : part area / area of the sheets used (whole sheets)
     lower_bound : ``ceil(Σ part area / sheet area)``
-    mode : ``"guillotine"`` or ``"irregular"`` (the mode that produced this result)
+    mode : the strategy that produced this result (``"rectangles"``, ``"guillotine"`` or ``"irregular"``)
     sheet_fill : (sheets,) part area / sheet area per sheet
-    work_units, history : search effort and ``(work units, sheets)`` along the search
+    work_units : the work count spent (:mod:`.budget`): with the same parts, parameters and seed, a
+        run given this count (``work_budget``) makes the same layout on any machine
+    work_budget : the work count the budget allowed (``time_budget`` × units per second)
+    seed : the search seed
+    seconds : wall time of :func:`~.engine.nest` (informative; the layout never depends on it)
+    history : ``(work units, sheets)`` along the search of the winning run
     """
 
     placements: list[Placement]
@@ -37,6 +42,8 @@ class Nesting:
     usable: tuple[float, float, float, float]
     sheet_fill: tuple[float, ...] = ()
     work_units: float = 0.0
+    work_budget: float = 0.0
+    seed: int = 0
     seconds: float = 0.0
     history: tuple = field(default=(), repr=False)
 
@@ -49,7 +56,9 @@ class Nesting:
 
     def summary(self) -> dict:
         return {"sheets": self.sheets, "utilisation": round(self.utilisation, 4), "lower_bound": self.lower_bound,
-                "mode": self.mode, "sheet": list(self.sheet_size), "seconds": round(self.seconds, 2)}
+                "mode": self.mode, "sheet": list(self.sheet_size), "seconds": round(self.seconds, 2),
+                "work_units": int(round(self.work_units)), "work_budget": int(round(self.work_budget)),
+                "seed": self.seed}
 
 
 def placed_outline(part: FlatPart, placement: Placement) -> np.ndarray:
@@ -58,10 +67,10 @@ def placed_outline(part: FlatPart, placement: Placement) -> np.ndarray:
 
 
 def _allowed_rotation(part: FlatPart, rot: float, params: NestingParams) -> bool:
-    if params.free_rotation and part.rotations is None:
-        return True
-    allowed = list(part.rotations) if part.rotations is not None else list(params.rotations)
-    return any(abs(((rot - a) + 180.0) % 360.0 - 180.0) < 1e-6 for a in allowed)
+    from .catalog import rotation_policy
+
+    free, allowed = rotation_policy(part, params)
+    return free or any(abs(((rot - a) + 180.0) % 360.0 - 180.0) < 1e-6 for a in allowed)
 
 
 def verify_nesting(parts: list[FlatPart], nesting: Nesting, params: NestingParams, tol: float = 1e-6) -> None:

@@ -1,21 +1,13 @@
-"""Filling one sheet with rows: a knapsack per row, a search over row heights, nestling.
+"""Filling one sheet with rows of bounding rectangles: a knapsack per row, a search over row heights.
 
 A sheet is filled bottom to top with rows (the first-stage cuts of a guillotine plan run
 along the sheet's length).  For a row of height at most ``Hc`` every remaining part takes
 its narrowest pose of height ``<= Hc``; a 0/1 knapsack over the quantised box widths
 (capacity = the sheet length) picks the parts of largest total value (Σ area^α); the row's
 height is its tallest box.  A sheet tries several first-row heights and stacks further rows
-greedily into the height left; the plan of largest total value wins.
-
-*Guillotine* sheets keep the boxes: rows are cut across the sheet, parts across each row,
-and every part is trimmed inside its box (edge to edge for convex parts).
-
-*Irregular* sheets keep only the planned row heights.  Each row is filled again from the
-pool with the knapsack capacity stretched by a few per cent; its parts are ordered, and
-turned to a twin pose with the same box (e.g. 180°), to maximise the exact nestling gains
-between neighbours (:func:`~.shapes.pair_gains`); each part slides left against what is
-placed (:func:`~.shapes.slide_distance`).  The first stretch whose nestled row really fits
-is kept, and the length still free is offered again.
+greedily into the height left; the plan of largest total value wins.  Rows are cut across the
+sheet, parts across each row, and every part is trimmed inside its box (edge to edge for
+convex parts).
 
 Positions are box corners in the planning frame of :mod:`.catalog`.
 """
@@ -27,26 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .budget import Work
 from .catalog import Catalog
-from .shapes import pair_gains, slide_distance
 
-# work units (≈ 5 µs each on the reference machine) charged per operation: see Work
-COST_DP_CALL, COST_DP_ITEM, COST_SLIDE, COST_GAINS, COST_ORDER = 30, 1.0, 60, 150, 40
-
-
-@dataclass
-class Work:
-    """Deterministic work counter: the currency of the time budget.
-
-    Every knapsack, sliding test and gain matrix charges a fixed number of units (about
-    5 µs each on the machine the constants were measured on), so a search that stops after
-    a number of units does the same thing on any machine.
-    """
-
-    units: float = 0.0
-
-    def add(self, n: float) -> None:
-        self.units += n
+# work units (≈ 1 µs each on the reference machine) charged per operation: see .budget
+COST_DP_CALL, COST_DP_ITEM = 66.0, 2.2
+COST_SCAN = 0.0094            # per pose scanned for a row's candidates
 
 
 @dataclass
@@ -75,30 +53,34 @@ class PlanConfig:
     top_k: int = 64             # parts offered to a row knapsack
     quantum: float = 5.0        # knapsack width quantum, mm
     jitter: float = 0.0         # random perturbation of part values (0 = none)
-    stretch: tuple[float, ...] = (0.04, 0.025, 0.012, 0.0)   # irregular rows: length stretches tried
 
 
 class SheetFiller:
     """Plans and realises sheets for a :class:`~.catalog.Catalog`."""
 
-    def __init__(self, cat: Catalog, irregular: bool, work: Work):
+    def __init__(self, cat: Catalog, work: Work):
         self.cat = cat
-        self.irregular = irregular
         self.work = work
-        self.tol = 0.01
-        self._gains: dict[tuple[int, int], float] = {}
+        self.order = np.lexsort((-cat.o_h, cat.o_w, cat.o_part))
+        self.o_part_s, self.o_w_s, self.o_h_s = cat.o_part[self.order], cat.o_w[self.order], cat.o_h[self.order]
+        work.add(COST_SCAN * 10 * len(self.order))
 
     # -- knapsack rows ------------------------------------------------------------------------
     def _row_poses(self, rem: np.ndarray, hc: float, cap: float) -> np.ndarray:
-        """The narrowest pose of height <= hc of every remaining part (pose indices)."""
+        """The narrowest pose of height <= hc of every remaining part (pose indices).
+
+        Poses are kept sorted by (part, width, −height) once, so a call is one pass over them.
+        """
         c = self.cat
-        fit = rem[c.o_part] & (c.o_h <= hc + 1e-9) & (c.o_w <= cap + 1e-9)
+        srt = self.order
+        fit = rem[self.o_part_s] & (self.o_h_s <= hc + 1e-9) & (self.o_w_s <= cap + 1e-9)
+        self.work.add(COST_SCAN * len(srt))
         idx = np.flatnonzero(fit)
         if len(idx) == 0:
             return idx
-        srt = idx[np.lexsort((-c.o_h[idx], c.o_w[idx], c.o_part[idx]))]
-        first = np.r_[True, c.o_part[srt][1:] != c.o_part[srt][:-1]]
-        return srt[first]
+        parts = self.o_part_s[idx]
+        first = np.r_[True, parts[1:] != parts[:-1]]
+        return srt[idx[first]]
 
     def best_row(self, rem: np.ndarray, hc: float, cap: float, cfg: PlanConfig,
                  values: np.ndarray) -> tuple[float, list[int]]:
@@ -196,6 +178,19 @@ class SheetFiller:
     def initial_config(self) -> PlanConfig:
         return PlanConfig()
 
+    @staticmethod
+    def cost_key(cfg: PlanConfig) -> tuple:
+        """Configurations compare by cost in this order (larger = dearer)."""
+        return (cfg.n_heights, cfg.top_k)
+
+    def cheaper(self, cfg: PlanConfig) -> PlanConfig | None:
+        """The next configuration down the cost ladder (fewer first-row heights, smaller knapsacks), or ``None``."""
+        for n, k in ((6, 48), (2, 32)):
+            if n < cfg.n_heights:
+                return PlanConfig(alpha=cfg.alpha, n_heights=n, top_k=min(k, cfg.top_k), quantum=cfg.quantum,
+                                  jitter=cfg.jitter)
+        return None
+
     def random_config(self, rng: np.random.Generator) -> PlanConfig:
         """Randomised knobs for one ruin-and-recreate step."""
         return PlanConfig(alpha=float(rng.uniform(0.8, 1.8)), n_heights=int(rng.choice([10, 16, 24])),
@@ -209,112 +204,11 @@ class SheetFiller:
         y = 0.0
         for row in rows:
             height = float(c.o_h[row].max())
-            if self.irregular:
-                self._nestle_row(sheet, y, height, rem, cfg, values)
-            else:
-                rem[c.o_part[row]] = False
-                x = 0.0
-                for o in row:
-                    sheet.pieces.append(Piece(int(o), x, y))
-                    x += float(c.o_w[o])
+            rem[c.o_part[row]] = False
+            x = 0.0
+            for o in row:
+                sheet.pieces.append(Piece(int(o), x, y))
+                x += float(c.o_w[o])
             y += height
         sheet.area = float(c.part_area[[c.o_part[p.orient] for p in sheet.pieces]].sum())
         return sheet
-
-    def _twins(self, o: int) -> np.ndarray:
-        c = self.cat
-        p = c.o_part[o]
-        r = np.arange(c.part_start[p], c.part_start[p + 1])
-        return r[c.twins[r] == c.twins[o]]
-
-    def _gain_matrix(self, poses: list[int]) -> np.ndarray:
-        """Nestling gains ``G[a, b]`` of pose ``b`` following pose ``a`` (cached across calls)."""
-        c = self.cat
-        n = len(poses)
-        if any((a, b) not in self._gains for a in poses for b in poses):
-            G = pair_gains([c.orients[o].halo for o in poses], np.array([c.orients[o].w for o in poses]),
-                           [c.orients[o].poly for o in poses], c.spacing)
-            self.work.add(COST_GAINS + n * n)
-            for i, a in enumerate(poses):
-                for j, b in enumerate(poses):
-                    self._gains[(a, b)] = float(G[i, j])
-        return np.array([[self._gains[(a, b)] for b in poses] for a in poses]).reshape(n, n)
-
-    def _order(self, row: list[int], last: int | None) -> list[int]:
-        """Order and twin choice of a row's poses maximising the neighbours' nestling gains (greedy)."""
-        var = [self._twins(o) for o in row]
-        flat = [int(v) for vs in var for v in vs]
-        item = np.array([k for k, vs in enumerate(var) for _ in vs])
-        pool = flat + ([last] if last is not None else [])
-        G = self._gain_matrix(pool)
-        self.work.add(COST_ORDER)
-        best_total, best_seq = -1.0, [0]
-        for s0 in (range(len(flat)) if last is None else [len(flat)]):
-            seq = [s0]
-            used = np.zeros(len(row), dtype=bool)
-            if last is None:
-                used[item[s0]] = True
-            total = 0.0
-            while not used.all():
-                g = np.where(used[item], -np.inf, G[seq[-1], : len(flat)])
-                j = int(np.argmax(g))
-                total += float(g[j])
-                seq.append(j)
-                used[item[j]] = True
-            if total > best_total + 1e-9:
-                best_total, best_seq = total, seq
-        out = [pool[k] for k in best_seq]
-        return out[1:] if last is not None else out
-
-    def _slide_left(self, o: int, x_box: float, y: float, halos: list[np.ndarray]) -> float:
-        """Where pose ``o`` on base ``y`` comes to rest sliding left towards ``halos``.
-
-        It starts right of every halo in its band (a valid start), slides until contact or the
-        left edge, and never ends right of its box position ``x_box`` (always allowed).
-        """
-        c = self.cat
-        h = c.orients[o].h
-        band = [g for g in halos if g[:, 1].min() < y + h and g[:, 1].max() > y]
-        if not band:
-            return 0.0
-        start = max(x_box, max(float(g[:, 0].max()) for g in band) + 1e-3)
-        t = slide_distance(c.orients[o].poly + np.array([start, y]), band, (-1.0, 0.0), self.tol)
-        self.work.add(COST_SLIDE)
-        return min(max(start - t, 0.0), x_box)
-
-    def _nestle_row(self, sheet: Sheet, y: float, height: float, rem: np.ndarray, cfg: PlanConfig,
-                    values: np.ndarray) -> None:
-        """Fill one irregular row of height ``height`` at base ``y`` (see the module docstring)."""
-        c = self.cat
-        halos: list[np.ndarray] = []
-        for p in sheet.pieces:            # earlier rows' outlines reaching into this band (boxes never do)
-            if p.Y + c.o_h[p.orient] > y + 1e-9:
-                halos.append(c.orients[p.orient].halo + np.array([p.X, p.Y]))
-        last: int | None = None
-        x_end = 0.0
-        for attempt in range(4):
-            cap = c.L - x_end
-            placed = None
-            for beta in (cfg.stretch if attempt == 0 else cfg.stretch[-2:]):
-                _, poses = self.best_row(rem, height, cap * (1.0 + beta), cfg, values)
-                if not poses:
-                    break
-                seq = self._order(poses, last)
-                trial, trial_halos, xe = [], list(halos), x_end
-                for o in seq:
-                    x = self._slide_left(o, xe, y, trial_halos)
-                    if x + c.o_w[o] > c.L + 1e-9:
-                        trial = None
-                        break
-                    trial.append(Piece(int(o), float(x), y))
-                    trial_halos.append(c.orients[o].halo + np.array([x, y]))
-                    xe = max(xe, float(x + c.o_w[o]))      # a piece nestled deep into the one before ends left of it
-                if trial is not None:
-                    placed = (trial, trial_halos, xe)
-                    break
-            if placed is None:
-                break
-            trial, halos, x_end = placed
-            sheet.pieces.extend(trial)
-            rem[[c.o_part[p.orient] for p in trial]] = False
-            last = trial[-1].orient

@@ -55,47 +55,135 @@ def ccw(points: np.ndarray) -> np.ndarray:
     """The polygon in counter-clockwise order (a mirrored outline turns clockwise)."""
     p = np.asarray(points, dtype=float)
     x, y = p[:, 0], p[:, 1]
-    area = 0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-    return p if area >= 0 else p[::-1].copy()
+    area2 = float(x[:-1] @ y[1:] - y[:-1] @ x[1:] + x[-1] * y[0] - y[-1] * x[0])
+    return p if area2 >= 0 else p[::-1].copy()
+
+
+def rotations_matrix(degrees: np.ndarray) -> np.ndarray:
+    """Matrices ``(R, 2, 2)`` acting on row vectors: ``p @ M[r]`` is ``p`` turned by ``degrees[r]``."""
+    a = np.radians(np.asarray(degrees, dtype=float))
+    c, s = np.cos(a), np.sin(a)
+    quarter = np.abs(np.asarray(degrees, dtype=float) % 90.0) < 1e-12      # exact quarter turns
+    c, s = np.where(quarter, np.round(c), c), np.where(quarter, np.round(s), s)
+    return np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], -2)
 
 
 def halo(poly: np.ndarray, spacing: float) -> np.ndarray:
     """Outline offset outwards by ``spacing`` (mitred, limit 1.1: contains the round offset), ``(b, 2)``."""
-    if spacing <= 0:
-        return ccw(poly)
-    from shapely.geometry import Polygon
+    return halos([poly], spacing)[0]
 
-    g = Polygon(poly).buffer(spacing + HALO_EXTRA, join_style="mitre", mitre_limit=1.1)
-    return ccw(np.asarray(g.exterior.coords, dtype=float)[:-1])
+
+def halos(polys: list[np.ndarray], spacing: float) -> list[np.ndarray]:
+    """:func:`halo` of many outlines at once (one vectorised shapely call), each ``(b_i, 2)`` counter-clockwise.
+
+    The halo of a rotated outline is the rotated halo, so a part's halo is made once and turned
+    with each of its poses.
+    """
+    if spacing <= 0:
+        return [ccw(p) for p in polys]
+    import shapely
+
+    geoms = [shapely.Polygon(p) for p in polys]
+    out = shapely.buffer(np.array(geoms, dtype=object), spacing + HALO_EXTRA, join_style="mitre", mitre_limit=1.1)
+    return [ccw(np.asarray(shapely.get_exterior_ring(g).coords, dtype=float)[:-1]) for g in out]
+
+
+def convex_hull(outline: np.ndarray) -> np.ndarray:
+    """Counter-clockwise convex hull ``(h, 2)`` of a polygon (the polygon itself when it is convex)."""
+    p = np.asarray(outline, dtype=float)
+    e_in = p - np.concatenate([p[-1:], p[:-1]])
+    e_out = np.concatenate([p[1:], p[:1]]) - p
+    if np.all(e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0] >= 0):
+        return p
+    from shapely.geometry import MultiPoint
+
+    return ccw(np.asarray(MultiPoint([tuple(q) for q in p]).convex_hull.exterior.coords, dtype=float)[:-1])
+
+
+def hull_edge_angles(outline: np.ndarray, most: int = 8) -> list[float]:
+    """Rotations (degrees, in [0, 360)) that lay a convex-hull edge of ``outline`` along +x.
+
+    An edge ``e`` of a counter-clockwise hull laid along +x has the part above it (the edge at the
+    bottom); ``+ 180°`` puts it on top.  Only the ``most`` longest hull edges are used.
+    """
+    hull = convex_hull(outline)
+    e = np.concatenate([hull[1:], hull[:1]]) - hull
+    keep = np.argsort(-np.hypot(e[:, 0], e[:, 1]), kind="stable")[:most]
+    ang = (-np.degrees(np.arctan2(e[keep, 1], e[keep, 0]))) % 360.0
+    return [float(a) for a in ang]
 
 
 def free_angles(outline: np.ndarray) -> list[float]:
-    """Rotations (degrees, in [0, 360)) that lay each convex-hull edge of ``outline`` along +x."""
-    from shapely.geometry import MultiPoint
+    """Rotations tried for a part that may turn freely, degrees in [0, 360).
 
-    hull = np.asarray(MultiPoint([tuple(p) for p in outline]).convex_hull.exterior.coords, dtype=float)
-    e = np.diff(hull, axis=0)
-    ang = (-np.degrees(np.arctan2(e[:, 1], e[:, 0]))) % 360.0
-    return sorted(set(round(float(a), 9) % 360.0 for a in ang))
+    Every (longest) hull edge along +x at the bottom and at the top of the part, and the frame of
+    the part's minimum-area rectangle in its four quarter turns (lying and standing).
+    """
+    edge = hull_edge_angles(outline)
+    rect = min_rect_angle(outline)
+    angles = edge + [(a + 180.0) % 360.0 for a in edge] + [(rect + 90.0 * k) % 360.0 for k in range(4)]
+    return unique_angles(angles)
+
+
+def min_rect_angle(outline: np.ndarray) -> float:
+    """Rotation (degrees) that lays the long side of the minimum-area rectangle of ``outline`` along +x.
+
+    The optimum has a side on the convex hull (Freeman & Shapira), so every hull edge direction is tried.
+    """
+    hull = convex_hull(outline)
+    e = np.concatenate([hull[1:], hull[:1]]) - hull
+    ang = np.arctan2(e[:, 1], e[:, 0])
+    c, s = np.cos(ang), np.sin(ang)
+    px = hull[None, :, 0] * c[:, None] + hull[None, :, 1] * s[:, None]
+    py = -hull[None, :, 0] * s[:, None] + hull[None, :, 1] * c[:, None]
+    w, h = np.ptp(px, axis=1), np.ptp(py, axis=1)
+    k = int(np.argmin(w * h))
+    a = -math.degrees(ang[k]) + (0.0 if w[k] >= h[k] else 90.0)
+    return a % 360.0
+
+
+def unique_angles(angles: list[float], tol: float = 1e-6) -> list[float]:
+    """Angles modulo 360 without near-duplicates (within ``tol`` degrees), sorted."""
+    out: list[float] = []
+    for a in sorted(float(x) % 360.0 for x in angles):
+        if not out or a - out[-1] > tol:
+            out.append(a)
+    if len(out) > 1 and out[0] + 360.0 - out[-1] <= tol:
+        out.pop()
+    return out
 
 
 def orientations(part_index: int, outline: np.ndarray, rotations: list[float], mirror: bool,
-                 spacing: float) -> list[Orient]:
-    """All poses of a part (duplicates of the same polygon removed)."""
+                 spacing: float, part_halo: np.ndarray | None = None, dedupe: bool = True) -> list[Orient]:
+    """All poses of a part (with ``dedupe``, duplicates of the same polygon removed).
+
+    ``part_halo`` is the halo of ``outline`` (made here when not given); each pose's halo is it
+    turned with the pose.  All rotations are applied at once (one matrix product per mirror side).
+    """
     out: list[Orient] = []
     seen: set = set()
+    hl = halo(outline, spacing) if part_halo is None else part_halo
+    rots = np.array([float(r) % 360.0 for r in rotations])
+    M = rotations_matrix(rots)
     for mirrored in ([False, True] if mirror else [False]):
-        for rot in rotations:
-            r = float(rot) % 360.0
-            p = ccw(rotate(outline, r, mirrored))
-            lo = p.min(axis=0)
-            poly = p - lo
-            key = tuple(sorted(map(tuple, np.round(poly, 6).tolist())))    # the same point set = the same pose
-            if key in seen:
-                continue
-            seen.add(key)
-            w, h = poly.max(axis=0)
-            out.append(Orient(part_index, r, mirrored, poly, -lo, float(w), float(h), halo(poly, spacing)))
+        flip = np.array([-1.0, 1.0]) if mirrored else np.array([1.0, 1.0])
+        P = np.einsum("kj,rji->rki", outline * flip, M)             # (R, k, 2)
+        Hh = np.einsum("kj,rji->rki", hl * flip, M)
+        lo = P.min(axis=1)
+        P = P - lo[:, None, :]
+        Hh = Hh - lo[:, None, :]
+        size = P.max(axis=1)
+        if mirrored:                                                  # mirroring reverses the orientation
+            P, Hh = P[:, ::-1], Hh[:, ::-1]
+        for r in range(len(rots)):
+            if dedupe:                                                # the same point set = the same pose
+                q = np.round(P[r], 6) + 0.0
+                key = q[np.lexsort((q[:, 1], q[:, 0]))].tobytes()
+                if key in seen:
+                    continue
+                seen.add(key)
+            out.append(Orient(part_index, float(rots[r]), mirrored, P[r], -lo[r], float(size[r, 0]),
+                              float(size[r, 1]), Hh[r]))
     return out
 
 
@@ -145,37 +233,8 @@ def slide_distance(moving: np.ndarray, fixed: list[np.ndarray], direction: tuple
         return math.inf
     d = np.asarray(direction, dtype=float)
     m = np.asarray(moving, dtype=float)
-    fa = np.concatenate([np.asarray(f, dtype=float) for f in fixed])
-    fb = np.concatenate([np.roll(np.asarray(f, dtype=float), -1, axis=0) for f in fixed])
+    fa = np.concatenate(fixed) if len(fixed) > 1 else np.asarray(fixed[0], dtype=float)
+    fb = np.concatenate([np.concatenate([f[1:], f[:1]]) for f in fixed])
     t1 = _ray_hits(m[:, None, :], d, fa[None], fb[None], tol).min(initial=math.inf)
-    t2 = _ray_hits(fa[:, None, :], -d, m[None], np.roll(m, -1, axis=0)[None], tol).min(initial=math.inf)
+    t2 = _ray_hits(fa[:, None, :], -d, m[None], np.concatenate([m[1:], m[:1]])[None], tol).min(initial=math.inf)
     return float(min(t1, t2))
-
-
-def pair_gains(halos: list[np.ndarray], widths: np.ndarray, polys: list[np.ndarray], spacing: float) -> np.ndarray:
-    """Nestling along a row: how much closer than their boxes allow piece ``b`` can follow piece ``a``.
-
-    Piece ``a`` (its halo) sits with its box at ``[0, w_a]``; piece ``b`` starts on the same base
-    line right of the halo and slides along ``−x`` until it meets it.  Entry ``[a, b]`` is how far
-    left of the box position ``w_a + spacing`` it ends (at least 0: the box position is always
-    allowed) — the length the pair saves over two boxes.  Vectorised over all pairs; ``(A, B)``.
-    """
-    if not halos or not polys:
-        return np.zeros((len(halos), len(polys)))
-    ha, hb = pad(halos)                         # (A, h, 2)
-    pa, pb = pad(polys)                         # (B, k, 2)
-    box = np.asarray(widths, dtype=float) + spacing
-    start = np.maximum(box, ha[..., 0].max(axis=1) + 1e-3)                                  # (A,)
-    off = start[:, None, None, None] * np.array([1.0, 0.0])                                 # (A,1,1,2)
-    d = np.array([-1.0, 0.0])
-    tol = 0.01
-    # vertices of b (at the start offset of a) against edges of halo a
-    p = pa[None, :, :, None, :] + off[:, :, :, None, :]                                    # (A, B, k, 1, 2)
-    t1 = _ray_hits(p, d, ha[:, None, None, :, :], hb[:, None, None, :, :], tol).min(axis=(2, 3))
-    # vertices of halo a against edges of b, moving by +x
-    q = ha[:, None, :, None, :]                                                            # (A, 1, h, 1, 2)
-    ea = pa[None, :, None, :, :] + off[:, :, :, None, :]                                  # (A, B, 1, k, 2)
-    eb = pb[None, :, None, :, :] + off[:, :, :, None, :]
-    t2 = _ray_hits(q, -d, ea, eb, tol).min(axis=(2, 3))
-    t = np.minimum(np.minimum(t1, t2), start[:, None])
-    return np.maximum(box[:, None] - (start[:, None] - t), 0.0)

@@ -48,13 +48,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .catalog import Catalog
-from .rows import Piece, Sheet, Work
+from .budget import Work
+from .rows import Piece, Sheet
 from .shapes import slide_distance
 
 CELLS = 300                     # column cells across the usable length (q = L / CELLS)
 ELONGATION = 6.0                # a part whose narrowest box is this many times longer than deep is a strip
-# work units (≈ 5 µs each on the reference machine): per candidate cell evaluated, per step, per exact slide
-COST_CELL, COST_STEP, COST_SLIDE = 1.0 / 220.0, 40.0, 60.0
+# work units (≈ 1 µs each on the reference machine): per candidate cell evaluated, per step, per exact slide
+COST_CELL, COST_STEP, COST_SLIDE = 3.0 / 220.0, 121.0, 182.0
+COST_PROFILE = 39.0             # per pose: column profiles and the filler's arrays
 STRIDE, SHORTLIST = 4, 32      # short-listing: every 4th cell for all candidates, all cells for the best 32
 
 
@@ -74,8 +76,11 @@ def column_extents(polys: list[np.ndarray], q: float, x_from: np.ndarray,
         its edges cross the slab's sides, and those are the points examined.
     """
     k = np.array([len(p) for p in polys])
-    a = np.concatenate([np.asarray(p, dtype=float) for p in polys])
-    b = np.concatenate([np.roll(np.asarray(p, dtype=float), -1, axis=0) for p in polys])
+    a = np.concatenate(polys).astype(float, copy=False)
+    start = np.cumsum(k) - k
+    nxt = np.arange(len(a)) + 1
+    nxt[start + k - 1] = start                      # each polygon's last vertex joins its first
+    b = a[nxt]
     pid = np.repeat(np.arange(len(polys)), k)
     x0 = np.asarray(x_from, dtype=float)[pid]
     nn = np.asarray(n, dtype=np.int64)
@@ -189,7 +194,10 @@ class StackFiller:
     def __init__(self, cat: Catalog, work: Work, profiles: Profiles | None = None):
         self.cat = cat
         self.work = work
-        self.prof = profiles if profiles is not None else build_profiles(cat)
+        if profiles is None:
+            profiles = build_profiles(cat)
+            work.add(COST_PROFILE * len(cat.orients))
+        self.prof = profiles
         self.Hu = cat.H - cat.spacing
         self.o_h = np.array([o.h for o in cat.orients])
         self.halo_box = np.array([[*o.halo.min(axis=0), *o.halo.max(axis=0)] for o in cat.orients])   # (O, 4)
@@ -205,6 +213,15 @@ class StackFiller:
                            jitter=float(rng.choice([0.0, 0.02, 0.05, 0.1])),
                            height=float(rng.choice([0.0, 0.1, 0.3, 1.0])),
                            first=str(rng.choice(["longest", "best", "random"])))
+
+    @staticmethod
+    def cost_key(cfg: StackConfig) -> tuple:
+        """One cost level."""
+        return ()
+
+    def cheaper(self, cfg: StackConfig) -> StackConfig | None:
+        """There is no cheaper stack: ``None``."""
+        return None
 
     def initial_config(self) -> StackConfig:
         return StackConfig()

@@ -7,7 +7,8 @@ Every function works on stacks: ``corners (F, 4, 3)``, flat polygons ``(F, k, 2)
   orientation as ``QuadMesh.face_planes``).  The panel's planarity deviation is the largest
   distance of a corner from that plane (mm).
 * Flat frame: an orthonormal frame ``(origin, X, Y, N)`` with ``N`` the outside normal,
-  ``X`` along the projected reference edge ``c0 → c1`` and ``Y = N × X``.  The map
+  ``X`` along the projected reference edge ``c0 → c1`` and ``Y = N × X``; or (:func:`min_area_frames`)
+  turned in the plane so that the outline's minimum-area rectangle is axis-aligned.  The map
   ``p ↦ ((p − origin)·X, (p − origin)·Y)`` is an exact isometry of the face plane onto R²,
   and ``(x, y) ↦ origin + x X + y Y`` its inverse, so the flat outline maps back to 3D.
 * Inset: every edge line is moved inwards by ``δ`` in the plane (mitred offset) and
@@ -126,7 +127,7 @@ def min_area_rectangles(q: np.ndarray) -> np.ndarray:
     """Smallest enclosing rectangles ``(F, 3)``: ``(long side, short side, angle of long side in degrees)``.
 
     The optimum has a side on the convex hull; for the convex quads of a panel mesh
-    every edge direction is tried (for non-convex outlines the hull edges are a subset,
+    every edge direction is tried (of directions within 1e-6 of the least area, the first edge's) (for non-convex outlines the hull edges are a subset,
     so the result is the same).
     """
     q = np.asarray(q, dtype=float)
@@ -138,7 +139,9 @@ def min_area_rectangles(q: np.ndarray) -> np.ndarray:
     w = px.max(-1) - px.min(-1)
     h = py.max(-1) - py.min(-1)
     area = w * h
-    best = np.argmin(area, axis=1)
+    # the first edge (from the reference corner) within 1e-6 of the least area: near-ties (opposite edges
+    # almost parallel) are decided by corner order, which a rigid motion does not change
+    best = np.argmax(area <= area.min(axis=1, keepdims=True) * (1 + 1e-6), axis=1)
     rows = np.arange(len(q))
     wb, hb, ab = w[rows, best], h[rows, best], np.degrees(ang[rows, best])
     long = np.maximum(wb, hb)
@@ -146,3 +149,44 @@ def min_area_rectangles(q: np.ndarray) -> np.ndarray:
     angle = np.where(wb >= hb, ab, ab + 90.0)
     angle = (angle + 180.0) % 180.0
     return np.stack([long, short, angle], axis=-1)
+
+
+def min_area_frames(origin: np.ndarray, X: np.ndarray, Y: np.ndarray,
+                    outline: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Turn flat frames so each outline lies in its minimum-area rectangle ``[0, long] × [0, short]``.
+
+    With ``θ`` the angle of the rectangle's long side (:func:`min_area_rectangles`) and ``m`` the
+    lower-left corner of the turned outline, the new coordinates are ``q = R(−θ) p − m`` and the
+    frame ``X' = cos θ X + sin θ Y``, ``Y' = −sin θ X + cos θ Y``, ``origin' = origin + m_x X' + m_y Y'``,
+    so ``origin + p_x X + p_y Y = origin' + q_x X' + q_y Y'`` (the same 3D points, ``N`` unchanged).
+    Of ``θ`` and ``θ + π`` the one leaving the reference corner (vertex 0) in the lower-left half is used.
+
+    Parameters
+    ----------
+    origin, X, Y : (F, 3) frames; outline : (F, k, 2) coordinates in them
+
+    Returns
+    -------
+    origin, X, Y : (F, 3) turned frames; outline : (F, k, 2) in them, corner order unchanged
+    """
+    theta = np.radians(min_area_rectangles(outline)[:, 2])
+
+    def turned(t: np.ndarray) -> np.ndarray:
+        c, s = np.cos(t), np.sin(t)
+        return np.stack([c[:, None] * outline[..., 0] + s[:, None] * outline[..., 1],
+                         -s[:, None] * outline[..., 0] + c[:, None] * outline[..., 1]], axis=-1)
+
+    q = turned(theta)
+    # of the two turns that lay the long side along x (θ, θ + 180°) take the one with the reference
+    # corner in the lower-left half of the rectangle: a choice that a rigid motion does not change
+    centre = 0.5 * (q.min(axis=1) + q.max(axis=1))
+    flip = (q[:, 0, 0] - centre[:, 0]) + (q[:, 0, 1] - centre[:, 1]) > 0
+    theta = np.where(flip, theta + np.pi, theta)
+    q = turned(theta)
+    c, s = np.cos(theta), np.sin(theta)
+    m = q.min(axis=1)
+    q = q - m[:, None, :]
+    X2 = c[:, None] * X + s[:, None] * Y
+    Y2 = -s[:, None] * X + c[:, None] * Y
+    origin2 = origin + m[:, :1] * X2 + m[:, 1:2] * Y2
+    return origin2, X2, Y2, q

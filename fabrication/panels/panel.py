@@ -35,6 +35,9 @@ from .params import PanelParams
 
 log = logging.getLogger("ppfab")
 
+ROTATIONS: dict[str, tuple[float, ...] | None] = {"free": None, "grain": (0.0, 180.0), "quarter": (0.0, 90.0, 180.0, 270.0)}
+"""Allowed rotations of each ``PanelParams.rotation`` (``None``: any angle)."""
+
 
 @dataclass(frozen=True, eq=False)
 class Panel:
@@ -47,13 +50,16 @@ class Panel:
     face_ij : ``(i, j)`` on a regular patch, else ``None``
     mesh_face : index of the face in the mesh that was passed in
     outline : (k, 2) inset outline in the panel frame, counter-clockwise seen from outside,
-        starting at the reference corner (corner 0, ``v[i, j]`` on a grid) at the origin; its first
-        edge, the reference edge, runs along +x (face edge ``c0 → c1``, or ``c0 → c3`` when the
+        starting at the reference corner (corner 0, ``v[i, j]`` on a grid).  With
+        ``rotation = "free"`` it lies in its minimum-area rectangle (long side along +x, the
+        rectangle's lower-left corner at the origin); otherwise the reference corner is at the
+        origin and the reference edge runs along +x (face edge ``c0 → c1``, or ``c0 → c3`` when the
         face's normal points inside)
     corner_index : (k,) face corner (0..3 in the face's corner order) of each outline vertex
     corners_3d : (k, 3) the mesh face's corners (mm), in face order
     frame : :class:`Frame` mapping the flat outline back to 3D
     deviation_mm : largest distance of a face corner from the face's least-squares plane
+    rotation : how the panel may turn on the stock sheet (:attr:`PanelParams.rotation`)
     """
 
     part_id: str
@@ -78,6 +84,7 @@ class Panel:
     type_id: str = ""
     marks: tuple = ()
     meta: dict = field(default_factory=dict)
+    rotation: str = "free"
 
     def outline_3d(self) -> np.ndarray:
         """The inset outline in 3D, ``(k, 3)`` mm, on the face's least-squares plane."""
@@ -106,9 +113,11 @@ class Panel:
             meta["face_i"], meta["face_j"] = self.face_ij
         meta.update(self.meta)
         cut = shape or self
+        rotations = ROTATIONS[self.rotation]
+        meta["rotation"] = self.rotation
         return FlatPart(part_id=self.part_id, kind="panel", outline=cut.outline, marks=cut.marks,
-                        label=self.part_id, type_id=self.type_id, rotations=None,
-                        mirror_allowed=self.mirror_allowed, meta=meta)
+                        label=self.part_id, type_id=self.type_id, rotations=rotations,
+                        mirror_allowed=self.mirror_allowed, meta=meta, free_rotation=rotations is None)
 
 
 def _outside_signs(corners: np.ndarray, planes: np.ndarray, mode: str) -> np.ndarray:
@@ -249,10 +258,12 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
         names = ", ".join(ids[k] for k in collapsed[:8]) + (" …" if len(collapsed) > 8 else "")
         raise FabricationError(f"inset by gap/2 = {0.5 * p.gap:g} mm collapses {len(collapsed)} panel(s): {names} "
                                f"({ids[f]}: shortest edge {shortest:.3g} mm)")
-    # final frame: origin at the inset reference corner, X unchanged
+    # final frame: origin at the inset reference corner, X unchanged ...
     ref = inset[:, 0, :]
     origin = origin + ref[:, :1] * X + ref[:, 1:2] * Y
     outline = inset - ref[:, None, :]
+    if p.rotation == "free":          # ... or, for glass free to turn, the minimum-area rectangle frame
+        origin, X, Y, outline = geo.min_area_frames(origin, X, Y, outline)
     perim = geo.perimeter(outline)
     angles = np.degrees(geo.corner_angles(outline))
     rects = geo.min_area_rectangles(outline)
@@ -300,6 +311,7 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
             mirror_allowed=p.mirror_allowed,
             type_id=f"T{int(types[f]) + 1:0{wt}d}",
             marks=_mark_polylines(o, float(used[f])),
+            rotation=p.rotation,
         ))
     return panels
 

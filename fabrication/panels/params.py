@@ -38,6 +38,12 @@ class PanelParams:
     outside: str = param("auto", doc="which side of a face is the outside: 'normal' (the side its corner order "
                                      "turns counter-clockwise about), 'reverse', or 'auto' (away from the mesh centroid)",
                          choices=("auto", "normal", "reverse"))
+    rotation: str = param("free", doc="how panels may turn on the stock sheet: 'free' (float glass has no grain: "
+                                      "any angle; each outline is laid out in its minimum-area rectangle), 'grain' "
+                                      "(0 or 180°: the sheet's length stays along the panel's reference edge, for "
+                                      "coated or patterned glass whose direction must be the same on every pane), "
+                                      "or 'quarter' (0, 90, 180, 270°); 'grain' and 'quarter' keep the outline "
+                                      "in its reference-edge frame", choices=("free", "grain", "quarter"))
     mark_size: float = param(80.0, doc="length of the reference-corner mark on layer MARK, mm", min=0)
     edge_finish: str = param("arrised", doc="edge work of the panes, written to the glass order (e.g. arrised, "
                                             "ground, polished)")

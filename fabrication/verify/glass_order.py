@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import ORDER_COLUMNS, ORDER_CORNERS, ORDER_SHAPE_COLUMNS, csv_value
+from ..glassorder import reference_frame
 from . import Verification, check, read_csv
 from ._shapes import number
 from .congruence import congruence_error, inset_face_2d
@@ -113,8 +114,9 @@ def check_glass_order(v: Verification) -> None:
                 v.error(row["file"], "", str(exc))
                 continue
             if len(dxf.parts) != 1 or dxf.parts[0].points.shape != c.shape or \
-                    np.abs(dxf.parts[0].points - c).max() > 0.006:
-                v.error(row["file"], tid, "CUT outline is not at the corners of the glass order")
+                    np.abs(reference_frame(dxf.parts[0].points) - c).max() > 0.006:
+                v.error(row["file"], tid, "CUT outline, moved to corner 1 at the origin and edge 12 along +x, "
+                                          "is not at the corners of the glass order")
             want = sorted(np.r_[edges, diags]) if dimensioned else []
             got = sorted(dxf.dimensions)
             if len(got) != len(want) or (want and np.abs(np.array(got) - want).max() > 0.006):

@@ -1,0 +1,1 @@
+"""Nesting strategies, one module each (see :mod:`fabrication.nesting.registry`)."""
