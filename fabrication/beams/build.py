@@ -16,6 +16,7 @@ from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plat
 from .params import BeamParams
 from .plates import BeamPlate, layout_plates
 from .report import BeamRecord, BeamReport, Defect
+from .torsion import check_torsion
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,8 +52,9 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     ----------
     support : node axes and support planes (:mod:`ppfab.support`), in mm
     params : beam parameters (defaults when omitted)
-    strict : raise :class:`~ppfab.errors.FabricationError` naming every defective plate
-        (with its measured value) instead of returning them in ``report.defects``
+    strict : raise :class:`~fabrication.beams.torsion.TorsionError` when the support's torsion at beam depth
+        exceeds ``params.max_torsion_mm`` (listing the edges), and :class:`~ppfab.errors.FabricationError`
+        naming every defective plate (with its measured value) instead of returning them in ``report.defects``
 
     Returns
     -------
@@ -61,6 +63,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     params = params or BeamParams()
     if not isinstance(params, BeamParams):
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
+    if strict:
+        check_torsion(support, params)
     plates, defects = layout_plates(support, params)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique

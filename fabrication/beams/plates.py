@@ -273,13 +273,29 @@ def _continuous_family(support: SupportStructure, params: BeamParams) -> int:
     return support.planar_families[0] if support.planar_families else 0
 
 
+def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.ndarray:
+    """``(L,)`` bool: the polylines ``[beams] segment`` names (ids and rules of :mod:`ppfab.support.lines`;
+    ``nonplanar`` here means further than ``plane_tolerance`` mm from the polyline's plane)."""
+    from ppfab.support.lines import select_polylines
+
+    mesh = support.mesh
+    out = np.zeros(len(mesh.polylines), dtype=bool)
+    if "nonplanar" in params.segment:
+        out |= support.polyline_deviation > params.plane_tolerance
+    rest = [s for s in params.segment if s != "nonplanar"]
+    if rest:
+        out |= select_polylines(mesh, rest, "beams.segment")
+    return out
+
+
 def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
     (``support.polyline_planar``), it lies in that plane within ``params.plane_tolerance``
     and, with segmented joints, belongs to the continuous family; otherwise one plate per
-    edge in the edge's support plane.  With half-lap
+    edge in the edge's support plane.  Polylines the support left out of the planar families
+    (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -296,6 +312,8 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
     cont = _continuous_family(support, params)
     planar_lines = support.polyline_planar
     assert planar_lines is not None, "SupportStructure.__post_init__ sets polyline_planar"
+    left_out = {k for k, _ in support.left_out}
+    cut = segmented_polylines(support, params)
     plates: list[BeamPlate] = []
     defects: list[Defect] = []
     for l, line in enumerate(support.polylines):
@@ -305,7 +323,7 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
         dev = float(support.polyline_deviation[l])
         supported = bool(planar_lines[l]) or len(vs) == 2
         planar = supported and dev <= params.plane_tolerance
-        segmented = jt.segments and line.family != cont
+        segmented = (jt.segments and line.family != cont) or l in left_out or bool(cut[l])
         if not planar and not segmented and jt.planar_requirement is not None:
             why = (f"its vertices lie up to {dev:.3g} mm off the beam plane (tolerance {params.plane_tolerance:g} mm)"
                    if dev > params.plane_tolerance else

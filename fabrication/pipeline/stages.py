@@ -87,10 +87,13 @@ def stage_quality(geometry: Geometry, progress: Progress) -> Quality:
 
 def stage_support(design: Design, geometry: Geometry, progress: Progress) -> SupportStructure:
     """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh."""
+    from ppfab.support.params import BeamContext
     from ppfab.support.select import support_structure
 
     progress.start("support")
-    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None)
+    beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
+    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
+                                beams=beams)
     s = support.summary()
     progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
     return support

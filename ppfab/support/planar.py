@@ -1,0 +1,114 @@
+"""Support structures whose planar beams are chosen polylines (the PP and P methods on any quad mesh).
+
+:func:`planar_support` takes the polylines that should be planar beams (both families for PP, one for P),
+leaves out those that cannot be (the ``[support] exclude`` selectors, :mod:`ppfab.support.lines`), finds the
+node axes (:func:`ppfab.support.axes.solve_axes`) and assembles the :class:`SupportStructure`.
+
+The selector ``"auto"`` (the default) stands for the polylines that cannot be planar beams:
+
+1. ``"tangent"`` — a polyline whose plane is further than ``max_normal_angle_deg`` from the surface normal at
+   one of its vertices (no axis in it could be near the normal: a curve in a flat part of the surface);
+2. then, only if the axes where more than two planes meet (singular vertices, re-entrant corners of a jagged
+   boundary) leave some of those planes by more than ``max_torsion`` at beam depth: the polylines ending at
+   singular vertices (``"singular"``), the boundary polylines (``"boundary"``), or both — the first of these
+   that brings every edge within ``max_torsion``; if none does, the one with the smallest torsion (which the
+   build then refuses, listing the edges).
+
+Every polyline left out is recorded with its reason (:attr:`SupportStructure.left_out`), so ``ppfab check``
+and the report can list it; its edges become beams of one edge each in their own support planes.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ppfab.mesh import QuadMesh
+
+from .axes import AxisSolution, solve_axes
+from .lines import PolylinePlanes, polyline_planes, select_polylines
+from .params import BeamContext
+from .structure import SupportStructure, _assemble, torsion_offset
+
+ESCALATION: tuple[tuple[str, ...], ...] = ((), ("singular",), ("boundary",), ("singular", "boundary"))
+"""What ``"auto"`` adds to ``"tangent"``, in order, when the support is not within the torsion tolerance."""
+
+
+def _reasons(planes: PolylinePlanes, left: np.ndarray, masks: dict[str, np.ndarray]) -> dict[int, str]:
+    """Why each polyline of ``left`` is not a planar beam (the first selector that took it)."""
+    text = {
+        "exclude": lambda k: "left out by support.exclude",
+        "tangent": lambda k: (f"its plane is {planes.tilt_deg[k]:.0f}° from the surface normal at vertex "
+                              f"{int(planes.tilt_vertex[k])} (> support.max_normal_angle_deg): no axis in it can "
+                              "be near the normal"),
+        "singular": lambda k: ("it ends at a singular vertex where the planes of the polylines ending there do "
+                               "not share a line"),
+        "boundary": lambda k: "it runs along the boundary, whose corners join more planes than can share a line",
+    }
+    out: dict[int, str] = {}
+    for k in np.flatnonzero(left):
+        k = int(k)
+        name = next((n for n in text if n in masks and masks[n][k]), None)
+        if name is not None:
+            out[k] = text[name](k)
+    return out
+
+
+def _max_offset(mesh: QuadMesh, sol: AxisSolution, depth: float) -> float:
+    return float(torsion_offset(mesh, sol.axes, depth).max()) if len(mesh.topology.edges) else 0.0
+
+
+def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, exclude: Sequence[int | str],
+                   kind: str, families: tuple[int, ...], flip: bool = False, max_normal_angle_deg: float = 30.0,
+                   planar_tolerance: float = 1e-6, beams: BeamContext | None = None,
+                   planes: np.ndarray | None = None, key: str = "support.exclude") -> SupportStructure:
+    """The support structure whose planar beams are the ``candidates`` (``(L,)`` bool over
+    ``mesh.polylines``) minus the polylines ``exclude`` selects (module docstring).
+
+    ``planes``: the planes of the polylines, ``(L, 4)`` (finite rows override the least-squares planes);
+    ``beams``: beam depth and torsion tolerance (mesh units) for the crossing term and for ``"auto"``;
+    ``families``: the families reported as planar when all their candidate polylines stay planar beams.
+    """
+    pp = polyline_planes(mesh, normals, straight_tolerance=planar_tolerance)
+    if planes is not None:
+        given = np.asarray(planes, dtype=float)
+        ok = np.all(np.isfinite(given), axis=1)
+        plane_arr = pp.planes.copy()
+        plane_arr[ok] = given[ok] / np.linalg.norm(given[ok, :3], axis=1, keepdims=True)
+        pp = PolylinePlanes(plane_arr, pp.deviation, pp.relative, pp.straight, pp.tilt_deg, pp.tilt_vertex)
+    lengths = np.array([len(p) for p in mesh.polylines])
+    cand = np.asarray(candidates, dtype=bool) & (lengths >= 3) & np.all(np.isfinite(pp.planes), axis=1)
+    sel = [s for s in exclude if s != "auto"]
+    auto = "auto" in exclude
+    none = np.zeros(len(lengths), dtype=bool)
+    base = {"exclude": select_polylines(mesh, sel, key, pp, max_normal_angle_deg, planar_tolerance),
+            "tangent": select_polylines(mesh, ["tangent"], key, pp, max_normal_angle_deg) if auto else none}
+    depth = beams.depth if beams is not None else None
+    steps = ESCALATION if auto else ((),)
+    best: tuple[float, np.ndarray, AxisSolution, dict[str, np.ndarray]] | None = None
+    for step in steps:
+        extra = {name: select_polylines(mesh, [name], key) for name in step}
+        out = base["exclude"] | base["tangent"]
+        if step and not any((m & cand & ~out).any() for m in extra.values()):
+            continue                                     # this step would leave nothing more out
+        for m in extra.values():
+            out = out | m
+        planar = cand & ~out
+        sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth)
+        worst = _max_offset(mesh, sol, depth) if depth else float(np.abs(sol.torsion_det).max(initial=0.0))
+        if best is None or worst < best[0] - 1e-12:
+            best = (worst, planar, sol, {**base, **extra})
+        limit = beams.max_torsion if beams is not None else 0.0
+        if worst <= limit or not auto or beams is None:
+            break
+    assert best is not None
+    _, planar, sol, used = best
+    reasons = _reasons(pp, cand & ~planar, used)
+    fam = np.array([p.family for p in mesh.polylines], dtype=np.int64)
+    kept = tuple(f for f in families if np.any(cand & (fam == f)) and not np.any(cand & ~planar & (fam == f)))
+    meta = {"planes": "least squares", "iterations": sol.iterations, "stages": sol.stages, "normal_weight": sol.normal_weight,
+            "misfit_max": float(sol.misfit.max(initial=0.0)), "left_out": len(reasons),
+            "straight_polylines": int(pp.straight.sum())}
+    return _assemble(mesh, sol.axes, pp.planes, planar, kept, kind, meta,
+                     left_out=tuple(sorted(reasons.items())), planes_at=sol.planes_at, misfit=sol.misfit)
