@@ -86,14 +86,17 @@ def stage_quality(geometry: Geometry, progress: Progress) -> Quality:
 
 
 def stage_support(design: Design, geometry: Geometry, progress: Progress) -> SupportStructure:
-    """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh."""
+    """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh; axes further from the surface
+    normals than ``[support] max_axis_angle_deg`` stop the build (:mod:`ppfab.support.quality`)."""
     from ppfab.support.params import BeamContext
+    from ppfab.support.quality import check_axis_angles
     from ppfab.support.select import support_structure
 
     progress.start("support")
     beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
     support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
                                 beams=beams)
+    check_axis_angles(support, design.support.max_axis_angle_deg)
     s = support.summary()
     progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
     return support

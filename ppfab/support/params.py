@@ -36,6 +36,11 @@ class SupportParams:
                                                    "that cannot be planar beams, see docs), 'tangent', "
                                                    "'boundary', 'closed', 'singular', 'closed-singular', "
                                                    "'nonplanar'; [] keeps every polyline")
+    max_axis_angle_deg: float = param(75.0, doc="largest angle between a node axis and the surface normal; a "
+                                                "build whose axes leave the normals by more stops, naming the "
+                                                "vertices (a beam along such an axis meets the glass at less "
+                                                "than 90° minus this; the paper's PP constructions reach 60°)",
+                                      exclusive_min=0, max=90)
     flip: bool = param(False, doc="turn all axes to the other side (beams on the outside)")
 
     def __post_init__(self) -> None:

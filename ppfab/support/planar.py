@@ -8,11 +8,13 @@ The selector ``"auto"`` (the default) stands for the polylines that cannot be pl
 
 1. ``"tangent"`` — a polyline whose plane is further than ``max_normal_angle_deg`` from the surface normal at
    one of its vertices (no axis in it could be near the normal: a curve in a flat part of the surface);
-2. then, only if the axes where more than two planes meet (singular vertices, re-entrant corners of a jagged
-   boundary) leave some of those planes by more than ``max_torsion`` at beam depth: the polylines ending at
-   singular vertices (``"singular"``), the boundary polylines (``"boundary"``), or both — the first of these
-   that brings every edge within ``max_torsion``; if none does, the one with the smallest torsion (which the
-   build then refuses, listing the edges).
+2. then, only while the support exceeds ``max_torsion`` at beam depth on some edge: at every vertex where
+   more than two planes meet (singular vertices, corners of a jagged boundary) and the axis leaves one of
+   them by more than the tolerance, the polylines ending there except two (those running through the
+   vertex, then the longest), repeated up to :data:`CONFLICT_ROUNDS` times; if that is not enough, the same
+   again after leaving out the polylines ending at singular vertices (``"singular"``), the boundary
+   polylines (``"boundary"``), or both — the first that brings every edge within ``max_torsion``; if none
+   does, the one with the smallest torsion (which the build then refuses, listing the edges).
 
 Every polyline left out is recorded with its reason (:attr:`SupportStructure.left_out`), so ``ppfab check``
 and the report can list it; its edges become beams of one edge each in their own support planes.
@@ -34,6 +36,39 @@ from .structure import SupportStructure, _assemble, torsion_offset
 ESCALATION: tuple[tuple[str, ...], ...] = ((), ("singular",), ("boundary",), ("singular", "boundary"))
 """What ``"auto"`` adds to ``"tangent"``, in order, when the support is not within the torsion tolerance."""
 
+TORSION_SHARE = 0.25
+"""The axes that are solved for stop at this share of ``max_torsion`` (keeping them nearer the normals)."""
+
+CONFLICT_ROUNDS = 3
+"""How often ``"auto"`` leaves out the polylines ending at the vertices whose planes do not share a line."""
+
+
+def _conflicts(mesh: QuadMesh, sol: AxisSolution, planar: np.ndarray, sine: float) -> np.ndarray:
+    """``(L,)`` bool: at every vertex where more than two planes meet with a misfit above ``sine`` (the
+    torsion tolerance over the depth), the planar polylines ending there, except the two kept: polylines
+    running through the vertex first, then the longest."""
+    out = np.zeros(len(planar), dtype=bool)
+    bad = np.flatnonzero((sol.planes_at >= 3) & (sol.misfit > sine))
+    if not len(bad):
+        return out
+    at: dict[int, list[int]] = {int(v): [] for v in bad}
+    for k, p in enumerate(mesh.polylines):
+        if planar[k]:
+            for v in set(p.vertices.tolist()) & at.keys():
+                at[v].append(k)
+    for v, ks in at.items():
+        lines = mesh.polylines
+
+        def ends(k: int) -> bool:
+            p = lines[k]
+            return not p.closed and v in (int(p.vertices[0]), int(p.vertices[-1]))
+
+        order = sorted(ks, key=lambda k: (ends(k), -len(lines[k]), k))
+        for k in order[2:]:
+            if ends(k):
+                out[k] = True
+    return out
+
 
 def _reasons(planes: PolylinePlanes, left: np.ndarray, masks: dict[str, np.ndarray]) -> dict[int, str]:
     """Why each polyline of ``left`` is not a planar beam (the first selector that took it)."""
@@ -45,6 +80,8 @@ def _reasons(planes: PolylinePlanes, left: np.ndarray, masks: dict[str, np.ndarr
         "singular": lambda k: ("it ends at a singular vertex where the planes of the polylines ending there do "
                                "not share a line"),
         "boundary": lambda k: "it runs along the boundary, whose corners join more planes than can share a line",
+        "conflict": lambda k: ("it ends at a vertex where more polyline planes meet than share a line (the two "
+                               "polylines running through or longest there are kept)"),
     }
     out: dict[int, str] = {}
     for k in np.flatnonzero(left):
@@ -85,22 +122,29 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
     base = {"exclude": select_polylines(mesh, sel, key, pp, max_normal_angle_deg, planar_tolerance),
             "tangent": select_polylines(mesh, ["tangent"], key, pp, max_normal_angle_deg) if auto else none}
     depth = beams.depth if beams is not None else None
-    steps = ESCALATION if auto else ((),)
+    limit = beams.max_torsion if beams is not None else 0.0
     best: tuple[float, np.ndarray, AxisSolution, dict[str, np.ndarray]] | None = None
-    for step in steps:
-        extra = {name: select_polylines(mesh, [name], key) for name in step}
-        out = base["exclude"] | base["tangent"]
-        if step and not any((m & cand & ~out).any() for m in extra.values()):
+    for step in (ESCALATION if auto and beams is not None else ((),)):
+        masks = {**base, **{name: select_polylines(mesh, [name], key) for name in step}}
+        out = np.logical_or.reduce(list(masks.values()))
+        if step and not (cand & out & ~(base["exclude"] | base["tangent"])).any():
             continue                                     # this step would leave nothing more out
-        for m in extra.values():
-            out = out | m
-        planar = cand & ~out
-        sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth)
-        worst = _max_offset(mesh, sol, depth) if depth else float(np.abs(sol.torsion_det).max(initial=0.0))
-        if best is None or worst < best[0] - 1e-12:
-            best = (worst, planar, sol, {**base, **extra})
-        limit = beams.max_torsion if beams is not None else 0.0
-        if worst <= limit or not auto or beams is None:
+        masks["conflict"] = none.copy()
+        for _ in range(CONFLICT_ROUNDS + 1):
+            planar = cand & ~out
+            sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth,
+                             TORSION_SHARE * limit / depth if depth and limit > 0 else 1e-10)
+            worst = _max_offset(mesh, sol, depth) if depth else float(np.abs(sol.torsion_det).max(initial=0.0))
+            if best is None or worst < best[0] - 1e-12:
+                best = (worst, planar, sol, {k: m.copy() for k, m in masks.items()})
+            if worst <= limit or not auto or beams is None:
+                break
+            more = _conflicts(mesh, sol, planar, limit / beams.depth) & ~out
+            if not more.any():
+                break
+            masks["conflict"] |= more
+            out |= more
+        if best is not None and best[0] <= limit:
             break
     assert best is not None
     _, planar, sol, used = best
