@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .params import BeamContext, SupportParams
     from .structure import SupportStructure
 
-_INFRASTRUCTURE = ("registry", "select", "structure", "params", "lines", "axes", "planar", "quality")
+_INFRASTRUCTURE = ("registry", "select", "structure", "params", "lines", "axes", "planar", "quality", "report")
 
 
 @dataclass(frozen=True)
