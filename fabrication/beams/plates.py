@@ -386,17 +386,17 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
         ca: list[np.ndarray] = []
         chain: list[int] = []
         if s is not None:
-            p, a = cut_point(s)
-            cp.append(p)
-            ca.append(a)
+            point, axis = cut_point(s)
+            cp.append(point)
+            ca.append(axis)
         for k in idx:
             chain.append(len(cp))
             cp.append(pts[k])
             ca.append(axes[k])
         if e is not None:
-            p, a = cut_point(e)
-            cp.append(p)
-            ca.append(a)
+            point, axis = cut_point(e)
+            cp.append(point)
+            ca.append(axis)
         ca_unit = np.asarray(ca)
         ca_unit /= np.linalg.norm(ca_unit, axis=1, keepdims=True)
         # a node is an end only where the polyline itself ends (pieces end at cuts inside edges)

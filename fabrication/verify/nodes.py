@@ -16,6 +16,7 @@ def check_nodes(v: Verification) -> None:
     if rel is None or mesh is None:
         return
     rows = read_csv(v.folder / rel)
+    v.data["nodes"] = rows
     if rows:
         missing = [c for c in NODES_COLUMNS if c not in rows[0]]
         if missing:

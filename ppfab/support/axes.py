@@ -164,6 +164,8 @@ class _Problem:
         self.p = p / lp[:, None]
         self.q = np.cross(plane[one], self.p)
         self.t0 = target[zero]
+        self.b1: np.ndarray
+        self.b2: np.ndarray
         self.b1, self.b2 = _perpendicular(self.t0) if len(zero) else (np.zeros((0, 3)), np.zeros((0, 3)))
         # columns: θ of each count-1 vertex, then (x, y) of each count-0 vertex
         self.col = -np.ones((self.nv, 2), dtype=np.int64)

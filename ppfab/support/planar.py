@@ -84,8 +84,7 @@ def _reasons(planes: PolylinePlanes, left: np.ndarray, masks: dict[str, np.ndarr
                                "polylines running through or longest there are kept)"),
     }
     out: dict[int, str] = {}
-    for k in np.flatnonzero(left):
-        k = int(k)
+    for k in (int(x) for x in np.flatnonzero(left)):
         name = next((n for n in text if n in masks and masks[n][k]), None)
         if name is not None:
             out[k] = text[name](k)
