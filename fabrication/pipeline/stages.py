@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ppfab.errors import DesignError, GeometryError
+from ppfab.errors import DesignError, GeometryError, NonPlanarPanelError
 from ppfab.geometry import Geometry, build_geometry
 from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.metrics import Quality
@@ -46,7 +46,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         geometry = stage_geometry(design, p, allow_large)
         quality = stage_quality(geometry, p)
         support = stage_support(design, geometry, p)
-        panels = stage_panels(design, geometry, p)
+        panels = stage_panels(design, geometry, p, quality)
         beams = stage_beams(design, support, p)
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)
@@ -102,12 +102,20 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
     return support
 
 
-def stage_panels(design: Design, geometry: Geometry, progress: Progress) -> PanelSet:
-    """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types."""
+def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality: Quality | None = None) -> PanelSet:
+    """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types; a mesh file
+    whose panels are not planar is refused with what to do (:mod:`fabrication.pipeline.advice`)."""
     from ..panels import make_panels, panel_types
+    from .advice import planarity_advice
 
     progress.start("panels")
-    panels = make_panels(geometry.mesh, design.panels)
+    try:
+        panels = make_panels(geometry.mesh, design.panels)
+    except NonPlanarPanelError as exc:
+        advice = planarity_advice(design, quality, geometry.optimize_result) if quality is not None else ""
+        if not advice:
+            raise
+        raise NonPlanarPanelError(exc.offenders, exc.tolerance_mm, advice) from None
     types = panel_types(panels)
     progress.done(f"{len(panels)} panels, {len(types)} types")
     return PanelSet(tuple(panels), types)
