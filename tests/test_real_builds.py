@@ -270,3 +270,34 @@ def test_default_design_builds_and_verifies_at_finer_meshes(faces, tmp_path):
     b = build(default_at(*faces))
     b.write(tmp_path / "out")
     assert b.verify().ok
+
+
+def _rows_planar_grid(tmp_path):
+    """A 6 × 8 grid whose rows lie in the planes y = y_i but whose columns bend and whose faces are warped."""
+    i, j = np.meshgrid(np.arange(7.0), np.arange(9.0), indexing="ij")
+    x = j + 0.05 * i * i * (j - 4)
+    z = 0.3 * np.sin(0.7 * i + 0.4 * j) + 0.02 * i * j
+    from ppfab.mesh import QuadGrid
+
+    path = tmp_path / "rows_planar.obj"
+    write_obj(QuadGrid(np.stack([x, i, z], axis=-1)), path)
+    return path
+
+
+def test_a_raw_mesh_with_one_family_planar_is_told_to_optimise_the_other(tmp_path):
+    path = _rows_planar_grid(tmp_path)
+    d = parse_design(tomllib.loads(design_text(path)))
+    with pytest.raises(Exception) as err:
+        build(d)
+    msg = str(err.value)
+    assert "panel(s) deviate from their plane" in msg
+    assert "the rows are already planar (max δ_P" in msg and "but the cols are not" in msg
+    assert 'families = "cols"' in msg
+
+
+def test_an_optimisation_that_misses_its_targets_is_named(tmp_path):
+    path = _rows_planar_grid(tmp_path)
+    d = parse_design(tomllib.loads(design_text(path, "[optimize]\nfamilies = \"both\"\nmax_iterations = 1\n")))
+    with pytest.raises(Exception, match=r"the \[optimize\] section did not meet its targets \(.+\); a net far from "
+                                        r"a conjugate net"):
+        build(d)
