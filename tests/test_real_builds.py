@@ -199,7 +199,8 @@ def test_check_lists_the_polylines_that_cannot_be_planar_beams(capsys):
         in text
 
 
-@pytest.mark.parametrize("name, count", [("libhedra__QuadMesh.off", 1085), ("libhedra__circular_wo_boundary.off", 1427)])
+@pytest.mark.parametrize("name, count", [("libhedra__QuadMesh.off", 1085),
+                                         ("libhedra__circular_wo_boundary.off", 1427)])
 def test_one_based_off_files_are_named_as_such(name, count):
     with pytest.raises(MeshFileError, match=rf"indices look 1-based \(smallest 1, largest {count} = the vertex "
                                             r"count\); OFF indices start at 0, subtract 1"):

@@ -150,8 +150,8 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
     reasons = _reasons(pp, cand & ~planar, used)
     fam = np.array([p.family for p in mesh.polylines], dtype=np.int64)
     kept = tuple(f for f in families if np.any(cand & (fam == f)) and not np.any(cand & ~planar & (fam == f)))
-    meta = {"planes": "least squares", "iterations": sol.iterations, "stages": sol.stages, "normal_weight": sol.normal_weight,
-            "misfit_max": float(sol.misfit.max(initial=0.0)), "left_out": len(reasons),
+    meta = {"planes": "least squares", "iterations": sol.iterations, "stages": sol.stages,
+            "normal_weight": sol.normal_weight, "misfit_max": float(sol.misfit.max(initial=0.0)), "left_out": len(reasons),
             "straight_polylines": int(pp.straight.sum())}
     return _assemble(mesh, sol.axes, pp.planes, planar, kept, kind, meta,
                      left_out=tuple(sorted(reasons.items())), planes_at=sol.planes_at, misfit=sol.misfit)
