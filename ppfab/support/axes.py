@@ -26,8 +26,9 @@ near the normals, and the third keeps consecutive axes from crossing within the 
 ``h_e = 1 + (D / |e|) (a_j − a_i)·ê`` is the length of the bottom edge ``(v_j + D a_j) − (v_i + D a_i)``
 along ``ê`` over the top edge's; the axes of the edge cross less than ``D`` below it when ``h_e < 0``
 (``h_min = 0.25`` keeps the crossing beyond ``D / 0.75``).  ``w_n`` is lowered stage by stage
-(``1, 10⁻¹, …, 10⁻⁸``) until the largest ``|det|`` is below ``1e-10``: the result is the torsion-free
-structure that the continuation reaches from the normals.  Whatever torsion remains (a system with no
+(``1, 10⁻¹, …, 10⁻⁸``) until the largest ``|det|`` is below ``torsion_target`` (in a build a quarter of
+``beams.max_torsion_mm`` over the depth, :mod:`ppfab.support.planar`): the result is the torsion-free
+structure, within that share of the tolerance, that the continuation reaches from the normals.  Whatever torsion remains (a system with no
 exact solution) is reported by the structure's torsion and stops a build beyond ``beams.max_torsion_mm``.
 
 For a P mesh (one family planar) every vertex has ``c_v = 1`` and the transverse polylines decouple: each
