@@ -14,7 +14,10 @@ The selector ``"auto"`` (the default) stands for the polylines that cannot be pl
    vertex, then the longest), repeated up to :data:`CONFLICT_ROUNDS` times; if that is not enough, the same
    again after leaving out the polylines ending at singular vertices (``"singular"``), the boundary
    polylines (``"boundary"``), or both — the first that brings every edge within ``max_torsion``; if none
-   does, the one with the smallest torsion (which the build then refuses, listing the edges).
+   does, the one with the smallest torsion (which the build then refuses, listing the edges);
+3. in the same rounds, a planar beam whose node axes, brought into its plane, cross less than the beam depth
+   below it (the plate would fold; its axes are fixed by its own and the crossing planes): leaving it out
+   frees its axes to turn apart.
 
 Every polyline left out is recorded with its reason (:attr:`SupportStructure.left_out`), so ``ppfab check``
 and the report can list it; its edges become beams of one edge each in their own support planes.
@@ -82,12 +85,39 @@ def _reasons(planes: PolylinePlanes, left: np.ndarray, masks: dict[str, np.ndarr
         "boundary": lambda k: "it runs along the boundary, whose corners join more planes than can share a line",
         "conflict": lambda k: ("it ends at a vertex where more polyline planes meet than share a line (the two "
                                "polylines running through or longest there are kept)"),
+        "crossing": lambda k: ("the node axes in its plane cross less than the beam depth below it (the plate "
+                               "would fold)"),
     }
     out: dict[int, str] = {}
     for k in (int(x) for x in np.flatnonzero(left)):
         name = next((n for n in text if n in masks and masks[n][k]), None)
         if name is not None:
             out[k] = text[name](k)
+    return out
+
+
+def _crossing(mesh: QuadMesh, axes: np.ndarray, planes: np.ndarray, planar: np.ndarray, depth: float) -> np.ndarray:
+    """``(L,)`` bool: planar beams with an edge whose two node axes, brought into the beam's plane, cross less
+    than ``depth`` below it (the plate would fold: ``T_i + α s_i = T_j + β s_j`` with ``0 < α, β`` and
+    ``min(α, β) < depth``)."""
+    out = np.zeros(len(planar), dtype=bool)
+    v = mesh.vertices
+    for k in np.flatnonzero(planar):
+        p = mesh.polylines[int(k)]
+        vs = p.vertices
+        i, j = (np.r_[vs[:-1], vs[-1]], np.r_[vs[1:], vs[0]]) if p.closed and len(vs) > 2 else (vs[:-1], vs[1:])
+        n = planes[k, :3] / np.linalg.norm(planes[k, :3])
+        s = axes - np.outer(axes @ n, n)
+        s /= np.maximum(np.linalg.norm(s, axis=1, keepdims=True), 1e-300)
+        si, sj, d = s[i], s[j], v[j] - v[i]
+        # least squares of α s_i − β s_j = d (exact when all lie in the plane)
+        a11, a12, a22 = np.einsum("ij,ij->i", si, si), -np.einsum("ij,ij->i", si, sj), np.einsum("ij,ij->i", sj, sj)
+        b1, b2 = np.einsum("ij,ij->i", si, d), -np.einsum("ij,ij->i", sj, d)
+        det = a11 * a22 - a12 * a12
+        ok = np.abs(det) > 1e-12
+        alpha = np.where(ok, (b1 * a22 - a12 * b2) / np.where(ok, det, 1.0), np.inf)
+        beta = np.where(ok, (a11 * b2 - a12 * b1) / np.where(ok, det, 1.0), np.inf)
+        out[k] = bool(np.any(ok & (alpha > 0) & (beta > 0) & (np.minimum(alpha, beta) < depth)))
     return out
 
 
@@ -122,28 +152,32 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
             "tangent": select_polylines(mesh, ["tangent"], key, pp, max_normal_angle_deg) if auto else none}
     depth = beams.depth if beams is not None else None
     limit = beams.max_torsion if beams is not None else 0.0
-    best: tuple[float, np.ndarray, AxisSolution, dict[str, np.ndarray]] | None = None
+    best: tuple[tuple[bool, int, float], np.ndarray, AxisSolution, dict[str, np.ndarray]] | None = None
     for step in (ESCALATION if auto and beams is not None else ((),)):
         masks = {**base, **{name: select_polylines(mesh, [name], key) for name in step}}
         out = np.logical_or.reduce(list(masks.values()))
         if step and not (cand & out & ~(base["exclude"] | base["tangent"])).any():
             continue                                     # this step would leave nothing more out
         masks["conflict"] = none.copy()
+        masks["crossing"] = none.copy()
         for _ in range(CONFLICT_ROUNDS + 1):
             planar = cand & ~out
             sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth,
                              TORSION_SHARE * limit / depth if depth and limit > 0 else 1e-10)
             worst = _max_offset(mesh, sol, depth) if depth else float(np.abs(sol.torsion_det).max(initial=0.0))
-            if best is None or worst < best[0] - 1e-12:
-                best = (worst, planar, sol, {k: m.copy() for k, m in masks.items()})
-            if worst <= limit or not auto or beams is None:
+            crossing = _crossing(mesh, sol.axes, pp.planes, planar, depth) if auto and depth else none
+            score = (worst > limit, int(crossing.sum()), worst)
+            if best is None or score < best[0]:
+                best = (score, planar, sol, {k: m.copy() for k, m in masks.items()})
+            if (worst <= limit and not crossing.any()) or not auto or beams is None:
                 break
-            more = _conflicts(mesh, sol, planar, limit / beams.depth) & ~out
-            if not more.any():
+            conflict = _conflicts(mesh, sol, planar, limit / beams.depth) & ~out if worst > limit else none
+            if not (conflict | crossing).any():
                 break
-            masks["conflict"] |= more
-            out |= more
-        if best is not None and best[0] <= limit:
+            masks["conflict"] |= conflict
+            masks["crossing"] |= crossing & ~conflict
+            out |= conflict | crossing
+        if best is not None and not best[0][0] and not best[0][1]:
             break
     assert best is not None
     _, planar, sol, used = best
