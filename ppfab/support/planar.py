@@ -15,9 +15,9 @@ The selector ``"auto"`` (the default) stands for the polylines that cannot be pl
    again after leaving out the polylines ending at singular vertices (``"singular"``), the boundary
    polylines (``"boundary"``), or both — the first that brings every edge within ``max_torsion``; if none
    does, the one with the smallest torsion (which the build then refuses, listing the edges);
-3. in the same rounds, a planar beam whose node axes, brought into its plane, cross less than the beam depth
-   below it (the plate would fold; its axes are fixed by its own and the crossing planes): leaving it out
-   frees its axes to turn apart.
+3. once the torsion is within the tolerance, a planar beam whose node axes, brought into its plane, cross
+   less than the beam depth below it (the plate would fold; its axes are fixed by its own and the crossing
+   planes), up to :data:`CONFLICT_ROUNDS` times: leaving it out frees its axes to turn apart.
 
 Every polyline left out is recorded with its reason (:attr:`SupportStructure.left_out`), so ``ppfab check``
 and the report can list it; its edges become beams of one edge each in their own support planes.
@@ -43,7 +43,8 @@ TORSION_SHARE = 0.25
 """The axes that are solved for stop at this share of ``max_torsion`` (keeping them nearer the normals)."""
 
 CONFLICT_ROUNDS = 3
-"""How often ``"auto"`` leaves out the polylines ending at the vertices whose planes do not share a line."""
+"""How often ``"auto"`` leaves out the polylines ending at the vertices whose planes do not share a line (and,
+as often again, the beams whose axes cross within the depth)."""
 
 
 def _conflicts(mesh: QuadMesh, sol: AxisSolution, planar: np.ndarray, sine: float) -> np.ndarray:
@@ -160,7 +161,7 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
             continue                                     # this step would leave nothing more out
         masks["conflict"] = none.copy()
         masks["crossing"] = none.copy()
-        for _ in range(CONFLICT_ROUNDS + 1):
+        for _ in range(2 * CONFLICT_ROUNDS + 1):
             planar = cand & ~out
             sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth,
                              TORSION_SHARE * limit / depth if depth and limit > 0 else 1e-10)
@@ -171,12 +172,15 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
                 best = (score, planar, sol, {k: m.copy() for k, m in masks.items()})
             if (worst <= limit and not crossing.any()) or not auto or beams is None:
                 break
-            conflict = _conflicts(mesh, sol, planar, limit / beams.depth) & ~out if worst > limit else none
-            if not (conflict | crossing).any():
+            if worst > limit:                        # torsion first: the planes that do not share a line
+                more = _conflicts(mesh, sol, planar, limit / beams.depth) & ~out
+                masks["conflict"] |= more
+            else:                                    # then the beams whose axes cross within the depth
+                more = crossing & ~out
+                masks["crossing"] |= more
+            if not more.any():
                 break
-            masks["conflict"] |= conflict
-            masks["crossing"] |= crossing & ~conflict
-            out |= conflict | crossing
+            out |= more
         if best is not None and not best[0][0] and not best[0][1]:
             break
     assert best is not None
