@@ -302,3 +302,28 @@ def test_an_optimisation_that_misses_its_targets_is_named(tmp_path):
     with pytest.raises(Exception, match=r"the \[optimize\] section did not meet its targets \(.+\); a net far from "
                                         r"a conjugate net"):
         build(d)
+
+
+def test_curved_beams_are_cut_to_the_width_of_the_plate_stock():
+    """A 20 m arch of 40 edges (rise 3 m) cut for plate stock 5900 × 350 mm: every piece's flat extent fits
+    both, the length along its chord and the height across it (sagitta plus depth)."""
+    t = np.linspace(-1.0, 1.0, 41)
+    pts = np.c_[10000.0 * t, 0 * t, 3000.0 * (1 - t * t)]
+    tang = np.c_[np.full_like(t, 10000.0), 0 * t, -6000.0 * t]
+    normal = np.c_[-tang[:, 2], 0 * t, tang[:, 0]]
+    axes = -normal / np.linalg.norm(normal, axis=1, keepdims=True)       # downward, into the arch
+    plane = np.array([0.0, 1.0, 0.0, 0.0])
+    plan = plan_cuts(pts, axes, plane, False, 200.0, 5900.0, np.full(41, 40.0), max_height=350.0)
+    assert not plan.problem
+    only_length = plan_cuts(pts, axes, plane, False, 200.0, 5900.0, np.full(41, 40.0))
+    assert len(plan.cuts) > len(only_length.cuts)                          # the width asks for more pieces
+    at = [0.0] + [c.edge + c.t for c in plan.cuts] + [40.0]
+    for a, b in zip(at[:-1], at[1:]):
+        s = np.linspace(a, b, 200)
+        p = np.stack([np.interp(s, np.arange(41), pts[:, k]) for k in range(3)], axis=1)
+        q = np.stack([np.interp(s, np.arange(41), axes[:, k]) for k in range(3)], axis=1)
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        both = np.concatenate([p, p + 200.0 * q])
+        chord = (p[-1] - p[0]) / np.linalg.norm(p[-1] - p[0])
+        across = np.cross(plane[:3], chord)
+        assert np.ptp(both @ chord) <= 5900.0 + 1.0 and np.ptp(both @ across) <= 350.0 + 1.0

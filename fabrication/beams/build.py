@@ -45,7 +45,8 @@ class BeamSet:
 
 
 
-def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True) -> BeamSet:
+def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
+                max_height: float = 0.0) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
@@ -55,6 +56,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     strict : raise :class:`~fabrication.beams.torsion.TorsionError` when the support's torsion at beam depth
         exceeds ``params.max_torsion_mm`` (listing the edges), and :class:`~ppfab.errors.FabricationError`
         naming every defective plate (with its measured value) instead of returning them in ``report.defects``
+    max_height : the widest flat piece the plate stock holds across its length, mm (0 = no limit): long
+        curved beams are cut so that their pieces fit it
 
     Returns
     -------
@@ -65,7 +68,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
     if strict:
         check_torsion(support, params)
-    plates, defects = layout_plates(support, params)
+    plates, defects = layout_plates(support, params, max_height)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
         raise DesignError("beams", "duplicate part ids")

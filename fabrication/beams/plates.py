@@ -235,14 +235,16 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
     return out
 
 
-def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[BeamPlate], list[Defect]]:
+def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0
+                  ) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
     (``support.polyline_planar``), it lies in that plane within ``params.plane_tolerance``
     and, with segmented joints, belongs to the continuous family; otherwise one plate per
     edge in the edge's support plane.  Polylines the support left out of the planar families
-    (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.  With half-lap
+    (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.
+    ``max_height``: the widest flat piece the plate stock holds across its length (0 = no limit).  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -279,7 +281,7 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
-            plates.extend(_continuous(support, params, l, ids[l], defects))
+            plates.extend(_continuous(support, params, l, ids[l], defects, max_height))
         else:
             a, b = vs[:-1], vs[1:]
             if line.closed and len(vs) > 2:
@@ -333,23 +335,29 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
 
 
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
-                defects: list[Defect]) -> list[BeamPlate]:
+                defects: list[Defect], max_height: float = 0.0) -> list[BeamPlate]:
     """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
     room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
-    bottom-edge overhang at the ends included) at most ``max_length``."""
+    bottom-edge overhang at the ends included) at most ``max_length`` and its height across at most
+    ``max_height``."""
     line = support.polylines[l]
     vs = line.vertices
     closed = bool(line.closed and len(vs) > 2)
     plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
-                     params.max_length, _node_clearance(support, params, l))
+                     params.max_length, _node_clearance(support, params, l), max_height)
     pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
-    extent = max(float(np.ptp(p.raw_outline[:, 0])) for p in pieces)
-    if plan.problem or (params.max_length > 0 and extent > params.max_length + 1e-6):
-        why = plan.problem or f"its longest piece is {extent:.0f} mm"
-        defects.append(Defect(beam_id, "too_long", max(extent, plan.longest), params.max_length, f"polyline {l}",
-                              f"{beam_id}: cannot be cut into pieces of at most {params.max_length:g} mm clear "
-                              f"of the joints: {why}; raise beams.max_length (up to the usable plate length) or "
-                              "lower beams.depth"))
+    sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
+    long_x = max(x for x, _ in sizes)
+    high_y = max(y for _, y in sizes)
+    over = ((params.max_length > 0 and long_x > params.max_length + 1e-6)
+            or (max_height > 0 and high_y > max_height + 1e-6))
+    if plan.problem or over:
+        limit = f"{params.max_length:g} mm" + (f" × {max_height:g} mm" if max_height > 0 else "")
+        why = plan.problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
+        defects.append(Defect(beam_id, "too_long", long_x, params.max_length, f"polyline {l}",
+                              f"{beam_id}: cannot be cut into pieces of at most {limit} clear of the joints: "
+                              f"{why}; raise beams.max_length (up to the usable plate length), use wider plate "
+                              "stock ([beam_nesting] sheet) or lower beams.depth"))
     return pieces
 
 

@@ -8,10 +8,12 @@ axis: the two pieces share the cut line.  A cut must stay clear of the joints: a
 along the edge.
 
 A piece's *flat extent* is what the stock must hold: the extent, along its chord (first to last top
-point), of its top and bottom points (``top + depth · â``), as :func:`fabrication.beams.plates.make_plate`
-draws it.  :func:`plan_cuts` walks along the beam and puts each cut as far on as the piece still fits
-``max_length`` (the fewest pieces: the extent only grows as a piece gets longer), then evens the pieces out
-by bisection on a common length (the same number of pieces, the longest as short as possible).  A closed
+point) and across it in its plane, of its top and bottom points (``top + depth · â``), as
+:func:`fabrication.beams.plates.make_plate` draws it; it fits when the length is at most ``max_length`` and
+the height at most ``max_height`` (a curved beam's sagitta plus its depth must fit the plate's width).
+:func:`plan_cuts` walks along the beam and puts each cut as far on as the piece still fits (the fewest
+pieces: the extent only grows as a piece gets longer), then evens the pieces out by bisection on a common
+share of the limits (the same number of pieces, the largest as small as possible).  A closed
 beam is cut at least twice.  When a stretch of the beam has no place for a cut that leaves the piece short
 enough — an edge too short to hold a cut clear of both its nodes, a node whose joints alone are longer than
 ``max_length`` — the beam is refused, saying where and why.
@@ -46,7 +48,8 @@ class CutPlan:
 class _Beam:
     """The chain of a beam in its plane: top points ``(k, 3)``, unit in-plane axes ``(k, 3)``."""
 
-    def __init__(self, points: np.ndarray, axes: np.ndarray, plane: np.ndarray, closed: bool, depth: float):
+    def __init__(self, points: np.ndarray, axes: np.ndarray, plane: np.ndarray, closed: bool, depth: float,
+                 max_length: float = 0.0, max_height: float = 0.0):
         n = plane[:3] / np.linalg.norm(plane[:3])
         self.n = n
         self.top = points - np.outer(points @ n + plane[3], n)
@@ -58,6 +61,10 @@ class _Beam:
         self.n_edges = self.k if closed else self.k - 1
         nxt = np.roll(self.top, -1, axis=0)[: self.n_edges]
         self.edge_len = np.linalg.norm(nxt - self.top[: self.n_edges], axis=1)
+        self.ix = 1.0 / max_length if max_length > 0 else 0.0
+        self.iy = 1.0 / max_height if max_height > 0 else 0.0
+        if not (self.ix or self.iy):                        # no limit: measure by length (closed beams)
+            self.ix = 1.0 / max(float(self.edge_len.sum()), 1e-300)
 
     def cut_point(self, c: Cut) -> tuple[np.ndarray, np.ndarray]:
         i, j = c.edge, (c.edge + 1) % self.k
@@ -77,8 +84,8 @@ class _Beam:
                 hi += self.k
         return [q % self.k for q in range(lo, hi + 1)]
 
-    def extent(self, start: Cut | None, end: Cut | None) -> float:
-        """Flat extent of the piece between two cuts (module docstring)."""
+    def size(self, start: Cut | None, end: Cut | None) -> tuple[float, float]:
+        """Flat extent of the piece between two cuts along its chord and across it (module docstring), mm."""
         idx = self.nodes_between(start, end)
         pts = [self.top[idx]]
         ax = [self.axes[idx]]
@@ -97,8 +104,15 @@ class _Beam:
             chord = top[1] - top[0]
         ex = chord - (chord @ self.n) * self.n
         ex /= np.linalg.norm(ex)
-        x = np.concatenate([top, bottom]) @ ex
-        return float(x.max() - x.min())
+        ey = np.cross(self.n, ex)
+        both = np.concatenate([top, bottom])
+        x, y = both @ ex, both @ ey
+        return float(x.max() - x.min()), float(y.max() - y.min())
+
+    def extent(self, start: Cut | None, end: Cut | None) -> float:
+        """How much of the stock the piece takes: ``max(length / max_length, height / max_height)`` (≤ 1 fits)."""
+        x, y = self.size(start, end)
+        return max(x * self.ix, y * self.iy)
 
 
 def _windows(beam: _Beam, clear: np.ndarray) -> list[tuple[int, float, float]]:
@@ -187,14 +201,15 @@ def _why(beam: _Beam, start: Cut | None, windows: list[tuple[int, float, float]]
         return (f"after chain node {node} no edge is long enough to hold a cut clear of the joints at both its "
                 "ends")
     e, lo, _ = later[0]
+    x, y = beam.size(start, Cut(e, lo))
     return (f"the piece from {'its start' if start is None else 'the cut before chain node ' + str(node)} to the "
-            f"nearest place a cut clears the joints (edge {e}) is already {beam.extent(start, Cut(e, lo)):.0f} mm "
-            f"long")
+            f"nearest place a cut clears the joints (edge {e}) is already {x:.0f} × {y:.0f} mm")
 
 
 def plan_cuts(points: np.ndarray, axes: np.ndarray, plane: np.ndarray, closed: bool, depth: float,
-              max_length: float, clear: np.ndarray) -> CutPlan:
-    """Cuts of a beam into pieces of at most ``max_length`` flat extent (module docstring).
+              max_length: float, clear: np.ndarray, max_height: float = 0.0) -> CutPlan:
+    """Cuts of a beam into pieces of at most ``max_length`` flat extent along their chords and ``max_height``
+    across (module docstring).
 
     Parameters
     ----------
@@ -204,16 +219,18 @@ def plan_cuts(points: np.ndarray, axes: np.ndarray, plane: np.ndarray, closed: b
     depth : beam depth, mm
     max_length : longest flat piece, mm (0 = no limit: only a closed beam is cut, in two)
     clear : (k,) distance a cut keeps from each node along the edges, mm
+    max_height : widest flat piece across its chord, mm (the plate stock's width; 0 = no limit)
     """
     beam = _Beam(np.asarray(points, dtype=float), np.asarray(axes, dtype=float), np.asarray(plane, dtype=float),
-                 closed, depth)
+                 closed, depth, max_length, max_height)
     windows = _windows(beam, np.asarray(clear, dtype=float))
-    whole = beam.extent(None, None)
-    if not closed and (max_length <= 0 or whole <= max_length):
+    whole = beam.size(None, None)[0]
+    limited = max_length > 0 or max_height > 0
+    if not closed and (not limited or beam.extent(None, None) <= 1.0):
         return CutPlan((), whole)
     if closed and not windows:
         return CutPlan((), whole, "no edge of the closed beam is long enough to hold a cut clear of the joints")
-    limit = max_length if max_length > 0 else np.inf
+    limit = 1.0 if limited else np.inf
     if closed:
         # start at the window nearest the middle of edge 0's side of the ring; try a few and keep the best
         starts = [Cut(e, 0.5 * (lo + hi)) for e, lo, hi in windows[:: max(1, len(windows) // 4)]]
@@ -242,15 +259,21 @@ def _pieces_of(beam: _Beam, cuts: list[Cut]) -> list[tuple[Cut | None, Cut | Non
 
 
 def _longest(beam: _Beam, cuts: list[Cut]) -> float:
-    if not cuts:
-        return beam.extent(None, None)
-    return max(beam.extent(a, b) for a, b in _pieces_of(beam, cuts))
+    """Flat length along the chord of the piece that takes most of the stock, mm."""
+    pieces = _pieces_of(beam, cuts) if cuts else [(None, None)]
+    a, b = max(pieces, key=lambda ab: beam.extent(*ab))
+    return beam.size(a, b)[0]
+
+
+def _largest(beam: _Beam, cuts: list[Cut]) -> float:
+    pieces = _pieces_of(beam, cuts) if cuts else [(None, None)]
+    return max(beam.extent(a, b) for a, b in pieces)
 
 
 def _balanced(beam: _Beam, windows: list[tuple[int, float, float]], cuts: list[Cut], first: Cut | None,
               pieces: int) -> list[Cut]:
-    """The same number of pieces with the longest as short as bisection on the common limit finds."""
-    hi = _longest(beam, cuts)
+    """The same number of pieces with the largest as small as bisection on the common limit finds."""
+    hi = _largest(beam, cuts)
     lo = 0.0
     best = cuts
     for _ in range(8):

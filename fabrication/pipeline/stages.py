@@ -133,7 +133,8 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
         raise DesignError("beams.max_length", f"beam pieces up to {params.max_length:g} mm do not fit the "
                                               f"usable plate length {usable_len:g} mm of [beam_nesting]; "
                                               "set beams.max_length to at most the usable length")
-    beams = build_beams(support, params, strict=True)
+    usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
+    beams = build_beams(support, params, strict=True, max_height=usable_width)
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams
