@@ -327,6 +327,15 @@ def node_torsion(nodes_csv: Path) -> dict:
             out[key + "_max"] = max(vals)
             if key == "torsion_deg":
                 out["nodes_over_1deg"] = sum(v > 1.0 for v in vals)
+    nodes_json = nodes_csv.with_suffix(".json")
+    if nodes_json.exists():
+        doc = json.loads(nodes_json.read_text())
+        angles = [n["axis_normal_deg"] for n in doc.get("nodes", []) if n.get("axis_normal_deg") is not None]
+        if angles:
+            out["axis_normal_max"] = max(angles)
+        support = doc.get("support", {})
+        if "left_out" in support:
+            out["left_out"] = support["left_out"]
     return out
 
 
@@ -425,12 +434,20 @@ def build_cell(opt: dict) -> str:
     if "torsion_deg_max" in b:
         extra += (f", torsion max {b['torsion_deg_max']:.2g}° / {b.get('torsion_mm_max', float('nan')):.2g} mm, "
                   f"{b['nodes_over_1deg']} of {b['nodes']} nodes > 1°")
+    if "axis_normal_max" in b:
+        extra += f", axes ≤ {b['axis_normal_max']:.0f}° from the normals"
+    if b.get("left_out"):
+        extra += f", {b['left_out']} polylines left out of the planar families"
     return cell(b["result"], 320) + f" ({extra})"
 
 
 def table(records: list[dict], quick: bool) -> str:
     ok = sum(1 for r in records for lab in ("P", "PP")
              if (r[lab].get("build") or {}).get("result") == "built and verified")
+    meshes = sorted({r["name"] for r in records for lab in ("P", "PP")
+                     if (r[lab].get("build") or {}).get("result") == "built and verified"}, key=str.lower)
+    by_kind = {lab: sum(1 for r in records if (r[lab].get("build") or {}).get("result") == "built and verified")
+               for lab in ("P", "PP")}
     lines = [
         "# Real quad meshes: optimisation and build results",
         "",
@@ -448,12 +465,16 @@ def table(records: list[dict], quick: bool) -> str:
         "scaled to a roof of the given span (P: `[support] method = \"p\"`, segmented beams, rows "
         "continuous; PP: `method = \"pp\"`, half-lap joints), then `ppfab verify`; for a written build the "
         "largest torsion at a node (degrees, and mm at the beam's bottom edge, from its nodes.csv) and the "
-        "nodes above 1°."),
+        "nodes above 1°; the largest angle between a node axis and the surface normal, and how many polylines "
+        "the support left out of the planar families (their edges are beams of one edge each). A build stops "
+        "when the torsion exceeds `beams.max_torsion_mm` (0.5 mm) or an axis leaves the normal by more than "
+        "`support.max_axis_angle_deg` (75°)."),
         "",
         ("Times are wall-clock seconds of `ppfab optimize` on a 2-core machine shared with other work "
         "(OMP_NUM_THREADS=1); treat them as rough."),
         "",
-        f"Built and verified: {ok} of {2 * len(records)} builds.",
+        f"Built and verified: {ok} of {2 * len(records)} builds ({by_kind['P']} P, {by_kind['PP']} PP) on "
+        f"{len(meshes)} meshes: " + ", ".join(f"`{m}`" for m in meshes) + ".",
         "",
         ("| mesh | V / F | kind | δ_f / δ_P rows / cols before | P: δ_f / δ_P, time, move | crease P | P build | "
         "PP: δ_f / δ_P, time, move | crease PP | PP build |"),

@@ -19,13 +19,15 @@ output contract in DESIGN.md.  Columns of ``nodes.csv``:
                    panels along its polyline's edges at the node (its own edge for a segment)
 ``torsion_deg``    largest torsion of the edges at the node (angle between the planes of
                    the edge with either end axis; 0 for a torsion-free support structure)
-``torsion_mm``     the same as the offset of an axis at beam depth
+``torsion_mm``     the same as the offset of an axis at beam depth (the figure checked against
+                   ``beams.max_torsion_mm``)
 ``slot_width_mm``  half-lap slot width (empty elsewhere)
 ``trims_mm``       ``;``-separated end set-backs of ending plates from the axis
 =================  =======================================================================
 
 ``nodes.json`` holds the same per node with lists instead of ``;``-strings, plus
-the planes of the beams and every pairwise angle.
+the planes of the beams, every pairwise angle and ``axis_normal_deg``, the angle between
+the node axis and the surface normal.
 """
 
 from __future__ import annotations
@@ -73,6 +75,7 @@ def node_records(beams: Any) -> list[dict]:
     for col in (0, 1):
         np.maximum.at(node_tors, edges[:, col], tors)
         np.maximum.at(node_off, edges[:, col], toff)
+    normal_angle = support.normal_angle_deg
     grid = support.grid_index
     joint_at = beams.joint_at
     by_id = beams.by_id
@@ -112,6 +115,7 @@ def node_records(beams: Any) -> list[dict]:
                       for a, b, dih, op, same in (j.angles if j else ())],
             "torsion_deg": float(node_tors[k]),
             "torsion_mm": float(node_off[k]),
+            "axis_normal_deg": float(normal_angle[k]),
             "slot_width_mm": _num(j.slot_width) if j else None,
         }
         out.append(rec)

@@ -147,7 +147,11 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
         ("δ_P columns max / mean", f"{q.delta_p_cols_max:.2e} / {q.delta_p_cols_mean:.2e}"),
         ("panel deviation from plane, max", f"{q.deviation_abs_max:.3g} mm (tolerance {tol:g} mm)"),
         ("support structure torsion, max", f"{s.torsion_max_deg:.3g}°"),
-        ("torsion offset at beam depth, max", f"{beams.report.torsion_offset_max_mm:.3g} mm"),
+        ("torsion offset at beam depth, max", f"{beams.report.torsion_offset_max_mm:.3g} mm "
+                                              f"(tolerance beams.max_torsion_mm {design.beams.max_torsion_mm:g} mm)"),
+        ("node axis to surface normal, max", f"{float(build.support.normal_angle_deg.max()):.1f}° "
+                                             f"(limit support.max_axis_angle_deg {design.support.max_axis_angle_deg:g}°)"),
+        ("polylines left out of the planar families", len(build.support.left_out)),
         ("conical residual max / mean", f"{q.conical_max:.2e} / {q.conical_mean:.2e} rad"),
         ("panels above tolerance", len(over)),
         ("beam plates not slidable through their slots", beams.report.totals()["not_slidable"]),
@@ -155,6 +159,10 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
     rep.key_values(rows)
     if over:
         rep.table(["panel", "deviation [mm]"], [(p.part_id, p.deviation_mm) for p in over])
+    if build.support.left_out:
+        rep.heading("Polylines left out of the planar families (beams of one edge each)", 3)
+        rep.table(["polyline", "vertices", "why"],
+                  [(k, len(build.support.polylines[k]), why) for k, why in build.support.left_out], left=(2,))
     flagged = [p for p in panels if p.flags]
     if flagged:
         rep.heading("Panels outside processing limits", 3)
@@ -197,10 +205,11 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
                 place.get(r.part_id, {}).get("nest_tag", "")) for r in beams.report.records], left=(0, 1, 2))
     rep.heading("Nodes")
     rep.table(["node", "vertex", "grid", "x [mm]", "y [mm]", "z [mm]", "beams", "joint", "dihedral [°]",
-               "torsion [°]"],
+               "torsion [°]", "torsion [mm]"],
               [(r["node_id"], r["vertex"], "" if r["grid"] is None else f"{r['grid'][0]},{r['grid'][1]}",
                 *(round(c, 1) for c in r["position"]), "; ".join(b["part_id"] for b in r["beams"]), r["joint"],
-                "" if r["dihedral_deg"] is None else r["dihedral_deg"], r["torsion_deg"]) for r in node_rows],
+                "" if r["dihedral_deg"] is None else r["dihedral_deg"], r["torsion_deg"], r["torsion_mm"])
+               for r in node_rows],
               left=(0, 2, 6, 7))
     listed = sorted(k for k in files)
     rep.heading("Files")

@@ -69,7 +69,7 @@ class FabricationError(PpfabError):
 class NonPlanarPanelError(FabricationError):
     """Panels deviate from their plane by more than the tolerance (in mm)."""
 
-    def __init__(self, offenders: list[tuple[str, float]], tolerance_mm: float):
+    def __init__(self, offenders: list[tuple[str, float]], tolerance_mm: float, advice: str = ""):
         self.offenders = offenders
         self.tolerance_mm = tolerance_mm
         worst = sorted(offenders, key=lambda o: -o[1])
@@ -77,7 +77,7 @@ class NonPlanarPanelError(FabricationError):
         more = f" (and {len(worst) - 8} more)" if len(worst) > 8 else ""
         super().__init__(
             f"{len(offenders)} panel(s) deviate from their plane by more than "
-            f"{tolerance_mm:g} mm: {shown}{more}"
+            f"{tolerance_mm:g} mm: {shown}{more}" + (f"; {advice}" if advice else "")
         )
 
 

@@ -420,9 +420,10 @@ CASES = [
          "edge (1, 4) is shared by 3 faces (non-manifold)"),
     Case("mesh file", "inconsistent orientation", {"m.obj": GRID_OBJ.replace("f 2 3 6 5", "f 2 5 6 3")},
          check("m.obj"), 2, "inconsistent orientation"),
-    Case("mesh file", "not a regular grid where one is needed",
-         design(f"[geometry]\nmesh = '{DATA / 'DOS__botanic-garden-bubble-0.obj'}'\n[support]\nmethod = 'pp'\n"),
-         build(), 1, "not a regular grid"),
+    Case("mesh file", "a raw mesh that is not a PP mesh yet",
+         design(f"[geometry]\nmesh = '{DATA / 'DOS__heart.obj'}'\nscale = 1000.0\n[support]\nmethod = 'pp'\n"),
+         build(), 1, "the mesh file is not a PP mesh yet (max δ_f 1.2e-01, max δ_P rows 7.1e-02 / cols 7.1e-02): "
+                     "add an [optimize] section with families = \"both\""),
     # geometry that cannot be fabricated
     Case("geometry", "panels out of plane beyond the tolerance",
          design(f"[geometry]\nmesh = '{DATA / 'compas_libigl__tubemesh.off'}'\nscale = 1000.0\n"), build(), 1,

@@ -16,6 +16,7 @@ from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plat
 from .params import BeamParams
 from .plates import BeamPlate, layout_plates
 from .report import BeamRecord, BeamReport, Defect
+from .torsion import check_torsion
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,15 +45,19 @@ class BeamSet:
 
 
 
-def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True) -> BeamSet:
+def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
+                max_height: float = 0.0) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
     ----------
     support : node axes and support planes (:mod:`ppfab.support`), in mm
     params : beam parameters (defaults when omitted)
-    strict : raise :class:`~ppfab.errors.FabricationError` naming every defective plate
-        (with its measured value) instead of returning them in ``report.defects``
+    strict : raise :class:`~fabrication.beams.torsion.TorsionError` when the support's torsion at beam depth
+        exceeds ``params.max_torsion_mm`` (listing the edges), and :class:`~ppfab.errors.FabricationError`
+        naming every defective plate (with its measured value) instead of returning them in ``report.defects``
+    max_height : the widest flat piece the plate stock holds across its length, mm (0 = no limit): long
+        curved beams are cut so that their pieces fit it
 
     Returns
     -------
@@ -61,7 +66,9 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     params = params or BeamParams()
     if not isinstance(params, BeamParams):
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
-    plates, defects = layout_plates(support, params)
+    if strict:
+        check_torsion(support, params)
+    plates, defects = layout_plates(support, params, max_height)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
         raise DesignError("beams", "duplicate part ids")

@@ -36,8 +36,17 @@ class BeamParams:
                                            "degenerate", min=0, exclusive_max=90)
     min_segment: float = param(10.0, doc="shortest acceptable edge or trimmed segment, mm", min=0)
     max_length: float = param(6000.0, doc="longest flat piece, mm (its extent along its chord); longer beams "
-                                          "(and every closed one) are split at edge midpoints; 0 = never split",
-                              min=0)
+                                          "(and every closed one) are cut between nodes, clear of the joints; "
+                                          "0 = never split", min=0)
+    max_torsion_mm: float = param(0.5, doc="largest torsion of the support structure, as the offset at the "
+                                           "beam's bottom edge: how far, mm, the node axis at one end of an edge, "
+                                           "followed for the depth, leaves the plane of the edge and the other "
+                                           "axis; a build above it stops, listing the edges", min=0)
+    segment: list[int | str] = param([], doc="polylines cut into beams of one edge each at every node, in "
+                                             "their planes: polyline ids (`ppfab check --polylines`) and rules "
+                                             "'boundary', 'closed', 'singular', 'closed-singular' (see [support] "
+                                             "exclude) and 'nonplanar' (further than plane_tolerance from its "
+                                             "plane)")
     plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)
@@ -46,6 +55,17 @@ class BeamParams:
         from .joint_types import get_joint_type
 
         get_joint_type(self.joint, "joint")
+        from ppfab.support.lines import RULES
+
+        rules = [r for r in RULES if r != "tangent"]
+        for k, s in enumerate(self.segment):
+            if isinstance(s, str) and s not in rules:
+                from ppfab.schema import suggest
+
+                raise DesignError(f"segment[{k}]", f"unknown rule {s!r}{suggest(s, rules)}; rules: "
+                                                   f"{', '.join(rules)}")
+            if isinstance(s, int) and s < 0:
+                raise DesignError(f"segment[{k}]", f"polyline ids are 0 or more, got {s}")
         if self.max_length and self.max_length < 2 * self.min_segment:
             raise DesignError("max_length", f"must be 0 or at least twice min_segment ({2 * self.min_segment:g} mm), "
                                             f"got {self.max_length:g}")

@@ -15,12 +15,12 @@ afterwards — a CAD kernel accepts a face only if its polygon is exactly planar
 
 Polylines that are not planar (the transverse family of a P mesh, or with
 ``joint = "segmented"``) become one plate per edge, in the edge's support plane.
-Long or closed planar polylines are split into pieces at edge midpoints.
+Long or closed planar polylines are cut into pieces inside edges, clear of the joints
+(:mod:`fabrication.beams.splitting`).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,6 +34,7 @@ from .. import contract
 
 from .params import BeamParams
 from .report import Defect
+from .splitting import Cut, plan_cuts
 
 
 @dataclass(frozen=True, eq=False)
@@ -175,60 +176,6 @@ def beam_ids(support: SupportStructure) -> list[str]:
     return [contract.beam_id(k, w) for k in range(len(lines))]
 
 
-# -- splitting ---------------------------------------------------------------------------------------
-
-def split_edges(lengths: np.ndarray, closed: bool, max_length: float) -> tuple[list[int], float]:
-    """Edges at whose midpoints a polyline is cut so that no piece is longer than ``max_length``.
-
-    Parameters
-    ----------
-    lengths : (e,) edge lengths (``e = k − 1`` for an open, ``k`` for a closed polyline of ``k`` vertices)
-    closed : a closed polyline is always cut at least twice (a ring cannot be cut from flat stock)
-    max_length : 0 = no limit
-
-    Returns
-    -------
-    sorted edge indices, and the longest resulting piece (measured along the polyline)
-    """
-    lengths = np.asarray(lengths, dtype=float)
-    ne = len(lengths)
-    total = float(lengths.sum())
-    cum = np.r_[0.0, np.cumsum(lengths)]
-    mids = cum[:-1] + 0.5 * lengths
-    kmin = 2 if closed else 1
-    if max_length > 0:
-        kmin = max(kmin, int(math.ceil(total / max_length - 1e-9)))
-    best: tuple[list[int], float] | None = None
-    for k in range(kmin, ne + 1):
-        if closed:
-            targets = (mids[0] + total * np.arange(k) / k) % total
-        else:
-            targets = total * np.arange(1, k) / k
-        cuts = sorted({int(np.argmin(np.abs(mids - t) if not closed else
-                                      np.minimum(np.abs(mids - t), total - np.abs(mids - t)))) for t in targets})
-        if closed and len(cuts) < 2:
-            continue
-        longest = _longest_piece(cuts, mids, total, closed)
-        if best is None or longest < best[1]:
-            best = (cuts, longest)
-        if max_length <= 0 or longest <= max_length:
-            return cuts, longest
-    if best is None:
-        return [], total
-    return best
-
-
-def _longest_piece(cuts: list[int], mids: np.ndarray, total: float, closed: bool) -> float:
-    if not cuts:
-        return total
-    pos = np.asarray([mids[c] for c in cuts])
-    if closed:
-        gaps = np.diff(np.r_[pos, pos[0] + total])
-    else:
-        gaps = np.diff(np.r_[0.0, pos, total])
-    return float(gaps.max())
-
-
 # -- plates ------------------------------------------------------------------------------------------
 
 def _in_plane_axes(axes: np.ndarray, n: np.ndarray, where: str) -> np.ndarray:
@@ -273,13 +220,31 @@ def _continuous_family(support: SupportStructure, params: BeamParams) -> int:
     return support.planar_families[0] if support.planar_families else 0
 
 
-def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[BeamPlate], list[Defect]]:
+def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.ndarray:
+    """``(L,)`` bool: the polylines ``[beams] segment`` names (ids and rules of :mod:`ppfab.support.lines`;
+    ``nonplanar`` here means further than ``plane_tolerance`` mm from the polyline's plane)."""
+    from ppfab.support.lines import select_polylines
+
+    mesh = support.mesh
+    out = np.zeros(len(mesh.polylines), dtype=bool)
+    if "nonplanar" in params.segment:
+        out |= support.polyline_deviation > params.plane_tolerance
+    rest = [s for s in params.segment if s != "nonplanar"]
+    if rest:
+        out |= select_polylines(mesh, rest, "beams.segment")
+    return out
+
+
+def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0
+                  ) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
     (``support.polyline_planar``), it lies in that plane within ``params.plane_tolerance``
     and, with segmented joints, belongs to the continuous family; otherwise one plate per
-    edge in the edge's support plane.  With half-lap
+    edge in the edge's support plane.  Polylines the support left out of the planar families
+    (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.
+    ``max_height``: the widest flat piece the plate stock holds across its length (0 = no limit).  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -296,6 +261,8 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
     cont = _continuous_family(support, params)
     planar_lines = support.polyline_planar
     assert planar_lines is not None, "SupportStructure.__post_init__ sets polyline_planar"
+    left_out = {k for k, _ in support.left_out}
+    cut = segmented_polylines(support, params)
     plates: list[BeamPlate] = []
     defects: list[Defect] = []
     for l, line in enumerate(support.polylines):
@@ -305,7 +272,7 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
         dev = float(support.polyline_deviation[l])
         supported = bool(planar_lines[l]) or len(vs) == 2
         planar = supported and dev <= params.plane_tolerance
-        segmented = jt.segments and line.family != cont
+        segmented = (jt.segments and line.family != cont) or l in left_out or bool(cut[l])
         if not planar and not segmented and jt.planar_requirement is not None:
             why = (f"its vertices lie up to {dev:.3g} mm off the beam plane (tolerance {params.plane_tolerance:g} mm)"
                    if dev > params.plane_tolerance else
@@ -314,7 +281,7 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
-            plates.extend(_continuous(support, params, l, ids[l], defects))
+            plates.extend(_continuous(support, params, l, ids[l], defects, max_height))
         else:
             a, b = vs[:-1], vs[1:]
             if line.closed and len(vs) > 2:
@@ -333,31 +300,68 @@ def layout_plates(support: SupportStructure, params: BeamParams) -> tuple[list[B
     return plates, defects
 
 
-def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
-                defects: list[Defect]) -> list[BeamPlate]:
-    """The pieces of a planar polyline.  Cut points are chosen along the polyline
-    (:func:`split_edges`); a piece whose flat length (extent along its chord, bottom-edge
-    overhang at the ends included) still exceeds ``max_length`` makes the split tighter."""
+def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np.ndarray:
+    """``(k,)`` how far (mm, along the edges) a cut of polyline ``l`` must stay from each of its nodes: half
+    the widest half-lap slot or end set-back another plate there can need (:func:`~fabrication.beams.joint_types.
+    halflap.slot_width` at the smallest angle between this plane and another support plane at the node) plus
+    ``min_segment``."""
     line = support.polylines[l]
-    pts = support.vertices[line.vertices]
-    closed = bool(line.closed and len(line.vertices) > 2)
-    seg = np.linalg.norm(np.diff(np.concatenate([pts, pts[:1]]) if closed else pts, axis=0), axis=1)
-    limit = params.max_length
-    for _ in range(8):
-        cuts, longest = split_edges(seg, closed, limit)
-        pieces = _pieces(support, params, l, beam_id, cuts, closed)
-        extent = max(float(np.ptp(p.raw_outline[:, 0])) for p in pieces)
-        if params.max_length <= 0 or extent <= params.max_length or longest > limit:
-            break
-        limit -= extent - params.max_length + 1e-6
-    if params.max_length > 0 and (longest > limit or extent > params.max_length):
-        defects.append(Defect(beam_id, "too_long", extent, params.max_length, f"polyline {l}",
-                              f"{beam_id}: cannot be cut into pieces of at most {params.max_length:g} mm at edge "
-                              f"midpoints (longest piece {extent:.0f} mm)"))
+    vs = line.vertices
+    n = pl.normalize(support.polyline_planes[l])[:3]
+    edges = support.edges
+    nv = len(support.vertices)
+    key = edges[:, 0] * nv + edges[:, 1]
+    own = set()
+    a, b = vs[:-1], vs[1:]
+    if line.closed and len(vs) > 2:
+        a, b = np.r_[a, vs[-1]], np.r_[b, vs[0]]
+    own.update(np.searchsorted(key, np.minimum(a, b) * nv + np.maximum(a, b)).tolist())
+    at: dict[int, list[int]] = {}
+    for e, (i, j) in enumerate(edges.tolist()):
+        if e not in own:
+            at.setdefault(i, []).append(e)
+            at.setdefault(j, []).append(e)
+    out = np.full(len(vs), params.min_segment)
+    t, c = params.thickness, params.clearance
+    for q, v in enumerate(vs.tolist()):
+        others = at.get(v, [])
+        if not others:
+            continue
+        cos = np.abs(support.edge_planes[others, :3] @ n)
+        cmax = float(min(cos.max(), np.cos(np.radians(max(params.min_angle_deg, 1.0)))))
+        width = t * (1.0 + cmax) / np.sqrt(1.0 - cmax * cmax) + c
+        out[q] += 0.5 * width
+    return out
+
+
+def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
+                defects: list[Defect], max_height: float = 0.0) -> list[BeamPlate]:
+    """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
+    room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
+    bottom-edge overhang at the ends included) at most ``max_length`` and its height across at most
+    ``max_height``."""
+    line = support.polylines[l]
+    vs = line.vertices
+    closed = bool(line.closed and len(vs) > 2)
+    plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
+                     params.max_length, _node_clearance(support, params, l), max_height)
+    pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
+    sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
+    long_x = max(x for x, _ in sizes)
+    high_y = max(y for _, y in sizes)
+    over = ((params.max_length > 0 and long_x > params.max_length + 1e-6)
+            or (max_height > 0 and high_y > max_height + 1e-6))
+    if plan.problem or over:
+        limit = f"{params.max_length:g} mm" + (f" × {max_height:g} mm" if max_height > 0 else "")
+        why = plan.problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
+        defects.append(Defect(beam_id, "too_long", long_x, params.max_length, f"polyline {l}",
+                              f"{beam_id}: cannot be cut into pieces of at most {limit} clear of the joints: "
+                              f"{why}; raise beams.max_length (up to the usable plate length), use wider plate "
+                              "stock ([beam_nesting] sheet) or lower beams.depth"))
     return pieces
 
 
-def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str, cuts: list[int],
+def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str, cuts: list[Cut],
             closed: bool) -> list[BeamPlate]:
     line = support.polylines[l]
     vs = line.vertices
@@ -365,37 +369,45 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
     plane = support.polyline_planes[l]
     axes = support.axes[vs]
     nn = len(vs)
-    pieces: list[tuple[int | None, list[int], int | None]] = []
+    pieces: list[tuple[Cut | None, list[int], Cut | None]] = []
     if closed:
         for r in range(len(cuts)):
             a, b = cuts[r], cuts[(r + 1) % len(cuts)]
-            pieces.append((a, [(a + 1 + t) % nn for t in range(((b - a) % nn) or nn)], b))
+            count = (b.edge - a.edge) % nn or nn
+            pieces.append((a, [(a.edge + 1 + q) % nn for q in range(count)], b))
     else:
-        starts: list[int | None] = [None, *cuts]
-        ends: list[int | None] = [*cuts, None]
+        starts: list[Cut | None] = [None, *cuts]
+        ends: list[Cut | None] = [*cuts, None]
         for s, e in zip(starts, ends):
-            lo = 0 if s is None else s + 1
-            hi = nn - 1 if e is None else e
+            lo = 0 if s is None else s.edge + 1
+            hi = nn - 1 if e is None else e.edge
             pieces.append((s, list(range(lo, hi + 1)), e))
     out = []
     w = contract.digits(len(pieces))
+
+    def cut_point(c: Cut) -> tuple[np.ndarray, np.ndarray]:
+        i, j = c.edge, (c.edge + 1) % nn
+        return (1 - c.t) * pts[i] + c.t * pts[j], (1 - c.t) * axes[i] + c.t * axes[j]
+
     for r, (s, idx, e) in enumerate(pieces):
         cp: list[np.ndarray] = []
         ca: list[np.ndarray] = []
         chain: list[int] = []
         if s is not None:
-            cp.append(0.5 * (pts[s] + pts[(s + 1) % nn]))
-            ca.append(axes[s] + axes[(s + 1) % nn])
+            point, axis = cut_point(s)
+            cp.append(point)
+            ca.append(axis)
         for k in idx:
             chain.append(len(cp))
             cp.append(pts[k])
             ca.append(axes[k])
         if e is not None:
-            cp.append(0.5 * (pts[e] + pts[(e + 1) % nn]))
-            ca.append(axes[e] + axes[(e + 1) % nn])
+            point, axis = cut_point(e)
+            cp.append(point)
+            ca.append(axis)
         ca_unit = np.asarray(ca)
         ca_unit /= np.linalg.norm(ca_unit, axis=1, keepdims=True)
-        # a node is an end only where the polyline itself ends (pieces end at edge midpoints)
+        # a node is an end only where the polyline itself ends (pieces end at cuts inside edges)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
         pid = beam_id if len(pieces) == 1 else contract.piece_id(beam_id, r, w)
         out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca_unit, vs[idx],

@@ -16,20 +16,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="fail (exit 1) when max δ_f or max δ_P of a planar family exceeds this")
     p.add_argument("--families", choices=["rows", "cols", "both", "none"], default="both",
                    help="which polyline families --tol applies to (default both)")
+    p.add_argument("--polylines", action="store_true",
+                   help="list every polyline (id, family, size, δ_P, tilt) and whether it can be a planar beam, "
+                        "with the reason when not (the ids [support] exclude and [beams] segment take)")
     p.add_argument("--json", action="store_true", help="print the metrics as JSON")
 
 
 def run(args: argparse.Namespace) -> int:
     from ppfab.io import load_mesh
     from ppfab.metrics import quality
+    from ppfab.support.report import polyline_report, tangent_polylines
 
     mesh = load_mesh(args.mesh)
     q = quality(mesh)
+    tangent = tangent_polylines(mesh)
+    records = polyline_report(mesh) if args.polylines else None
     if args.json:
-        print(json.dumps(q.as_dict(), indent=2))
+        doc = q.as_dict()
+        doc["polylines_tangent"] = tangent
+        if records is not None:
+            doc["polylines"] = [r.as_dict() for r in records]
+            doc["polylines_left_out"] = [r.id for r in records if not r.planar_beam and r.vertices >= 3]
+        print(json.dumps(doc, indent=2))
     else:
         print(f"{args.mesh}")
         print(q.table())
+        print(f"polylines that cannot be planar beams (plane > 30° from the normal): {len(tangent)}"
+              + (f" — ids {_ids(tangent)}" if tangent else "")
+              + ("" if records is not None else " (--polylines: every polyline, the full rule and the reasons)"))
+        if records is not None:
+            _print_polylines(records)
     if args.tol is None:
         return 0
     worst = {"delta_f": q.delta_f_max}
@@ -43,3 +59,21 @@ def run(args: argparse.Namespace) -> int:
         print(f"ppfab: check failed: {msg} > tol {args.tol:g}")
         return 1
     return 0
+
+
+def _ids(ids: list[int], limit: int = 30) -> str:
+    return ", ".join(map(str, ids[:limit])) + (f" … ({len(ids) - limit} more)" if len(ids) > limit else "")
+
+
+def _print_polylines(records: list) -> None:
+    """The table of ``--polylines``: one line per polyline."""
+    left = [r.id for r in records if not r.planar_beam and r.vertices >= 3]
+    print(f"polylines left out of the planar families by [support] exclude = ['auto']: {len(left)}"
+          + (f" — ids {_ids(left)}" if left else ""))
+    print(f"{'id':>5} {'family':6} {'verts':>5} {'closed':6} {'δ_P':>9} {'tilt°':>6}  planar beam")
+    for r in records:
+        dp = "" if r.delta_p is None else f"{r.delta_p:.2e}"
+        tilt = "" if r.tilt_deg is None else f"{r.tilt_deg:.1f}"
+        fam = ("rows", "cols")[r.family] + ("*" if r.straight else "")
+        state = "yes" if r.planar_beam else f"no: {r.reason}"
+        print(f"{r.id:>5} {fam:6} {r.vertices:>5} {'yes' if r.closed else 'no':6} {dp:>9} {tilt:>6}  {state}")

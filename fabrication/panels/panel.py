@@ -46,7 +46,8 @@ class Panel:
     Attributes
     ----------
     part_id : ``P-U07-V12`` (face ``f[7, 12]`` of a regular patch) or ``P-0042`` (face 42)
-    face : 0-based index of the face in the output OBJ (row-major ``i·n' + j`` on a regular patch)
+    face : 0-based index of the face in the output OBJ: row-major ``i·n' + j`` for a :class:`QuadGrid`, the
+        mesh's own face order for a :class:`QuadMesh` (also when it is a recovered regular patch)
     face_ij : ``(i, j)`` on a regular patch, else ``None``
     mesh_face : index of the face in the mesh that was passed in
     outline : (k, 2) inset outline in the panel frame, counter-clockwise seen from outside,
@@ -291,7 +292,7 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
         o = outline[f]
         panels.append(Panel(
             part_id=ids[f],
-            face=f,
+            face=int(mesh_face[f]) if isinstance(mesh, QuadMesh) else f,     # the face of the OBJ written
             face_ij=None if ij is None else (int(ij[f, 0]), int(ij[f, 1])),
             mesh_face=int(mesh_face[f]),
             outline=o,

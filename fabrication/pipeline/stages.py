@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ppfab.errors import DesignError, GeometryError
+from ppfab.errors import DesignError, GeometryError, NonPlanarPanelError
 from ppfab.geometry import Geometry, build_geometry
 from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.metrics import Quality
@@ -46,7 +46,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         geometry = stage_geometry(design, p, allow_large)
         quality = stage_quality(geometry, p)
         support = stage_support(design, geometry, p)
-        panels = stage_panels(design, geometry, p)
+        panels = stage_panels(design, geometry, p, quality)
         beams = stage_beams(design, support, p)
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)
@@ -104,22 +104,36 @@ def stage_quality(geometry: Geometry, progress: Progress) -> Quality:
 
 
 def stage_support(design: Design, geometry: Geometry, progress: Progress) -> SupportStructure:
-    """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh."""
+    """Node axes and support planes (:mod:`ppfab.support`) of the placed mesh; axes further from the surface
+    normals than ``[support] max_axis_angle_deg`` stop the build (:mod:`ppfab.support.quality`)."""
+    from ppfab.support.params import BeamContext
+    from ppfab.support.quality import check_axis_angles
     from ppfab.support.select import support_structure
 
     progress.start("support")
-    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None)
+    beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
+    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
+                                beams=beams)
+    check_axis_angles(support, design.support.max_axis_angle_deg)
     s = support.summary()
     progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
     return support
 
 
-def stage_panels(design: Design, geometry: Geometry, progress: Progress) -> PanelSet:
-    """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types."""
+def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality: Quality | None = None) -> PanelSet:
+    """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types; a mesh file
+    whose panels are not planar is refused with what to do (:mod:`fabrication.pipeline.advice`)."""
     from ..panels import make_panels, panel_types
+    from .advice import planarity_advice
 
     progress.start("panels")
-    panels = make_panels(geometry.mesh, design.panels)
+    try:
+        panels = make_panels(geometry.mesh, design.panels)
+    except NonPlanarPanelError as exc:
+        advice = planarity_advice(design, quality, geometry.optimize_result) if quality is not None else ""
+        if not advice:
+            raise
+        raise NonPlanarPanelError(exc.offenders, exc.tolerance_mm, advice) from None
     types = panel_types(panels)
     progress.done(f"{len(panels)} panels, {len(types)} types")
     return PanelSet(tuple(panels), types)
@@ -137,7 +151,8 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
         raise DesignError("beams.max_length", f"beam pieces up to {params.max_length:g} mm do not fit the "
                                               f"usable plate length {usable_len:g} mm of [beam_nesting]; "
                                               "set beams.max_length to at most the usable length")
-    beams = build_beams(support, params, strict=True)
+    usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
+    beams = build_beams(support, params, strict=True, max_height=usable_width)
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams

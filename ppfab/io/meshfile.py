@@ -54,6 +54,9 @@ def _parse_obj(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
             except ValueError:
                 raise MeshFileError(path, f"line {lineno}: face indices are not integers") from None
             n = len(verts)
+            if 0 in idx:
+                raise MeshFileError(path, f"line {lineno}: face uses vertex index 0, but OBJ indices start at 1: "
+                                          "the indices look 0-based; add 1 to every face index")
             idx = [i - 1 if i > 0 else n + i for i in idx]
             faces.append(idx)
             lines.append(lineno)
@@ -124,7 +127,7 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
     f = np.array(faces, dtype=np.int64)
     out = np.flatnonzero((f < 0).any(axis=1) | (f >= len(v)).any(axis=1))
     if len(out):
-        raise MeshFileError(path, f"face {int(out[0])} (line {lines[out[0]]}) refers to a vertex that does not exist")
+        raise MeshFileError(path, _index_problem(f, int(out[0]), lines[out[0]], len(v), path))
     rep = np.flatnonzero(np.array([len(set(r)) for r in f.tolist()]) < 4)
     if len(rep):
         raise MeshFileError(path, f"face {int(rep[0])} (line {lines[rep[0]]}) repeats a corner (degenerate quad)")
@@ -154,6 +157,20 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
         raise MeshFileError(path, f"faces {int(faces_at[0])} and {int(faces_at[1])} run through edge "
                                   f"({int(e[0])}, {int(e[1])}) in the same direction (inconsistent orientation)")
     return f
+
+
+def _index_problem(f: np.ndarray, k: int, line: int, nv: int, path: str) -> str:
+    """Why face ``k`` refers to a vertex that does not exist, and what to do about it: an OFF file numbered
+    from 1 (smallest index 1, largest the vertex count) or an OBJ file numbered from 0 says so."""
+    lo, hi = int(f.min()), int(f.max())
+    bad = int(next(i for i in f[k] if i < 0 or i >= nv))
+    if path.lower().endswith(".obj"):
+        return f"face {k} (line {line}) refers to a vertex that does not exist (the file has {nv} vertices)"
+    if lo == 1 and hi == nv:
+        return (f"face {k} (line {line}) refers to vertex {bad}, but the file has vertices 0…{nv - 1}: the indices "
+                f"look 1-based (smallest 1, largest {hi} = the vertex count); OFF indices start at 0, subtract 1 "
+                "from every face index")
+    return f"face {k} (line {line}) refers to vertex {bad}, which does not exist (vertices 0…{nv - 1})"
 
 
 def _check_coincident(path: str, v: np.ndarray, f: np.ndarray, used: np.ndarray, size: float) -> None:

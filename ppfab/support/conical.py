@@ -16,7 +16,7 @@ from .registry import support_method
 from .structure import SupportStructure, _assemble, as_quadmesh, vertex_normals
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .params import SupportParams
+    from .params import BeamContext, SupportParams
 
 
 def support_conical(mesh: QuadMesh | QuadGrid, flip: bool = False) -> SupportStructure:
@@ -73,5 +73,6 @@ def conical_axis_residual(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
 
 
 @support_method("conical", "conical meshes: the cone axes")
-def _build(mesh: QuadMesh, params: "SupportParams", family: int | None) -> SupportStructure:
+def _build(mesh: QuadMesh, params: "SupportParams", family: int | None,
+           beams: "BeamContext | None" = None) -> SupportStructure:
     return support_conical(mesh, flip=params.flip)

@@ -26,7 +26,7 @@ from .registry import support_method
 from .structure import SupportStructure, _assemble, _edge_frames, _orient_inward, as_quadmesh, vertex_normals
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .params import SupportParams
+    from .params import BeamContext, SupportParams
 
 
 def _perpendicular_pair(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -268,6 +268,7 @@ def _planar_families(mesh: QuadMesh, planar: np.ndarray, fitted: np.ndarray) -> 
 
 
 @support_method("parallel", "any planar-quad mesh: a least-squares parallel mesh")
-def _build(mesh: QuadMesh, params: "SupportParams", family: int | None) -> SupportStructure:
+def _build(mesh: QuadMesh, params: "SupportParams", family: int | None,
+           beams: "BeamContext | None" = None) -> SupportStructure:
     return support_parallel(mesh, params.planar_tolerance, flip=params.flip,
                             max_normal_angle_deg=params.max_normal_angle_deg)

@@ -1,6 +1,6 @@
 """The table of support methods (``[support] method = …``).
 
-A method is a function ``build(mesh, params, family) -> SupportStructure`` registered with
+A method is a function ``build(mesh, params, family, beams) -> SupportStructure`` registered with
 :func:`support_method` by its own module in this package (``pp``, ``p``, ``conical``, ``parallel``);
 :func:`get_support_method` imports every module of the package once, so a new method is one new file.
 :func:`ppfab.support.select.support_structure` chooses among them (``auto``).
@@ -16,19 +16,20 @@ from ppfab.registry import Registry
 if TYPE_CHECKING:  # pragma: no cover
     from ppfab.mesh import QuadMesh
 
-    from .params import SupportParams
+    from .params import BeamContext, SupportParams
     from .structure import SupportStructure
 
-_INFRASTRUCTURE = ("registry", "select", "structure", "params")
+_INFRASTRUCTURE = ("registry", "select", "structure", "params", "lines", "axes", "planar", "quality", "report")
 
 
 @dataclass(frozen=True)
 class SupportMethod:
-    """One entry of :data:`SUPPORT_METHODS`: ``build(mesh, params, family)``; ``family`` is the planar family
-    (0 rows, 1 cols) when the caller knows it, else ``None``."""
+    """One entry of :data:`SUPPORT_METHODS`: ``build(mesh, params, family, beams)``; ``family`` is the planar
+    family (0 rows, 1 cols) when the caller knows it, else ``None``; ``beams`` the beam depth and torsion
+    tolerance (:class:`~ppfab.support.params.BeamContext`) when a build knows them, else ``None``."""
 
     name: str
-    build: Callable[["QuadMesh", "SupportParams", "int | None"], "SupportStructure"]
+    build: Callable[["QuadMesh", "SupportParams", "int | None", "BeamContext | None"], "SupportStructure"]
     summary: str
 
 
@@ -37,7 +38,7 @@ SUPPORT_METHODS: dict[str, SupportMethod] = _TABLE.entries
 
 
 def support_method(name: str, summary: str) -> Callable:
-    """Decorator registering ``build(mesh, params, family) -> SupportStructure`` under ``name``."""
+    """Decorator registering ``build(mesh, params, family, beams) -> SupportStructure`` under ``name``."""
     def register(fn: Callable) -> Callable:
         _TABLE.add(name, SupportMethod(name, fn, summary))
         return fn

@@ -12,21 +12,23 @@ from ppfab.topology import family_index
 from ppfab.conical.cones import cone_axes
 
 from .conical import conical_axis_residual
-from .params import SupportParams
+from .params import BeamContext, SupportParams
 from .registry import get_support_method
 from .structure import SupportStructure, as_quadmesh
 
 
 def support_structure(mesh: QuadMesh | QuadGrid, params: SupportParams | None = None,
-                      planar_families: tuple | list | None = None) -> SupportStructure:
+                      planar_families: tuple | list | None = None,
+                      beams: BeamContext | None = None) -> SupportStructure:
     """The support structure chosen by ``params.method``.
 
     ``auto``: when ``planar_families`` names the families a construction keeps planar
-    (``"rows"``/``"cols"`` or 0/1) — both on a patch → :func:`~ppfab.support.pp.support_pp`, one →
-    :func:`~ppfab.support.p.support_p` with that family.  Otherwise: a patch carrying ``U_i``/``W_j`` or with
-    both families planar (δ_P ≤ ``planar_tolerance``) → :func:`~ppfab.support.pp.support_pp`; one family
+    (``"rows"``/``"cols"`` or 0/1) — both → :func:`~ppfab.support.pp.support_pp`, one →
+    :func:`~ppfab.support.p.support_p` with that family.  Otherwise: a patch carrying ``U_i``/``W_j`` or a mesh
+    with both families planar (δ_P ≤ ``planar_tolerance``) → :func:`~ppfab.support.pp.support_pp`; one family
     planar → :func:`~ppfab.support.p.support_p`; a conical planar-quad mesh (residual ≤ 1e-6 rad) →
     :func:`~ppfab.support.conical.support_conical`; otherwise :func:`~ppfab.support.parallel.support_parallel`.
+    ``beams``: the beam depth and torsion tolerance, in the mesh's units.
     """
     p = params or SupportParams()
     qm = as_quadmesh(mesh)
@@ -34,7 +36,7 @@ def support_structure(mesh: QuadMesh | QuadGrid, params: SupportParams | None = 
     fam = None
     if method == "auto" and planar_families:
         fams = sorted({family_index(f) for f in planar_families})
-        if len(fams) == 2 and qm.grid is not None:
+        if len(fams) == 2:
             method = "pp"
         elif len(fams) == 1:
             method, fam = "p", fams[0]
@@ -42,7 +44,7 @@ def support_structure(mesh: QuadMesh | QuadGrid, params: SupportParams | None = 
         method = _auto_method(qm, p.planar_tolerance)
     if method == "p" and fam is None:
         fam = _auto_family(qm) if p.method == "auto" else family_index(p.family, "support.family")
-    return get_support_method(method).build(qm, p, fam)
+    return get_support_method(method).build(qm, p, fam, beams)
 
 
 def _family_planarity(mesh: QuadMesh) -> dict[int, float]:
@@ -66,8 +68,6 @@ def _auto_method(mesh: QuadMesh, tol: float) -> str:
         return "pp"
     fp = _family_planarity(mesh)
     planar = [f for f in (0, 1) if fp[f] <= tol]
-    if planar and grid is None:
-        return "parallel"           # keeps the axes of planar polylines in their planes
     if len(planar) == 2:
         return "pp"
     if planar:

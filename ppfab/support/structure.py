@@ -61,6 +61,12 @@ class SupportStructure:
     meta : solver record (iterations, constraint residual, …)
     polyline_planar : (L,) bool, the polyline's plane is a support plane (its axes lie in it), so the
         polyline can be one planar beam; default: the polylines of ``planar_families``
+    left_out : ``(polyline, reason)`` of the polylines that were candidates for planar beams but were left out
+        of the planar families (:mod:`ppfab.support.planar`); their edges are beams of one edge each
+    planes_at : (N,) int, how many distinct support planes of planar beams pass through each vertex (2: the
+        axis is their line, more: the least-squares line, 1 or 0: solved), when the method records it
+    misfit : (N,) float, smallest singular value of the stacked unit normals of those planes where more than
+        two meet (0 = they share the axis), when recorded
     """
 
     mesh: QuadMesh
@@ -72,6 +78,9 @@ class SupportStructure:
     kind: str
     meta: dict = field(default_factory=dict)
     polyline_planar: np.ndarray | None = None
+    left_out: tuple[tuple[int, str], ...] = ()
+    planes_at: np.ndarray | None = None
+    misfit: np.ndarray | None = None
 
     def __post_init__(self):
         if self.polyline_planar is None:
@@ -80,8 +89,10 @@ class SupportStructure:
         pp = np.array(self.polyline_planar, dtype=bool, copy=True)
         pp.flags.writeable = False
         object.__setattr__(self, "polyline_planar", pp)
-        for name in ("axes", "polyline_planes", "polyline_deviation", "edge_planes"):
-            a = np.array(getattr(self, name), dtype=float, copy=True)
+        for name in ("axes", "polyline_planes", "polyline_deviation", "edge_planes", "planes_at", "misfit"):
+            if getattr(self, name) is None:
+                continue
+            a = np.array(getattr(self, name), dtype=np.int64 if name == "planes_at" else float, copy=True)
             a.flags.writeable = False
             object.__setattr__(self, name, a)
 
@@ -102,6 +113,13 @@ class SupportStructure:
     def torsion(self) -> np.ndarray:
         """``(E,)`` torsion angle of every edge, radians (see :func:`torsion`)."""
         return torsion(self.mesh, self.axes)
+
+    @cached_property
+    def normal_angle_deg(self) -> np.ndarray:
+        """``(N,)`` angle between each node axis and the surface normal at its vertex, degrees (0…90; the
+        normal taken as a line, :func:`vertex_normals`)."""
+        c = np.abs(np.einsum("ij,ij->i", self.axes, vertex_normals(self.mesh)))
+        return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
 
     def torsion_offset(self, depth: float) -> np.ndarray:
         """``(E,)`` how far (mesh units) the axis at one end of an edge, followed for ``depth``,
@@ -263,7 +281,8 @@ def _span_planes(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
 
 
 def _assemble(mesh: QuadMesh, axes: np.ndarray, polyline_planes: np.ndarray, planar_lines: np.ndarray,
-              planar_families: tuple[int, ...], kind: str, meta: dict) -> SupportStructure:
+              planar_families: tuple[int, ...], kind: str, meta: dict, left_out: tuple[tuple[int, str], ...] = (),
+              planes_at: np.ndarray | None = None, misfit: np.ndarray | None = None) -> SupportStructure:
     """Edge planes (polyline plane on planar polylines, span of the axes elsewhere) and deviations."""
     edge_planes = _span_planes(mesh, axes)
     epl = edge_polyline_index(mesh)
@@ -280,7 +299,7 @@ def _assemble(mesh: QuadMesh, axes: np.ndarray, polyline_planes: np.ndarray, pla
     dev = np.array([float(np.abs(pl.signed_distance(planes[k], mesh.vertices[p.vertices])).max())
                     for k, p in enumerate(mesh.polylines)])
     return SupportStructure(mesh, axes, planes, dev, edge_planes, tuple(sorted(planar_families)), kind, meta,
-                            np.asarray(planar_lines, dtype=bool))
+                            np.asarray(planar_lines, dtype=bool), left_out, planes_at, misfit)
 
 
 def _orient_inward(axes: np.ndarray, normals: np.ndarray, flip: bool) -> np.ndarray:
