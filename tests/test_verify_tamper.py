@@ -263,7 +263,7 @@ def test_torsion_beyond_tolerance(copy, capsys):
     reseal(copy, "nodes.csv", "nodes.json", "mesh.json")
     err = findings(copy, capsys)
     assert f"edge N{k:04d}-" in err or f"-N{k:04d}: torsion" in err
-    assert "(> beams.plane_tolerance 0.5 mm)" in err
+    assert "(> beams.max_torsion_mm 0.5 mm)" in err
     assert "axis differs" not in err
     m = manifest(copy)
     m["fabrication"]["beams"]["max_torsion_mm"] = 2.0
