@@ -162,6 +162,20 @@ PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
 
 
+DRAWINGS_DIR, NODE_SHEET_DIR = "drawings", "nodes"
+"""The installers' drawings: ``drawings/<view>.svg`` and ``drawings/nodes/node_type_<id>.svg``."""
+
+
+def view_file(view: str) -> str:
+    """``key_plan.svg`` for the plan, ``elevation_front.svg`` for an elevation."""
+    return "key_plan.svg" if view == "plan" else f"elevation_{view}.svg"
+
+
+def node_sheet_file(type_id: str) -> str:
+    """``node_type_NT03.svg``: the sheet of a node type."""
+    return f"node_type_{type_id}.svg"
+
+
 def sheet_file(prefix: str, sheet: int, sheets: int) -> str:
     """``glass_03.dxf``: the file of 1-based ``sheet`` out of ``sheets``."""
     return f"{prefix}_{sheet:0{max(2, len(str(sheets)))}d}.dxf"

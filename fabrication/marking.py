@@ -118,7 +118,8 @@ def _box(centre: np.ndarray, width: float, depth: float, angle_deg: float) -> np
 
 
 def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_height: float,
-                min_height: float = 2.0, keep_out: tuple[np.ndarray, ...] = ()) -> LabelPlacement:
+                min_height: float = 2.0, keep_out: tuple[np.ndarray, ...] = (),
+                keep_out_areas: tuple[np.ndarray, ...] = (), prefer_deg: float | None = None) -> LabelPlacement:
     """Place a label block upright inside ``outline`` (see module docstring).
 
     Parameters
@@ -128,13 +129,15 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
     margin : clearance of the block from the outline (and its slots) and from ``keep_out``, mm
     max_height, min_height : text height range of the block, mm (lines scale it by ``TextLine.scale``)
     keep_out : polylines ``(p, 2)`` the block must keep ``margin`` from (marking lines)
+    keep_out_areas : polygons ``(p, 2)`` the block must keep ``margin`` from (other labels)
+    prefer_deg : a direction tried first at every height (e.g. 0 for horizontal text on a drawing), before the
+        part's long side
 
     Returns
     -------
     LabelPlacement — ``fits`` is False when no height down to ``min_height`` fits; the block is then put at the
     pole of inaccessibility at ``min_height``.
     """
-    import shapely
     from shapely.geometry import LineString, Polygon
     from shapely.ops import polylabel
 
@@ -146,32 +149,49 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
     for m in keep_out:
         if len(m) >= 2:
             region = region.difference(LineString(m).buffer(margin, cap_style="flat"))
-    a = np.radians(angle)
-    u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
-    height = max_height
-    while height >= min_height - 1e-9 and not region.is_empty:
-        width, depth, _ = block_size(lines, height)
-        inner = region.buffer(-0.5 * depth)
-        if not inner.is_empty:
-            x0, y0, x1, y1 = inner.bounds
-            step = max(0.25 * depth, np.hypot(x1 - x0, y1 - y0) / 150.0)
-            gx, gy = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
-            pts = np.c_[gx.ravel(), gy.ravel()]
-            pts = pts[shapely.contains_xy(inner, pts[:, 0], pts[:, 1])]
-            if len(pts):
-                hw, hd = 0.5 * width, 0.5 * depth
-                corners = (pts[:, None, :] + np.array([-hw, hw, hw, -hw])[None, :, None] * u
-                           + np.array([-hd, -hd, hd, hd])[None, :, None] * v)
-                boxes = shapely.polygons(corners)
-                ok = shapely.within(boxes, region)
-                if ok.any():
-                    cand = np.flatnonzero(ok)
-                    room = shapely.distance(boxes[cand], region.boundary)
-                    best = pts[cand[int(np.argmax(room))]]
-                    return _placed(lines, best, height, angle, True)
-        height *= 0.85
+    for q in keep_out_areas:
+        region = region.difference(Polygon(q).buffer(margin, join_style="mitre"))
+    angles = [angle] if prefer_deg is None else [upright_deg(prefer_deg), angle]
+    centroid = np.array(region.centroid.coords[0]) if not region.is_empty else np.zeros(2)
+    for ang in angles:
+        height = max_height
+        while height >= min_height - 1e-9 and not region.is_empty:
+            width, depth, _ = block_size(lines, height)
+            best = _fit(region, region.buffer(-0.5 * depth), width, depth, ang, centroid)
+            if best is not None:
+                return _placed(lines, best, height, ang, True)
+            height *= 0.85
     pole = polylabel(poly, tolerance=max(np.sqrt(max(poly.area, 1e-9)) * 0.01, 0.1))
     return _placed(lines, np.array([pole.x, pole.y]), min_height, angle, False)
+
+
+def _fit(region, inner, width: float, depth: float, angle: float, centroid: np.ndarray) -> np.ndarray | None:
+    """The centre of a ``width × depth`` box at ``angle`` inside ``region`` (candidates on a grid over ``inner``,
+    the region shrunk by half the depth): among those within 10 % of the largest clearance, the one nearest the
+    region's centroid; ``None`` when none fits."""
+    import shapely
+
+    if inner.is_empty:
+        return None
+    a = np.radians(angle)
+    u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    x0, y0, x1, y1 = inner.bounds
+    step = max(0.25 * depth, np.hypot(x1 - x0, y1 - y0) / 150.0)
+    gx, gy = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
+    pts = np.c_[gx.ravel(), gy.ravel()]
+    pts = pts[shapely.contains_xy(inner, pts[:, 0], pts[:, 1])]
+    if not len(pts):
+        return None
+    hw, hd = 0.5 * width, 0.5 * depth
+    corners = (pts[:, None, :] + np.array([-hw, hw, hw, -hw])[None, :, None] * u
+               + np.array([-hd, -hd, hd, hd])[None, :, None] * v)
+    boxes = shapely.polygons(corners)
+    ok = np.flatnonzero(shapely.within(boxes, region))
+    if not len(ok):
+        return None
+    room = shapely.distance(boxes[ok], region.boundary)
+    good = ok[room >= 0.9 * room.max()]
+    return pts[good[int(np.argmin(np.linalg.norm(pts[good] - centroid, axis=1)))]]
 
 
 def _placed(lines: list[TextLine], centre: np.ndarray, height: float, angle: float, fits: bool) -> LabelPlacement:
