@@ -167,16 +167,19 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
 
 def _fit(region, inner, width: float, depth: float, angle: float, centroid: np.ndarray) -> np.ndarray | None:
     """The centre of a ``width × depth`` box at ``angle`` inside ``region`` (candidates on a grid over ``inner``,
-    the region shrunk by half the depth): among those within 10 % of the largest clearance, the one nearest the
-    region's centroid; ``None`` when none fits."""
+    the region shrunk by half the depth): the centroid when the box fits there, else among the candidates within
+    10 % of the largest clearance the one nearest the centroid; ``None`` when none fits."""
     import shapely
 
     if inner.is_empty:
         return None
     a = np.radians(angle)
     u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    shapely.prepare(region)
+    if shapely.within(shapely.polygons(_box(centroid, width, depth, angle)), region):
+        return centroid                     # the usual case (a convex pane): no search
     x0, y0, x1, y1 = inner.bounds
-    step = max(0.25 * depth, np.hypot(x1 - x0, y1 - y0) / 150.0)
+    step = max(0.25 * depth, np.hypot(x1 - x0, y1 - y0) / 60.0)
     gx, gy = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
     pts = np.c_[gx.ravel(), gy.ravel()]
     pts = pts[shapely.contains_xy(inner, pts[:, 0], pts[:, 1])]

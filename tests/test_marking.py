@@ -175,3 +175,26 @@ def test_a_label_avoids_slots_and_axis_lines():
     slot = Polygon([(290, 75), (310, 75), (310, 160), (290, 160)])
     assert box.distance(slot) >= 5.0 - 1e-9
     assert all(-90 < pl.rotation_deg <= 90 for pl in where.lines)
+
+
+def test_verify_names_a_wrong_face_mark_and_an_upside_down_label(built, tmp_path):
+    import shutil
+
+    import ezdxf
+
+    from fabrication.verify import verify
+
+    bad = tmp_path / "bad"
+    shutil.copytree(built, bad)
+    path = sorted((bad / "beams").glob("*.dxf"))[0]
+    doc = ezdxf.readfile(path)
+    texts = doc.modelspace().query("TEXT[layer=='MARK']")
+    face = [t for t in texts if t.dxf.text[-1] in "+-" and len(t.dxf.text) == 2][0]
+    pid = [v for _, v in face.get_xdata("PPFAB") if v.startswith("part_id=")][0].split("=", 1)[1]
+    face.dxf.text = face.dxf.text[0] + ("-" if face.dxf.text[1] == "+" else "+")
+    label = [t for t in doc.modelspace().query("TEXT[layer=='LABEL']") if t.dxf.get("align_point")][0]
+    label.dxf.rotation = 180.0
+    doc.saveas(path)
+    found = [str(f) for f in verify(bad).findings]
+    assert any(pid in f and "face marks" in f for f in found), found
+    assert any("upside down" in f for f in found), found
