@@ -10,7 +10,8 @@ Labels.  Every label is placed with :func:`fabrication.marking.place_label`: upr
 monospace glyphs drawn) inside the projected panel shrunk by a margin, clear of the beam labels placed before
 it.  On the key plan beam part ids sit on the middle edge of each piece, along it; a beam label that would overlap
 another is moved to the next edge out from the middle.  Text height scales with the panel (a fraction of the
-short side of its projected outline).  The key plan labels every panel and beam piece; an elevation labels the
+short side of its projected outline).  The key plan labels every panel and beam piece — at its place, or, where
+panels overlap in plan and a label finds no room, in a list below the view; an elevation labels the
 beam plates seen broadside (:data:`BROADSIDE`) on their projected faces, nearest first, and the panels facing
 the viewer (:data:`FACING`) whose label fits at the beam labels' height — a roof seen from the side shows its
 panels edge-on, so those are found on the key plan.
@@ -90,6 +91,16 @@ class SvgSheet:
         ET.SubElement(self.root, "title").text = title
         ET.SubElement(self.root, "rect", {"x": "0", "y": "0", "width": _fmt(w), "height": _fmt(h), "fill": "white"})
         self.texts: list[DrawnText] = []
+
+    def extend_down(self, by: float) -> None:
+        """Make the picture ``by`` mm taller at the bottom (for a legend below the view)."""
+        _, _, w, h = (float(x) for x in self.root.get("viewBox", "0 0 1 1").split())
+        px = float(self.root.get("width", "1"))
+        self.root.set("viewBox", f"0 0 {_fmt(w)} {_fmt(h + by)}")
+        self.root.set("height", _fmt(px * (h + by) / w))
+        bg = self.root.find("rect")
+        if bg is not None:
+            bg.set("height", _fmt(h + by))
 
     def xy(self, p: np.ndarray) -> tuple[float, float]:
         return float(p[0] - self.x0), float(self.y1 - p[1])
@@ -230,7 +241,7 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
                     labelled.append(p.part_id)
                     break
             else:
-                unfit.append(p.part_id)
+                unfit.append(p.part_id)          # listed below the view
     else:
         # plates seen broadside (|n·d| >= BROADSIDE), nearest first, labelled on their projected face
         near_first = sorted(plates, key=lambda p: float(p.frame.origin @ d))
@@ -252,25 +263,45 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
                 tree_polys.append(Polygon(where.box))
                 placed.append(where.box)
                 labelled.append(p.part_id)
+    import shapely
+
     beam_boxes = tuple(placed)
     index = STRtree([Polygon(b) for b in beam_boxes]) if beam_boxes else None
+    label_polys: list = []                       # panel labels placed so far (projected panels may overlap)
     for k, p in enumerate(panels):
         if not show[k]:
             continue
         poly = Polygon(proj[k])
         short = _short_side(poly)
-        near = tuple(beam_boxes[int(i)] for i in index.query(poly.buffer(0.1 * short))) if index is not None else ()
+        zone = poly.buffer(0.1 * short)
+        near = tuple(beam_boxes[int(i)] for i in index.query(zone)) if index is not None else ()
+        if label_polys:
+            hit = shapely.intersects(np.array(label_polys, dtype=object), zone)
+            near += tuple(np.asarray(label_polys[int(i)].exterior.coords)[:4] for i in np.flatnonzero(hit))
         where = place_label(proj[k], [TextLine(p.part_id, "LABEL")], margin=0.04 * short,
                             max_height=0.16 * short, min_height=0.04 * short if plan else 0.8 * beam_h,
                             keep_out_areas=near, prefer_deg=0.0)
-        if not where.fits and not plan:
+        if not where.fits:
+            if plan:
+                unfit.append(p.part_id)
             continue
         pl = where.lines[0]
         sheet.text(p.part_id, pl.centre, pl.height, pl.rotation_deg, p.part_id)
+        label_polys.append(Polygon(where.box))
         labelled.append(p.part_id)
-        if not where.fits:
-            unfit.append(p.part_id)
     sheet.text(title, np.array([lo[0], hi[1] + pad + 0.5 * head]), 0.4 * head, 0.0, anchor="start")
+    if unfit:
+        # parts whose label has no room at its place (panels overlapping in this view): listed below the view
+        step = 1.6 * beam_h
+        per_row = max(1, int((hi[0] - lo[0]) // (LABEL_CHAR_WIDTH * 12 * beam_h)))
+        sheet.text("not labelled at their place (no room in this view):", np.array([lo[0], lo[1] - pad - step]),
+                   beam_h, 0.0, anchor="start")
+        for q, pid in enumerate(unfit):
+            r, c = divmod(q, per_row)
+            at = np.array([lo[0] + c * LABEL_CHAR_WIDTH * 12 * beam_h, lo[1] - pad - (r + 2) * step])
+            sheet.text(pid, at, beam_h, 0.0, anchor="start")
+        rows = (len(unfit) + per_row - 1) // per_row
+        sheet.extend_down(pad + (rows + 2.5) * step)
     return ViewResult(sheet.tostring(), tuple(labelled), tuple(unfit), tuple(sheet.texts))
 
 
