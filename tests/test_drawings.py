@@ -134,3 +134,30 @@ def test_verify_names_a_part_missing_from_the_key_plan(built, tmp_path):
     plan.write_text(re.sub(rf'<text[^>]*data-part="{victim}"[^>]*>{victim}</text>', "", text))
     found = [str(f) for f in verify(bad).findings]
     assert any("not on the key plan" in f and victim in f for f in found), found
+
+
+def test_panels_overlapping_in_plan_keep_their_labels_apart():
+    """Eight panes stacked above one another (a wall or an overhang seen from above): no two labels overlap,
+    and the ids without room at their place are listed below the view."""
+    from shapely import STRtree
+
+    from fabrication.drawings import view_svg
+
+    class Pane:
+        def __init__(self, k):
+            self.part_id = f"P-STACKED-{k:02d}"
+            self._pts = np.array([[0, 0, 100.0 * k], [1000, 0, 100.0 * k], [1000, 400, 100.0 * k],
+                                  [0, 400, 100.0 * k]])
+
+        def outline_3d(self):
+            return self._pts
+
+    res = view_svg("plan", [Pane(k) for k in range(8)], [], "stack")
+    root = ET.fromstring(res.svg)
+    texts = list(root.iter(f"{NS}text"))
+    assert {f"P-STACKED-{k:02d}" for k in range(8)} <= {t.text for t in texts}
+    placed = [t for t in texts if t.get("data-part")]
+    assert 0 < len(placed) < 8 and res.unfit
+    boxes = [_measured_box(t) for t in placed]
+    tree = STRtree(boxes)
+    assert all(len([j for j in tree.query(b, predicate="intersects") if j != i]) == 0 for i, b in enumerate(boxes))
