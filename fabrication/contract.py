@@ -59,9 +59,31 @@ DXF_OLDEST = "AC1015"
 
 DXF_INSUNITS_MM = 4
 
-LAYERS = {"SHEET": 8, "TRIM": 3, "CUT": 1, "LABEL": 5, "MARK": 6}
+LAYERS = {"SHEET": 8, "TRIM": 3, "CUT": 1, "LABEL": 5, "MARK": 6, "MARK_BACK": 4}
 """Layer name → ACI colour.  SHEET stock outline, TRIM usable area, CUT part outlines (one closed LWPOLYLINE
-per part), LABEL part id text (never machined), MARK scribe/marking lines."""
+per part), LABEL part id text (never machined), MARK scribe/marking lines and engraved text on the face that
+looks up from the sheet (node axes, the part id and, on a beam plate, its face mark), MARK_BACK the marks of
+the face underneath (node axes at the same sheet coordinates, the underside's face mark as backward text, read
+when the plate is turned over)."""
+
+REQUIRED_LAYERS = ("SHEET", "TRIM", "CUT", "LABEL", "MARK")
+"""The layers every cutting file must have (DESIGN.md); ``MARK_BACK`` is written as well but not required."""
+
+MARK_LAYERS = ("MARK", "MARK_BACK")
+"""The layers a CAM engraves or inks; TEXT on them carries XDATA ``part_id=…`` and ``mark=id|face``."""
+
+FACE_MARK_PATTERN = r"^[UWR][+-]$"
+"""A face mark: the plate family's letter and the side of its plane ``n·x + d = 0`` (``parts.csv`` ``plane``)
+the marked face looks to (see :mod:`fabrication.marking`)."""
+
+KERF_NOTES = {
+    "laser": "kerf 0.2-0.4 mm; sharp inner corners (tool_radius 0)",
+    "plasma": "kerf 1.5-3 mm; inner corners need a relief radius of about the kerf",
+    "waterjet": "kerf 0.8-1.2 mm; inner corners radius about half the kerf",
+    "router": "kerf = cutter diameter; dog-bone corners with tool_radius = cutter radius",
+}
+"""Notes per cutting process written into each cutting sheet's header (``$CUSTOMPROPERTY``) and the report:
+outlines are nominal (no kerf offset); the CAM applies its kerf compensation."""
 
 XDATA_APPID = "PPFAB"
 """The application id of the XDATA on every CUT outline: group-1000 strings ``key=value``."""
@@ -138,6 +160,20 @@ def nest_tag(prefix: str, sheet: int, part: int, sheet_width: int, part_width: i
 GLASS_SHEET_DIR, GLASS_SHEET_PREFIX = "glass", "glass"
 PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
+
+
+DRAWINGS_DIR, NODE_SHEET_DIR = "drawings", "nodes"
+"""The installers' drawings: ``drawings/<view>.svg`` and ``drawings/nodes/node_type_<id>.svg``."""
+
+
+def view_file(view: str) -> str:
+    """``key_plan.svg`` for the plan, ``elevation_front.svg`` for an elevation."""
+    return "key_plan.svg" if view == "plan" else f"elevation_{view}.svg"
+
+
+def node_sheet_file(type_id: str) -> str:
+    """``node_type_NT03.svg``: the sheet of a node type."""
+    return f"node_type_{type_id}.svg"
 
 
 def sheet_file(prefix: str, sheet: int, sheets: int) -> str:

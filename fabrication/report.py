@@ -3,7 +3,8 @@
 Sections: summary (size, counts, areas, weights, lengths, sheets and
 utilisation against the area lower bound), quality (δ_f, δ_P, panel
 deviation in mm, torsion, conical residual, panels above tolerance), figures
-(3D structure, histograms), cutting sheets (inline SVG with part labels), and
+(3D structure, histograms), drawings for installers (key plan, elevations, node sheets, node types, kerf
+notes), cutting sheets (inline SVG with part labels), and
 the parts and node tables with nest tags.
 """
 
@@ -108,8 +109,49 @@ def drawn_figures(figures: list[tuple[Callable[[], bytes], str]]) -> tuple[list[
     return out, notes
 
 
-def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) -> str:
-    """The report page of a build, listing the files written so far (``files``) and the parts table."""
+def _svg_img(svg: str, alt: str) -> str:
+    """An SVG drawing as a self-contained ``<img>`` (base64 data URI), as wide as the page."""
+    import base64
+
+    data = base64.b64encode(svg.encode("utf-8")).decode("ascii")
+    return f'<img alt="{esc(alt)}" style="width:100%;height:auto" src="data:image/svg+xml;base64,{data}"/>'
+
+
+def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], drawings: dict[str, str]) -> None:
+    """The installers' drawings (key plan, elevations, node sheets, :mod:`fabrication.drawings`) embedded, the
+    node types, and the kerf notes per cutting process."""
+    from .contract import KERF_NOTES
+    from .nodetypes import node_types
+
+    rep.heading("Drawings for installers")
+    rep.paragraph("Every panel and beam plate id is on the key plan; the elevations label the plates seen "
+                  "broadside and the panels facing the viewer. The same drawings are in drawings/ as SVG files.",
+                  "muted")
+    for rel in files.get("drawings", []):
+        if rel in drawings:
+            rep.raw(f"<figure>{_svg_img(drawings[rel], rel)}<figcaption>{esc(rel)}</figcaption></figure>")
+    types = node_types(build.nodes.records)
+    rep.heading("Node types", 3)
+    rep.table(["type", "joint", "plates", "dihedral [°]", "nodes", "slot width [mm]", "sheet"],
+              [(t.type_id, t.joint, len(t.roles), ", ".join(f"{a:g}" for a in t.angles_deg), len(t.nodes),
+                "" if t.slot_width_range is None else f"{t.slot_width_range[0]:.2f}–{t.slot_width_range[1]:.2f}",
+                rel) for t, rel in zip(types, files.get("node_sheets", []))], left=(0, 1, 6))
+    sheets = [rel for rel in files.get("node_sheets", []) if rel in drawings][:2]
+    if sheets:
+        rep.raw('<div class="figs">' + "".join(f"<figure>{_svg_img(drawings[rel], rel)}<figcaption>{esc(rel)}"
+                                                 "</figcaption></figure>" for rel in sheets) + "</div>")
+    rep.heading("Cutting processes", 3)
+    r = build.design.beams.tool_radius
+    rep.paragraph(f"Outlines are nominal (no kerf offset): the CAM applies its kerf compensation. Slot corners: "
+                  + (f"dog-bone reliefs for a tool of radius {r:g} mm (beams.tool_radius)." if r > 0 else
+                     "sharp (beams.tool_radius = 0, laser)."), "muted")
+    rep.table(["process", "note"], list(KERF_NOTES.items()), left=(0, 1))
+
+
+def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
+                 drawings: dict[str, str] | None = None) -> str:
+    """The report page of a build, listing the files written so far (``files``) and the parts table;
+    ``drawings``: relative path → SVG text of the drawings written (embedded)."""
     s = build.summary
     q = build.quality
     panels = list(build.panels.panels)
@@ -182,6 +224,8 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict]) 
     rep.figures(figs)
     for note in notes:
         rep.paragraph(note, "muted")
+
+    drawings_section(rep, build, files, drawings or {})
 
     nest = build.nesting
     rep.heading("Cutting sheets — glass")

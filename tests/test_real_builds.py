@@ -327,3 +327,17 @@ def test_curved_beams_are_cut_to_the_width_of_the_plate_stock():
         chord = (p[-1] - p[0]) / np.linalg.norm(p[-1] - p[0])
         across = np.cross(plane[:3], chord)
         assert np.ptp(both @ chord) <= 5900.0 + 1.0 and np.ptp(both @ across) <= 350.0 + 1.0
+
+
+def test_marking_and_drawings_on_a_real_mesh(dome_build):
+    """The marking and drawing checks of test_marking / test_drawings on the PP-optimised quad_dome (a general
+    quad mesh with singular vertices, plates named ``B-R…``)."""
+    import test_drawings
+    import test_marking
+
+    test_marking.test_labels_are_upright_inside_their_part_and_clear_of_slots(dome_build)
+    test_marking.test_face_mark_is_on_the_side_the_3d_model_puts_up(dome_build)
+    test_drawings.test_key_plan_names_every_part_once_inside_its_face(dome_build)
+    for view in ("key_plan", "elevation_front", "elevation_side"):
+        test_drawings.test_labels_do_not_overlap(dome_build, view)
+    test_drawings.test_node_sheets_hold_every_node_once_with_angles_within_the_type(dome_build)

@@ -212,7 +212,13 @@ def apply_joints(plate: BeamPlate, trims: list[tuple[int, float]], slots: list[S
         return replace(plate, trims=tuple(trims), slots=tuple(slots))
     outline = body
     if slots:
-        outline = _single(body.difference(unary_union([Polygon(s.polygon()) for s in slots])), plate, "slots",
+        r = params.tool_radius
+        for s in slots:
+            if r > 0 and s.width < 2 * r:
+                defects.append(Defect(plate.part_id, "outline", s.width, 2 * r, f"slot at node {s.node}",
+                                      f"{plate.part_id}: the slot at node {s.node} is {s.width:.3g} mm wide, "
+                                      f"narrower than the tool (beams.tool_radius {r:g} mm); use a smaller tool"))
+        outline = _single(body.difference(unary_union([s.cutout(r) for s in slots])), plate, "slots",
                           defects)
     if outline is None:
         return replace(plate, body=_clean(np.asarray(body.exterior.coords)), trims=tuple(trims), slots=tuple(slots))

@@ -47,6 +47,10 @@ class BeamParams:
                                              "'boundary', 'closed', 'singular', 'closed-singular' (see [support] "
                                              "exclude) and 'nonplanar' (further than plane_tolerance from its "
                                              "plane)")
+    tool_radius: float = param(0.0, doc="radius of the cutting tool, mm: each inner corner at a slot's closed "
+                                        "end gets a dog-bone relief, a circle of this radius through the corner, "
+                                        "so that the mating plate seats fully; 0 = sharp corners (laser). Kerf "
+                                        "notes per process: DXF header and report", min=0)
     plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)
@@ -81,4 +85,5 @@ class BeamParams:
                 "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance,
                 "beam_min_angle_deg": self.min_angle_deg, "beam_min_segment": self.min_segment,
                 "beam_max_length": self.max_length, "beam_plane_tolerance": self.plane_tolerance,
+                "beam_tool_radius": self.tool_radius,
                 "beam_continuous": self.continuous}

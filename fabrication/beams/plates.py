@@ -62,6 +62,33 @@ class Slot:
                         self.origin + a1 * s + w * t, self.origin + a0 * s + w * t])
         return pts if _signed_area(pts) > 0 else pts[::-1]
 
+    def inner_corners(self) -> np.ndarray:
+        """``(2, 2)`` the corners of the slot's closed end (where the mating plate's edge seats)."""
+        t = np.array([-self.direction[1], self.direction[0]])
+        return self.end_center + np.outer([-0.5 * self.width, 0.5 * self.width], t)
+
+    def cutout(self, tool_radius: float = 0.0, segments: int = 8):
+        """The material removed by the slot (shapely ``Polygon``): :meth:`polygon` and, with ``tool_radius``
+        ``r > 0``, a dog-bone relief at each inner corner ``q``: the disc of radius ``r`` centred ``r`` from
+        ``q`` along the corner's bisector into the slot, so the tool passes through the corner.  The disc is
+        drawn circumscribed (``segments`` per quarter, vertex radius ``r / cos(π/(4·segments))``) so that it
+        holds the true circle."""
+        from shapely.geometry import Point, Polygon
+
+        rect = Polygon(self.polygon())
+        if tool_radius <= 0:
+            return rect
+        s = self.direction
+        t = np.array([-s[1], s[0]])
+        grow = 1.0 / np.cos(np.pi / (4 * segments))
+        discs = []
+        for q, side in zip(self.inner_corners(), (1.0, -1.0)):
+            # into the slot: back along the slot line (towards the open end) and across towards its middle
+            inward = (-s if self.from_top else s) + side * t
+            c = q + tool_radius * inward / np.linalg.norm(inward)
+            discs.append(Point(c).buffer(tool_radius * grow, quad_segs=segments))
+        return rect.union(discs[0]).union(discs[1])
+
     @property
     def end_center(self) -> np.ndarray:
         """Centre of the slot's closed end (on the slot line at ``α = length``)."""

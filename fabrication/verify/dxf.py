@@ -35,6 +35,7 @@ def check_dxf(v: Verification) -> None:
                 v.error(rel, "", str(exc))
                 continue
             polys = []
+            v.data.setdefault("dxf_texts", {})[rel] = content.texts          # for the marking check
             trim = Polygon(content.trim_outline).buffer(1e-6)
             for label in content.labels:
                 if contract.one_line(label) != label:

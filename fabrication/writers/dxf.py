@@ -7,7 +7,13 @@ origin at the sheet's lower-left corner; layers
 * ``CUT`` — one closed ``LWPOLYLINE`` per part in sheet coordinates, carrying XDATA under
   the application id ``PPFAB``: ``part_id=…``, ``nest_tag=…``, ``kind=…``, ``type_id=…``,
 * ``LABEL`` — part id and nest tag as TEXT (never machined),
-* ``MARK`` — marking lines (reference corner of a panel, node axes of a beam).
+* ``MARK`` — marking on the face that looks up from the sheet: lines (reference corner of a panel, node axes of
+  a beam) and, on a beam plate, its id and face mark as TEXT (XDATA ``part_id=…``, ``mark=id|face``),
+* ``MARK_BACK`` — a beam plate's underside: its node axes and its face mark (backward text).
+
+Labels are upright in the sheet frame (rotation in (−90°, 90°]) and placed inside the part, clear of its
+edges, slots and node-axis lines (:mod:`fabrication.marking`).  The header carries kerf notes per cutting
+process (``$CUSTOMPROPERTY`` ``PPFAB_KERF_*``); outlines are nominal.
 
 No blocks, no splines: flat geometry a CAM program reads as it is.  Files are byte-for-byte
 reproducible: handles are assigned in a fixed order and ezdxf's time stamps and GUIDs are
@@ -20,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -30,10 +37,12 @@ from ppfab.errors import VerificationError
 
 from . import Files, writer
 
-from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, GLASS_SHEET_DIR, GLASS_SHEET_PREFIX,
-                        LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text,
-                        sheet_file, type_file, xdata_strings)
+from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
+                        GLASS_SHEET_PREFIX, KERF_NOTES, LAYERS, MARK_LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
+                        REQUIRED_LAYERS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text, sheet_file, type_file,
+                        xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
+from ..marking import TextLine, face_marks, face_sign, place_label
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
@@ -65,15 +74,40 @@ def _new_doc(version: str = DXF_VERSION):
     return doc
 
 
-def _label_point(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """A point well inside a polygon and the distance to its boundary (pole of inaccessibility)."""
-    from shapely.geometry import Polygon
-    from shapely.ops import polylabel
+PLATE_TEXT_MAX, PANEL_TEXT_MAX = 25.0, 60.0
+"""Largest text height of a label on a beam plate (engraved) and on a glass pane, mm."""
 
-    poly = Polygon(points)
-    size = float(np.sqrt(max(poly.area, 1e-9)))
-    pt = polylabel(poly, tolerance=max(size * 0.01, 0.1))
-    return np.array([pt.x, pt.y]), float(poly.exterior.distance(pt))
+
+def _short_side(points: np.ndarray) -> float:
+    """The short side of the minimum rotated rectangle of a polygon ``(k, 2)``."""
+    from shapely.geometry import Polygon
+
+    rect = np.asarray(Polygon(points).minimum_rotated_rectangle.exterior.coords)[:3]
+    return float(min(np.linalg.norm(rect[1] - rect[0]), np.linalg.norm(rect[2] - rect[1])))
+
+
+def face_mark_of(part: FlatPart, mirrored: bool) -> tuple[str, str]:
+    """``(up face, underside)`` marks of a beam plate placed with ``mirrored`` (:mod:`fabrication.marking`);
+    ``("", "")`` for a part without a support plane."""
+    frame, plane = part.meta.get("frame"), part.meta.get("plane")
+    if part.kind != "beam" or not frame or plane is None:
+        return "", ""
+    family = {"rows": 0, "cols": 1}.get(str(part.meta.get("family", "")), 2)
+    sign = face_sign(np.asarray(frame["normal"], dtype=float), np.asarray(plane, dtype=float)[:3], mirrored)
+    return face_marks(family, sign)
+
+
+def _label_lines(part: FlatPart, tag: str, mirrored: bool) -> tuple[list[TextLine], str]:
+    """The label block of a part and the underside's face mark: a beam plate gets its id and face mark engraved
+    (MARK) with the id and nest tag on LABEL; a pane its id and nest tag on LABEL."""
+    text = part.label or part.part_id
+    up, back = face_mark_of(part, mirrored)
+    lines = [TextLine(text, "LABEL")]
+    if part.kind == "beam":
+        lines = [TextLine(text, "MARK")] + ([TextLine(up, "MARK")] if up else []) + [TextLine(text, "LABEL", 0.6)]
+    if tag:
+        lines.append(TextLine(tag, "LABEL", 0.6))
+    return lines, back
 
 
 class CuttingSheet:
@@ -108,6 +142,10 @@ class CuttingSheet:
                                     dxfattribs={"layer": "TRIM"})
         if title:
             self.msp.add_text(dxf_text(title), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+        if self.doc.dxfversion >= "AC1018":          # $CUSTOMPROPERTY exists from R2004 on
+            self.doc.header.custom_vars.append("PPFAB_OUTLINES", "nominal: no kerf offset, the CAM compensates")
+            for process, note in KERF_NOTES.items():
+                self.doc.header.custom_vars.append(f"PPFAB_KERF_{process.upper()}", note)
 
     def add_part(self, part: FlatPart, placement: Placement | None = None) -> None:
         """The part's outline on CUT (with XDATA), its label on LABEL, its marks on MARK.
@@ -126,23 +164,37 @@ class CuttingSheet:
                                       dxfattribs={"layer": "CUT"})
         tag = placement.nest_tag if placement is not None else ""
         cut.set_xdata(XDATA_APPID, xdata_strings(part.part_id, tag, part.kind, part.type_id))
-        centre, room = _label_point(outline)
-        height = float(np.clip(0.25 * room, 2.0, 60.0))
-        rot = float(placement.rotation_deg) if placement is not None else 0.0
-        from ezdxf.enums import TextEntityAlignment
-
-        label = self.msp.add_text(dxf_text(part.label or part.part_id), height=height,
-                                  dxfattribs={"layer": "LABEL", "rotation": rot})
-        label.set_placement(tuple(map(float, centre)), align=TextEntityAlignment.MIDDLE_CENTER)
-        if tag:
-            off = np.array([-np.sin(np.radians(rot)), np.cos(np.radians(rot))]) * (-1.4 * height)
-            sub = self.msp.add_text(dxf_text(tag), height=0.6 * height, dxfattribs={"layer": "LABEL", "rotation": rot})
-            sub.set_placement(tuple(map(float, centre + off)), align=TextEntityAlignment.MIDDLE_CENTER)
-        for mark in part.marks:
-            pts = to_sheet(mark)
+        marks = [to_sheet(m) for m in part.marks]
+        for pts in marks:
             if len(pts) >= 2:
                 self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
                                         dxfattribs={"layer": "MARK"})
+        lines, back = _label_lines(part, tag, placement.mirrored if placement is not None else False)
+        short = _short_side(outline)
+        cap = PLATE_TEXT_MAX if part.kind == "beam" else PANEL_TEXT_MAX
+        where = place_label(outline, lines, margin=float(np.clip(0.05 * short, 2.0, 40.0)),
+                            max_height=float(np.clip(0.15 * short, 2.0, cap)), min_height=2.0,
+                            keep_out=tuple(marks) if part.kind == "beam" else ())
+        from ezdxf.enums import TextEntityAlignment
+
+        for pl in where.lines:
+            ent = self.msp.add_text(dxf_text(pl.line.text), height=pl.height,
+                                    dxfattribs={"layer": pl.line.layer, "rotation": pl.rotation_deg})
+            ent.set_placement(tuple(map(float, pl.centre)), align=TextEntityAlignment.MIDDLE_CENTER)
+            what = "face" if re.match(FACE_MARK_PATTERN, pl.line.text) else "id"
+            if pl.line.layer in MARK_LAYERS:
+                ent.set_xdata(XDATA_APPID, [(1000, f"part_id={part.part_id}"), (1000, f"mark={what}")])
+            if back and what == "face" and pl.line.layer == "MARK":
+                under = self.msp.add_text(dxf_text(back), height=pl.height,
+                                          dxfattribs={"layer": "MARK_BACK", "rotation": pl.rotation_deg,
+                                                      "text_generation_flag": 2})
+                under.set_placement(tuple(map(float, pl.centre)), align=TextEntityAlignment.MIDDLE_CENTER)
+                under.set_xdata(XDATA_APPID, [(1000, f"part_id={part.part_id}"), (1000, "mark=face")])
+        if part.kind == "beam":
+            for pts in marks:
+                if len(pts) >= 2:
+                    self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
+                                            dxfattribs={"layer": "MARK_BACK"})
 
     def write(self, path: str | os.PathLike) -> Path:
         """Save (deterministic bytes)."""
@@ -206,6 +258,20 @@ class DXFPart:
 
 
 @dataclass
+class DXFText:
+    """A TEXT entity: its layer, text, middle-centre point ``(2,)`` (the insert for left-aligned text), height,
+    rotation (degrees), ``backward`` (mirrored, text generation flag 2) and its XDATA fields."""
+
+    layer: str
+    text: str
+    centre: np.ndarray
+    height: float
+    rotation_deg: float
+    backward: bool
+    xdata: dict
+
+
+@dataclass
 class DXFContent:
     """What :func:`read_sheet_dxf` found in a file."""
 
@@ -221,6 +287,8 @@ class DXFContent:
     audit_errors: list[str] = field(default_factory=list)
     other_entities: list[str] = field(default_factory=list)
     dimensions: list[float] = field(default_factory=list)
+    texts: list[DXFText] = field(default_factory=list)
+    back_marks: int = 0
 
 
 def _xdata(entity) -> dict:
@@ -243,6 +311,8 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     auditor = doc.audit()
     errors = [f"{e.code}: {e.message}" for e in auditor.errors]
     parts, labels, marks, other, dims = [], [], 0, [], []
+    texts: list[DXFText] = []
+    back = 0
     sheet = trim = None
     e: Any
     for e in doc.modelspace():
@@ -265,16 +335,24 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
                 trim = pts
             elif layer == "MARK":
                 marks += 1
+            elif layer == "MARK_BACK":
+                back += 1
             else:
                 other.append(f"LWPOLYLINE on {layer}")
-        elif kind == "TEXT" and layer == "LABEL":
-            labels.append(e.dxf.text)
+        elif kind == "TEXT" and layer in ("LABEL",) + MARK_LAYERS:
+            if layer == "LABEL":
+                labels.append(e.dxf.text)
+            align = e.dxf.get("align_point") if e.dxf.get("halign", 0) or e.dxf.get("valign", 0) else None
+            where = align if align is not None else e.dxf.insert
+            texts.append(DXFText(layer, e.dxf.text, np.array([where[0], where[1]], dtype=float), float(e.dxf.height),
+                                 float(e.dxf.get("rotation", 0.0)), bool(int(e.dxf.get("text_generation_flag", 0)) & 2),
+                                 _xdata(e)))
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
         else:
             other.append(f"{kind} on {layer}")
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
-                      parts, sheet, trim, labels, marks, errors, other, dims)
+                      parts, sheet, trim, labels, marks, errors, other, dims, texts, back)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
@@ -292,7 +370,7 @@ def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest:
         raise VerificationError(f"{name}: DXF version {c.dxfversion} is older than {oldest}")
     if c.insunits != DXF_INSUNITS_MM and c.dxfversion > "AC1009":
         raise VerificationError(f"{name}: $INSUNITS is {c.insunits}, expected 4 (mm)")
-    missing = [la for la in LAYERS if la not in c.layers]
+    missing = [la for la in REQUIRED_LAYERS if la not in c.layers]
     if missing:
         raise VerificationError(f"{name}: layers {missing} are missing")
     if c.other_entities:

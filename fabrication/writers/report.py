@@ -16,7 +16,11 @@ if TYPE_CHECKING:  # pragma: no cover
 def write_report(build: "Build", out: Path, files: Files) -> str:
     from ..report import build_report
 
-    html = build_report(build, files, parts_table(build, files))
+    drawings = {}
+    for key in ("drawings", "node_sheets"):
+        for rel in files.get(key, []):
+            drawings[str(rel)] = (out / str(rel)).read_text(encoding="utf-8")
+    html = build_report(build, files, parts_table(build, files), drawings)
     (out / "report.html").write_text(html, encoding="utf-8")
     files["report_html"] = "report.html"
     return f"{len(html) / 1e6:.1f} MB"

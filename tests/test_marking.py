@@ -1,0 +1,200 @@
+"""Marking on the cutting sheets, read back with ezdxf: every label upright in the sheet frame and inside its
+part clear of the edges and slots; the face mark of every beam plate on the side that the plate's 3D frame
+(parts.csv, checked against beams.step) and its ``mirrored`` flag put up."""
+
+import ast
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fabrication.cli import main
+from fabrication.marking import TextLine, face_marks, place_label, upright_deg
+
+from conftest import small_design
+
+SMALL = small_design(6, 4, u_range=(-4.5, 4.5), name="marking", extra="""
+[beams]
+depth = 150.0
+thickness = 12.0
+max_length = 3000.0
+[panels]
+gap = 16.0
+""")
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("marking")
+    design = root / "d.toml"
+    design.write_text(SMALL)
+    out = root / "out"
+    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
+    return out
+
+
+def _rows(out: Path) -> dict[str, dict]:
+    with open(out / "parts.csv", newline="") as fh:
+        return {r["part_id"]: r for r in csv.DictReader(fh)}
+
+
+def _sheets(out: Path):
+    """``(path, doc)`` of every cutting sheet, read with ezdxf."""
+    import ezdxf
+
+    for path in sorted((out / "beams").glob("*.dxf")) + sorted((out / "glass").glob("*.dxf")):
+        yield path, ezdxf.readfile(path)
+
+
+def _text_box(e) -> np.ndarray:
+    """The box of a middle-centred TEXT entity measured by ezdxf's font metrics ``(4, 2)``, sheet coordinates."""
+    from ezdxf.tools.text_size import text_size
+
+    size = text_size(e)
+    w, cap, total = size.width, size.cap_height, size.total_height
+    local = np.array([[-w / 2, -cap / 2 - (total - cap)], [w / 2, -cap / 2 - (total - cap)], [w / 2, cap / 2],
+                      [-w / 2, cap / 2]])
+    a = np.radians(e.dxf.rotation)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    p = e.dxf.align_point
+    return local @ rot.T + np.array([p[0], p[1]])
+
+
+def _cut_polygons(doc) -> dict[str, "object"]:
+    from shapely.geometry import Polygon
+
+    out = {}
+    for e in doc.modelspace().query("LWPOLYLINE[layer=='CUT']"):
+        pid = [v for c, v in e.get_xdata("PPFAB") if str(v).startswith("part_id=")][0].split("=", 1)[1]
+        out[pid] = Polygon([(p[0], p[1]) for p in e.get_points("xy")])
+    return out
+
+
+def test_upright_angle():
+    for a in np.linspace(-720, 720, 97):
+        u = upright_deg(a)
+        assert -90 < u <= 90 and abs(np.sin(np.radians(u - a))) < 1e-9
+
+
+def test_labels_are_upright_inside_their_part_and_clear_of_slots(built):
+    from shapely import STRtree
+    from shapely.geometry import Point, Polygon
+
+    counts = {"plate": 0, "glass": 0}
+    for path, doc in _sheets(built):
+        cuts = _cut_polygons(doc)
+        ids = list(cuts)
+        tree = STRtree([cuts[k] for k in ids])
+        for e in doc.modelspace().query("TEXT"):
+            p = e.dxf.get("align_point")
+            if p is None:
+                assert e.dxf.layer == "LABEL" and e.dxf.insert[1] < 0, e.dxf.text
+                continue                                  # the sheet title, left-aligned below the sheet
+            hit = tree.query(Point(p[0], p[1]), predicate="within")
+            assert len(hit) == 1, (path.name, e.dxf.text)
+            poly = cuts[ids[int(hit[0])]]
+            assert -90.0 < e.dxf.rotation <= 90.0, (path.name, e.dxf.text, e.dxf.rotation)
+            box = Polygon(_text_box(e))
+            # inside the part, and clear of its outline (edges and slot notches alike) by 1 mm
+            assert poly.buffer(-1.0).contains(box), (path.name, e.dxf.text, poly.exterior.distance(box))
+            if e.dxf.layer in ("MARK", "LABEL"):
+                counts["plate" if path.parent.name == "beams" else "glass"] += 1
+    assert counts["plate"] > 0 and counts["glass"] > 0
+
+
+def _sheet_to_3d(row: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The affine map sheet → 3D of a placed part, ``X = A s + b`` with ``A (3, 2)``, from parts.csv alone:
+    part point ``p = M R⁻¹ (s − t)``, ``X = origin + p_x x_dir + p_y y_dir``."""
+    frame = ast.literal_eval(row["frame"])
+    a = np.radians(float(row["rotation_deg"]))
+    rinv = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+    m = np.diag([-1.0, 1.0]) if row["mirrored"] == "1" else np.eye(2)
+    lin = np.stack([frame["x_dir"], frame["y_dir"]], axis=1) @ (m @ rinv)
+    t = np.array([float(row["x"]), float(row["y"])])
+    return lin, np.asarray(frame["origin"]) - lin @ t
+
+
+def test_face_mark_is_on_the_side_the_3d_model_puts_up(built):
+    from fabrication.writers.step import solid_vertices
+
+    rows = _rows(built)
+    solids = solid_vertices(built / "beams.step")
+    seen = {"0": 0, "1": 0}
+    for path, doc in _sheets(built):
+        if path.parent.name != "beams":
+            continue
+        msp = doc.modelspace()
+        cuts = {}
+        for e in msp.query("LWPOLYLINE[layer=='CUT']"):
+            pid = [v for c, v in e.get_xdata("PPFAB") if str(v).startswith("part_id=")][0].split("=", 1)[1]
+            cuts[pid] = np.array([(p[0], p[1]) for p in e.get_points("xy")])
+        faces: dict[tuple[str, str], list] = {}
+        for e in msp.query("TEXT"):
+            if e.dxf.layer in ("MARK", "MARK_BACK") and e.has_xdata("PPFAB"):
+                x = dict(str(v).split("=", 1) for _, v in e.get_xdata("PPFAB"))
+                if x.get("mark") == "face":
+                    faces.setdefault((x["part_id"], e.dxf.layer), []).append(e)
+        for pid, sheet_pts in cuts.items():
+            row = rows[pid]
+            lin, off = _sheet_to_3d(row)
+            plane = np.asarray(ast.literal_eval(row["plane"]), dtype=float)
+            n = plane[:3] / np.linalg.norm(plane[:3])
+            t = float(row["thickness_mm"])
+            # the map is the plate's: the DXF outline lands on the STEP solid's two faces
+            mid = sheet_pts @ lin.T + off
+            verts = solids[pid]
+            for sgn in (-1.0, 1.0):
+                d = np.linalg.norm((mid + sgn * 0.5 * t * n)[:, None, :] - verts[None], axis=2).min(axis=1)
+                assert d.max() < 1e-3, (pid, d.max())
+            # the face looking up from the sheet: the image of the sheet's +z under the (rigid) placement
+            up = np.cross(lin[:, 0], lin[:, 1])
+            family = {"rows": 0, "cols": 1}[row["family"]]
+            top, under = face_marks(family, 1 if up @ n > 0 else -1)
+            (mark,) = faces[(pid, "MARK")]
+            (back,) = faces[(pid, "MARK_BACK")]
+            assert mark.dxf.text == top and back.dxf.text == under, (pid, row["mirrored"], mark.dxf.text)
+            assert back.dxf.text_generation_flag & 2 and not mark.dxf.text_generation_flag & 2
+            seen[row["mirrored"]] += 1
+    assert seen["0"] > 0 and seen["1"] > 0, seen         # both cases occur on this build
+
+
+def test_a_label_avoids_slots_and_axis_lines():
+    """A plate with a slot from the top in its middle and an axis line through it: the block fits beside them."""
+    from shapely.geometry import LineString, Polygon
+
+    outline = np.array([[0, 0], [600, 0], [600, 150], [310, 150], [310, 75], [290, 75], [290, 150], [0, 150]],
+                       dtype=float)
+    axis = np.array([[300.0, 75.0], [300.0, 0.0]])
+    lines = [TextLine("B-U03-S01", "MARK"), TextLine("U+", "MARK"), TextLine("B07-012", "LABEL", 0.6)]
+    where = place_label(outline, lines, margin=5.0, max_height=25.0, keep_out=(axis,))
+    assert where.fits
+    box = Polygon(where.box)
+    assert Polygon(outline).buffer(-5.0 + 1e-9).contains(box)
+    assert box.distance(LineString(axis)) >= 5.0 - 1e-9
+    slot = Polygon([(290, 75), (310, 75), (310, 160), (290, 160)])
+    assert box.distance(slot) >= 5.0 - 1e-9
+    assert all(-90 < pl.rotation_deg <= 90 for pl in where.lines)
+
+
+def test_verify_names_a_wrong_face_mark_and_an_upside_down_label(built, tmp_path):
+    import shutil
+
+    import ezdxf
+
+    from fabrication.verify import verify
+
+    bad = tmp_path / "bad"
+    shutil.copytree(built, bad)
+    path = sorted((bad / "beams").glob("*.dxf"))[0]
+    doc = ezdxf.readfile(path)
+    texts = doc.modelspace().query("TEXT[layer=='MARK']")
+    face = [t for t in texts if t.dxf.text[-1] in "+-" and len(t.dxf.text) == 2][0]
+    pid = [v for _, v in face.get_xdata("PPFAB") if v.startswith("part_id=")][0].split("=", 1)[1]
+    face.dxf.text = face.dxf.text[0] + ("-" if face.dxf.text[1] == "+" else "+")
+    label = [t for t in doc.modelspace().query("TEXT[layer=='LABEL']") if t.dxf.get("align_point")][0]
+    label.dxf.rotation = 180.0
+    doc.saveas(path)
+    found = [str(f) for f in verify(bad).findings]
+    assert any(pid in f and "face marks" in f for f in found), found
+    assert any("upside down" in f for f in found), found
