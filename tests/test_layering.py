@@ -30,7 +30,7 @@ FAB_LAYERS = [
      "htmlreport", "report"},
     {"writers", "verify"},
     {"pipeline"},
-    {"cli"},
+    {"cli", "studio"},
 ]
 
 
