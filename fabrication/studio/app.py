@@ -68,11 +68,14 @@ class Studio:
 
         self.model = model
         self.lock = threading.RLock()
-        self.metric = "planarity"
+        self.metric = "panel area"
         self.job: Any = None
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.server.scene.set_up_direction("+z")
+        # no environment map (its images would be fetched from the network): plain lights only
+        self.server.scene.configure_environment_map(None)
+        self.server.scene.configure_default_lights(True, cast_shadow=False)
         self._syncing = False
         self._handles: dict[str, Any] = {}
         self._items: dict[str, Any] = {}
@@ -284,14 +287,7 @@ class Studio:
         else:
             colours = ramp(values)
         colours[st.folded.reshape(-1)] = FOLD_RGB
-        verts = corners.reshape(-1, 3)
-        base = 4 * np.arange(m * n)[:, None]
-        tris = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=0)
-        import trimesh
-
-        face_rgb = np.concatenate([colours, colours], axis=0)
-        mesh = trimesh.Trimesh(verts, tris, face_colors=np.c_[face_rgb, np.full(len(face_rgb), 255)], process=False)
-        scene.add_mesh_trimesh("/mesh", mesh)
+        self._draw_panels(corners.reshape(-1, 4, 3), colours)
         depth = float(self.model.doc.get("beams", {}).get("depth", 200.0)) / 1000.0
         axes = st.placed.axes
         if axes is not None and self.show_axes.value:
@@ -322,6 +318,21 @@ class Studio:
         self._show_status()
         self.redraws += 1
 
+    def _draw_panels(self, quads: np.ndarray, colours: np.ndarray) -> None:
+        """One flat-shaded mesh per distinct colour (the ramp is binned to 16 steps)."""
+        scene = self.server.scene
+        for name in [k for k in self._items if k.startswith("/panels/")]:
+            self._remove(name)
+        binned = (colours.astype(int) // 16) * 16 + 8
+        keys, inverse = np.unique(binned, axis=0, return_inverse=True)
+        for k, rgb in enumerate(keys):
+            q = quads[inverse.reshape(-1) == k]
+            b = 4 * np.arange(len(q))[:, None]
+            t = np.concatenate([b + [0, 1, 2], b + [0, 2, 3]])
+            name = f"/panels/{k}"
+            self._items[name] = scene.add_mesh_simple(name, q.reshape(-1, 3), t, color=tuple(int(x) for x in rgb),
+                                                      flat_shading=True, side="double")
+
     def camera_view(self) -> tuple[np.ndarray, np.ndarray]:
         """``(position, look_at)`` of the camera that frames the mesh (display metres): from the −x −y side,
         above it."""
@@ -329,7 +340,7 @@ class Studio:
         lo, hi = v.min(0), v.max(0)
         centre = 0.5 * (lo + hi)
         diag = float(np.linalg.norm(hi - lo))
-        return centre + diag * np.array([-0.45, -0.75, 0.55]), centre
+        return centre + diag * np.array([-0.32, -0.55, 0.45]), centre
 
     def _frame_camera(self, client: Any) -> None:
         position, look_at = self.camera_view()
@@ -353,9 +364,7 @@ class Studio:
         for h in self.model.handles():
             g = scene.add_transform_controls(f"/handles/{h.key}", scale=size, position=tuple(h.position),
                                              disable_rotations=not h.rotatable, disable_sliders=True)
-            g.on_drag_start(lambda _e: self._guard(self.model.begin_drag))
-            g.on_update(lambda e, key=h.key: self._guard(lambda: self._drag(key, e.target)))
-            g.on_drag_end(lambda _e: self._guard(self._end_drag))
+            g.on_update(self._gizmo_callback(h.key))
             self._handles[h.key] = g
         if self.model.method == "conical_spheres":
             s, R, t = _placement(self.model.geometry)
@@ -364,6 +373,19 @@ class Studio:
                 ico = scene.add_icosphere(f"/handles/sphere{k}", radius=abs(float(sph[3])) * s / 1000.0,
                                           color=(200, 60, 160), opacity=0.12, position=tuple(c), subdivisions=2)
                 self._handles[f"sphere{k}"] = ico
+
+    def _gizmo_callback(self, key: str) -> Any:
+        """The gizmo's callback: ``async`` so that the phases of one drag (start, update…, end) arrive in order."""
+        async def on_gizmo(event: Any) -> None:
+            phase = getattr(event, "phase", "update")
+            if phase == "start":
+                self._guard(self.model.begin_drag)
+            elif phase == "end":
+                self._guard(lambda: self._drag(key, event.target))
+                self._guard(self._end_drag)
+            else:
+                self._guard(lambda: self._drag(key, event.target))
+        return on_gizmo
 
     def _drag(self, key: str, target: Any) -> None:
         self.model.drag(key, np.asarray(target.position, dtype=float), quat_matrix(target.wxyz))
