@@ -113,13 +113,17 @@ def _delta_p(vertices: np.ndarray, families) -> float:
 def _project(camera, point: np.ndarray, width: int, height: int) -> np.ndarray:
     """Canvas pixel ``(x, y)`` of a world point under the client's pinhole camera: ``wxyz`` turns camera
     coordinates (x right, y down, z forward) into world ones, ``fov`` is the vertical field of view."""
-    w, x, y, z = np.asarray(camera.wxyz, dtype=float)
-    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    R = _rotation(camera.wxyz)
     d = R.T @ (np.asarray(point, dtype=float) - np.asarray(camera.position, dtype=float))
     focal = 0.5 * height / np.tan(0.5 * float(camera.fov))
     return np.array([0.5 * width + focal * d[0] / d[2], 0.5 * height + focal * d[1] / d[2]])
+
+
+def _rotation(wxyz) -> np.ndarray:
+    w, x, y, z = np.asarray(wxyz, dtype=float)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 def _control(browser, label: str):
@@ -147,16 +151,21 @@ def _slider_keys(browser, label: str, key: str, times: int) -> int:
 
 
 def _drag_handle(browser, studio: Studio, key: str, pixels: float) -> None:
-    """Drag handle ``key`` along its z arrow by ``pixels`` on the screen (up for positive) with real mouse
-    events."""
+    """Drag handle ``key`` along its z arrow by ``pixels`` on the screen (positive: towards +z) with real
+    mouse events."""
     client = next(iter(studio.server.get_clients().values()))
     centre = np.asarray(studio.snapshot()["handles"][key])
     eye = centre + np.array([-6.0, -22.0, 4.0])
-    client.camera.up_direction = (0.0, 0.0, 1.0)
-    client.camera.look_at = tuple(centre)
-    client.camera.position = tuple(eye)
-    _wait(lambda: np.allclose(client.camera.position, eye, atol=1e-6), what="the camera")
-    time.sleep(1.5)                                            # the client reports its pose (wxyz) back
+    client.camera.position = tuple(eye)                       # position first: the client keeps it and turns
+    client.camera.look_at = tuple(centre)                     # towards the look-at point set next
+    view = (centre - eye) / np.linalg.norm(centre - eye)
+
+    def settled() -> bool:                                     # the client reported the pose back
+        forward = _rotation(client.camera.wxyz)[:, 2]
+        return bool(np.allclose(client.camera.position, eye, atol=1e-6) and forward @ view > 1 - 1e-6)
+    _wait(settled, what=f"the camera (set {eye} -> {centre}; reported {client.camera.position}, "
+                        f"{client.camera.look_at})")
+    time.sleep(1.0)
     canvas = max(browser.find_elements(By.TAG_NAME, "canvas"), key=lambda c: c.size["width"] * c.size["height"])
     w, h = canvas.size["width"], canvas.size["height"]
     a = _project(client.camera, centre, w, h)
@@ -178,6 +187,21 @@ def test_studio_default_design_slider_drag_save(browser, tmp_path):
         assert before["vertices"].shape == (23, 16, 3)
         _shot(browser, "studio_default.png", tmp_path)
 
+        # a handle: the tangent plane of g at its second node, dragged up its z arrow
+        undo_before = len(studio.model.history.undo)
+        _drag_handle(browser, studio, "g1", 80.0)
+        _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
+        dragged = studio.snapshot()
+        assert dragged["handles"]["g1"][2] > before["handles"]["g1"][2]     # the tangent plane went up
+        assert dragged["vertices"].shape == before["vertices"].shape
+        moved = np.abs(dragged["vertices"] - before["vertices"]).max()
+        assert moved > 10.0, f"the mesh moved only {moved} mm"
+        assert dragged["params"]["g"] != before["params"]["g"]
+        assert dragged["params"]["h"] == before["params"]["h"]
+        assert max(dragged["delta_p"].values()) <= PP_TOL
+        assert _delta_p(dragged["vertices"], ("rows", "cols")) <= PP_TOL
+        assert dragged["error"] == ""
+
         # a slider: faces_u up by 3 with the arrow keys on its thumb
         want = _slider_keys(browser, "faces_u", Keys.ARROW_RIGHT, 3)
         assert want >= 24
@@ -187,20 +211,7 @@ def test_studio_default_design_slider_drag_save(browser, tmp_path):
         assert max(after_slider["delta_p"].values()) <= PP_TOL
         assert _delta_p(after_slider["vertices"], ("rows", "cols")) <= PP_TOL
 
-        # a handle: the tangent plane of g at its second node, dragged up its z arrow
-        undo_before = len(studio.model.history.undo)
-        _drag_handle(browser, studio, "g1", -80.0)
-        _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
-        dragged = studio.snapshot()
-        assert dragged["vertices"].shape == after_slider["vertices"].shape
-        moved = np.abs(dragged["vertices"] - after_slider["vertices"]).max()
-        assert moved > 10.0, f"the mesh moved only {moved} mm"
-        assert dragged["params"]["g"] != after_slider["params"]["g"]
-        assert dragged["params"]["h"] == after_slider["params"]["h"]
-        assert max(dragged["delta_p"].values()) <= PP_TOL
-        assert _delta_p(dragged["vertices"], ("rows", "cols")) <= PP_TOL
-        assert dragged["error"] == ""
-
+        assert after_slider["params"]["g"] == dragged["params"]["g"]              # the drag is kept
         # save through the GUI: type the file name, click Save; loading it gives the same geometry
         target = tmp_path / "edited.toml"
         field = _control(browser, "save as")
@@ -215,9 +226,22 @@ def test_studio_default_design_slider_drag_save(browser, tmp_path):
         button.click()
         _wait(target.exists, what="the saved file")
         reloaded = StudioModel.load(target)
-        assert np.abs(reloaded.state.placed.vertices - dragged["vertices"]).max() <= 1e-9
+        assert np.abs(reloaded.state.placed.vertices - after_slider["vertices"]).max() <= 1e-9
         again = solve(tomllib.loads(target.read_text(encoding="utf-8")), target.parent)
-        assert np.abs(again.placed.vertices - dragged["vertices"]).max() <= 1e-9
+        assert np.abs(again.placed.vertices - after_slider["vertices"]).max() <= 1e-9
+
+        # undo (clicks) takes back the slider's steps (one edit each), then the drag
+        undo = browser.find_element(By.XPATH, "//span[text()='Undo']/ancestor::button")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", undo)
+        steps = len(studio.model.history.undo) - undo_before - 1
+        assert steps >= 1
+        for k in range(steps):
+            undo.click()
+            _wait(lambda: len(studio.model.history.undo) == undo_before + steps - k, what="an undo")
+        assert studio.snapshot()["params"]["faces_u"] == 22
+        undo.click()
+        _wait(lambda: studio.snapshot()["params"]["g"] == before["params"]["g"], what="undo of the drag")
+        assert np.abs(studio.snapshot()["vertices"] - before["vertices"]).max() == 0.0
     finally:
         studio.stop()
 
@@ -230,7 +254,7 @@ def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
         assert any(k.startswith("s") for k in before["handles"]) and any(k.startswith("p") for k in before["handles"])
         _shot(browser, "studio_conical.png", tmp_path)
         undo_before = len(studio.model.history.undo)
-        _drag_handle(browser, studio, "s2", -60.0)
+        _drag_handle(browser, studio, "s2", 60.0)
         _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
         after = studio.snapshot()
         assert after["params"]["spheres"][2][2] > before["params"]["spheres"][2][2]      # moved up

@@ -344,7 +344,6 @@ class Studio:
 
     def _frame_camera(self, client: Any) -> None:
         position, look_at = self.camera_view()
-        client.camera.up_direction = (0.0, 0.0, 1.0)
         client.camera.position = tuple(position)
         client.camera.look_at = tuple(look_at)
 
