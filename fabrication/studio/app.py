@@ -70,7 +70,7 @@ class Studio:
         self.lock = threading.RLock()
         self.metric = "panel area"
         self.job: Any = None
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server: Any = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.server.scene.set_up_direction("+z")
         # no environment map (its images would be fetched from the network): plain lights only
@@ -88,7 +88,7 @@ class Studio:
 
     # -- GUI ------------------------------------------------------------------------------------------
     def _build_gui(self, design_path: str) -> None:
-        gui = self.server.gui
+        gui: Any = self.server.gui
         name = self.model.method or f"mesh {self.model.geometry.get('mesh')}"
         gui.add_markdown(f"**ppfab studio** — {name}")
         self.status = gui.add_markdown("")
@@ -129,7 +129,7 @@ class Studio:
     def _rebuild_param_controls(self) -> None:
         """One control per parameter: a slider for an integer (resolution), a number for a float, a vector
         for a short list, text (JSON) for a nested list; then the handle set's numbers and the placement."""
-        gui = self.server.gui
+        gui: Any = self.server.gui
         for handle, _ in self._controls.values():
             handle.remove()
         self._controls = {}
@@ -155,7 +155,7 @@ class Studio:
                 self._controls[key] = (h, key)
 
     def _control(self, key: str, tp: Any, meta: Any, value: Any) -> Any:
-        gui = self.server.gui
+        gui: Any = self.server.gui
         hint = str(meta.get("doc", "")) or None
         if tp is bool:
             h = gui.add_checkbox(key, bool(value), hint=hint)
@@ -171,7 +171,7 @@ class Studio:
                 gui.add_text(key, str(value), hint=hint)
         elif isinstance(value, list) and len(value) in (2, 3) and all(isinstance(x, (int, float)) for x in value):
             add = gui.add_vector2 if len(value) == 2 else gui.add_vector3
-            h = add(key, tuple(float(x) for x in value), step=0.01, hint=hint)   # type: ignore[operator]
+            h = add(key, tuple(float(x) for x in value), step=0.01, hint=hint)
         else:
             h = gui.add_text(key, json.dumps(value), multiline=False, hint=hint)
 
@@ -274,7 +274,7 @@ class Studio:
 
     def redraw(self, handles: bool = True) -> None:
         """Redraw the mesh, beams, axes (and the handles) from the model."""
-        scene = self.server.scene
+        scene: Any = self.server.scene
         st = self.model.state
         v = st.placed.vertices / 1000.0
         corners = face_corners(v, st.placed.closed)
@@ -320,7 +320,7 @@ class Studio:
 
     def _draw_panels(self, quads: np.ndarray, colours: np.ndarray) -> None:
         """One flat-shaded mesh per distinct colour (the ramp is binned to 16 steps)."""
-        scene = self.server.scene
+        scene: Any = self.server.scene
         for name in [k for k in self._items if k.startswith("/panels/")]:
             self._remove(name)
         binned = (colours.astype(int) // 16) * 16 + 8
@@ -353,7 +353,7 @@ class Studio:
             item.remove()
 
     def _draw_handles(self) -> None:
-        scene = self.server.scene
+        scene: Any = self.server.scene
         for h in self._handles.values():
             h.remove()
         self._handles = {}

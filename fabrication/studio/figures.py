@@ -67,21 +67,19 @@ def face_corners(v: np.ndarray, closed: bool = False) -> np.ndarray:
 def panel_boxes(corners: np.ndarray) -> np.ndarray:
     """``(..., 2)`` long and short side of the least-area rectangle around each planar quad ``(..., 4, 3)``."""
     c = np.asarray(corners, dtype=float)
-    normal = np.cross(c[..., 2, :] - c[..., 0, :], c[..., 3, :] - c[..., 1, :])
+    shape = c.shape[:-2]
+    c = c.reshape(-1, 4, 3)
+    normal = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
     normal /= np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-300)
-    best = np.full(c.shape[:-2] + (2,), np.inf)
-    area = np.full(c.shape[:-2], np.inf)
-    for k in range(4):
-        e = c[..., (k + 1) % 4, :] - c[..., k, :]
-        e /= np.maximum(np.linalg.norm(e, axis=-1, keepdims=True), 1e-300)
-        f = np.cross(normal, e)
-        x = np.einsum("...ki,...i->...k", c, e)
-        y = np.einsum("...ki,...i->...k", c, f)
-        a, b = x.max(-1) - x.min(-1), y.max(-1) - y.min(-1)
-        better = a * b < area
-        area = np.where(better, a * b, area)
-        best = np.where(better[..., None], np.stack([np.maximum(a, b), np.minimum(a, b)], -1), best)
-    return best
+    e = np.roll(c, -1, axis=1) - c                                   # (F, 4 edges, 3)
+    e /= np.maximum(np.linalg.norm(e, axis=-1, keepdims=True), 1e-300)
+    f = np.cross(normal[:, None, :], e)
+    x = np.matmul(e, np.swapaxes(c, 1, 2))                           # (F, edge, corner)
+    y = np.matmul(f, np.swapaxes(c, 1, 2))
+    a, b = x.max(2) - x.min(2), y.max(2) - y.min(2)                  # (F, 4)
+    k = np.argmin(a * b, axis=1)
+    a, b = np.take_along_axis(a, k[:, None], 1)[:, 0], np.take_along_axis(b, k[:, None], 1)[:, 0]
+    return np.stack([np.maximum(a, b), np.minimum(a, b)], -1).reshape(shape + (2,))
 
 
 def panel_types(corners: np.ndarray, tolerance: float = 1.0) -> np.ndarray:
@@ -89,8 +87,9 @@ def panel_types(corners: np.ndarray, tolerance: float = 1.0) -> np.ndarray:
     c = np.asarray(corners, dtype=float).reshape(-1, 4, 3)
     edges = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=-1)
     diags = np.stack([np.linalg.norm(c[:, 2] - c[:, 0], axis=-1), np.linalg.norm(c[:, 3] - c[:, 1], axis=-1)], -1)
-    key = np.round(np.concatenate([np.sort(edges, 1), np.sort(diags, 1)], 1) / tolerance).astype(np.int64)
-    _, inverse = np.unique(key, axis=0, return_inverse=True)
+    key = np.ascontiguousarray(np.round(np.concatenate([np.sort(edges, 1), np.sort(diags, 1)], 1) / tolerance)
+                               .astype(np.int64))
+    _, inverse = np.unique(key.view(np.dtype((np.void, key.itemsize * key.shape[1]))).ravel(), return_inverse=True)
     return inverse.reshape(np.asarray(corners).shape[:-2])
 
 

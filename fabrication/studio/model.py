@@ -228,8 +228,8 @@ class StudioModel:
         """Move handle ``key`` from where the drag began (not recorded: :meth:`end_drag` records the drag)."""
         base = getattr(self, "_drag_base", None)
         if base is None:
-            self.begin_drag()
-            base = self._drag_base
+            base = (copy.deepcopy(self.doc), self.state)
+            self._drag_base = base
         doc, state = base
         current = (self.doc, self.state)
         self.doc, self.state = doc, state
