@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import socket
+import time
 import tomllib
 
 import numpy as np
@@ -210,3 +211,25 @@ def test_build_job_writes_the_edited_design(default, tmp_path):
 
     manifest = json.loads((tmp_path / "out" / "manifest.json").read_text(encoding="utf-8"))
     assert manifest["summary"]["panels"] == 12
+
+
+def test_optimize_job_runs_in_the_background_and_cancels():
+    from fabrication.studio.jobs import OptimizeJob
+    from ppfab.optimize.params import OptimizeParams
+    from ppfab.schema import parse_params
+
+    path = REPO / "examples" / "p_optimised_conical1.toml"
+    m = StudioModel.load(path)
+    assert m.state.families == ()                        # the mesh file before optimising
+    params = parse_params(OptimizeParams, dict(m.doc["optimize"]), "optimize")
+    told: list[str] = []
+    job = OptimizeJob(m.state.raw, params, lambda text, fraction: told.append(text))
+    job.start()
+    t0 = time.monotonic()
+    while not told and time.monotonic() - t0 < 120:
+        time.sleep(0.05)
+    assert told and told[0].startswith("iteration")
+    job.cancel()
+    job.join(120)
+    assert job.status == "cancelled" and job.result is None
+    assert told[-1] == "optimisation cancelled"

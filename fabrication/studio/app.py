@@ -70,6 +70,7 @@ class Studio:
         self.lock = threading.RLock()
         self.metric = "panel area"
         self.job: Any = None
+        self.opt_job: Any = None
         self.server: Any = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
         self.server.scene.set_up_direction("+z")
@@ -106,6 +107,13 @@ class Studio:
             undo.on_click(lambda _: self._guard(lambda: self._history(self.model.undo)))
             redo.on_click(lambda _: self._guard(lambda: self._history(self.model.redo)))
         self.params_folder = gui.add_folder("Parameters")
+        if self.model.method is None and "optimize" in self.model.doc:
+            with gui.add_folder("Optimise ([optimize])"):
+                run = gui.add_button("Optimise")
+                stop = gui.add_button("Cancel")
+                run.on_click(lambda _: self._guard(self._optimize))
+                stop.on_click(lambda _: self._guard(self._cancel_optimize))
+                self.opt_msg = gui.add_markdown("")
         with gui.add_folder("Save and build"):
             default = str(Path(design_path).with_name(Path(design_path).stem + "_edited.toml")) if design_path else ""
             self.save_path = gui.add_text("save as", default)
@@ -258,6 +266,33 @@ class Studio:
 
         self.job = BuildJob(self.model.design(), out, tell)
         self.job.start()
+
+    def _optimize(self) -> None:
+        from ppfab.optimize.params import OptimizeParams
+        from ppfab.schema import parse_params
+        from ppfab.topology import families_of
+
+        from .jobs import OptimizeJob
+
+        if self.opt_job is not None and self.opt_job.status == "running":
+            raise ValueError("the optimisation is running; cancel it first")
+        params = parse_params(OptimizeParams, dict(self.model.doc.get("optimize", {})), "optimize")
+        families = tuple(families_of(params.families))
+
+        def tell(text: str, fraction: float | None) -> None:
+            self.opt_msg.content = text
+
+        def done(job: Any) -> None:
+            if job.status == "done":
+                with self.lock:
+                    self.model.adopt(job.result.mesh, families)
+                    self.redraw(handles=False)
+
+        self.opt_job = OptimizeJob(self.model.state.raw, params, tell, done).start()
+
+    def _cancel_optimize(self) -> None:
+        if self.opt_job is not None:
+            self.opt_job.cancel()
 
     # -- scene ----------------------------------------------------------------------------------------
     def _show_status(self) -> None:

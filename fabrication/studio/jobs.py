@@ -83,3 +83,58 @@ class BuildJob:
 
     def join(self, timeout: float | None = None) -> None:
         self.thread.join(timeout)
+
+
+class Cancelled(Exception):
+    """Raised inside the optimiser's callback to stop it."""
+
+
+class OptimizeJob:
+    """Optimise a mesh design's ``[optimize]`` in a thread (``ppfab.optimize.optimize``), telling every
+    iteration; :meth:`cancel` stops it at the next iteration.  ``result`` is the
+    :class:`~ppfab.optimize.OptimizeResult` when ``status`` is ``done``."""
+
+    def __init__(self, mesh: Any, params: Any, tell: Callable[[str, float | None], None] | None = None,
+                 on_done: Callable[["OptimizeJob"], None] | None = None):
+        self.mesh, self.params = mesh, params
+        self.tell = tell or (lambda text, fraction: None)
+        self.on_done = on_done
+        self.status = "running"
+        self.message = ""
+        self.result: Any = None
+        self._cancel = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="ppfab-studio-optimize", daemon=True)
+
+    def start(self) -> "OptimizeJob":
+        self.thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def _callback(self, record: Any) -> None:
+        if self._cancel.is_set():
+            raise Cancelled()
+        self.tell(f"iteration {record.iteration}, stage {record.stage}: max δ_f {record.delta_f_max:.2e}, "
+                  f"max δ_P {record.delta_p_max:.2e}", None)
+
+    def _run(self) -> None:
+        from ppfab.errors import PpfabError
+        from ppfab.optimize import optimize
+
+        try:
+            self.result = optimize(self.mesh, self.params, callback=self._callback)
+            self.status = "done"
+            self.message = f"optimised: {self.result.message}"
+        except Cancelled:
+            self.status, self.message = "cancelled", "optimisation cancelled"
+        except PpfabError as exc:
+            self.status, self.message = "failed", f"ppfab: error: {exc}"
+        except Exception as exc:
+            self.status, self.message = "failed", f"ppfab: error: the optimisation stopped: {type(exc).__name__}: {exc}"
+        self.tell(self.message, 1.0 if self.status == "done" else None)
+        if self.on_done is not None:
+            self.on_done(self)
+
+    def join(self, timeout: float | None = None) -> None:
+        self.thread.join(timeout)

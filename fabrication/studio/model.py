@@ -68,18 +68,28 @@ def solve(doc: dict, base_dir: Path | None = None) -> Solve:
 
     Raises :class:`~ppfab.errors.PpfabError` when the construction refuses the parameters.
     """
-    from ppfab.folds import folded_faces
     from ppfab.geometry import GeometrySpec, build_geometry
-    from ppfab.metrics import polyline_planarity
     from ppfab.schema import parse_params
-    from ppfab.transforms.similarity import transform
 
     t0 = time.perf_counter()
     spec = parse_params(GeometrySpec, dict(_section(doc, "geometry")), "geometry")
     raw_spec = GeometrySpec(method=spec.method, mesh=spec.mesh, params=spec.params,
                             planar_families=spec.planar_families, max_vertices=spec.max_vertices)
     geometry = build_geometry(raw_spec, base_dir=base_dir, allow_large=False)
-    raw = geometry.mesh
+    return measure(doc, geometry.mesh, geometry.planar_families, t0)
+
+
+def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = None) -> Solve:
+    """The :class:`Solve` of a mesh in construction units (placed by ``doc``'s ``[geometry]``): δ_P of
+    ``families``, the figures and the fold marks."""
+    from ppfab.folds import folded_faces
+    from ppfab.geometry import GeometrySpec
+    from ppfab.metrics import polyline_planarity
+    from ppfab.schema import parse_params
+    from ppfab.transforms.similarity import transform
+
+    t0 = time.perf_counter() if t0 is None else t0
+    spec = parse_params(GeometrySpec, dict(_section(doc, "geometry")), "geometry")
     if not isinstance(raw, QuadGrid):
         grid = raw.grid
         if grid is None:
@@ -87,18 +97,18 @@ def solve(doc: dict, base_dir: Path | None = None) -> Solve:
         raw = grid
     placed = transform(raw, spec.scale, spec.rotate_z_deg, spec.translate, spec.flip_orientation)
     delta = {}
-    for fam in geometry.planar_families:
+    for fam in families:
         lines = placed.rows() if fam == "rows" else placed.cols()
         delta[fam] = float(polyline_planarity(lines).max()) if lines.shape[1] >= 3 else 0.0
     nest, beams = _section(doc, "nesting"), _section(doc, "beams")
-    figs = figures(placed.vertices, placed.axes, geometry.planar_families, placed.closed,
+    figs = figures(placed.vertices, placed.axes, families, placed.closed,
                    tuple(nest.get("sheet", [6000.0, 3210.0])), float(nest.get("margin", 10.0)),
                    float(beams.get("depth", 200.0)), float(beams.get("max_length", 0.0) or 0.0))
     try:
         folded = np.asarray(folded_faces(placed), dtype=bool)
     except Exception:                            # a grid too small for the fold test: nothing to mark
         folded = np.zeros(face_corners(placed.vertices, placed.closed).shape[:2], dtype=bool)
-    return Solve(raw, placed, geometry.planar_families, delta, figs, folded, time.perf_counter() - t0)
+    return Solve(raw, placed, families, delta, figs, folded, time.perf_counter() - t0)
 
 
 def face_metric(placed: QuadGrid, metric: str) -> np.ndarray:
@@ -246,6 +256,12 @@ class StudioModel:
             self.history.undo.append(base[0])
             del self.history.undo[:-self.history.limit]
             self.history.redo.clear()
+
+    def adopt(self, mesh: Any, families: tuple[str, ...]) -> None:
+        """Show ``mesh`` (construction units, e.g. the optimiser's result for ``[optimize]``) as the current
+        state; the document is unchanged (a build optimises again from it)."""
+        self.state = measure(self.doc, mesh, families)
+        self.error = ""
 
     def undo(self) -> bool:
         if not self.history.undo:
