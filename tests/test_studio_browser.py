@@ -263,3 +263,30 @@ def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
         assert _delta_p(after["vertices"], ("rows",)) <= PP_TOL
     finally:
         studio.stop()
+
+
+@pytest.mark.slow
+def test_studio_build_button_writes_the_folder_and_shows_the_report(browser, tmp_path):
+    model = StudioModel.load(None)
+    for key, value in (("faces_u", 4), ("faces_v", 3), ("u_range", [-3.0, 3.0]), ("v_range", [-2.0, 2.0])):
+        assert model.set_param(key, value), model.error
+    studio = _open(browser, model)
+    try:
+        out = tmp_path / "build"
+        field = _control(browser, "build folder")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", field)
+        field.click()
+        field.send_keys(str(out), Keys.ENTER)
+        _wait(lambda: str(out) in str(studio.out_path.value), what="the typed folder")
+        button = browser.find_element(By.XPATH, "//span[text()='Build']/ancestor::button")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", button)
+        button.click()
+        _wait(lambda: studio.job is not None, what="the build to start")
+        studio.job.join(900)
+        assert studio.job.status == "done", studio.job.message
+        assert (out / "report.html").is_file() and (out / "manifest.json").is_file()
+        report = str((out / "report.html").resolve())
+        _wait(lambda: browser.find_elements(By.XPATH, f"//code[text()='{report}']"), 30, "the report's path")
+        _wait(lambda: browser.find_elements(By.XPATH, "//span[text()='Open report']"), 30, "the Open report button")
+    finally:
+        studio.stop()

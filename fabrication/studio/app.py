@@ -123,6 +123,8 @@ class Studio:
             build = gui.add_button("Build")
             build.on_click(lambda _: self._guard(self._build))
             self.progress = gui.add_progress_bar(0.0, visible=False)
+            self.open_report = gui.add_button("Open report", visible=False)
+            self.open_report.on_click(lambda _: self._guard(self._show_report))
             self.build_msg = gui.add_markdown("")
 
     def _field_types(self) -> dict[str, Any]:
@@ -261,11 +263,19 @@ class Studio:
             if fraction is not None:
                 self.progress.value = 100.0 * fraction
             report = self.job.report if self.job is not None else None
-            link = f"\n\n[report.html]({report.as_uri()}) — `{report}`" if report else ""
-            self.build_msg.content = f"{text}{link}"
+            self.build_msg.content = f"{text}\n\nreport: `{report}`" if report else text
+            self.open_report.visible = report is not None
 
         self.job = BuildJob(self.model.design(), out, tell)
         self.job.start()
+
+    def _show_report(self) -> None:
+        """Open the build's report in the browser of the machine the studio runs on (a page served over http
+        may not link to a local file)."""
+        import webbrowser
+
+        if self.job is not None and self.job.report is not None:
+            webbrowser.open(self.job.report.as_uri())
 
     def _optimize(self) -> None:
         from ppfab.optimize.params import OptimizeParams
