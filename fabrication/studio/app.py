@@ -31,11 +31,14 @@ _RAMP = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [25
 FOLD_RGB = (230, 30, 30)
 
 
-def ramp(values: np.ndarray) -> np.ndarray:
-    """``(k, 3)`` uint8 colours of ``values (k,)`` on the ramp, scaled from their min to their max."""
+def ramp(values: np.ndarray, bounds: tuple[float, float] | None = None) -> np.ndarray:
+    """``(k, 3)`` uint8 colours of ``values (k,)`` on the ramp, scaled from ``bounds`` (default: their min and
+    max)."""
     x = np.asarray(values, dtype=float)
     finite = np.isfinite(x)
     lo, hi = (float(x[finite].min()), float(x[finite].max())) if finite.any() else (0.0, 1.0)
+    if bounds is not None:
+        lo, hi = bounds
     t = np.clip((np.nan_to_num(x, nan=lo) - lo) / (hi - lo if hi > lo else 1.0), 0, 1) * (len(_RAMP) - 1)
     k = np.minimum(t.astype(int), len(_RAMP) - 2)
     f = (t - k)[:, None]
@@ -329,6 +332,8 @@ class Studio:
             rng = np.random.default_rng(7)
             palette = rng.integers(60, 230, size=(int(values.max()) + 1, 3)).astype(np.uint8)
             colours = palette[values.astype(int)]
+        elif self.metric == "planarity":             # δ_f on a fixed scale: 0 (blue) … 1e-3 (yellow) and above
+            colours = ramp(np.minimum(values, 1e-3), (0.0, 1e-3))
         else:
             colours = ramp(values)
         colours[st.folded.reshape(-1)] = FOLD_RGB

@@ -189,7 +189,11 @@ class StudioModel:
     # -- edits ----------------------------------------------------------------------------------------
     def _commit(self, doc: dict, record: bool = True) -> bool:
         """Re-solve ``doc``; keep it (and push the old one on the undo stack) when it solves, else keep the
-        current state and set :attr:`error`.  Returns whether the edit was taken."""
+        current state and set :attr:`error`.  Returns whether the edit was taken; an edit that changes
+        nothing is taken without an undo step."""
+        if doc == self.doc:
+            self.error = ""
+            return True
         try:
             state = solve(doc, self.base_dir)
         except PpfabError as exc:
