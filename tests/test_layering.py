@@ -30,7 +30,7 @@ FAB_LAYERS = [
      "htmlreport", "report", "marking", "drawings", "nodetypes"},
     {"writers", "verify"},
     {"pipeline"},
-    {"cli"},
+    {"cli", "studio"},
 ]
 
 

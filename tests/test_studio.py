@@ -1,0 +1,235 @@
+"""The studio's model without a browser: handles keep the mesh PP (P for the conical vault), the edited
+parameters are exact, saving round-trips the geometry, bad values leave the state alone with a message,
+undo/redo, and the live figures against independent formulas."""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+import tomllib
+
+import numpy as np
+import pytest
+
+from conftest import REPO
+from fabrication.cli import main
+from fabrication.studio.figures import face_corners, panel_boxes
+from fabrication.studio.model import StudioModel, face_metric, solve
+
+pytest.importorskip("tomli_w", reason="the studio extra is not installed")
+
+CONICAL = REPO / "examples" / "conical_spheres.toml"
+
+
+def _delta_p(vertices: np.ndarray, families) -> float:
+    """δ_P (§3.3) by SVD: largest distance from the least-squares plane over the bounding-box diagonal."""
+    worst = 0.0
+    for fam in families:
+        for line in (vertices if fam == "rows" else np.swapaxes(vertices, 0, 1)):
+            c = line - line.mean(0)
+            worst = max(worst, float(np.abs(c @ np.linalg.svd(c)[2][-1]).max() / np.linalg.norm(np.ptp(line, 0))))
+    return worst
+
+
+def _poly(coeffs, t):
+    return np.array([np.polyval(np.asarray(c, dtype=float)[::-1], t) for c in coeffs])
+
+
+@pytest.fixture(scope="module")
+def default() -> StudioModel:
+    return StudioModel.load(None)
+
+
+def test_tangent_plane_handle_moves_one_node_and_keeps_pp(default):
+    m = StudioModel(default.doc, default.base_dir)
+    p0 = m.params
+    h = {x.key: x for x in m.handles()}["g1"]
+    target = h.position + np.array([0.0, 0.0, 0.4])                # display metres
+    assert m.move_handle("g1", target)
+    p1 = m.params
+    assert p1["h"] == p0["h"] and p1["c"] == p0["c"]
+    # the new face plane f(u_1, v̄) = g(u_1) + h(v̄) − c passes through the moved handle (construction units)
+    u = np.linspace(p0["u_range"][0], p0["u_range"][1], 4)
+    vbar = 0.5 * sum(p0["v_range"])
+    plane = _poly(p1["g"], u[1]) + _poly(p1["h"], vbar) - np.asarray(p1["c"])
+    x = target * 1000.0 / m.geometry["scale"]
+    assert abs(plane[:3] @ x + plane[3]) / np.linalg.norm(plane[:3]) < 1e-9
+    for k in (0, 2, 3):                                            # the other nodes keep their values
+        assert np.allclose(_poly(p1["g"], u[k]), _poly(p0["g"], u[k]), atol=1e-12)
+    moved = np.abs(m.state.placed.vertices - default.state.placed.vertices).max()
+    assert moved > 50.0                                            # mm
+    assert _delta_p(m.state.placed.vertices, ("rows", "cols")) < 1e-9
+
+
+def test_turning_a_tangent_plane_handle_keeps_pp(default):
+    m = StudioModel(default.doc, default.base_dir)
+    h = {x.key: x for x in m.handles()}["h2"]
+    a = math.radians(3.0)
+    rot = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    assert m.move_handle("h2", h.position, rot)
+    assert m.params["g"] == default.params["g"]
+    assert np.abs(m.state.placed.vertices - default.state.placed.vertices).max() > 10.0
+    assert _delta_p(m.state.placed.vertices, ("rows", "cols")) < 1e-9
+
+
+def test_sphere_and_profile_handles_of_the_conical_vault():
+    m = StudioModel.load(CONICAL)
+    before = m.state.placed.vertices.copy()
+    hs = {x.key: x for x in m.handles()}
+    assert {"s0", "s4", "p0"} <= set(hs)
+    assert m.move_handle("s2", hs["s2"].position + np.array([0.0, 0.0, 0.8]))
+    assert m.params["spheres"][2][:3] == pytest.approx([16.0, -0.6, 0.8])
+    assert m.state.families == ("rows",)
+    assert _delta_p(m.state.placed.vertices, ("rows",)) < 1e-9
+    assert np.abs(m.state.placed.vertices - before).max() > 100.0
+    p = {x.key: x for x in m.handles()}["p4"]
+    assert m.move_handle("p4", p.position + np.array([0.0, 0.0, -0.3]))
+    assert _delta_p(m.state.placed.vertices, ("rows",)) < 1e-9
+
+
+def test_drag_is_relative_to_its_start_and_one_undo_step(default):
+    m = StudioModel(default.doc, default.base_dir)
+    h = {x.key: x for x in m.handles()}["g2"]
+    m.begin_drag()
+    for dz in (0.1, 0.2, 0.3):
+        assert m.drag("g2", h.position + np.array([0.0, 0.0, dz]))
+    m.end_drag()
+    direct = StudioModel(default.doc, default.base_dir)
+    direct.move_handle("g2", h.position + np.array([0.0, 0.0, 0.3]))
+    assert np.abs(m.state.placed.vertices - direct.state.placed.vertices).max() < 1e-9
+    assert len(m.history.undo) == 1
+    assert m.undo() and np.array_equal(m.state.placed.vertices, default.state.placed.vertices)
+    assert m.redo() and np.abs(m.state.placed.vertices - direct.state.placed.vertices).max() == 0.0
+
+
+def test_bad_values_leave_the_state_and_say_why(default):
+    m = StudioModel(default.doc, default.base_dir)
+    before = m.state
+    assert not m.set_param("faces_u", "many")
+    assert "faces_u" in m.error and m.state is before
+    assert not m.set_param("u_range", [3.0, -3.0])
+    assert "u_range" in m.error and m.state is before
+    assert not m.set_param("g", [[0.0]])
+    assert "g" in m.error and m.state is before
+    assert m.set_param("faces_u", 10) and m.error == ""
+    c = StudioModel.load(CONICAL)
+    assert not c.set_param("spheres", [[0, 0, 0, 7], [1, 0, 0, 20]])
+    assert "spacelike" in c.error
+
+
+def test_save_round_trip_and_only_where_asked(default, tmp_path):
+    m = StudioModel(default.doc, default.base_dir)
+    h = {x.key: x for x in m.handles()}["h0"]
+    m.move_handle("h0", h.position + np.array([0.3, -0.2, 0.5]))
+    m.set_param("faces_v", 19)
+    out = m.save(tmp_path / "roof.toml")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["roof.toml"]
+    again = solve(tomllib.loads(out.read_text(encoding="utf-8")), tmp_path)
+    assert np.abs(again.placed.vertices - m.state.placed.vertices).max() <= 1e-9
+    from fabrication import load_design
+    from ppfab.geometry import build_geometry
+
+    d = load_design(out)                                           # every section still valid
+    g = build_geometry(d.geometry, base_dir=d.base_dir)
+    assert np.abs(g.mesh.vertices - m.state.placed.vertices).max() <= 1e-9
+    from ppfab.errors import DesignError
+
+    for bad in (tmp_path / "roof.txt", tmp_path / "missing" / "a.toml", tmp_path):
+        with pytest.raises(DesignError):
+            m.save(bad)
+
+
+def test_figures_against_independent_formulas(default):
+    st = default.state
+    v = st.placed.vertices
+    m, n = v.shape[0] - 1, v.shape[1] - 1
+    f = st.figures
+    assert f.panels == m * n
+    # a planar quad is two triangles
+    c = face_corners(v)
+    tri = 0.5 * (np.linalg.norm(np.cross(c[..., 1, :] - c[..., 0, :], c[..., 2, :] - c[..., 0, :]), axis=-1) +
+                 np.linalg.norm(np.cross(c[..., 2, :] - c[..., 0, :], c[..., 3, :] - c[..., 0, :]), axis=-1))
+    assert f.glass_area_m2 == pytest.approx(tri.sum() / 1e6, rel=1e-9)
+    assert f.glass_sheets_min == math.ceil(tri.sum() / (5980.0 * 3190.0))
+    assert f.beams == (m + 1) + (n + 1)
+    lengths = np.linalg.norm(np.diff(v, axis=1), axis=-1).sum() + np.linalg.norm(np.diff(v, axis=0), axis=-1).sum()
+    assert f.beam_length_m == pytest.approx(lengths / 1000.0, rel=1e-12)
+    assert f.torsion_mm < 1e-6                                     # PP: the axes lie in both support planes
+    edges = np.linalg.norm(np.roll(c, -1, axis=-2) - c, axis=-1)
+    assert f.largest_panel_mm[0] >= edges.max() - 1e-9
+    # the box around a rectangle is the rectangle
+    rect = np.array([[[0, 0, 0], [3, 0, 0], [3, 2, 0], [0, 2, 0]]], float)
+    assert panel_boxes(rect)[0] == pytest.approx([3.0, 2.0])
+    assert face_metric(st.placed, "corner angle").min() == pytest.approx(f.min_corner_deg)
+
+
+def test_studio_server_survives_bad_input_and_binds_loopback(default):
+    pytest.importorskip("viser")
+    from fabrication.studio.app import Studio, _parse_list
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
+    try:
+        assert studio.server.get_host() == "127.0.0.1"
+        studio._guard(lambda: studio._set("g", _parse_list("[[0.0, 1", "g")))
+        assert studio.model.error.startswith("g: not a list")
+        studio._guard(lambda: studio.model.save("/nonexistent-folder/x.toml"))
+        assert "no such folder" in studio.model.error
+        studio._guard(lambda: studio._set("faces_u", 12))
+        assert studio.model.error == "" and studio.model.state.placed.vertices.shape[0] == 13
+        with socket.create_connection(("127.0.0.1", studio.server.get_port()), timeout=5):
+            pass
+    finally:
+        studio.stop()
+
+
+def test_cli_studio_bad_input(capsys):
+    assert main(["studio", "--port", "0", "--no-browser"]) == 2
+    assert capsys.readouterr().err.strip().startswith("ppfab: error: --port")
+    assert main(["studio", "missing-design.toml", "--no-browser"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ppfab: error:")
+
+
+@pytest.mark.slow
+def test_build_job_writes_the_edited_design(default, tmp_path):
+    from fabrication.studio.jobs import BuildJob
+
+    m = StudioModel(default.doc, default.base_dir)
+    for key, value in (("faces_u", 4), ("faces_v", 3), ("u_range", [-3.0, 3.0]), ("v_range", [-2.0, 2.0])):
+        assert m.set_param(key, value), m.error
+    seen: list[str] = []
+    job = BuildJob(m.design(), tmp_path / "out", lambda text, fraction: seen.append(text)).start()
+    job.join(600)
+    assert job.status == "done", job.message
+    assert job.report is not None and job.report.is_file()
+    assert any(s.startswith("support") for s in seen)
+    import json
+
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["summary"]["panels"] == 12
+
+
+def test_optimize_job_runs_in_the_background_and_cancels():
+    from fabrication.studio.jobs import OptimizeJob
+    from ppfab.optimize.params import OptimizeParams
+    from ppfab.schema import parse_params
+
+    path = REPO / "examples" / "p_optimised_conical1.toml"
+    m = StudioModel.load(path)
+    assert m.state.families == ()                        # the mesh file before optimising
+    params = parse_params(OptimizeParams, dict(m.doc["optimize"]), "optimize")
+    told: list[str] = []
+    job = OptimizeJob(m.state.raw, params, lambda text, fraction: told.append(text))
+    job.start()
+    t0 = time.monotonic()
+    while not told and time.monotonic() - t0 < 120:
+        time.sleep(0.05)
+    assert told and told[0].startswith("iteration")
+    job.cancel()
+    job.join(120)
+    assert job.status == "cancelled" and job.result is None
+    assert told[-1] == "optimisation cancelled"

@@ -1,0 +1,292 @@
+"""``ppfab studio`` in a real headless Chromium (Debian's ``chromium`` and ``chromium-driver``; CI installs them).
+
+The studio runs in this process on a free loopback port; the browser loads its page and a person's input is
+sent as real events: arrow keys on the ``faces_u`` slider, a mouse drag on a handle's gizmo, typing a file
+name and clicking Save.  The state is read back through :meth:`fabrication.studio.app.Studio.snapshot`.
+
+Locating the gizmo: the test puts the camera where it wants (position, look-at, up, vertical field of view,
+all reported back by the client), projects the handle's centre and a point 60 % up its z arrow (the arrow's
+length is the gizmo's scale in world units) to canvas pixels with the pinhole model, presses the mouse there
+and drags upwards along the arrow's screen direction.
+
+Screenshots of the default design and of a conical design go to ``docs/images/`` when ``PPFAB_SCREENSHOTS=1``
+(the README shows them), else into the test's temporary folder.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import REPO
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+DRIVER = shutil.which("chromedriver")
+pytestmark = pytest.mark.skipif(not (CHROMIUM and DRIVER),
+                                reason="needs Debian's chromium and chromium-driver (apt-get install chromium "
+                                       "chromium-driver; .ci/run installs them)")
+viser = pytest.importorskip("viser", reason="the studio extra is not installed (pip install '.[studio]')")
+selenium = pytest.importorskip("selenium")
+
+from selenium import webdriver  # noqa: E402
+from selenium.webdriver.chrome.options import Options  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.common.keys import Keys  # noqa: E402
+
+from fabrication.studio.app import Studio  # noqa: E402
+from fabrication.studio.model import StudioModel, solve  # noqa: E402
+
+PP_TOL = 1e-9
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _wait(cond, timeout: float = 30.0, what: str = "condition"):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        value = cond()
+        if value:
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+@pytest.fixture
+def browser():
+    o = Options()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1400,900",
+              "--use-gl=swiftshader", "--enable-unsafe-swiftshader", "--disable-dev-shm-usage"):
+        o.add_argument(a)
+    o.binary_location = CHROMIUM
+    d = webdriver.Chrome(service=Service(DRIVER), options=o)
+    yield d
+    d.quit()
+
+
+def _open(browser, model: StudioModel, design_path: str = "") -> Studio:
+    studio = Studio(model, port=_free_port(), design_path=design_path)
+    browser.get(f"http://127.0.0.1:{studio.server.get_port()}")
+    _wait(lambda: studio.server.get_clients(), what="the page to connect")
+    _wait(lambda: browser.find_elements(By.TAG_NAME, "canvas"), what="the 3D canvas")
+    for close in browser.find_elements(By.CSS_SELECTOR, ".mantine-Notification-closeButton"):
+        close.click()                                          # the software-rendering notice
+    return studio
+
+
+def _shot(browser, name: str, tmp_path: Path) -> Path:
+    folder = REPO / "docs" / "images" if os.environ.get("PPFAB_SCREENSHOTS") == "1" else tmp_path
+    folder.mkdir(parents=True, exist_ok=True)
+    time.sleep(2.0)                                            # let the software renderer finish a frame
+    path = folder / name
+    browser.save_screenshot(str(path))
+    assert path.stat().st_size > 10_000
+    return path
+
+
+def _delta_p(vertices: np.ndarray, families) -> float:
+    """δ_P (§3.3) recomputed here from the vertices: largest distance from the least-squares plane (SVD) over
+    the bounding-box diagonal, for every polyline of the planar families."""
+    worst = 0.0
+    for fam in families:
+        lines = vertices if fam == "rows" else np.swapaxes(vertices, 0, 1)
+        for line in lines:
+            c = line - line.mean(0)
+            normal = np.linalg.svd(c)[2][-1]
+            diag = np.linalg.norm(line.max(0) - line.min(0))
+            worst = max(worst, float(np.abs(c @ normal).max() / diag))
+    return worst
+
+
+def _project(camera, point: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Canvas pixel ``(x, y)`` of a world point under the client's pinhole camera: ``wxyz`` turns camera
+    coordinates (x right, y down, z forward) into world ones, ``fov`` is the vertical field of view."""
+    R = _rotation(camera.wxyz)
+    d = R.T @ (np.asarray(point, dtype=float) - np.asarray(camera.position, dtype=float))
+    focal = 0.5 * height / np.tan(0.5 * float(camera.fov))
+    return np.array([0.5 * width + focal * d[0] / d[2], 0.5 * height + focal * d[1] / d[2]])
+
+
+def _rotation(wxyz) -> np.ndarray:
+    w, x, y, z = np.asarray(wxyz, dtype=float)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _control(browser, label: str):
+    """The input element of the GUI control labelled ``label`` (a ``<label for=…>``; viser breaks long labels
+    with ``<wbr>``, so the label's string value is compared)."""
+    xpath = f"//label[normalize-space(string(.))='{label}']"
+    found = browser.find_elements(By.ID, browser.find_element(By.XPATH, xpath).get_attribute("for"))
+    if found:
+        return found[0]
+    return browser.find_element(By.XPATH, f"{xpath}/ancestor::div[contains(@class, 'mantine-Flex-root')][1]//input")
+
+
+def _slider_keys(browser, label: str, key: str, times: int) -> int:
+    """Focus the slider's thumb with a click, press ``key`` ``times`` times; returns the value the slider
+    should show then (the value after the click, which may move the thumb by a step, plus ``times``)."""
+    thumb = _control(browser, label).find_element(By.CSS_SELECTOR, "[role='slider']")
+    browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", thumb)
+    ActionChains(browser).click(thumb).perform()
+    time.sleep(0.5)
+    start = int(thumb.get_attribute("aria-valuenow"))
+    for _ in range(times):
+        thumb.send_keys(key)
+        time.sleep(0.2)
+    return start + times
+
+
+def _drag_handle(browser, studio: Studio, key: str, pixels: float) -> None:
+    """Drag handle ``key`` along its z arrow by ``pixels`` on the screen (positive: towards +z) with real
+    mouse events."""
+    client = next(iter(studio.server.get_clients().values()))
+    centre = np.asarray(studio.snapshot()["handles"][key])
+    eye = centre + np.array([-6.0, -22.0, 4.0])
+    client.camera.position = tuple(eye)                       # position first: the client keeps it and turns
+    client.camera.look_at = tuple(centre)                     # towards the look-at point set next
+    view = (centre - eye) / np.linalg.norm(centre - eye)
+
+    def settled() -> bool:                                     # the client reported the pose back
+        forward = _rotation(client.camera.wxyz)[:, 2]
+        return bool(np.allclose(client.camera.position, eye, atol=1e-6) and forward @ view > 1 - 1e-6)
+    _wait(settled, what=f"the camera (set {eye} -> {centre}; reported {client.camera.position}, "
+                        f"{client.camera.look_at})")
+    time.sleep(1.0)
+    canvas = max(browser.find_elements(By.TAG_NAME, "canvas"), key=lambda c: c.size["width"] * c.size["height"])
+    w, h = canvas.size["width"], canvas.size["height"]
+    a = _project(client.camera, centre, w, h)
+    b = _project(client.camera, centre + 0.6 * studio.handle_scale * np.array([0.0, 0.0, 1.0]), w, h)
+    direction = (b - a) / np.linalg.norm(b - a)
+    chain = ActionChains(browser, duration=50)
+    chain.move_to_element_with_offset(canvas, int(b[0] - w / 2), int(b[1] - h / 2)).click_and_hold()
+    for _ in range(6):
+        step = direction * pixels / 6
+        chain.move_by_offset(int(round(step[0])), int(round(step[1])))
+    chain.release().perform()
+
+
+def test_studio_default_design_slider_drag_save(browser, tmp_path):
+    model = StudioModel.load(None)
+    studio = _open(browser, model)
+    try:
+        before = studio.snapshot()
+        assert before["vertices"].shape == (23, 16, 3)
+        _shot(browser, "studio_default.png", tmp_path)
+
+        # a handle: the tangent plane of g at its second node, dragged up its z arrow
+        undo_before = len(studio.model.history.undo)
+        _drag_handle(browser, studio, "g1", 80.0)
+        _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
+        dragged = studio.snapshot()
+        assert dragged["handles"]["g1"][2] > before["handles"]["g1"][2]     # the tangent plane went up
+        assert dragged["vertices"].shape == before["vertices"].shape
+        moved = np.abs(dragged["vertices"] - before["vertices"]).max()
+        assert moved > 10.0, f"the mesh moved only {moved} mm"
+        assert dragged["params"]["g"] != before["params"]["g"]
+        assert dragged["params"]["h"] == before["params"]["h"]
+        assert max(dragged["delta_p"].values()) <= PP_TOL
+        assert _delta_p(dragged["vertices"], ("rows", "cols")) <= PP_TOL
+        assert dragged["error"] == ""
+
+        # a slider: faces_u up by 3 with the arrow keys on its thumb
+        want = _slider_keys(browser, "faces_u", Keys.ARROW_RIGHT, 3)
+        assert want >= 24
+        _wait(lambda: studio.snapshot()["params"]["faces_u"] == want, what=f"faces_u to reach {want}")
+        after_slider = studio.snapshot()
+        assert after_slider["vertices"].shape == (want + 1, 16, 3)
+        assert max(after_slider["delta_p"].values()) <= PP_TOL
+        assert _delta_p(after_slider["vertices"], ("rows", "cols")) <= PP_TOL
+
+        assert after_slider["params"]["g"] == dragged["params"]["g"]              # the drag is kept
+        # save through the GUI: type the file name, click Save; loading it gives the same geometry
+        target = tmp_path / "edited.toml"
+        field = _control(browser, "save as")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", field)
+        field.click()
+        field.send_keys(Keys.CONTROL, "a")
+        field.send_keys(str(target), Keys.ENTER)
+        _wait(lambda: studio.server.gui is not None and str(target) in str(studio.save_path.value),
+              what="the typed file name")
+        button = browser.find_element(By.XPATH, "//span[text()='Save']/ancestor::button")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", button)
+        button.click()
+        _wait(target.exists, what="the saved file")
+        reloaded = StudioModel.load(target)
+        assert np.abs(reloaded.state.placed.vertices - after_slider["vertices"]).max() <= 1e-9
+        again = solve(tomllib.loads(target.read_text(encoding="utf-8")), target.parent)
+        assert np.abs(again.placed.vertices - after_slider["vertices"]).max() <= 1e-9
+
+        # undo (clicks) takes back the slider's steps (one edit each), then the drag
+        undo = browser.find_element(By.XPATH, "//span[text()='Undo']/ancestor::button")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", undo)
+        steps = len(studio.model.history.undo) - undo_before - 1
+        assert steps >= 1
+        for k in range(steps):
+            undo.click()
+            _wait(lambda: len(studio.model.history.undo) == undo_before + steps - k, what="an undo")
+        assert studio.snapshot()["params"]["faces_u"] == 22
+        undo.click()
+        _wait(lambda: studio.snapshot()["params"]["g"] == before["params"]["g"], what="undo of the drag")
+        assert np.abs(studio.snapshot()["vertices"] - before["vertices"]).max() == 0.0
+    finally:
+        studio.stop()
+
+
+def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
+    path = REPO / "examples" / "conical_spheres.toml"
+    studio = _open(browser, StudioModel.load(path), str(path))
+    try:
+        before = studio.snapshot()
+        assert any(k.startswith("s") for k in before["handles"]) and any(k.startswith("p") for k in before["handles"])
+        _shot(browser, "studio_conical.png", tmp_path)
+        undo_before = len(studio.model.history.undo)
+        _drag_handle(browser, studio, "s2", 60.0)
+        _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
+        after = studio.snapshot()
+        assert after["params"]["spheres"][2][2] > before["params"]["spheres"][2][2]      # moved up
+        assert np.abs(after["vertices"] - before["vertices"]).max() > 1.0
+        assert after["delta_p"]["rows"] <= PP_TOL                     # P: the cross-sections stay planar
+        assert _delta_p(after["vertices"], ("rows",)) <= PP_TOL
+    finally:
+        studio.stop()
+
+
+@pytest.mark.slow
+def test_studio_build_button_writes_the_folder_and_shows_the_report(browser, tmp_path):
+    model = StudioModel.load(None)
+    for key, value in (("faces_u", 4), ("faces_v", 3), ("u_range", [-3.0, 3.0]), ("v_range", [-2.0, 2.0])):
+        assert model.set_param(key, value), model.error
+    studio = _open(browser, model)
+    try:
+        out = tmp_path / "build"
+        field = _control(browser, "build folder")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", field)
+        field.click()
+        field.send_keys(str(out), Keys.ENTER)
+        _wait(lambda: str(out) in str(studio.out_path.value), what="the typed folder")
+        button = browser.find_element(By.XPATH, "//span[text()='Build']/ancestor::button")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", button)
+        button.click()
+        _wait(lambda: studio.job is not None, what="the build to start")
+        studio.job.join(900)
+        assert studio.job.status == "done", studio.job.message
+        assert (out / "report.html").is_file() and (out / "manifest.json").is_file()
+        report = str((out / "report.html").resolve())
+        _wait(lambda: browser.find_elements(By.XPATH, f"//code[text()='{report}']"), 30, "the report's path")
+        _wait(lambda: browser.find_elements(By.XPATH, "//span[text()='Open report']"), 30, "the Open report button")
+    finally:
+        studio.stop()
