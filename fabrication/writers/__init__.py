@@ -53,12 +53,22 @@ def load_writers() -> list[Writer]:
     return sorted(_TABLE.load().values(), key=lambda w: (w.order, w.name))
 
 
-def write_all(build: "Build", out: Path, progress: "Progress") -> Files:
-    """Run every enabled writer in order into ``out``; returns the ``files`` table."""
+def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | None = None) -> Files:
+    """Run every enabled writer in order into ``out``; returns the ``files`` table.
+
+    With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
+    STEP writer runs in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
+    and the table are the same either way.
+    """
+    from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
+
+    enabled = [w for w in load_writers() if w.enabled(build.design)]
+    if parallel is None:
+        parallel = parallel_enabled()
+    if parallel and any(w.name in SECOND_PROCESS for w in enabled):
+        return write_split(build, out, progress, enabled)
     files: Files = {}
-    for w in load_writers():
-        if not w.enabled(build.design):
-            continue
+    for w in enabled:
         progress.start(w.name)
         try:
             note = w.write(build, out, files)
