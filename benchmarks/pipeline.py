@@ -2,6 +2,8 @@
 
     OMP_NUM_THREADS=1 python benchmarks/pipeline.py [--sizes 22x15,44x30,66x45,88x60] [--budget 0.5]
                                                     [--writers serial|parallel|both] [--design FILE]
+                                                    [--baseline TREE] [--jobs N]
+    OMP_NUM_THREADS=1 python benchmarks/pipeline.py --per-file 22x15
 
 The default design (or ``--design``) is built at each size ``faces_u x faces_v`` (``[geometry.params]``:
 the same surface cut into more, smaller panels) in a fresh subprocess, so that each size has its own peak
@@ -16,7 +18,11 @@ resident memory, and one line per writer (CPU s inside the files stage).  CPU co
 and, for parallel writing, its writer processes (``RUSAGE_CHILDREN``).  Then the growth exponent of each
 stage: the slope ``b`` of the least-squares fit ``log t = a + b log F`` over the sizes (F = faces).
 
-With ``--writers both`` each size is built twice, serial then parallel writing, side by side in one run.
+With ``--writers both`` each size is built twice, serial and parallel writing, side by side in one run; with
+``--baseline TREE`` also with the source tree ``TREE`` (e.g. ``git worktree add TREE <commit>``), and a table
+of CPU seconds before → after.  ``--jobs`` runs that many builds at once (CPU seconds are per build; wall
+times then include the waiting).  ``--per-file SIZE`` prints only the ms per per-type DXF (by part of the
+work, and the document set-up alternatives) and per STEP plate against the kernel writing the same prisms.
 """
 
 from __future__ import annotations
@@ -101,18 +107,126 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None) ->
                                   "plate_sheets": result.summary.plate_sheets}))
 
 
-def run_size(size: str, budget: float, parallel: bool, design: str | None) -> dict:
-    env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    cmd = [sys.executable, __file__, "--child", size, "--budget", str(budget)]
+def _per_file(size: str, budget: float) -> None:
+    """ms per per-type DXF (by part, and the document set-up alternatives) and ms per STEP plate (with and
+    without the writer's own BRepCheck, against the kernel writing the same prisms with nothing else)."""
+    import copy
+    import io
+    import tempfile
+    import tomllib
+
+    import ezdxf
+
+    from fabrication import build, parse_design
+    from fabrication.design import DEFAULT_DESIGN
+    from fabrication.writers._dxf_dimensions import add_pane_dimensions
+    from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc
+    from fabrication.writers.step import beam_assembly, build_solids, export_step
+
+    fu, fv = (int(x) for x in size.split("x"))
+    doc = tomllib.loads(DEFAULT_DESIGN.read_text(encoding="utf-8"))
+    doc["geometry"]["params"].update(faces_u=fu, faces_v=fv)
+    for section in ("nesting", "beam_nesting"):
+        doc[section]["time_budget"] = budget
+    b = build(parse_design(doc, str(DEFAULT_DESIGN), "", DEFAULT_DESIGN.parent), allow_large=True)
+    tmp = Path(tempfile.mkdtemp())
+    parts = list(b.nesting.glass_parts)[:200]
+    t = dict.fromkeys(("document", "part", "dimensions", "save"), 0.0)
+    for k, part in enumerate(parts):
+        c0 = time.process_time()
+        sheet = CuttingSheet(None, None, f"T{k} ({part.part_id})", "R2010")
+        c1 = time.process_time()
+        sheet.add_part(part, None)
+        c2 = time.process_time()
+        add_pane_dimensions(sheet.doc, part.outline)
+        c3 = time.process_time()
+        sheet.write(tmp / f"t{k}.dxf")
+        c4 = time.process_time()
+        for key, dt in zip(t, (c1 - c0, c2 - c1, c3 - c2, c4 - c3)):
+            t[key] += dt
+    n = len(parts)
+    print(f"per-type DXF ({n} files of {size}), ms per file: " + ", ".join(f"{k} {1000 * v / n:.2f}" for k, v in t.items())
+          + f"; total {1000 * sum(t.values()) / n:.2f}")
+    with _fixed_metadata():
+        template = _new_doc()
+        s = io.StringIO()
+        template.write(s)
+    text = s.getvalue()
+    reps = 50
+    for label, make in (("ezdxf.new + layers (used)", _new_doc), ("ezdxf.read of a template", lambda: ezdxf.read(io.StringIO(text))),
+                        ("deepcopy of a template", lambda: copy.deepcopy(template))):
+        c0 = time.process_time()
+        for _ in range(reps):
+            make()
+        print(f"  document set-up, {label}: {1000 * (time.process_time() - c0) / reps:.2f} ms")
+    empty = CuttingSheet(None, None, "", "R2010")
+    c0 = time.process_time()
+    for k in range(reps):
+        empty.write(tmp / "empty.dxf")
+    print(f"  saving an empty document: {1000 * (time.process_time() - c0) / reps:.2f} ms")
+
+    plates = list(b.beams.plates)
+    for check in (True, False):
+        c0 = time.process_time()
+        export_step(beam_assembly(plates, build_solids(plates, check=check), "bench"), tmp / "beams.step")
+        dt = time.process_time() - c0
+        print(f"STEP, {len(plates)} plates ({'with' if check else 'without'} the writer's BRepCheck): "
+              f"{1000 * dt / len(plates):.2f} ms per plate")
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.gp import gp_Pnt, gp_Vec
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    c0 = time.process_time()
+    w = STEPControl_Writer()
+    for p in plates:
+        poly = BRepBuilderAPI_MakePolygon()
+        for x, y, z in p.frame.to3d(p.outline):
+            poly.Add(gp_Pnt(float(x), float(y), float(z)))
+        poly.Close()
+        face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+        n = p.frame.normal * p.thickness
+        w.Transfer(BRepPrimAPI_MakePrism(face, gp_Vec(*map(float, n))).Shape(), STEPControl_AsIs)
+    w.Write(str(tmp / "kernel.step"))
+    print(f"STEP kernel baseline (OCP: polygon, face, prism, STEPControl_Writer; no names, colours or tree): "
+          f"{1000 * (time.process_time() - c0) / len(plates):.2f} ms per plate")
+
+
+def _command(size: str, budget: float, parallel: bool, design: str | None, root: Path) -> list[str]:
+    cmd = [sys.executable, str(root / "benchmarks" / "pipeline.py"), "--child", size, "--budget", str(budget)]
     if parallel:
         cmd.append("--parallel")
     if design:
         cmd += ["--design", design]
-    out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
-    line = next((x for x in out.stdout.splitlines() if x.startswith("RESULT ")), None)
-    if line is None:
-        raise SystemExit(f"size {size} failed:\n{out.stderr[-3000:]}")
-    return json.loads(line[len("RESULT "):])
+    return cmd
+
+
+def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str | None, jobs: int) -> dict:
+    """Run ``(variant, size, parallel, source tree)`` tasks, ``jobs`` at a time (largest first); variant →
+    size → result."""
+    pending = sorted(tasks, key=lambda t: -int(t[1].split("x")[0]) * int(t[1].split("x")[1]))
+    running: list[tuple[tuple, subprocess.Popen]] = []
+    out: dict[str, dict[str, dict]] = {}
+    while pending or running:
+        while pending and len(running) < jobs:
+            task = pending.pop(0)
+            variant, size, parallel, root = task
+            env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(root))
+            running.append((task, subprocess.Popen(_command(size, budget, parallel, design, root), env=env,
+                                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)))
+        time.sleep(1.0)
+        for item in [r for r in running if r[1].poll() is not None]:
+            running.remove(item)
+            (variant, size, _, _), proc = item
+            stdout, stderr = proc.communicate()
+            line = next((x for x in stdout.splitlines() if x.startswith("RESULT ")), None)
+            if line is None:
+                raise SystemExit(f"{variant} {size} failed:\n{stderr[-3000:]}")
+            r = json.loads(line[len("RESULT "):])
+            out.setdefault(variant, {})[size] = r
+            print(f"  {variant} {size}: total {r['stages']['total'][1]:.1f} CPU s, files "
+                  f"{r['stages']['files'][1]:.1f} CPU s", flush=True)
+    return out
 
 
 def exponent(faces: list[int], times: list[float]) -> float:
@@ -153,26 +267,56 @@ def main(argv: list[str]) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", default="22x15,44x30,66x45,88x60")
     ap.add_argument("--budget", type=float, default=0.5, help="both nesting budgets, s (same at every size)")
-    ap.add_argument("--writers", choices=("serial", "parallel", "both"), default="both")
+    ap.add_argument("--writers", choices=("serial", "parallel", "both", "none"), default="both",
+                    help="the variants of this tree (none: only --baseline)")
     ap.add_argument("--design", default=None)
+    ap.add_argument("--baseline", default=None, metavar="TREE",
+                    help="also build every size with the source tree TREE (serial): the 'before' columns")
+    ap.add_argument("--save", default=None, metavar="JSON", help="write every result to JSON")
+    ap.add_argument("--reuse", default=None, metavar="JSON",
+                    help="results of an earlier --save (same machine and load): only the builds missing there run")
+    ap.add_argument("--jobs", type=int, default=1, help="builds run at the same time (CPU times are per build)")
+    ap.add_argument("--per-file", default=None, metavar="SIZE",
+                    help="only the ms per per-type DXF and per STEP plate at SIZE (e.g. 22x15)")
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--parallel", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.per_file:
+        _per_file(args.per_file, args.budget)
+        return
     if args.child:
         _child(args.child, args.budget, args.parallel, args.design)
         return
+    base = Path(args.baseline).resolve() if args.baseline else None
     print(f"ppfab build of {'the bundled default' if not args.design else args.design}; both nesting budgets "
-          f"{args.budget:g} s at every size; OMP_NUM_THREADS=1; {os.cpu_count()} cores; one subprocess per size")
-    modes = {"serial": [False], "parallel": [True], "both": [False, True]}[args.writers]
-    results: dict[bool, list[dict]] = {m: [] for m in modes}
-    for size in args.sizes.split(","):
-        for m in modes:                     # serial and parallel side by side at each size
-            results[m].append(run_size(size, args.budget, m, args.design))
-            r = results[m][-1]
-            print(f"  {size} {'parallel' if m else 'serial'}: total {r['stages']['total'][1]:.1f} CPU s, "
-                  f"files {r['stages']['files'][1]:.1f} CPU s", flush=True)
-    for m in modes:
-        table(results[m], "parallel" if m else "serial")
+          f"{args.budget:g} s at every size; OMP_NUM_THREADS=1; {os.cpu_count()} cores; one subprocess per size "
+          f"and variant, {args.jobs} at a time" + (f"; before = the tree {base}" if base else ""))
+    sizes = args.sizes.split(",")
+    modes = {"serial": [False], "parallel": [True], "both": [False, True], "none": []}[args.writers]
+    tasks = [(("parallel" if m else "serial"), size, m, ROOT) for size in sizes for m in modes]
+    if base is not None:
+        tasks += [("before", size, False, base) for size in sizes]
+    results: dict = json.loads(Path(args.reuse).read_text()) if args.reuse else {}
+    tasks = [t for t in tasks if t[1] not in results.get(t[0], {})]
+    for variant, done in run_all(tasks, args.budget, args.design, args.jobs).items():
+        results.setdefault(variant, {}).update(done)
+    if args.save:
+        Path(args.save).write_text(json.dumps(results, indent=1))
+    for variant in (["before"] if base else []) + [("parallel" if m else "serial") for m in modes]:
+        if all(s in results.get(variant, {}) for s in sizes):
+            table([results[variant][s] for s in sizes], variant)
+    if base is not None and all(s in results.get(v, {}) for s in sizes
+                                for v in ("before", "parallel" if True in modes else "serial")):
+        after = "parallel" if True in modes else "serial"
+        print(f"\n== CPU seconds, before → {after} (ratio after/before) ==")
+        stages = list(results[after][sizes[-1]]["stages"])
+        print(f"{'stage':<10}" + "".join(f"{s:>26}" for s in sizes))
+        for st in stages:
+            cells = ""
+            for s in sizes:
+                b, a = results["before"][s]["stages"].get(st, [0, 0])[1], results[after][s]["stages"].get(st, [0, 0])[1]
+                cells += f"{b:>10.1f} → {a:>7.1f} ({a / b if b else float('nan'):>4.2f})"
+            print(f"{st:<10}{cells}")
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@
 A writer is a function ``write(build, out, files) -> str`` that writes its files into the (temporary) output
 folder ``out`` and records each under a key of ``files`` (the manifest's ``files`` table, in writing
 order); it returns a short note for the progress display.  Modules of this package register theirs with
-:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF 30, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
+:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF sheets 30, per-type DXF 35, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
 glTF 70, report 80, manifest 90) and an
 ``enabled(design)`` predicate for optional files; :func:`write_all` runs them in order.  Adding an output
 format is one new module.
@@ -57,7 +57,7 @@ def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | 
     """Run every enabled writer in order into ``out``; returns the ``files`` table.
 
     With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
-    STEP writer runs in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
+    per-type DXFs are written in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
     and the table are the same either way.
     """
     from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
