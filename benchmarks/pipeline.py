@@ -201,12 +201,13 @@ def _command(size: str, budget: float, parallel: bool, design: str | None, root:
     return cmd
 
 
-def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str | None, jobs: int) -> dict:
+def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str | None, jobs: int,
+            save: Path | None = None, out: dict | None = None) -> dict:
     """Run ``(variant, size, parallel, source tree)`` tasks, ``jobs`` at a time (largest first); variant →
-    size → result."""
+    size → result (added to ``out``, and written to ``save`` after each build)."""
     pending = sorted(tasks, key=lambda t: -int(t[1].split("x")[0]) * int(t[1].split("x")[1]))
     running: list[tuple[tuple, subprocess.Popen]] = []
-    out: dict[str, dict[str, dict]] = {}
+    out = {} if out is None else out
     while pending or running:
         while pending and len(running) < jobs:
             task = pending.pop(0)
@@ -224,6 +225,8 @@ def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str
                 raise SystemExit(f"{variant} {size} failed:\n{stderr[-3000:]}")
             r = json.loads(line[len("RESULT "):])
             out.setdefault(variant, {})[size] = r
+            if save is not None:
+                save.write_text(json.dumps(out, indent=1))
             print(f"  {variant} {size}: total {r['stages']['total'][1]:.1f} CPU s, files "
                   f"{r['stages']['files'][1]:.1f} CPU s", flush=True)
     return out
@@ -298,10 +301,7 @@ def main(argv: list[str]) -> None:
         tasks += [("before", size, False, base) for size in sizes]
     results: dict = json.loads(Path(args.reuse).read_text()) if args.reuse else {}
     tasks = [t for t in tasks if t[1] not in results.get(t[0], {})]
-    for variant, done in run_all(tasks, args.budget, args.design, args.jobs).items():
-        results.setdefault(variant, {}).update(done)
-    if args.save:
-        Path(args.save).write_text(json.dumps(results, indent=1))
+    run_all(tasks, args.budget, args.design, args.jobs, Path(args.save) if args.save else None, results)
     for variant in (["before"] if base else []) + [("parallel" if m else "serial") for m in modes]:
         if all(s in results.get(variant, {}) for s in sizes):
             table([results[variant][s] for s in sizes], variant)
