@@ -107,6 +107,14 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None) ->
                                   "plate_sheets": result.summary.plate_sheets}))
 
 
+def _timed(fn, reps: int) -> float:
+    """CPU seconds per call of ``fn``."""
+    c0 = time.process_time()
+    for _ in range(reps):
+        fn()
+    return (time.process_time() - c0) / reps
+
+
 def _per_file(size: str, budget: float) -> None:
     """ms per per-type DXF (by part, and the document set-up alternatives) and ms per STEP plate (with and
     without the writer's own BRepCheck, against the kernel writing the same prisms with nothing else)."""
@@ -120,7 +128,7 @@ def _per_file(size: str, budget: float) -> None:
     from fabrication import build, parse_design
     from fabrication.design import DEFAULT_DESIGN
     from fabrication.writers._dxf_dimensions import add_pane_dimensions
-    from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc
+    from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc, _template_doc
     from fabrication.writers.step import beam_assembly, build_solids, export_step
 
     fu, fv = (int(x) for x in size.split("x"))
@@ -147,6 +155,32 @@ def _per_file(size: str, budget: float) -> None:
     n = len(parts)
     print(f"per-type DXF ({n} files of {size}), ms per file: " + ", ".join(f"{k} {1000 * v / n:.2f}" for k, v in t.items())
           + f"; total {1000 * sum(t.values()) / n:.2f}")
+    t = dict.fromkeys(("document", "part", "dimensions", "save"), 0.0)
+    for k, part in enumerate(parts):                # before: ezdxf.new per file and Drawing.saveas
+        c0 = time.process_time()
+        with _fixed_metadata():
+            d = _new_doc()
+        sheet = CuttingSheet.__new__(CuttingSheet)
+        sheet.version, sheet.doc, sheet.msp = "R2010", d, d.modelspace()
+        sheet.msp.add_text(f"T{k} ({part.part_id})", height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+        c1 = time.process_time()
+        sheet.add_part(part, None)
+        c2 = time.process_time()
+        add_pane_dimensions(sheet.doc, part.outline)
+        c3 = time.process_time()
+        classes = d.classes
+        classes.add_required_classes(d.dxfversion)
+        ordered = sorted(classes.classes.items())
+        classes.classes.clear()
+        classes.classes.update(ordered)
+        with _fixed_metadata():
+            d.saveas(tmp / f"old{k}.dxf")
+        c4 = time.process_time()
+        for key, dt in zip(t, (c1 - c0, c2 - c1, c3 - c2, c4 - c3)):
+            t[key] += dt
+    same = all((tmp / f"old{k}.dxf").read_bytes() == (tmp / f"t{k}.dxf").read_bytes() for k in range(n))
+    print(f"  before (ezdxf.new, saveas), ms per file: " + ", ".join(f"{k} {1000 * v / n:.2f}" for k, v in t.items())
+          + f"; total {1000 * sum(t.values()) / n:.2f}; files byte-identical: {same}")
     with _fixed_metadata():
         template = _new_doc()
         s = io.StringIO()
@@ -159,6 +193,8 @@ def _per_file(size: str, budget: float) -> None:
         for _ in range(reps):
             make()
         print(f"  document set-up, {label}: {1000 * (time.process_time() - c0) / reps:.2f} ms")
+    print(f"  document set-up, unpickled template (now): "
+          f"{1000 * _timed(lambda: _template_doc(), reps):.2f} ms")
     empty = CuttingSheet(None, None, "", "R2010")
     c0 = time.process_time()
     for k in range(reps):
@@ -172,24 +208,30 @@ def _per_file(size: str, budget: float) -> None:
         dt = time.process_time() - c0
         print(f"STEP, {len(plates)} plates ({'with' if check else 'without'} the writer's BRepCheck): "
               f"{1000 * dt / len(plates):.2f} ms per plate")
+    from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
     from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
     from OCP.gp import gp_Pnt, gp_Vec
+    from OCP.Interface import Interface_Static
     from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+    from OCP.TopoDS import TopoDS_Compound
 
     c0 = time.process_time()
-    w = STEPControl_Writer()
+    Interface_Static.SetIVal_s("write.surfacecurve.mode", 0)        # no p-curves, as ppfab writes
+    compound, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(compound)
     for p in plates:
         poly = BRepBuilderAPI_MakePolygon()
         for x, y, z in p.frame.to3d(p.outline):
             poly.Add(gp_Pnt(float(x), float(y), float(z)))
         poly.Close()
         face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
-        n = p.frame.normal * p.thickness
-        w.Transfer(BRepPrimAPI_MakePrism(face, gp_Vec(*map(float, n))).Shape(), STEPControl_AsIs)
+        builder.Add(compound, BRepPrimAPI_MakePrism(face, gp_Vec(*map(float, p.frame.normal * p.thickness))).Shape())
+    w = STEPControl_Writer()
+    w.Transfer(compound, STEPControl_AsIs)
     w.Write(str(tmp / "kernel.step"))
-    print(f"STEP kernel baseline (OCP: polygon, face, prism, STEPControl_Writer; no names, colours or tree): "
-          f"{1000 * (time.process_time() - c0) / len(plates):.2f} ms per plate")
+    print(f"STEP kernel baseline (OCP: polygon, face, prism of each plate, one compound, no p-curves, names, "
+          f"colours or tree): {1000 * (time.process_time() - c0) / len(plates):.2f} ms per plate")
 
 
 def _command(size: str, budget: float, parallel: bool, design: str | None, root: Path) -> list[str]:
@@ -222,7 +264,8 @@ def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str
             stdout, stderr = proc.communicate()
             line = next((x for x in stdout.splitlines() if x.startswith("RESULT ")), None)
             if line is None:
-                raise SystemExit(f"{variant} {size} failed:\n{stderr[-3000:]}")
+                print(f"  {variant} {size} failed: {stderr.strip().splitlines()[-1] if stderr.strip() else proc.returncode}")
+                continue
             r = json.loads(line[len("RESULT "):])
             out.setdefault(variant, {})[size] = r
             if save is not None:

@@ -93,3 +93,63 @@ def test_parallel_writing_is_off_on_one_core_and_by_environment(monkeypatch):
     assert _parallel.parallel_enabled()
     monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", "0")
     assert not _parallel.parallel_enabled()
+
+
+def test_dxf_from_the_template_is_byte_identical_to_a_new_document(tmp_path, small_build):
+    """Per-type and sheet DXFs built on the unpickled template and saved in one write are the bytes of a document
+    made by ``ezdxf.new`` and saved by ``Drawing.saveas`` (the way before the template), for every panel type
+    (with dimensions) and every glass sheet of the build, twice in a row (the template is not changed by use)."""
+    from fabrication.writers import dxf
+    from fabrication.writers._dxf_dimensions import add_pane_dimensions
+
+    parts = list(small_build.nesting.glass_parts)
+    assert len(parts) >= 12
+    nesting = small_build.nesting.glass
+    by_id = {p.part_id: p for p in parts}
+
+    for round_ in range(2):
+        for k, part in enumerate(parts[:12]):
+            fast = dxf.CuttingSheet(None, None, f"T{k}", "R2010")
+            fast.add_part(part, None)
+            add_pane_dimensions(fast.doc, part.outline)
+            fast.write(tmp_path / f"fast{k}.dxf")
+            with dxf._fixed_metadata():
+                doc = dxf._new_doc()
+            slow = object.__new__(dxf.CuttingSheet)
+            slow.version, slow.doc, slow.msp = "R2010", doc, doc.modelspace()
+            slow.msp.add_text(dxf.dxf_text(f"T{k}"), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+            slow.add_part(part, None)
+            add_pane_dimensions(slow.doc, part.outline)
+            _saveas(slow, tmp_path / f"slow{k}.dxf")
+            assert (tmp_path / f"fast{k}.dxf").read_bytes() == (tmp_path / f"slow{k}.dxf").read_bytes(), (round_, k)
+    for k, group in enumerate(nesting.by_sheet()):
+        fast = dxf.CuttingSheet(nesting.sheet_size, nesting.usable, f"sheet {k}", "R2010")
+        with dxf._fixed_metadata():
+            doc = dxf._new_doc()
+        slow = object.__new__(dxf.CuttingSheet)
+        slow.version, slow.doc, slow.msp = "R2010", doc, doc.modelspace()
+        w, h = (float(v) for v in nesting.sheet_size)
+        x0, y0, x1, y1 = (float(v) for v in nesting.usable)
+        slow.msp.add_lwpolyline([(0, 0), (w, 0), (w, h), (0, h)], close=True, dxfattribs={"layer": "SHEET"})
+        slow.msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs={"layer": "TRIM"})
+        slow.msp.add_text(dxf.dxf_text(f"sheet {k}"), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+        for pl in group:
+            fast.add_part(by_id[pl.part_id], pl)
+            slow.add_part(by_id[pl.part_id], pl)
+        fast.write(tmp_path / "fast_sheet.dxf")
+        _saveas(slow, tmp_path / "slow_sheet.dxf")
+        assert (tmp_path / "fast_sheet.dxf").read_bytes() == (tmp_path / "slow_sheet.dxf").read_bytes(), k
+    assert dxf.check_sheet_dxf(tmp_path / "fast_sheet.dxf").parts
+
+
+def _saveas(sheet, path):
+    """CuttingSheet.write as it was: the CLASSES sorted, then ``Drawing.saveas`` with fixed metadata."""
+    from fabrication.writers import dxf
+
+    classes = sheet.doc.classes
+    classes.add_required_classes(sheet.doc.dxfversion)
+    ordered = sorted(classes.classes.items())
+    classes.classes.clear()
+    classes.classes.update(ordered)
+    with dxf._fixed_metadata():
+        sheet.doc.saveas(path)
