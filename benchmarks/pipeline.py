@@ -120,6 +120,7 @@ def _per_file(size: str, budget: float) -> None:
     without the writer's own BRepCheck, against the kernel writing the same prisms with nothing else)."""
     import copy
     import io
+    import pickle
     import tempfile
     import tomllib
 
@@ -128,7 +129,7 @@ def _per_file(size: str, budget: float) -> None:
     from fabrication import build, parse_design
     from fabrication.design import DEFAULT_DESIGN
     from fabrication.writers._dxf_dimensions import add_pane_dimensions
-    from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc, _template_doc
+    from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc
     from fabrication.writers.step import beam_assembly, build_solids, export_step
 
     fu, fv = (int(x) for x in size.split("x"))
@@ -155,37 +156,52 @@ def _per_file(size: str, budget: float) -> None:
     n = len(parts)
     print(f"per-type DXF ({n} files of {size}), ms per file: " + ", ".join(f"{k} {1000 * v / n:.2f}" for k, v in t.items())
           + f"; total {1000 * sum(t.values()) / n:.2f}")
-    t = dict.fromkeys(("document", "part", "dimensions", "save"), 0.0)
-    for k, part in enumerate(parts):                # before: ezdxf.new per file and Drawing.saveas
-        c0 = time.process_time()
+    with _fixed_metadata():
+        pickled = pickle.dumps(_new_doc())
+
+    def whole_file(k: int, part, from_template: bool, one_write: bool) -> None:
+        """One per-type DXF with its document from ``ezdxf.new`` or the unpickled template, saved by
+        ``Drawing.saveas`` or into a string written at once (the alternatives tried against the fixed cost)."""
         with _fixed_metadata():
-            d = _new_doc()
+            d = pickle.loads(pickled) if from_template else _new_doc()
         sheet = CuttingSheet.__new__(CuttingSheet)
         sheet.version, sheet.doc, sheet.msp = "R2010", d, d.modelspace()
-        sheet.msp.add_text(f"T{k} ({part.part_id})", height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
-        c1 = time.process_time()
+        sheet.msp.add_text(f"T{k}", height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
         sheet.add_part(part, None)
-        c2 = time.process_time()
-        add_pane_dimensions(sheet.doc, part.outline)
-        c3 = time.process_time()
+        add_pane_dimensions(d, part.outline)
         classes = d.classes
         classes.add_required_classes(d.dxfversion)
         ordered = sorted(classes.classes.items())
         classes.classes.clear()
         classes.classes.update(ordered)
+        path = tmp / f"v{k}_{int(from_template)}{int(one_write)}.dxf"
         with _fixed_metadata():
-            d.saveas(tmp / f"old{k}.dxf")
-        c4 = time.process_time()
-        for key, dt in zip(t, (c1 - c0, c2 - c1, c3 - c2, c4 - c3)):
-            t[key] += dt
-    same = all((tmp / f"old{k}.dxf").read_bytes() == (tmp / f"t{k}.dxf").read_bytes() for k in range(n))
-    print(f"  before (ezdxf.new, saveas), ms per file: " + ", ".join(f"{k} {1000 * v / n:.2f}" for k, v in t.items())
-          + f"; total {1000 * sum(t.values()) / n:.2f}; files byte-identical: {same}")
+            if one_write:
+                buf = io.StringIO()
+                d.write(buf)
+                with open(path, "w", encoding=d.output_encoding, errors="dxfreplace") as fh:
+                    fh.write(buf.getvalue())
+            else:
+                d.saveas(path)
+
+    variants = [(False, False), (True, False), (True, True)]
+    spent = [0.0] * len(variants)
+    for k, part in enumerate(parts):                # interleaved, the order alternating: fair under load
+        for v in (variants if k % 2 else variants[::-1]):
+            c0 = time.process_time()
+            whole_file(k, part, *v)
+            spent[variants.index(v)] += time.process_time() - c0
+    same = all(len({(tmp / f"v{k}_{a}{b}.dxf").read_bytes() for a, b in ((0, 0), (1, 0), (1, 1))}) == 1
+               for k in range(n))
+    print("  whole file, interleaved: " + ", ".join(
+        f"{'template' if a else 'ezdxf.new'} + {'one write' if b else 'saveas'} {1000 * t / n:.2f} ms"
+        for (a, b), t in zip(variants, spent)) + f" (byte-identical: {same})")
     with _fixed_metadata():
         template = _new_doc()
         s = io.StringIO()
         template.write(s)
     text = s.getvalue()
+    pickled = pickle.dumps(template)
     reps = 50
     for label, make in (("ezdxf.new + layers (used)", _new_doc), ("ezdxf.read of a template", lambda: ezdxf.read(io.StringIO(text))),
                         ("deepcopy of a template", lambda: copy.deepcopy(template))):
@@ -193,8 +209,8 @@ def _per_file(size: str, budget: float) -> None:
         for _ in range(reps):
             make()
         print(f"  document set-up, {label}: {1000 * (time.process_time() - c0) / reps:.2f} ms")
-    print(f"  document set-up, unpickled template (now): "
-          f"{1000 * _timed(lambda: _template_doc(), reps):.2f} ms")
+    print(f"  document set-up, unpickled template: "
+          f"{1000 * _timed(lambda: pickle.loads(pickled), reps):.2f} ms")
     empty = CuttingSheet(None, None, "", "R2010")
     c0 = time.process_time()
     for k in range(reps):

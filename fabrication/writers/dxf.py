@@ -65,26 +65,6 @@ def _new_doc(version: str = DXF_VERSION):
     return doc
 
 
-_TEMPLATES: dict[str, bytes] = {}
-"""DXF version → the pickled empty document of :func:`_new_doc` (made once per process)."""
-
-
-def _template_doc(version: str = DXF_VERSION):
-    """A new empty document, as :func:`_new_doc` makes it, unpickled from a template made once.
-
-    Creating the document (header, tables, layers, application id, objects) is the fixed part of every file;
-    unpickling the template costs about 1.9 ms instead of 2.9 ms for ``ezdxf.new`` (``ezdxf.read`` of the
-    template's DXF text 11.5 ms, ``copy.deepcopy`` 9 ms; ``benchmarks/pipeline.py --per-file``); ezdxf has no
-    ``Drawing.copy``.  The copy holds the same handles, so the files are byte-identical.
-    """
-    import pickle
-
-    if version not in _TEMPLATES:
-        with _fixed_metadata():
-            _TEMPLATES[version] = pickle.dumps(_new_doc(version), protocol=pickle.HIGHEST_PROTOCOL)
-    return pickle.loads(_TEMPLATES[version])
-
-
 def _label_point(points: np.ndarray) -> tuple[np.ndarray, float]:
     """A point well inside a polygon and the distance to its boundary (pole of inaccessibility)."""
     from shapely.geometry import Polygon
@@ -115,7 +95,7 @@ class CuttingSheet:
         self._ctx = _fixed_metadata()
         self._ctx.__enter__()
         try:
-            self.doc = _template_doc(DXF_VERSION if version == "R12" else version)
+            self.doc = _new_doc(DXF_VERSION if version == "R12" else version)
         finally:
             self._ctx.__exit__(None, None, None)
         self.msp = self.doc.modelspace()
@@ -179,13 +159,8 @@ class CuttingSheet:
                 from ._dxf_r12 import save_r12
 
                 save_r12(self.doc, path)
-            else:                               # as Drawing.saveas, in one write instead of one per tag
-                import io
-
-                text = io.StringIO()
-                self.doc.write(text)
-                with open(path, "w", encoding=self.doc.output_encoding, errors="dxfreplace") as fh:
-                    fh.write(text.getvalue())
+            else:
+                self.doc.saveas(path)
         return path
 
 
