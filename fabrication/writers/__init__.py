@@ -3,7 +3,7 @@
 A writer is a function ``write(build, out, files) -> str`` that writes its files into the (temporary) output
 folder ``out`` and records each under a key of ``files`` (the manifest's ``files`` table, in writing
 order); it returns a short note for the progress display.  Modules of this package register theirs with
-:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF 30, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
+:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF sheets 30, per-type DXF 35, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
 glTF 70, report 80, manifest 90) and an
 ``enabled(design)`` predicate for optional files; :func:`write_all` runs them in order.  Adding an output
 format is one new module.
@@ -53,12 +53,22 @@ def load_writers() -> list[Writer]:
     return sorted(_TABLE.load().values(), key=lambda w: (w.order, w.name))
 
 
-def write_all(build: "Build", out: Path, progress: "Progress") -> Files:
-    """Run every enabled writer in order into ``out``; returns the ``files`` table."""
+def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | None = None) -> Files:
+    """Run every enabled writer in order into ``out``; returns the ``files`` table.
+
+    With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
+    per-type DXFs are written in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
+    and the table are the same either way.
+    """
+    from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
+
+    enabled = [w for w in load_writers() if w.enabled(build.design)]
+    if parallel is None:
+        parallel = parallel_enabled()
+    if parallel and any(w.name in SECOND_PROCESS for w in enabled):
+        return write_split(build, out, progress, enabled)
     files: Files = {}
-    for w in load_writers():
-        if not w.enabled(build.design):
-            continue
+    for w in enabled:
         progress.start(w.name)
         try:
             note = w.write(build, out, files)

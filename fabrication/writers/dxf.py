@@ -410,7 +410,7 @@ def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: st
 
 @writer("dxf", order=30)
 def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
-    """Glass and beam-plate cutting sheets and, with ``[output] per_type_dxf``, one flat DXF per panel type."""
+    """Glass and beam-plate cutting sheets (the per-type DXFs: :func:`write_dxf_type_files`)."""
     name = build.design.info.name
     nest = build.nesting
     glass = write_sheet_dxfs(list(nest.glass_parts), nest.glass, out / GLASS_SHEET_DIR, GLASS_SHEET_PREFIX,
@@ -419,8 +419,14 @@ def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
                               f"{name} beam plates")
     files["glass_sheets"] = [str(p.relative_to(out)) for p in glass]
     files["beam_sheets"] = [str(p.relative_to(out)) for p in plates]
-    if build.design.output.per_type_dxf:
-        types = write_type_dxfs(list(nest.glass_parts), out / TYPE_DIR,
-                                dimensions=build.design.output.type_dimensions)
-        files["panel_type_dxfs"] = [f"{TYPE_DIR}/{v}" for v in types.values()]
     return f"{len(glass)} glass + {len(plates)} plate sheets"
+
+
+@writer("dxf_types", order=35, enabled=lambda design: design.output.per_type_dxf)
+def write_dxf_type_files(build: "Build", out: Path, files: Files) -> str:
+    """With ``[output] per_type_dxf``, one flat DXF per panel type (reads nothing of ``files``, so it can run in
+    a second process, :mod:`fabrication.writers._parallel`)."""
+    types = write_type_dxfs(list(build.nesting.glass_parts), out / TYPE_DIR,
+                            dimensions=build.design.output.type_dimensions)
+    files["panel_type_dxfs"] = [f"{TYPE_DIR}/{v}" for v in types.values()]
+    return f"{len(types)} panel types"

@@ -1,0 +1,160 @@
+"""Writing the output files on two cores: the writers of :data:`SECOND_PROCESS` in a forked process.
+
+The writers are independent except through the ``files`` table: most read the file names that earlier
+writers recorded (the sheet files in ``parts.csv``, the report's list of files, the manifest's digests).
+The writers named in :data:`SECOND_PROCESS` read nothing of it; they run in one forked child process while
+this process runs all the others in their order.  The child is joined before the first writer of
+:data:`READS_EVERY_FILE` (the report lists every file, the manifest digests every file), and the ``files``
+table each writer sees, and the one returned, are assembled in writer order from what each writer added —
+exactly the table of a serial run, so every file is byte-identical to a serial build.
+
+Safety (:mod:`fabrication.pipeline.folder`): the child only writes into the temporary folder; it ignores
+SIGINT (a Ctrl-C reaches the whole process group: this process decides) and dies on SIGTERM/SIGHUP; it ends
+with ``os._exit`` (``multiprocessing``), never unwinding this process's ``with`` blocks, so the atomic folder,
+its lock and its clean-up stay with this process.  When this process fails or is interrupted, the child is
+terminated and joined before the exception leaves :func:`write_split`, i.e. before the temporary folder is
+removed.  When the child fails, its writers run again here, so the error raised is the writer's own.
+
+Used when fork is available and the process may run on at least two cores (:func:`parallel_enabled`);
+``PPFAB_PARALLEL_WRITERS=0`` turns it off, ``=1`` on.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from . import Files, Writer
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.progress import Progress
+    from ..pipeline.records import Build
+
+SECOND_PROCESS: tuple[str, ...] = ("dxf_types",)
+"""Writers that read nothing of the ``files`` table and run in the second process: the per-type DXFs (one file
+per panel type, the largest share of the DXF time), beside STEP, the sheets, tables, exchange files and report
+(at 22x15 to 88x60 faces the two halves take about the same time)."""
+
+READS_EVERY_FILE: tuple[str, ...] = ("report", "manifest")
+"""Writers that read the whole ``files`` table: the second process is joined before the first of them."""
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):          # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def parallel_enabled() -> bool:
+    """Whether :func:`~fabrication.writers.write_all` uses a second process: ``PPFAB_PARALLEL_WRITERS`` = 0 or 1
+    when set, else on when fork is available and at least two cores are."""
+    import multiprocessing
+
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return False
+    flag = os.environ.get("PPFAB_PARALLEL_WRITERS", "").strip()
+    if flag in ("0", "1"):
+        return flag == "1"
+    return cores() >= 2
+
+
+def _merged(added: dict[str, Files], order: list[str]) -> Files:
+    """The ``files`` table after the writers ``order`` (their additions, in that order)."""
+    files: Files = {}
+    for name in order:
+        files.update(added.get(name, {}))
+    return files
+
+
+def _run(w: Writer, build: "Build", out: Path, before: Files) -> tuple[Files, str]:
+    """Run one writer on a copy of the table ``before``; what it added and its note."""
+    files = dict(before)
+    note = w.write(build, out, files)
+    return {k: v for k, v in files.items() if k not in before or before[k] != v}, note
+
+
+def _child(build: "Build", out: Path, writers: list[Writer], conn: Any) -> None:
+    """The second process: run ``writers`` (each on an empty table) and send their additions, notes and times."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)):
+        if s is not None:
+            signal.signal(s, signal.SIG_DFL)
+    results = []
+    try:
+        for w in writers:
+            t0 = time.perf_counter()
+            added, note = _run(w, build, out, {})
+            results.append((w.name, added, note, time.perf_counter() - t0))
+        conn.send(("ok", results))
+    except BaseException as exc:                # reported; the parent runs the writer again for its error
+        conn.send(("failed", f"{type(exc).__name__}: {exc}"))
+    finally:
+        conn.close()
+
+
+def write_split(build: "Build", out: Path, progress: "Progress", writers: list[Writer]) -> Files:
+    """Run ``writers`` (enabled, in order) with those of :data:`SECOND_PROCESS` in a forked process; returns the
+    ``files`` table, equal to that of a serial run."""
+    import multiprocessing
+
+    side = [w for w in writers if w.name in SECOND_PROCESS]
+    ctx = multiprocessing.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(build, out, side, send), name="ppfab-writer", daemon=True)
+    order = [w.name for w in writers]
+    added: dict[str, Files] = {}
+    joined = False
+    proc.start()
+    send.close()
+    try:
+        for k, w in enumerate(writers):
+            if w.name in SECOND_PROCESS:
+                continue
+            if not joined and w.name in READS_EVERY_FILE:
+                _join(build, out, progress, proc, recv, side, added, order)
+                joined = True
+            progress.start(w.name)
+            try:
+                added[w.name], note = _run(w, build, out, _merged(added, order[:k]))
+            except BaseException:
+                progress.fail()
+                raise
+            progress.done(note)
+        if not joined:
+            _join(build, out, progress, proc, recv, side, added, order)
+    finally:
+        if proc.is_alive():
+            proc.terminate()
+        proc.join()
+        recv.close()
+    return _merged(added, order)
+
+
+def _join(build: "Build", out: Path, progress: "Progress", proc: Any, recv: Any, side: list[Writer],
+          added: dict[str, Files], order: list[str]) -> None:
+    """Wait for the second process; record its writers (progress and times), or run them here if it failed."""
+    try:
+        status, payload = recv.recv()
+    except EOFError:                            # killed (e.g. out of memory) before it could report
+        status, payload = "failed", f"the writer process ended with code {proc.exitcode}"
+    proc.join()
+    if status == "ok":
+        for name, files, note, seconds in payload:
+            progress.start(name, "(second process)")
+            progress._t0 = time.perf_counter() - seconds     # show and record the child's wall time
+            progress.done(note)
+            added[name] = files
+        return
+    for w in side:                              # again here: the writer's own exception, or success
+        progress.start(w.name)
+        try:
+            added[w.name], note = _run(w, build, out, _merged(added, order[:order.index(w.name)]))
+        except BaseException:
+            progress.fail()
+            raise
+        progress.done(note)
