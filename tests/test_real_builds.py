@@ -144,6 +144,107 @@ def test_a_build_beyond_its_torsion_tolerance_stops_listing_the_edges(dome):
     assert worst_mm > 1e-7 and worst_label in msg and f"{worst_mm:.3g} mm" in msg
 
 
+def hinge_angles(mesh) -> dict[tuple[int, int], float]:
+    """Dihedral angle (degrees, 0 = coplanar) at every interior edge, without face normals: 180° minus the
+    angle between the two faces' half-planes about the edge (the directions from the edge to each face's
+    centroid, perpendicular to the edge); exact for planar convex faces."""
+    v, f = mesh.vertices, mesh.faces
+    sides: dict[tuple[int, int], list[int]] = {}
+    for k, face in enumerate(f):
+        for a, b in zip(face, np.roll(face, -1)):
+            sides.setdefault((min(a, b), max(a, b)), []).append(k)
+    out = {}
+    for (i, j), fs in sides.items():
+        if len(fs) != 2:
+            continue
+        d = (v[j] - v[i]) / np.linalg.norm(v[j] - v[i])
+        u = [v[f[g]].mean(axis=0) - v[i] for g in fs]
+        u = [w - (w @ d) * d for w in u]
+        cos = u[0] @ u[1] / (np.linalg.norm(u[0]) * np.linalg.norm(u[1]))
+        out[(int(i), int(j))] = 180.0 - float(np.degrees(np.arccos(np.clip(cos, -1, 1))))
+    return out
+
+
+def test_a_build_beyond_its_crease_limit_stops_listing_the_edges(dome, capsys):
+    from fabrication.panels.crease import CreaseError
+
+    angles = hinge_angles(load_mesh(dome))
+    worst = max(angles.values())
+    limit = round(worst - 3.0)
+    assert 10 < limit < 45                                          # the dome builds with the default (45°)
+    d = parse_design(tomllib.loads(design_text(dome, f"[panels]\nmax_crease_deg = {limit}\n")))
+    with pytest.raises(CreaseError) as err:
+        build(d)
+    over = {e: a for e, a in angles.items() if a > limit}
+    listed = {tuple(int(x[1:]) for x in label.split()[0].split("-")): a for label, a in err.value.offenders}
+    assert set(listed) == set(over)
+    assert max(abs(listed[e] - over[e]) for e in over) < 1e-4       # planar faces (δ_f < 1e-6)
+    assert err.value.offenders[0][1] == pytest.approx(worst, abs=1e-4)
+    (dome.parent / "crease.toml").write_text(design_text(dome, f"[panels]\nmax_crease_deg = {limit}\n"))
+    capsys.readouterr()
+    assert main(["build", str(dome.parent / "crease.toml"), "-o", str(dome.parent / "crease_out")]) != 0
+    err_text = capsys.readouterr().err.strip().splitlines()[-1]
+    label = err.value.offenders[0][0]
+    assert err_text.startswith(f"ppfab: error: {len(over)} edge(s) fold the glass by more than "
+                               f"panels.max_crease_deg = {limit}°")
+    assert f"{label} {worst:.1f}°" in err_text and "P-" in label
+    assert not (dome.parent / "crease_out").exists()
+
+
+def test_the_build_records_its_crease_and_limit(dome_build):
+    m = json.loads((dome_build / "manifest.json").read_text())
+    angles = hinge_angles(load_mesh(dome_build / "mesh.obj"))
+    assert m["fabrication"]["max_crease_deg"] == m["fabrication"]["panels"]["max_crease_deg"] == 45.0
+    assert m["quality"]["crease_max"] == pytest.approx(max(angles.values()), abs=1e-3)
+    report = (dome_build / "report.html").read_text()
+    assert f"{m['quality']['crease_max']:.1f}° (limit panels.max_crease_deg 45°)" in report
+
+
+def test_verify_fails_a_build_beyond_its_crease_limit(dome_build, tmp_path, capsys):
+    """The manifest's limit lowered below the measured crease, then mesh.obj with one vertex lifted into a
+    fin: both fail, naming the edges with the angles recomputed from mesh.obj."""
+    import shutil
+
+    out = tmp_path / "lowered"
+    shutil.copytree(dome_build, out)
+    angles = hinge_angles(load_mesh(out / "mesh.obj"))
+    (i, j), worst = max(angles.items(), key=lambda kv: kv[1])
+    m = json.loads((out / "manifest.json").read_text())
+    m["fabrication"]["max_crease_deg"] = worst - 1.0                # as if built with a tighter limit
+    (out / "manifest.json").write_text(json.dumps(m, indent=1))
+    capsys.readouterr()
+    assert main(["verify", str(out)]) != 0
+    text = "".join(capsys.readouterr())
+    assert f"edge N{i:04d}-N{j:04d}: dihedral angle {worst:.2f}° between its panels" in text
+    assert text.count("between its panels") == min(20, sum(a > worst - 1.0 + 0.05 for a in angles.values()))
+
+    fin = tmp_path / "fin"
+    shutil.copytree(dome_build, fin)
+    mesh = load_mesh(fin / "mesh.obj")
+    k = int(np.bincount(mesh.faces.ravel()).argmax())                # an interior vertex of valence 4
+    lines = (fin / "mesh.obj").read_text().splitlines()
+    vlines = [n for n, ln in enumerate(lines) if ln.startswith("v ")]
+    x, y, z = (float(t) for t in lines[vlines[k]].split()[1:4])
+    span = float(np.linalg.norm(mesh.vertices[edges_of(mesh)[0, 1]] - mesh.vertices[edges_of(mesh)[0, 0]]))
+    lines[vlines[k]] = f"v {x:.6f} {y:.6f} {z + 3 * span:.6f}"
+    (fin / "mesh.obj").write_text("\n".join(lines) + "\n")
+    m = json.loads((fin / "manifest.json").read_text())
+    m["sha256"]["mesh.obj"] = hashlib.sha256((fin / "mesh.obj").read_bytes()).hexdigest()
+    (fin / "manifest.json").write_text(json.dumps(m, indent=1))
+    lifted = hinge_angles(load_mesh(fin / "mesh.obj"))
+    assert max(lifted.values()) > 45.0
+    capsys.readouterr()
+    assert main(["verify", str(fin)]) != 0
+    text = "".join(capsys.readouterr())
+    import re
+
+    found = re.findall(r"edge N(\d{4})-N(\d{4}): dihedral angle ([0-9.]+)° between its panels "
+                       r"\(> panels\.max_crease_deg 45°\)", text)
+    near = set(mesh.faces[(mesh.faces == k).any(axis=1)].ravel().tolist())   # the corners of the faces at k
+    assert found and all(int(a) in near and int(b) in near and float(t) > 45.0 for a, b, t in found)
+    assert "quality.crease_max" in text
+
+
 def test_axes_far_from_the_normals_stop_the_build(dome):
     d = parse_design(tomllib.loads(design_text(dome, "").replace('method = "pp"',
                                                                     'method = "pp"\nmax_axis_angle_deg = 5.0')))
