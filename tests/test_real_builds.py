@@ -191,6 +191,17 @@ def test_a_build_beyond_its_crease_limit_stops_listing_the_edges(dome, capsys):
     assert not (dome.parent / "crease_out").exists()
 
 
+def test_check_shows_the_crease_in_text_and_json(dome, capsys):
+    worst = max(hinge_angles(load_mesh(dome)).values())
+    over = sum(a > 30.0 for a in hinge_angles(load_mesh(dome)).values())
+    capsys.readouterr()
+    assert main(["check", str(dome), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["crease_max"] == pytest.approx(worst, abs=1e-4) and doc["crease_edges_over_30"] == over
+    assert main(["check", str(dome)]) == 0
+    assert f"crease max (dihedral angle, deg) / edges > 30 deg  {worst:.2f} / {over}" in capsys.readouterr().out
+
+
 def test_the_build_records_its_crease_and_limit(dome_build):
     m = json.loads((dome_build / "manifest.json").read_text())
     angles = hinge_angles(load_mesh(dome_build / "mesh.obj"))
