@@ -337,6 +337,31 @@ def test_panel_face_is_the_face_of_the_obj_written():
         assert {tuple(x) for x in mesh.vertices[mesh.faces[p.face]]} == {tuple(x) for x in p.corners_3d}
 
 
+def test_a_recovered_grid_builds_and_verifies_with_mesh_json_in_grid_order(tmp_path):
+    """compas__quadmesh (a 10 × 10 grid stored out of row-major order) optimised to PP: the package verifies,
+    mesh.obj keeps the file's vertex order and mesh.json's row-major vertices are mesh.obj's through
+    obj_vertex."""
+    res = optimize(load_mesh(LOCAL / "compas__quadmesh.obj"), {"families": "both"})
+    assert res.targets_met
+    write_obj(res.mesh, tmp_path / "quadmesh.obj")
+    extent = float(np.ptp(res.mesh.vertices, axis=0).max())
+    (tmp_path / "d.toml").write_text(design_text(tmp_path / "quadmesh.obj", scale=16000.0 / extent))
+    out = tmp_path / "out"
+    assert main(["build", str(tmp_path / "d.toml"), "-o", str(out), "--quiet"]) == 0
+    assert main(["verify", str(out), "--quiet"]) == 0
+    obj = read_mesh(out / "mesh.obj")
+    doc = json.loads((out / "mesh.json").read_text())
+    order = np.asarray(doc["obj_vertex"])
+    assert sorted(order.tolist()) == list(range(len(obj.vertices))) and order.tolist() != sorted(order.tolist())
+    grid = np.asarray(doc["vertices"]).reshape(doc["rows"], doc["cols"], 3)
+    assert np.abs(grid.reshape(-1, 3) - obj.vertices[order]).max() < 1e-9
+    steps = np.linalg.norm(np.diff(grid, axis=1), axis=2)                   # grid neighbours are mesh edges
+    e = {tuple(sorted(x)) for x in edges_of(obj).tolist()}
+    ids = order.reshape(doc["rows"], doc["cols"])
+    assert all((min(a, b), max(a, b)) in e for a, b in zip(ids[:, :-1].ravel(), ids[:, 1:].ravel()))
+    assert steps.min() > 0
+
+
 def test_cuts_clear_the_joints_anywhere_along_a_beam():
     """A straight 30 m beam of 45 edges of 667 mm: pieces of at most 5900 mm, cuts inside edges at least the
     clearance from every node, neighbouring pieces sharing their cut."""
