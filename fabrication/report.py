@@ -194,6 +194,9 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
         ("node axis to surface normal, max", f"{float(build.support.normal_angle_deg.max()):.1f}° "
                                              f"(limit support.max_axis_angle_deg {design.support.max_axis_angle_deg:g}°)"),
         ("polylines left out of the planar families", len(build.support.left_out)),
+        ("crease (dihedral angle between neighbouring panels), max", f"{q.crease_max:.1f}° (limit "
+                                                                     f"panels.max_crease_deg "
+                                                                     f"{design.panels.max_crease_deg:g}°)"),
         ("conical residual max / mean", f"{q.conical_max:.2e} / {q.conical_mean:.2e} rad"),
         ("panels above tolerance", len(over)),
         ("beam plates not slidable through their slots", beams.report.totals()["not_slidable"]),

@@ -144,6 +144,118 @@ def test_a_build_beyond_its_torsion_tolerance_stops_listing_the_edges(dome):
     assert worst_mm > 1e-7 and worst_label in msg and f"{worst_mm:.3g} mm" in msg
 
 
+def hinge_angles(mesh) -> dict[tuple[int, int], float]:
+    """Dihedral angle (degrees, 0 = coplanar) at every interior edge, without face normals: 180° minus the
+    angle between the two faces' half-planes about the edge (the directions from the edge to each face's
+    centroid, perpendicular to the edge); exact for planar convex faces."""
+    v, f = mesh.vertices, mesh.faces
+    sides: dict[tuple[int, int], list[int]] = {}
+    for k, face in enumerate(f):
+        for a, b in zip(face, np.roll(face, -1)):
+            sides.setdefault((min(a, b), max(a, b)), []).append(k)
+    out = {}
+    for (i, j), fs in sides.items():
+        if len(fs) != 2:
+            continue
+        d = (v[j] - v[i]) / np.linalg.norm(v[j] - v[i])
+        u = [v[f[g]].mean(axis=0) - v[i] for g in fs]
+        u = [w - (w @ d) * d for w in u]
+        cos = u[0] @ u[1] / (np.linalg.norm(u[0]) * np.linalg.norm(u[1]))
+        out[(int(i), int(j))] = 180.0 - float(np.degrees(np.arccos(np.clip(cos, -1, 1))))
+    return out
+
+
+def test_a_build_beyond_its_crease_limit_stops_listing_the_edges(dome, capsys):
+    from fabrication.panels.crease import CreaseError
+
+    angles = hinge_angles(load_mesh(dome))
+    worst = max(angles.values())
+    limit = round(worst - 3.0)
+    assert 10 < limit < 45                                          # the dome builds with the default (45°)
+    d = parse_design(tomllib.loads(design_text(dome, f"[panels]\nmax_crease_deg = {limit}\n")))
+    with pytest.raises(CreaseError) as err:
+        build(d)
+    over = {e: a for e, a in angles.items() if a > limit}
+    listed = {tuple(int(x[1:]) for x in label.split()[0].split("-")): a for label, a in err.value.offenders}
+    assert set(listed) == set(over)
+    assert max(abs(listed[e] - over[e]) for e in over) < 1e-4       # planar faces (δ_f < 1e-6)
+    assert err.value.offenders[0][1] == pytest.approx(worst, abs=1e-4)
+    (dome.parent / "crease.toml").write_text(design_text(dome, f"[panels]\nmax_crease_deg = {limit}\n"))
+    capsys.readouterr()
+    assert main(["build", str(dome.parent / "crease.toml"), "-o", str(dome.parent / "crease_out")]) != 0
+    err_text = capsys.readouterr().err.strip().splitlines()[-1]
+    label = err.value.offenders[0][0]
+    assert err_text.startswith(f"ppfab: error: {len(over)} edge(s) fold the glass by more than "
+                               f"panels.max_crease_deg = {limit}°")
+    assert f"{label} {worst:.1f}°" in err_text and "P-" in label
+    assert not (dome.parent / "crease_out").exists()
+
+
+def test_check_shows_the_crease_in_text_and_json(dome, capsys):
+    worst = max(hinge_angles(load_mesh(dome)).values())
+    over = sum(a > 30.0 for a in hinge_angles(load_mesh(dome)).values())
+    capsys.readouterr()
+    assert main(["check", str(dome), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["crease_max"] == pytest.approx(worst, abs=1e-4) and doc["crease_edges_over_30"] == over
+    assert main(["check", str(dome)]) == 0
+    assert f"crease max (dihedral angle, deg) / edges > 30 deg  {worst:.2f} / {over}" in capsys.readouterr().out
+
+
+def test_the_build_records_its_crease_and_limit(dome_build):
+    m = json.loads((dome_build / "manifest.json").read_text())
+    angles = hinge_angles(load_mesh(dome_build / "mesh.obj"))
+    assert m["fabrication"]["max_crease_deg"] == m["fabrication"]["panels"]["max_crease_deg"] == 45.0
+    assert m["quality"]["crease_max"] == pytest.approx(max(angles.values()), abs=1e-3)
+    report = (dome_build / "report.html").read_text()
+    assert f"{m['quality']['crease_max']:.1f}° (limit panels.max_crease_deg 45°)" in report
+
+
+def test_verify_fails_a_build_beyond_its_crease_limit(dome_build, tmp_path, capsys):
+    """The manifest's limit lowered below the measured crease, then mesh.obj with one vertex lifted into a
+    fin: both fail, naming the edges with the angles recomputed from mesh.obj."""
+    import shutil
+
+    out = tmp_path / "lowered"
+    shutil.copytree(dome_build, out)
+    angles = hinge_angles(load_mesh(out / "mesh.obj"))
+    (i, j), worst = max(angles.items(), key=lambda kv: kv[1])
+    m = json.loads((out / "manifest.json").read_text())
+    m["fabrication"]["max_crease_deg"] = worst - 1.0                # as if built with a tighter limit
+    (out / "manifest.json").write_text(json.dumps(m, indent=1))
+    capsys.readouterr()
+    assert main(["verify", str(out)]) != 0
+    text = "".join(capsys.readouterr())
+    assert f"edge N{i:04d}-N{j:04d}: dihedral angle {worst:.2f}° between its panels" in text
+    assert text.count("between its panels") == min(20, sum(a > worst - 1.0 + 0.05 for a in angles.values()))
+
+    fin = tmp_path / "fin"
+    shutil.copytree(dome_build, fin)
+    mesh = load_mesh(fin / "mesh.obj")
+    k = int(np.bincount(mesh.faces.ravel()).argmax())                # an interior vertex of valence 4
+    lines = (fin / "mesh.obj").read_text().splitlines()
+    vlines = [n for n, ln in enumerate(lines) if ln.startswith("v ")]
+    x, y, z = (float(t) for t in lines[vlines[k]].split()[1:4])
+    span = float(np.linalg.norm(mesh.vertices[edges_of(mesh)[0, 1]] - mesh.vertices[edges_of(mesh)[0, 0]]))
+    lines[vlines[k]] = f"v {x:.6f} {y:.6f} {z + 3 * span:.6f}"
+    (fin / "mesh.obj").write_text("\n".join(lines) + "\n")
+    m = json.loads((fin / "manifest.json").read_text())
+    m["sha256"]["mesh.obj"] = hashlib.sha256((fin / "mesh.obj").read_bytes()).hexdigest()
+    (fin / "manifest.json").write_text(json.dumps(m, indent=1))
+    lifted = hinge_angles(load_mesh(fin / "mesh.obj"))
+    assert max(lifted.values()) > 45.0
+    capsys.readouterr()
+    assert main(["verify", str(fin)]) != 0
+    text = "".join(capsys.readouterr())
+    import re
+
+    found = re.findall(r"edge N(\d{4})-N(\d{4}): dihedral angle ([0-9.]+)° between its panels "
+                       r"\(> panels\.max_crease_deg 45°\)", text)
+    near = set(mesh.faces[(mesh.faces == k).any(axis=1)].ravel().tolist())   # the corners of the faces at k
+    assert found and all(int(a) in near and int(b) in near and float(t) > 45.0 for a, b, t in found)
+    assert "quality.crease_max" in text
+
+
 def test_axes_far_from_the_normals_stop_the_build(dome):
     d = parse_design(tomllib.loads(design_text(dome, "").replace('method = "pp"',
                                                                     'method = "pp"\nmax_axis_angle_deg = 5.0')))
@@ -223,6 +335,31 @@ def test_panel_face_is_the_face_of_the_obj_written():
     assert sorted(order) == list(range(len(mesh.faces))) and order != list(range(len(mesh.faces)))
     for p in panels:
         assert {tuple(x) for x in mesh.vertices[mesh.faces[p.face]]} == {tuple(x) for x in p.corners_3d}
+
+
+def test_a_recovered_grid_builds_and_verifies_with_mesh_json_in_grid_order(tmp_path):
+    """compas__quadmesh (a 10 × 10 grid stored out of row-major order) optimised to PP: the package verifies,
+    mesh.obj keeps the file's vertex order and mesh.json's row-major vertices are mesh.obj's through
+    obj_vertex."""
+    res = optimize(load_mesh(LOCAL / "compas__quadmesh.obj"), {"families": "both"})
+    assert res.targets_met
+    write_obj(res.mesh, tmp_path / "quadmesh.obj")
+    extent = float(np.ptp(res.mesh.vertices, axis=0).max())
+    (tmp_path / "d.toml").write_text(design_text(tmp_path / "quadmesh.obj", scale=16000.0 / extent))
+    out = tmp_path / "out"
+    assert main(["build", str(tmp_path / "d.toml"), "-o", str(out), "--quiet"]) == 0
+    assert main(["verify", str(out), "--quiet"]) == 0
+    obj = read_mesh(out / "mesh.obj")
+    doc = json.loads((out / "mesh.json").read_text())
+    order = np.asarray(doc["obj_vertex"])
+    assert sorted(order.tolist()) == list(range(len(obj.vertices))) and order.tolist() != sorted(order.tolist())
+    grid = np.asarray(doc["vertices"]).reshape(doc["rows"], doc["cols"], 3)
+    assert np.abs(grid.reshape(-1, 3) - obj.vertices[order]).max() < 1e-9
+    steps = np.linalg.norm(np.diff(grid, axis=1), axis=2)                   # grid neighbours are mesh edges
+    e = {tuple(sorted(x)) for x in edges_of(obj).tolist()}
+    ids = order.reshape(doc["rows"], doc["cols"])
+    assert all((min(a, b), max(a, b)) in e for a, b in zip(ids[:, :-1].ravel(), ids[:, 1:].ravel()))
+    assert steps.min() > 0
 
 
 def test_cuts_clear_the_joints_anywhere_along_a_beam():

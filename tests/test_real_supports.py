@@ -41,12 +41,11 @@ TOLERANCE = 0.5
 SPAN = 30_000.0
 
 
-def roof(path, families: str | None = "both", targets: float = 1e-6) -> QuadMesh:
-    """The mesh of ``path``, optimised for ``families`` (``None``: as it is) to δ_f, δ_P ≤ ``targets``, scaled
-    to a ``SPAN`` mm roof."""
+def roof(path, families: str | None = "both") -> QuadMesh:
+    """The mesh of ``path``, optimised for ``families`` (``None``: as it is), scaled to a ``SPAN`` mm roof."""
     mesh = load_mesh(path)
     if families is not None:
-        res = optimize(mesh, {"families": families, "target_delta_f": targets, "target_delta_p": targets})
+        res = optimize(mesh, {"families": families})
         assert res.targets_met, res.message
         mesh = res.mesh
     return transform(mesh, SPAN / float(np.ptp(mesh.vertices, axis=0).max()))
@@ -171,16 +170,16 @@ CONTEXT = BeamContext(DEPTH, TOLERANCE)
 
 def test_pp_dome_with_valence_3_vertices_has_exact_axes():
     """quad_dome: a disk whose polylines end at four valence-3 vertices; there the three planes share a
-    line (to the optimiser's accuracy), so the least-squares axis lies in all three and the structure is
-    torsion-free to micrometres."""
-    mesh = roof(LOCAL / "DOS__quad_dome.obj", targets=1e-9)
-    # the optimised dome's lowest ring leans 31° off the normal: allow it so that every polyline is a beam
-    s = support_pp(mesh, beams=CONTEXT, max_normal_angle_deg=40.0)
+    line, so the least-squares axis lies in all three and the structure is torsion-free.  (The optimised
+    dome's steepest boundary polyline plane is 31° from the normal at a corner: the limit of the 'tangent'
+    rule is raised to 35° so that every polyline stays a planar beam.)"""
+    mesh = roof(LOCAL / "DOS__quad_dome.obj")
+    s = support_pp(mesh, beams=CONTEXT, max_normal_angle_deg=35.0)
     m = check_structure(mesh, s)
     assert not s.left_out and s.planar_families == (0, 1)
     assert multi_plane_axes_are_least_squares(mesh, s) == 4
-    # the three planes at a valence-3 vertex share their line to 2e-5 (least-squares misfit, measured 2.2e-5);
-    # the torsion that leaves is 2.6 µm at beam depth, far inside any fabrication tolerance
+    # the three planes share their line to a misfit of 2e-5 at the valence-3 vertices (the same with δ targets
+    # of 1e-9: a property of this optimised dome, not of the tolerance); the torsion left is 2.6 µm
     assert s.misfit.max() < 5e-5 and m["torsion"].max() < 1e-2
     sing = np.flatnonzero(~mesh.topology.boundary_vertices & (mesh.topology.valence == 3))
     assert sorted(s.planes_at[sing].tolist()) == [3, 3, 3, 3]

@@ -26,6 +26,10 @@ class PanelParams:
     planarity_tolerance: float = param(1.0, doc="largest allowed distance of a face corner from the face's "
                                                 "least-squares plane, mm; checked before anything is written",
                                        exclusive_min=0)
+    max_crease_deg: float = param(45.0, doc="largest dihedral angle between neighbouring panels, degrees (0 = "
+                                            "coplanar): the fold a joint between two panes takes; a mesh with "
+                                            "an edge beyond it stops the build, listing the edges", min=0,
+                                  exclusive_max=180)
     min_size: list[float] = param([250.0, 250.0], doc="smallest panel [w, h] the processor accepts, mm (flag)",
                                   length=2, min=0)
     max_size: list[float] = param([6000.0, 3210.0], doc="largest panel [w, h] the processor accepts, mm (flag)",

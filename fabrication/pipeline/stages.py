@@ -122,8 +122,10 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
 
 def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality: Quality | None = None) -> PanelSet:
     """Glass panels (planarity in mm checked first), flattened, labelled, grouped into types; a mesh file
-    whose panels are not planar is refused with what to do (:mod:`fabrication.pipeline.advice`)."""
+    whose panels are not planar is refused with what to do (:mod:`fabrication.pipeline.advice`), and so is a
+    mesh folded beyond ``panels.max_crease_deg`` between neighbouring panels (:mod:`fabrication.panels.crease`)."""
     from ..panels import make_panels, panel_types
+    from ..panels.crease import check_creases, part_ids_by_face
     from .advice import planarity_advice
 
     progress.start("panels")
@@ -134,6 +136,7 @@ def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality
         if not advice:
             raise
         raise NonPlanarPanelError(exc.offenders, exc.tolerance_mm, advice) from None
+    check_creases(geometry.mesh, design.panels.max_crease_deg, part_ids_by_face(panels))
     types = panel_types(panels)
     progress.done(f"{len(panels)} panels, {len(types)} types")
     return PanelSet(tuple(panels), types)

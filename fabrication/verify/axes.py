@@ -1,7 +1,7 @@
 """Node axes and beam lists against the support structure: nodes.csv, nodes.json, mesh.json and parts.csv agree.
 
 * every node's axis in ``nodes.csv`` is the one in ``nodes.json`` and, on a regular patch, in ``mesh.json``
-  (within 1e-9);
+  (within 1e-9; grid vertex ``k`` is OBJ vertex ``obj_vertex[k]`` when the mesh came from a file);
 * the support planes of ``mesh.json`` (``support_u`` rows, ``support_w`` columns) hold their polylines'
   vertices (within ``beams.plane_tolerance``) and their axes (within the torsion tolerance at beam depth);
 * a node's beams in ``nodes.csv`` are exactly the beam plates whose ``nodes`` in ``parts.csv`` contain it,
@@ -82,13 +82,16 @@ def check_axes(v: Verification) -> None:
             grid = {}
         shape = (int(grid.get("rows", 0)), int(grid.get("cols", 0)))
         gv = np.asarray(grid.get("vertices", []), dtype=float).reshape(-1, 3)
-        if len(gv) == len(mesh.vertices) and np.abs(gv - mesh.vertices).max(initial=0.0) <= 1e-6:
+        order = np.asarray(grid.get("obj_vertex", np.arange(len(gv))), dtype=np.int64).reshape(-1)
+        if (len(gv) == len(mesh.vertices) and len(order) == len(gv)
+                and np.array_equal(np.sort(order), np.arange(len(gv)))
+                and np.abs(gv - mesh.vertices[order]).max(initial=0.0) <= 1e-6):
             ga = np.asarray(grid.get("axes", np.full_like(gv, np.nan)), dtype=float).reshape(-1, 3)
-            diff = np.abs(ga - axes).max(axis=1)
+            diff = np.abs(ga - axes[order]).max(axis=1)
             for k in np.flatnonzero(~(diff <= 1e-8))[:20]:
-                v.error(mrel, f"N{int(k):04d}", f"axis {np.round(ga[k], 9).tolist()} differs from nodes.csv "
-                                                f"{np.round(axes[k], 9).tolist()}")
-            pts, ax = gv.reshape(shape + (3,)), axes.reshape(shape + (3,))
+                v.error(mrel, f"N{int(order[k]):04d}", f"axis {np.round(ga[k], 9).tolist()} differs from "
+                                                       f"nodes.csv {np.round(axes[order[k]], 9).tolist()}")
+            pts, ax = gv.reshape(shape + (3,)), axes[order].reshape(shape + (3,))
             for key, family in (("support_u", 0), ("support_w", 1)):
                 if key not in grid:
                     continue

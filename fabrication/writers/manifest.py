@@ -47,6 +47,7 @@ def fabrication_params(design: "Design") -> dict[str, Any]:
     panels = design.panels
     nesting = design.nesting
     out.update({"panel_gap": panels.gap, "planarity_tolerance": panels.planarity_tolerance,
+                "max_crease_deg": panels.max_crease_deg,
                 "glass_thickness": panels.thickness, "glass_makeup": panels.makeup,
                 "sheet": list(nesting.sheet), "sheet_margin": nesting.margin, "part_spacing": nesting.spacing})
     for name in ("support", "beams", "panels", "nesting", "beam_nesting", "output"):

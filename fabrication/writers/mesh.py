@@ -1,5 +1,7 @@
-"""``mesh.obj`` (the mesh in mm; a regular patch in row-major order) and ``mesh.json`` (grid, face image, and
-the support planes and node axes of the support structure that was fabricated)."""
+"""``mesh.obj`` (the mesh in mm; a constructed regular patch in row-major order, a mesh file in its own vertex
+order) and ``mesh.json`` (grid in row-major order, face image, the support planes and node axes of the
+support structure that was fabricated, and for a mesh file ``obj_vertex``: the OBJ vertex of each grid
+vertex)."""
 
 from __future__ import annotations
 
@@ -42,6 +44,10 @@ def write_mesh_files(build: "Build", out: Path, files: Files) -> str:
     grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
     if grid is not None:
         doc = grid_to_json(grid_with_support(grid, build.support))
+        if not isinstance(mesh, QuadGrid) and mesh.grid_ids is not None:
+            # a regular patch recovered from a mesh file: mesh.obj keeps the file's vertex order, mesh.json
+            # the grid's row-major order; obj_vertex[k] is the OBJ vertex of grid vertex k
+            doc["obj_vertex"] = [int(x) for x in mesh.grid_ids.reshape(-1)]
         (out / "mesh.json").write_text(json_text(doc), encoding="utf-8")
         files["mesh_json"] = "mesh.json"
     return "mesh.obj"
