@@ -56,14 +56,18 @@ def load_writers() -> list[Writer]:
 def write_all(build: "Build", out: Path, progress: "Progress") -> Files:
     """Run every enabled writer in order into ``out``; returns the ``files`` table."""
     files: Files = {}
-    for w in load_writers():
-        if not w.enabled(build.design):
-            continue
-        progress.start(w.name)
-        try:
-            note = w.write(build, out, files)
-        except BaseException:
-            progress.fail()
-            raise
-        progress.done(note)
+    writers = [w for w in load_writers() if w.enabled(build.design)]
+    progress.watch(out)                       # the status counts the files written so far
+    try:
+        for k, w in enumerate(writers):
+            progress.start(w.name)
+            progress.advance(k, None, f"file set {k + 1} of {len(writers)}")
+            try:
+                note = w.write(build, out, files)
+            except BaseException:
+                progress.fail()
+                raise
+            progress.done(note)
+    finally:
+        progress.watch(None)
     return files
