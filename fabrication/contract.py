@@ -19,10 +19,8 @@ PARTS_KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "ty
                        "width_mm", "height_mm", "perimeter_mm", "weight_kg", "planarity_dev_mm", "min_angle_deg",
                        "panel_flags", "outside"]
 """Further columns of ``parts.csv`` in this order when present; any others follow sorted by name.  A structured
-value (a list or a table: a beam plate's ``nodes``, ``frame``, ``plane``) is one JSON cell (:func:`csv_cell`)."""
-
-PARTS_RENAMED_COLUMNS = {"flags": "panel_flags"}
-"""Columns renamed since 0.1.0 (old → new): ``flags`` shadowed ``pandas.DataFrame.flags``."""
+value (a list or a table: a beam plate's ``nodes``, ``frame``, ``plane``) is one JSON cell (:func:`csv_cell`).
+``panel_flags`` was ``flags`` before 0.2 (it shadowed ``pandas.DataFrame.flags``; docs/migration.md)."""
 
 ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
                  "rotations", "mirror_allowed", "file"]
