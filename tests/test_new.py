@@ -121,7 +121,12 @@ def test_new_measures_a_mesh_and_proposes_its_sections(tmp_path, name, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["DOS__conical1.obj", "compas_libigl__tubemesh.off"])
+@pytest.mark.parametrize("name", [
+    "DOS__conical1.obj", "DOS__enneper2.obj",
+    pytest.param("compas_libigl__tubemesh.off", marks=pytest.mark.xfail(
+        strict=True, reason="the build's own verify rejects mesh.json (vertices differ from mesh.obj) for this "
+                            "optimised .off mesh: a defect of the mesh writers, not a refusal of the mesh")),
+])
 def test_new_for_a_mesh_builds_or_gives_the_mesh_refusal(tmp_path, name, capsys):
     design = _new(tmp_path, SHARED_DATA / name)
     small = tmp_path / "small.toml"
@@ -134,6 +139,7 @@ def test_new_for_a_mesh_builds_or_gives_the_mesh_refusal(tmp_path, name, capsys)
     else:
         line = err.strip().splitlines()[-1]
         assert rc == 1 and line.startswith("ppfab: error:") and "Traceback" not in err, err
+        assert "fail ppfab verify" not in line, line          # a refusal of the mesh, not a broken file
         assert not (tmp_path / "out").exists()
 
 
