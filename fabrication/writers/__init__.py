@@ -11,30 +11,17 @@ format is one new module.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 from ppfab.registry import Registry
 
+from .base import Files, Writer
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
     from ..pipeline.progress import Progress
     from ..pipeline.records import Build
-
-Files = dict[str, "str | list[str]"]
-"""The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""
-
-
-@dataclass(frozen=True)
-class Writer:
-    """One entry of :data:`WRITERS`."""
-
-    name: str
-    order: int
-    write: Callable[["Build", Path, Files], str]
-    enabled: Callable[["Design"], bool]
-
 
 _TABLE: Registry[Writer] = Registry("writer", "fabrication.writers")
 WRITERS: dict[str, Writer] = _TABLE.entries
@@ -68,12 +55,17 @@ def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | 
     if parallel and any(w.name in SECOND_PROCESS for w in enabled):
         return write_split(build, out, progress, enabled)
     files: Files = {}
-    for w in enabled:
-        progress.start(w.name)
-        try:
-            note = w.write(build, out, files)
-        except BaseException:
-            progress.fail()
-            raise
-        progress.done(note)
+    progress.watch(out)                       # the status counts the files written so far
+    try:
+        for k, w in enumerate(enabled):
+            progress.start(w.name)
+            progress.advance(k, None, f"file set {k + 1} of {len(enabled)}")
+            try:
+                note = w.write(build, out, files)
+            except BaseException:
+                progress.fail()
+                raise
+            progress.done(note)
+    finally:
+        progress.watch(None)
     return files
