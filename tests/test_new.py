@@ -16,7 +16,7 @@ from fabrication.design import SECTION_DEFAULTS, _section_types, load_design
 from ppfab.constructions import get_construction, load_all
 
 from conftest import FULL, SHARED_DATA
-from test_examples import small_form
+from test_examples import check_stages, small_form
 
 METHODS = sorted(load_all())
 
@@ -84,11 +84,18 @@ def test_new_without_method_writes_every_key_and_builds(tmp_path):
 @pytest.mark.parametrize("method", [pytest.param(m, marks=[] if m == "bisector" else [pytest.mark.slow])
                                     for m in METHODS])
 def test_new_for_each_method_builds(tmp_path, method):
+    """Each method's starter names every key and passes every build stage (each gate of a build); its
+    files are written and verified for ``bisector`` (the quick case) and, with PPFAB_FULL=1, for every method."""
+    from fabrication.pipeline.stages import build
+
     design = _new(tmp_path, method)
     text = design.read_text(encoding="utf-8")
     _check_every_key(text, method)
     small = tmp_path / "small.toml"
     small.write_text(small_form(text, tmp_path), encoding="utf-8")
+    if not FULL and method != "bisector":
+        check_stages(build(load_design(small)))
+        return
     assert main(["build", str(small), "-o", str(tmp_path / "out"), "--quiet"]) == 0
     assert (tmp_path / "out" / "report.html").is_file()
 
