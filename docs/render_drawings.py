@@ -6,33 +6,14 @@ a small PP vault: the bundled default's face image with 6 × 4 faces.
 
 from __future__ import annotations
 
+import sys
 import tempfile
 from pathlib import Path
 
-DESIGN = """
-[design]
-name = "README excerpt: 6 x 4 PP vault"
-[geometry]
-method = "face_image_curves"
-scale = 1000.0
-[geometry.params]
-g = [[0.0, 0.025], [0.0, 0.0, 0.0001], [0.5], [0.0, 0.0, -0.0125]]
-h = [[0.0, 0.0, 0.0001], [0.0, 0.0333333], [0.5], [-8.0, 0.0, -0.0166667]]
-u_range = [-4.5, 4.5]
-v_range = [-3.0, 3.0]
-faces_u = 6
-faces_v = 4
-[beams]
-depth = 150.0
-thickness = 12.0
-max_length = 3000.0
-[panels]
-gap = 16.0
-[nesting]
-time_budget = 0.5
-[beam_nesting]
-time_budget = 0.5
-"""
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from conftest import small_vault  # noqa: E402  (the tests' small vault: one design for the excerpt and the tests)
+
+DESIGN = small_vault("README excerpt: 6 x 4 PP vault")
 
 
 def main() -> None:

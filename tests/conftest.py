@@ -73,6 +73,37 @@ faces_v = {faces_v}
     return text
 
 
+def small_vault(name: str, max_length: float = 3000.0, joint: str | None = None) -> str:
+    """The 6 × 4 PP vault the end-to-end, tamper, drawing and marking tests build (depth 150 mm, 12 mm plates,
+    16 mm joints, fast nesting), with ``beams.max_length`` and, when given, ``beams.joint``."""
+    joint_line = f'joint = "{joint}"\n' if joint else ""
+    return small_design(6, 4, u_range=(-4.5, 4.5), name=name, extra=f"""
+[beams]
+depth = 150.0
+thickness = 12.0
+{joint_line}max_length = {max_length}
+[panels]
+gap = 16.0
+""")
+
+
+def built_folder(name: str, text: str):
+    """A module fixture ``built``: the design ``text`` built once by ``ppfab build`` into a folder of its own
+    (the build's exit status asserted), returned as that folder's path."""
+
+    @pytest.fixture(scope="module")
+    def built(tmp_path_factory) -> Path:
+        from fabrication.cli import main
+
+        root = tmp_path_factory.mktemp(name)
+        (root / "d.toml").write_text(text)
+        out = root / "out"
+        assert main(["build", str(root / "d.toml"), "-o", str(out), "--quiet"]) == 0
+        return out
+
+    return built
+
+
 WAVY_SPHERES = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
 """Control spheres ``(x, y, z, r)`` of a wavy channel surface (conical P tests)."""
 

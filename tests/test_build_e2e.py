@@ -6,32 +6,14 @@ import json
 import shutil
 
 import numpy as np
-import pytest
 
 from fabrication.cli import main
 from ppfab.io import load_mesh
 
-from conftest import small_design
+from conftest import built_folder, small_vault
 
-SMALL = small_design(6, 4, u_range=(-4.5, 4.5), name="e2e", extra="""
-[beams]
-depth = 150.0
-thickness = 12.0
-joint = "halflap"
-max_length = 5000.0
-[panels]
-gap = 16.0
-""")
-
-
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("e2e")
-    design = root / "d.toml"
-    design.write_text(SMALL)
-    out = root / "out"
-    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
-    return out
+SMALL = small_vault("e2e", max_length=5000.0, joint="halflap")
+built = built_folder("e2e", SMALL)
 
 
 def rows(path):

@@ -10,30 +10,13 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from fabrication.cli import main
 from ppfab.io import load_mesh
 
-from conftest import SHARED_DATA, small_design
+from conftest import built_folder, small_vault
 
 NS = "{http://www.w3.org/2000/svg}"
-SMALL = small_design(6, 4, u_range=(-4.5, 4.5), name="drawings", extra="""
-[beams]
-depth = 150.0
-thickness = 12.0
-max_length = 3000.0
-[panels]
-gap = 16.0
-""")
-
-
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("drawings")
-    design = root / "d.toml"
-    design.write_text(SMALL)
-    out = root / "out"
-    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
-    return out
+SMALL = small_vault("drawings")
+built = built_folder("drawings", SMALL)
 
 
 def _rows(path):

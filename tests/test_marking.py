@@ -7,31 +7,13 @@ import csv
 from pathlib import Path
 
 import numpy as np
-import pytest
 
-from fabrication.cli import main
 from fabrication.marking import TextLine, face_marks, place_label, upright_deg
 
-from conftest import small_design
+from conftest import built_folder, small_vault
 
-SMALL = small_design(6, 4, u_range=(-4.5, 4.5), name="marking", extra="""
-[beams]
-depth = 150.0
-thickness = 12.0
-max_length = 3000.0
-[panels]
-gap = 16.0
-""")
-
-
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("marking")
-    design = root / "d.toml"
-    design.write_text(SMALL)
-    out = root / "out"
-    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
-    return out
+SMALL = small_vault("marking")
+built = built_folder("marking", SMALL)
 
 
 def _rows(out: Path) -> dict[str, dict]:

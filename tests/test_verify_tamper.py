@@ -15,26 +15,10 @@ import pytest
 
 from fabrication.cli import main
 
-from conftest import small_design
+from conftest import built_folder, small_vault
 
-DESIGN = small_design(6, 4, u_range=(-4.5, 4.5), name="tamper", extra="""
-[beams]
-depth = 150.0
-thickness = 12.0
-joint = "halflap"
-max_length = 5000.0
-[panels]
-gap = 16.0
-""")
-
-
-@pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    root = tmp_path_factory.mktemp("tamper")
-    (root / "d.toml").write_text(DESIGN)
-    out = root / "out"
-    assert main(["build", str(root / "d.toml"), "-o", str(out), "--quiet"]) == 0
-    return out
+DESIGN = small_vault("tamper", max_length=5000.0, joint="halflap")
+built = built_folder("tamper", DESIGN)
 
 
 @pytest.fixture

@@ -10,6 +10,7 @@ for DXF and the CAD kernel for STEP.  Adding a check is one new module.
 from __future__ import annotations
 
 import csv
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -42,6 +43,14 @@ class Verification:
     @property
     def ok(self) -> bool:
         return not self.findings
+
+    def read_json(self, rel: str) -> Any:
+        """The JSON document ``rel`` of the folder, or ``None`` after a finding that it cannot be read."""
+        try:
+            return json.loads((self.folder / rel).read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            self.error(rel, "", f"cannot be read ({exc})")
+            return None
 
 
 def read_csv(path: Path) -> list[dict[str, str]]:

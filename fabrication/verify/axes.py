@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
@@ -41,11 +40,7 @@ def check_axes(v: Verification) -> None:
     # nodes.json
     jrel = files.get("nodes_json")
     if jrel is not None:
-        try:
-            doc = json.loads((v.folder / jrel).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            v.error(jrel, "", f"cannot be read ({exc})")
-            doc = {}
+        doc = v.read_json(jrel) or {}
         for node in doc.get("nodes", []):
             k = int(node.get("vertex", -1))
             if not 0 <= k < len(axes):
@@ -75,11 +70,7 @@ def check_axes(v: Verification) -> None:
     # mesh.json
     mrel = files.get("mesh_json")
     if mrel is not None:
-        try:
-            grid = json.loads((v.folder / mrel).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            v.error(mrel, "", f"cannot be read ({exc})")
-            grid = {}
+        grid = v.read_json(mrel) or {}
         shape = (int(grid.get("rows", 0)), int(grid.get("cols", 0)))
         gv = np.asarray(grid.get("vertices", []), dtype=float).reshape(-1, 3)
         order = np.asarray(grid.get("obj_vertex", np.arange(len(gv))), dtype=np.int64).reshape(-1)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 from ..contract import csv_value
@@ -34,10 +33,8 @@ def check_parts_json(v: Verification) -> None:
     rows = v.data.get("parts")
     if rel is None or rows is None:
         return
-    try:
-        doc = json.loads((v.folder / rel).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    doc = v.read_json(rel)
+    if doc is None:
         return
     parts = doc.get("parts", [])
     header = list(rows[0]) if rows else []
