@@ -49,7 +49,7 @@ def fabrication_params(design: "Design") -> dict[str, Any]:
     out.update({"panel_gap": panels.gap, "planarity_tolerance": panels.planarity_tolerance,
                 "glass_thickness": panels.thickness, "glass_makeup": panels.makeup,
                 "sheet": list(nesting.sheet), "sheet_margin": nesting.margin, "part_spacing": nesting.spacing})
-    for name in ("support", "beams", "panels", "nesting", "beam_nesting", "output"):
+    for name in ("support", "beams", "panels", "glazing", "splices", "nesting", "beam_nesting", "output"):
         out[name] = as_plain(design.section(name))
     return out
 
