@@ -105,7 +105,7 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
 
     by_beam: dict[str, list] = {}
     for p in plates:
-        if p.n_pieces > 1:
+        if p.n_pieces > 1 and not p.meta.get("segment"):     # one-edge segments meet at nodes: welded
             by_beam.setdefault(p.beam_id, []).append(p)
     out: list[Splice] = []
     L = params.length
