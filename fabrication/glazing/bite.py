@@ -18,6 +18,7 @@ The angle between the pane and the gasket face (the wedge the gasket takes up) i
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -25,6 +26,9 @@ from scipy.spatial import cKDTree
 from ppfab.errors import FabricationError
 
 from .strips import Strip
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..panels import Panel
 
 
 @dataclass(frozen=True)
@@ -62,7 +66,7 @@ def _section(poly: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def pane_edges(panels, vertices: np.ndarray, edges: np.ndarray) -> list[tuple[object, int, int]]:
+def pane_edges(panels: Sequence["Panel"], vertices: np.ndarray, edges: np.ndarray) -> list[tuple["Panel", int, int]]:
     """``(panel, outline edge k, mesh edge)`` for every edge of every pane: the mesh edge is the face edge the
     outline edge was inset from (found by the face corners' positions)."""
     tree = cKDTree(vertices)
@@ -83,7 +87,7 @@ def pane_edges(panels, vertices: np.ndarray, edges: np.ndarray) -> list[tuple[ob
     return out
 
 
-def edge_normals(panels, vertices: np.ndarray, edges: np.ndarray) -> np.ndarray:
+def edge_normals(panels: Sequence["Panel"], vertices: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """``(E, 3)``: the sum of the outside normals of the panes on each mesh edge (zero where none)."""
     out = np.zeros((len(edges), 3))
     for p, _, e in pane_edges(panels, vertices, edges):
@@ -92,7 +96,7 @@ def edge_normals(panels, vertices: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return out
 
 
-def measure_bites(panels, strips: list[Strip], vertices: np.ndarray, edges: np.ndarray, gasket: float,
+def measure_bites(panels: Sequence["Panel"], strips: list[Strip], vertices: np.ndarray, edges: np.ndarray, gasket: float,
                   stations: int = 9) -> list[EdgeBite]:
     """The :class:`EdgeBite` of every pane edge (see the module docstring)."""
     by_edge = {s.edge: s for s in strips}

@@ -128,8 +128,8 @@ def check_bite(v: Verification) -> None:
         for key, bite in bites.items():
             if bite < min_bite - 1e-6:
                 low.append((bite, row["part_id"], key))
-            e = edge_index.get(key)
-            w = written.get((row["part_id"], e)) if e is not None else None
+            found = edge_index.get(key)
+            w = written.get((row["part_id"], found)) if found is not None else None
             if w is not None and abs(w - bite) > 0.01:
                 v.error(rel, row["part_id"], f"bite over mesh edge {key} is {bite:.3f} mm from the files, "
                                              f"bites.csv says {w:.3f} mm")
