@@ -125,6 +125,8 @@ def test_every_split_beam_has_its_splice():
             inside_a = sum(pa.buffer(-0.5 * s.hole).contains(Point(*h)) for h in s.holes)
             inside_b = sum(pb.buffer(-0.5 * s.hole).contains(Point(*h)) for h in s.holes)
             assert inside_a == inside_b == len(s.holes) // 2 > 0       # half the bolts in each piece
+            cut = LineString([a.top[-1], a.bottom[-1]])                  # the pieces' common end
+            assert min(cut.distance(Point(*h)) for h in s.holes) >= 1.2 * s.hole - 1e-9
             # EN 1993-1-8 Table 3.3: hole centres at least 1.2 d0 from the cover plate's edges
             edge = min(plate.exterior.distance(Point(*h)) for h in s.holes)
             assert edge >= 1.2 * s.hole - 1e-9

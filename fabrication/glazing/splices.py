@@ -119,22 +119,28 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
         for a, b in pairs:
             f = a.frame
             c = a.top[-1]                                       # the cut's top point, in a's frame
-            t = a.top[-1] - a.top[-2]
-            t = t / np.linalg.norm(t)
-            s = np.array([t[1], -t[0]])
-            if s @ (a.bottom[-1] - a.top[-1]) < 0:
-                s = -s
+            s = a.bottom[-1] - a.top[-1]                        # down the cut line (the node axis there)
+            s = s / np.linalg.norm(s)
+            t = np.array([-s[1], s[0]])                         # square to the cut, along the beam
+            if t @ (a.top[-1] - a.top[-2]) < 0:
+                t = -t
             body = unary_union([Polygon(a.outline).buffer(1e-3),
                                 Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
-            h = float((a.bottom[-1] - a.top[-1]) @ s)
-            for beta in np.linspace(-0.5 * L, 0.5 * L, 9):      # the depth left under the top edge along the plate
-                ray = LineString([c + beta * t - s, c + beta * t + 2.0 * h * s])
+            depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
+            top, bottom = -np.inf, np.inf
+            for beta in np.linspace(-0.5 * L, 0.5 * L, 9):      # the plate's depth along the cover plate
+                foot = c + beta * t
+                ray = LineString([foot - 2.0 * depth * s, foot + 3.0 * depth * s])
                 hit = ray.intersection(body)
-                pieces = list(getattr(hit, "geoms", [hit]))
-                reach = [float(np.linalg.norm(np.asarray(g.coords)[-1] - (c + beta * t)))
-                         for g in pieces if not g.is_empty and g.distance(Point(c + beta * t)) < 1.0]
-                h = min(h, max(reach, default=0.0))
-            lo, hi = params.top_clear, h - params.bottom_clear
+                spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
+                if not spans:
+                    top, bottom = np.inf, -np.inf
+                    break
+                main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
+                al = sorted(float((q - foot) @ s) for q in main)
+                top, bottom = max(top, al[0]), min(bottom, al[-1])
+            h = bottom - top
+            lo, hi = top + params.top_clear, bottom - params.bottom_clear
             if hi - lo < 2 * params.e2:
                 raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
                                              f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "
