@@ -23,11 +23,15 @@ def _r(x: float, digits: int = 3) -> float:
 
 
 def splice_types(splices) -> dict[str, str]:
-    """Cover plate part id → type id ``SP<height>x<length>``: plates of one size and hole pattern (to 0.5 mm)."""
+    """Cover plate part id → type id ``SP<height>x<length>[-<skew>]``: plates of one size, skew (the angle of the
+    ends off square, whole degrees) and hole pattern."""
     out = {}
     for s in splices:
         w, h = np.ptp(s.flat_outline, axis=0)
-        key = f"SP{int(round(h))}x{int(round(w))}"
+        o = s.flat_outline
+        e0, e1 = o[1] - o[0], o[3] - o[0]
+        skew = int(round(abs(90.0 - np.degrees(np.arccos(abs(e0 @ e1) / np.linalg.norm(e0) / np.linalg.norm(e1))))))
+        key = f"SP{int(round(h))}x{int(round(w))}" + (f"-{skew}" if skew else "")
         for pid in s.part_ids:
             out[pid] = key
     return out

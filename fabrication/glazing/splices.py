@@ -122,41 +122,52 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
             s = a.bottom[-1] - a.top[-1]                        # down the cut line (the node axis there)
             s = s / np.linalg.norm(s)
             t = np.array([-s[1], s[0]])                         # square to the cut, along the beam
-            if t @ (a.top[-1] - a.top[-2]) < 0:
+            u = a.top[-1] - a.top[-2]                           # along the top edge
+            u = u / np.linalg.norm(u)
+            if t @ u < 0:
                 t = -t
+            m = np.array([u[1], -u[0]])                         # square to the top edge, down
+            if m @ s < 0:
+                m = -m
+            to_xy = np.array([t, m])                            # P − c ↦ (x across the cut, y under the top edge)
+            to_p = np.linalg.inv(to_xy)
             body = unary_union([Polygon(a.outline).buffer(1e-3),
                                 Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
             depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
+            reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in (0.0, depth)]
             top, bottom = -np.inf, np.inf
-            for beta in np.linspace(-0.5 * L, 0.5 * L, 9):      # the plate's depth along the cover plate
-                foot = c + beta * t
-                ray = LineString([foot - 2.0 * depth * s, foot + 3.0 * depth * s])
+            for tau in np.linspace(min(reach), max(reach), 9):  # the plate's depth under the top edge
+                foot = c + tau * u
+                ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
                 hit = ray.intersection(body)
                 spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
                 if not spans:
                     top, bottom = np.inf, -np.inf
                     break
                 main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
-                al = sorted(float((q - foot) @ s) for q in main)
-                top, bottom = max(top, al[0]), min(bottom, al[-1])
+                yy = sorted(float((q - foot) @ m) for q in main)
+                top, bottom = max(top, yy[0]), min(bottom, yy[-1])
             h = bottom - top
             lo, hi = top + params.top_clear, bottom - params.bottom_clear
             if hi - lo < 2 * params.e2:
                 raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
                                              f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "
                                              "or the clearances")
-            outline = np.array([c + lo * s - 0.5 * L * t, c + lo * s + 0.5 * L * t,
-                                c + hi * s + 0.5 * L * t, c + hi * s - 0.5 * L * t])
+
+            def at(x: float, y: float) -> np.ndarray:
+                return c + to_p @ np.array([x, y])
+
+            outline = np.array([at(-0.5 * L, lo), at(0.5 * L, lo), at(0.5 * L, hi), at(-0.5 * L, hi)])
             if (outline[1, 0] - outline[0, 0]) * (outline[2, 1] - outline[0, 1]) - \
                     (outline[1, 1] - outline[0, 1]) * (outline[2, 0] - outline[0, 0]) < 0:
                 outline = outline[::-1]
             usable = hi - lo - 2 * params.e2
             rows = 1 + int(usable // params.p2_min) if usable >= params.p2_min else 1
             rows = min(rows, 2) if usable < 2 * params.p2_min else rows
-            alphas = [lo + params.e2 + k * usable / max(rows - 1, 1) for k in range(rows)] if rows > 1 else \
+            ys = [lo + params.e2 + k * usable / max(rows - 1, 1) for k in range(rows)] if rows > 1 else \
                 [0.5 * (lo + hi)]
-            betas = [sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0)]
-            holes = np.array([c + al * s + be * t for al in alphas for be in sorted(betas)])
+            xs = sorted(sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0))
+            holes = np.array([at(x, y) for y in ys for x in xs])
             fits = bool(body.contains(Polygon(outline)))
             ids = (f"SP{beam[1:]}-{a.piece:02d}A", f"SP{beam[1:]}-{a.piece:02d}B")
             out.append(Splice(ids, beam, (a.part_id, b.part_id), f, outline, holes, params.hole,
