@@ -68,7 +68,8 @@ def splice_rows(glazing, beams) -> list[dict]:
     width = max(4, len(str(len(glazing.splices))))
     for k, s in enumerate(glazing.splices):
         w, h = np.ptp(s.flat_outline, axis=0)
-        gross = float(w * h)
+        x, y = s.flat_outline.T
+        gross = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))   # the parallelogram
         net = gross - len(s.holes) * math.pi * 0.25 * s.hole ** 2
         for side, pid in zip("AB", s.part_ids):
             rows.append({
