@@ -20,6 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
+import logging
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -29,6 +31,8 @@ from .strips import Strip
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..panels import Panel
+
+log = logging.getLogger("ppfab")
 
 
 @dataclass(frozen=True)
@@ -130,8 +134,8 @@ def measure_bites(panels: Sequence["Panel"], strips: list[Strip], vertices: np.n
 
 
 def check_bites(bites: list[EdgeBite], min_bite: float, max_tilt_deg: float) -> None:
-    """Raise :class:`BiteError` naming every pane edge with a bite below ``min_bite`` or a tilt above
-    ``max_tilt_deg``, worst first."""
+    """Raise :class:`BiteError` naming every pane edge with a bite below ``min_bite``, worst first; warn about
+    pane edges that lie steeper than ``max_tilt_deg`` on their strip (they need wedge gaskets)."""
     low = sorted((b for b in bites if b.bite < min_bite - 1e-9), key=lambda b: b.bite)
     if low:
         names = ", ".join(f"{b.panel} edge {b.edge} ({b.bite:.1f} mm)" for b in low[:8])
@@ -141,5 +145,5 @@ def check_bites(bites: list[EdgeBite], min_bite: float, max_tilt_deg: float) -> 
     steep = sorted((b for b in bites if b.tilt_deg > max_tilt_deg + 1e-9), key=lambda b: -b.tilt_deg)
     if steep:
         names = ", ".join(f"{b.panel} edge {b.edge} ({b.tilt_deg:.1f}°)" for b in steep[:8])
-        raise BiteError(f"{len(steep)} pane edge(s) lie steeper on their glazing strip than glazing.max_tilt_deg "
-                        f"= {max_tilt_deg:g}°: {names}; raise max_tilt_deg if the gasket takes that wedge")
+        log.warning("%d pane edge(s) lie steeper on their glazing strip than glazing.max_tilt_deg = %g°: %s; "
+                    "they need tapered (wedge) gaskets", len(steep), max_tilt_deg, names)

@@ -42,7 +42,8 @@ class GlazingParams:
     setting_block_length: float = param(100.0, doc="length of a setting block (two per pane, under its "
                                                    "lowest edge), mm", exclusive_min=0)
     max_tilt_deg: float = param(6.0, doc="largest angle between a pane and the strip it rests on, degrees; "
-                                         "the gasket takes up the wedge (width × tan of the angle)",
+                                         "the gasket takes up the wedge (width × tan of the angle); steeper edges are warned "
+                                         "about (they need tapered gaskets)",
                                 min=0, max=45)
 
     def __post_init__(self):
