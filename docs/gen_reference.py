@@ -24,6 +24,8 @@ SECTION_TEXT = {
     "support": "How the node axes and support planes are found.",
     "beams": "Planar beam plates along the support planes and their joints.",
     "panels": "Glass panels.",
+    "glazing": "The glazing strips the panes rest on, their gaskets and the bite check (docs/glazing.md).",
+    "splices": "Bolted cover-plate splices where a long beam is cut into pieces (docs/glazing.md).",
     "nesting": "Glass stock sheets and the nesting of the panels.",
     "beam_nesting": "Plate stock for the beam plates (same keys as `[nesting]`; defaults: sheet 6000 × 2000, "
                     "budget 5 s, tag prefix `B`).",

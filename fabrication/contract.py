@@ -37,7 +37,7 @@ edge work and coated side (``[panels]``), the corners 1–4 in the panel's own f
 the origin, edge 12 along +x, seen from outside, counter-clockwise), the edge lengths 12, 23, 34, 41, both
 diagonals and the interior corner angles."""
 
-PART_KINDS = ("panel", "beam")
+PART_KINDS = ("panel", "beam", "strip", "splice")
 
 # -- nodes.csv / nodes.json ------------------------------------------------------------------------------
 
