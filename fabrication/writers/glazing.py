@@ -80,7 +80,8 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     folder.mkdir(parents=True, exist_ok=True)
     names = []
     for t, s in first.items():
-        doc = _new_doc()
+        with _fixed_metadata():                 # ezdxf stamps the creation time into a new document
+            doc = _new_doc()
         msp = doc.modelspace()
         outline = s.flat_outline                                   # type: ignore[attr-defined]
         pl = msp.add_lwpolyline([tuple(map(float, p)) for p in outline], close=True, dxfattribs={"layer": "CUT"})
