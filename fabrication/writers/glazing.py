@@ -68,7 +68,7 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     """One flat DXF per cover plate type: outline and bolt holes on ``CUT``, the type id on ``LABEL``."""
     from ..contract import XDATA_APPID
     from ..glazing.rows import splice_types
-    from .dxf import _fixed_metadata, _new_doc
+    from .dxf import _fixed_metadata, _new_doc, save_doc
 
     types = splice_types(glazing.splices)
     first: dict[str, object] = {}
@@ -92,8 +92,7 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
         msp.add_text(f"{t} x{count[t]}", height=min(20.0, 0.1 * float(h)),
                      dxfattribs={"layer": "LABEL", "insert": (0.5 * float(w) - 40.0, 0.5 * float(h))})
         name = f"{SPLICE_DIR}/{t}.dxf"
-        with _fixed_metadata():
-            doc.saveas(folder.parent / name)
+        save_doc(doc, folder.parent / name)
         names.append(name)
     return names
 
