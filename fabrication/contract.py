@@ -17,8 +17,10 @@ PARTS_CONTRACT_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", 
 
 PARTS_KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "type_id", "material", "thickness_mm",
                        "width_mm", "height_mm", "perimeter_mm", "weight_kg", "planarity_dev_mm", "min_angle_deg",
-                       "flags", "outside"]
-"""Further columns of ``parts.csv`` in this order when present; any others follow sorted by name."""
+                       "panel_flags", "outside"]
+"""Further columns of ``parts.csv`` in this order when present; any others follow sorted by name.  A structured
+value (a list or a table: a beam plate's ``nodes``, ``frame``, ``plane``) is one JSON cell (:func:`csv_cell`).
+``panel_flags`` was ``flags`` before 0.2 (it shadowed ``pandas.DataFrame.flags``; docs/migration.md)."""
 
 ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
                  "rotations", "mirror_allowed", "file"]
@@ -254,11 +256,17 @@ def _is_number(text: str) -> bool:
 
 def csv_cell(value: object) -> object:
     """A CSV cell value: text on one line, and text that a spreadsheet would run as a formula (starting with
-    ``= + - @``, tab or CR) prefixed with ``'`` — numbers, and text that is a plain number, stay as they are.
+    ``= + - @``, tab or CR) prefixed with ``'`` — numbers, and text that is a plain number, stay as they are;
+    a list, tuple or dict becomes one JSON cell (double quotes, keys sorted, no NaN).
 
     >>> csv_cell("=HYPERLINK(1)"), csv_cell("-12.5"), csv_cell(-3), csv_cell("a\\nb")
     ("'=HYPERLINK(1)", '-12.5', -3, 'a b')
+    >>> csv_cell({"o": [0, 1.5]}), csv_cell((1, 2))
+    ('{"o": [0, 1.5]}', '[1, 2]')
     """
+    if isinstance(value, (list, tuple, dict)):
+        import json
+        return json.dumps(json_safe(value), sort_keys=True, ensure_ascii=False, allow_nan=False)
     if not isinstance(value, str):
         return value
     if value.startswith(CSV_FORMULA_PREFIXES) and not _is_number(value):

@@ -122,6 +122,23 @@ SECTION_DEFAULTS: dict[str, dict[str, Any]] = {
 }
 """Defaults that differ between sections sharing one parameter record."""
 
+SECTION_TEXT: dict[str, str] = {
+    "design": "Name and description shown in the report and the manifest.",
+    "geometry": "What to build: a construction (`method` + `[geometry.params]`) or a quad mesh file (`mesh`), "
+                "and its placement in millimetres.",
+    "optimize": "Optional, for `mesh = …`: optimise the mesh for planar faces and planar polylines first (§3.3).",
+    "support": "How the node axes and support planes are found.",
+    "beams": "Planar beam plates along the support planes and their joints.",
+    "panels": "Glass panels.",
+    "glazing": "The glazing strips the panes rest on, their gaskets and the bite check (docs/glazing.md).",
+    "splices": "Bolted cover-plate splices where a long beam is cut into pieces (docs/glazing.md).",
+    "nesting": "Glass stock sheets and the nesting of the panels.",
+    "beam_nesting": "Plate stock for the beam plates (same keys as `[nesting]`; defaults: sheet 6000 × 2000, "
+                    "budget 5 s, tag prefix `B`).",
+    "output": "Optional files.",
+}
+"""What each section is for (the README's key tables and the comments of ``ppfab new``)."""
+
 
 @dataclass(frozen=True)
 class Design:

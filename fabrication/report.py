@@ -262,13 +262,24 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
                 "" if r["dihedral_deg"] is None else r["dihedral_deg"], r["torsion_deg"], r["torsion_mm"])
                for r in node_rows],
               left=(0, 2, 6, 7))
-    listed = sorted(k for k in files)
     rep.heading("Files")
     models = [(files[k], what) for k, what in (("glb", "3D view (glTF: drop it into any glTF viewer)"),
                                                 ("ifc", "BIM (IFC4)"), ("rhino", "Rhino")) if k in files]
     if models:
-        rep.raw("<p>" + " · ".join(f'<a href="{esc(str(f))}">{esc(str(f))}</a> {esc(what)}'
+        rep.raw("<p>" + " · ".join(f'<a href="{_href(str(f))}">{esc(str(f))}</a> {esc(what)}'
                                    for f, what in models) + "</p>")
-    rep.paragraph("This folder holds: " + ", ".join(listed) + ". See manifest.json for every file and its sha256.",
-                  "muted")
+    rows = [(path, key.replace("_", " ")) for key, value in sorted(files.items())
+            for path in (value if isinstance(value, list) else [value])]
+    rows.append(("manifest.json", "manifest: every file and its sha256"))
+    rep.raw('<div class="scroll"><table class="files"><thead><tr><th class="l">file</th><th class="l">what</th>'
+            "</tr></thead><tbody>" + "".join(f'<tr><td class="l"><a href="{_href(str(f))}">{esc(str(f))}</a></td>'
+                                             f'<td class="l">{esc(what)}</td></tr>' for f, what in rows)
+            + "</tbody></table></div>")
     return rep.html()
+
+
+def _href(path: str) -> str:
+    """A relative link to a file of the folder (``glass/glass_01.dxf``), percent-encoded and HTML-escaped."""
+    from urllib.parse import quote
+
+    return esc(quote(path.replace("\\", "/")))

@@ -27,7 +27,7 @@ CORE_THIRD_PARTY = {"numpy", "scipy"}
 # fabrication's layers, lowest first; a module may import its own layer and the ones below
 FAB_LAYERS = [
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
-     "htmlreport", "report", "marking", "drawings", "nodetypes"},
+     "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter"},
     {"writers", "verify"},
     {"pipeline"},
     {"cli", "studio"},

@@ -10,7 +10,8 @@ Errors derived from :class:`~ppfab.errors.PpfabError` print one line
 ``ppfab: error: …`` and exit with their code (2 for bad input); so does an operating-system error
 (disk full, permission denied: exit 1).  Ctrl-C, SIGTERM and SIGHUP stop a run the same way (an
 exception unwinds it, so output folders are cleaned up) and exit ``128 + signal`` (130, 143, 129).
-numpy's RuntimeWarnings (overflow, invalid value) go to the log (``--verbose``), never raw to stderr.
+Library warnings (numpy's overflow and invalid-value RuntimeWarnings, matplotlib's, any other) and the
+libraries' own logger warnings go to the log (``--verbose``), never raw to stderr.
 No traceback reaches the user unless ``PPFAB_DEBUG=1``.
 """
 
@@ -109,6 +110,10 @@ def _interrupted(exc: BaseException) -> int | None:
     return None
 
 
+LIBRARY_LOGGERS = ("matplotlib", "ezdxf", "trimesh", "shapely", "build123d", "OCP", "ifcopenshell", "PIL")
+"""Loggers of the libraries ppfab calls: their warnings are shown with ``--verbose`` only."""
+
+
 def _showwarning(message, category, filename, lineno, file=None, line=None) -> None:
     logging.getLogger("ppfab").info("%s: %s", category.__name__, message)
 
@@ -140,9 +145,11 @@ def main(argv: list[str] | None = None) -> int:
             previous[signal.SIGINT] = signal.signal(signal.SIGINT, _on_signal)
     try:
         with warnings.catch_warnings():
-            if not debug:
-                warnings.simplefilter("always", RuntimeWarning)
+            if not debug:                        # every library warning goes to the log, none to the terminal
+                warnings.simplefilter("always")
                 warnings.showwarning = _showwarning
+                for name in LIBRARY_LOGGERS:
+                    logging.getLogger(name).setLevel(logging.INFO if level == logging.INFO else logging.ERROR)
             return int(args._run(args) or 0)
     except PpfabError as exc:
         if debug:

@@ -14,6 +14,7 @@ ORDER = 10
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("design", nargs="?", default=None,
                    help="design file (TOML); omitted: the bundled default example")
+    p.add_argument("--example", metavar="NAME", help="build a bundled example (`ppfab examples` lists them)")
     p.add_argument("-o", "--out", required=True, help="output folder (written atomically)")
     p.add_argument("--force", action="store_true",
                    help="replace an existing output folder, if it is a previous ppfab build")
@@ -38,13 +39,19 @@ def preload() -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ppfab.errors import DesignError
+
     from ..design import load_design
+    from ..examples import example_path
     from ..pipeline.folder import check_target
     from ..pipeline.lock import OutputLock
     from ..pipeline.stages import build
     from ..pipeline.progress import Progress
 
-    design = load_design(args.design)
+    if args.example and args.design:
+        raise DesignError("--example", f"give a design file or --example, not both ({args.design!r} and "
+                                       f"--example {args.example!r})")
+    design = load_design(example_path(args.example) if args.example else args.design)
     progress = Progress(quiet=args.quiet or args.json)
     check_target(args.out, force=args.force, protect=design.input_files())    # refuse before the work
     with OutputLock(args.out):                                                 # one run per output folder

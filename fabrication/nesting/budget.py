@@ -12,7 +12,8 @@ takes about its budget.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Callable
 
 UNITS_PER_SECOND = 1_000_000.0
 """Work units per second of ``time_budget`` on the reference machine."""
@@ -28,6 +29,10 @@ class Work:
     """Deterministic work counter (see the module docstring)."""
 
     units: float = 0.0
+    on_add: Callable[[float], None] | None = field(default=None, repr=False, compare=False)
+    """Called with the units so far after each charge (the progress display); never changes the count."""
 
     def add(self, n: float) -> None:
         self.units += n
+        if self.on_add is not None:
+            self.on_add(self.units)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Callable
 
 import numpy as np
 
@@ -31,9 +32,10 @@ from .rows import Sheet
 from .search import first_solution, improve
 
 
-def _solve(cat: Catalog, run: Run, units: float, seed: int, stream: int, lb: int) -> tuple[list[Sheet], Work, list]:
+def _solve(cat: Catalog, run: Run, units: float, seed: int, stream: int, lb: int,
+           on_add: Callable[[float], None] | None = None) -> tuple[list[Sheet], Work, list]:
     """One run: the filler's greedy sheets, improved until ``units`` are spent (or the bound is met)."""
-    work = Work()
+    work = Work(on_add=on_add)
     filler = run.make(cat, work)
     sheets, reached = first_solution(filler, np.ones(cat.n_parts, dtype=bool), filler.initial_config(), None, units)
     history = [(work.units, len(sheets))]
@@ -64,13 +66,16 @@ def work_budget(params: NestingParams) -> float:
     return float(params.time_budget) * UNITS_PER_SECOND
 
 
-def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
+def nest(parts: list[FlatPart], params: NestingParams | None = None,
+         on_progress: Callable[[float, float, int | None], None] | None = None) -> Nesting:
     """Place every part on stock sheets (see the module docstring).
 
     Parameters
     ----------
     parts : flat parts (outlines ``(k, 2)`` counter-clockwise, mm); ids must be unique
     params : :class:`NestingParams` (defaults when ``None``)
+    on_progress : called as ``on_progress(units spent, units of the budget, fewest sheets so far or None)``
+        about every 1/200 of the budget (it only watches: the layout does not depend on it)
 
     Returns
     -------
@@ -100,12 +105,20 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     runs = strategy.runs(cat, p)
     spent = fixed.units
     best = None
+    step = budget / 200.0
+    shown = [spent]
+
+    def meter(units: float) -> None:
+        if on_progress is not None and spent + units >= shown[0] + step:
+            shown[0] = spent + units
+            on_progress(min(shown[0], budget), budget, None if best is None else len(best[2]))
+
     for k, run in enumerate(runs):
         share = run.share / sum(r.share for r in runs[k:])
         units = share * max(budget - spent, 0.0)
         if best is not None and run.floor is not None and run.floor(cat) > units:
             continue                    # cannot pay even its cheapest first solution: left out
-        sheets, work, history = _solve(cat, run, units, p.seed, k, lb_usable)
+        sheets, work, history = _solve(cat, run, units, p.seed, k, lb_usable, meter if on_progress else None)
         spent += work.units
         key = (len(sheets), rank_of(run.mode))
         if best is None or key < best[0]:
@@ -113,6 +126,8 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None) -> Nesting:
     if best is None:                     # every strategy has at least one run, and the first always runs
         raise NestingError(f"nesting strategy {strategy.name!r} made no run (internal error)")
     _, mode, sheets, history = best
+    if on_progress is not None:
+        on_progress(budget, budget, len(sheets))
     placements = _placements(cat, sheets, p)
     fills = sorted((s.area / sheet_area for s in sheets), reverse=True)
     return Nesting(

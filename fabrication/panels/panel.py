@@ -107,7 +107,7 @@ class Panel:
             "weight_kg": round(self.weight_kg, 3),
             "planarity_dev_mm": round(self.deviation_mm, 4),
             "min_angle_deg": round(min(self.corner_angles_deg), 3),
-            "flags": ";".join(self.flags),
+            "panel_flags": ";".join(self.flags),
             "outside": "up",
         }
         if self.face_ij is not None:

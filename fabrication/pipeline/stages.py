@@ -196,13 +196,17 @@ def stage_nesting(design: Design, panels: PanelSet, beams: BeamSet, progress: Pr
     glass_parts = type_flat_parts(list(panels.panels))
     beam_parts = beams.flat_parts()
     nestings: list[Nesting] = []
+    notes = []
     for parts, params, what in ((glass_parts, design.nesting, "glass"), (beam_parts, design.beam_nesting, "plates")):
-        nesting = nest(parts, params)
+        def shown(done: float, total: float, sheets: int | None, what: str = what, n: int = len(parts)) -> None:
+            progress.advance(done / 1e6, total / 1e6, f"{what}, {n} parts: "
+                             + (f"best {sheets} sheets" if sheets else "first layout"))
+        nesting = nest(parts, params, on_progress=shown)
         verify_nesting(parts, nesting, params)
-        progress.note(f"{what}: {nesting.sheets} sheets ({100 * nesting.utilisation:.1f} %, "
-                      f"bound {nesting.lower_bound});")
+        notes.append(f"{what}: {nesting.sheets} sheets ({100 * nesting.utilisation:.1f} %, "
+                     f"bound {nesting.lower_bound})")
         nestings.append(nesting)
-    progress.done()
+    progress.done("; ".join(notes))
     return NestingSet(tuple(glass_parts), tuple(beam_parts), nestings[0], nestings[1])
 
 

@@ -6,6 +6,7 @@ Not a check (the leading underscore keeps it out of the registry).
 from __future__ import annotations
 
 import ast
+import json
 from typing import Any
 
 import numpy as np
@@ -21,9 +22,16 @@ def number(text: Any, default: float = float("nan")) -> float:
 
 
 def literal(text: str) -> Any:
-    """A cell holding a Python/JSON literal (``[0, 1]``, ``{'origin': …}``), or ``None`` when it does not."""
+    """A cell holding a JSON value (``[0, 1]``, ``{"origin": …}``; a Python literal as builds before 0.2 wrote
+    it), or ``None`` when it does not."""
+    if not text:
+        return None
     try:
-        return ast.literal_eval(text) if text else None
+        return json.loads(text)
+    except ValueError:
+        pass
+    try:
+        return ast.literal_eval(text)
     except (ValueError, SyntaxError, MemoryError, RecursionError):
         return None
 

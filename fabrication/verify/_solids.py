@@ -15,20 +15,16 @@ A solid read back from a file is compared with the part's ``parts.csv`` row and 
 
 from __future__ import annotations
 
-import ast
-
 import numpy as np
 
 from . import Verification
 from ._tolerance import type_tolerance
+from ._shapes import literal
 
 
 def parse_list(text: str) -> list:
     """A list written into ``parts.csv`` (``[0.99, -0.12, 0.0, 15709.2]``), or ``[]``."""
-    try:
-        value = ast.literal_eval(text) if text else []
-    except (ValueError, SyntaxError):
-        return []
+    value = literal(text)
     return list(value) if isinstance(value, (list, tuple)) else []
 
 
@@ -54,7 +50,7 @@ def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None
         vt = np.linalg.svd(corners - c)[2]
         return c + inset_face_2d(corners, 0.5 * float(fab.get("panel_gap", 0.0))) @ vt[:2]
     sheet = v.data.get("dxf_outlines", {}).get(row["part_id"])
-    frame = ast.literal_eval(row["frame"]) if row.get("frame", "").startswith("{") else None
+    frame = literal(row.get("frame", ""))
     if row["kind"] != "beam" or sheet is None or not isinstance(frame, dict):
         return None
     a = np.radians(float(row["rotation_deg"]))

@@ -68,12 +68,17 @@ def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | 
     if parallel and any(w.name in SECOND_PROCESS for w in enabled):
         return write_split(build, out, progress, enabled)
     files: Files = {}
-    for w in enabled:
-        progress.start(w.name)
-        try:
-            note = w.write(build, out, files)
-        except BaseException:
-            progress.fail()
-            raise
-        progress.done(note)
+    progress.watch(out)                       # the status counts the files written so far
+    try:
+        for k, w in enumerate(enabled):
+            progress.start(w.name)
+            progress.advance(k, None, f"file set {k + 1} of {len(enabled)}")
+            try:
+                note = w.write(build, out, files)
+            except BaseException:
+                progress.fail()
+                raise
+            progress.done(note)
+    finally:
+        progress.watch(None)
     return files

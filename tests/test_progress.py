@@ -1,0 +1,151 @@
+"""The progress display: every stage reports what it has done (nesting by budget spent and sheets, files by
+file sets and files written, optimisation by iteration and δ), a keep-alive fills any gap, no library warning
+reaches the terminal, ``--quiet`` and ``--json`` stay quiet, and no stage line carries a stray ``;``."""
+
+from __future__ import annotations
+
+import io
+import json
+import time
+import tomllib
+import warnings
+
+import pytest
+
+from fabrication.cli import main
+from fabrication.pipeline.progress import Event, Progress
+
+from conftest import small_design
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """A tiny build with its progress on a captured stream, the events recorded by a hook."""
+    from fabrication import build, parse_design
+
+    out = tmp_path_factory.mktemp("progress") / "out"
+    stream = io.StringIO()
+    p = Progress(stream=stream, interval=0.3, tick=0.1)
+    seen: list[Event] = []
+    p.hooks.append(seen.append)
+    design = parse_design(tomllib.loads(small_design(faces_u=4, faces_v=3)))
+    with warnings.catch_warnings(record=True):
+        b = build(design, progress=p)
+        b.write(out, progress=p)
+    return p, seen, stream.getvalue()
+
+
+def test_every_stage_starts_and_ends_and_the_hook_sees_every_event(run):
+    p, seen, _ = run
+    assert seen == p.events
+    starts = [e.stage for e in p.events if e.kind == "start"]
+    dones = [e.stage for e in p.events if e.kind == "done"]
+    assert starts == dones and {"geometry", "nesting", "step", "dxf", "report", "verify"} <= set(starts)
+    assert all(b.t >= a.t for a, b in zip(p.events, p.events[1:]))
+
+
+def test_nesting_reports_budget_spent_and_sheets(run):
+    p, _, _ = run
+    adv = [e for e in p.events if e.stage == "nesting" and e.kind == "advance"]
+    glass = [e for e in adv if e.text.startswith("glass")]
+    plates = [e for e in adv if e.text.startswith("plates")]
+    for part in (glass, plates):
+        assert len(part) >= 20                              # about every 1/200 of the budget
+        done = [e.done for e in part]
+        assert done == sorted(done) and done[-1] == part[-1].total == pytest.approx(0.5)
+        assert "sheets" in part[-1].text
+
+
+def test_file_writers_report_their_sets_in_order(run):
+    p, _, _ = run
+    adv = [e for e in p.events if e.kind == "advance" and e.text.startswith("file set")]
+    assert [e.done for e in adv] == list(range(len(adv))) and len(adv) >= 8
+    assert adv[-1].text == f"file set {len(adv)} of {len(adv)}"
+
+
+def test_long_stages_are_kept_alive(run):
+    """A stage longer than a few intervals shows keep-alives between its reports, counted rather than timed (a
+    call into the CAD kernel or rhino3dm holds the interpreter lock and delays the ticker while it runs)."""
+    p, _, _ = run
+    long = {s: t for s, t in p.times.items() if t > 3 * (p.interval + p.tick)}
+    for stage, seconds in long.items():
+        events = [e for e in p.events if e.stage == stage and e.kind in ("tick", "advance", "update")]
+        assert len(events) >= 2 and any(e.kind == "tick" for e in events), (stage, seconds, len(events))
+    assert sum(e.kind == "tick" for e in p.events) >= len(long)
+
+
+def test_stage_lines_are_clean(run):
+    _, _, text = run
+    lines = [ln for ln in text.splitlines() if ln.startswith("[ppfab]")]
+    assert len(lines) >= 15
+    for ln in lines:
+        assert ";  " not in ln and not ln.rstrip().endswith(";") and "; (" not in ln
+    nesting = next(ln for ln in text.splitlines() if "bound" in ln and "plates:" in ln)
+    assert "); plates:" in nesting
+
+
+def test_optimisation_reports_iterations_and_delta():
+    import numpy as np
+
+    from ppfab.io import load_mesh
+    from ppfab.optimize import optimize
+
+    from conftest import SHARED_DATA
+
+    stream = io.StringIO()
+    p = Progress(stream=stream, interval=0.0)
+    p.start("geometry")
+    optimize(load_mesh(SHARED_DATA / "compas_libigl__tubemesh.off"), {"families": "rows"}, callback=p.iteration)
+    p.done("ok")
+    its = [e for e in p.events if e.kind == "update"]
+    assert len(its) >= 3 and [e.done for e in its] == sorted(e.done for e in its)
+    assert all("max δ_f" in e.text and "max δ_P" in e.text for e in its)
+    assert np.isfinite([float(e.text.split("max δ_f ")[1].split(",")[0]) for e in its]).all()
+
+
+def test_library_warnings_go_to_the_log_not_the_terminal(tmp_path, capsys, monkeypatch):
+    """A warning raised inside a build (as matplotlib's overflow warnings were) does not reach stderr."""
+    import fabrication.pipeline.stages as stages
+
+    real = stages.stage_quality
+
+    def noisy(*a, **k):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        warnings.warn("Attempting to set identical low and high xlims", UserWarning)
+        return real(*a, **k)
+
+    monkeypatch.setattr(stages, "stage_quality", noisy)
+    design = tmp_path / "d.toml"
+    design.write_text(small_design(faces_u=3, faces_v=3), encoding="utf-8")
+    assert main(["build", str(design), "-o", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert "Warning" not in err and "warn(" not in err
+    assert "[ppfab] nesting" in err
+
+
+def test_quiet_and_json_print_no_progress(tmp_path, capsys):
+    design = tmp_path / "d.toml"
+    design.write_text(small_design(faces_u=3, faces_v=3), encoding="utf-8")
+    assert main(["build", str(design), "-o", str(tmp_path / "q"), "--quiet"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err == "" and cap.out == ""
+    assert main(["build", str(design), "-o", str(tmp_path / "j"), "--json"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err == "" and json.loads(cap.out)["summary"]["panels"] == 9
+
+
+def test_a_terminal_gets_a_bar_with_the_time_left():
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    s = Tty()
+    p = Progress(stream=s, tick=0.05)
+    p.start("nesting")
+    for k in range(1, 5):
+        p.advance(k, 10, "glass, 9 parts: best 2 sheets")
+        time.sleep(0.06)
+    p.done("glass: 2 sheets")
+    text = s.getvalue()
+    assert "%|" in text and "<" in text and "glass, 9 parts: best 2 sheets" in text     # bar, time left, status
+    assert text.rstrip().endswith("glass: 2 sheets (" + text.rstrip().rsplit("(", 1)[1])
