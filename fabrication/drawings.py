@@ -31,6 +31,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .contract import one_line
 from .marking import LABEL_CHAR_WIDTH, TextLine, place_label, upright_deg
 
 SVG_NS = "http://www.w3.org/2000/svg"
@@ -88,7 +89,7 @@ class SvgSheet:
         self.root = ET.Element("svg", {"xmlns": SVG_NS, "version": "1.1", "width": _fmt(width_px),
                                        "height": _fmt(width_px * h / w), "viewBox": f"0 0 {_fmt(w)} {_fmt(h)}",
                                        "font-family": FONT, "data-frame": f"{x0!r} {y1!r}"})
-        ET.SubElement(self.root, "title").text = title
+        ET.SubElement(self.root, "title").text = one_line(title)   # XML 1.0 admits no control characters
         ET.SubElement(self.root, "rect", {"x": "0", "y": "0", "width": _fmt(w), "height": _fmt(h), "fill": "white"})
         self.texts: list[DrawnText] = []
 
@@ -118,6 +119,7 @@ class SvgSheet:
     def text(self, text: str, centre: np.ndarray, height: float, rotation_deg: float = 0.0, part_id: str = "",
              fill: str = "#102a43", anchor: str = "middle") -> DrawnText:
         """A text centred on ``centre`` (``anchor="start"``: starting there), font size ``height``."""
+        text = one_line(text)                      # XML 1.0 admits no control characters
         x, y = self.xy(centre)
         attrs = {"x": _fmt(x), "y": _fmt(y), "font-size": _fmt(height), "text-anchor": anchor,
                  "dominant-baseline": "central", "fill": fill}
