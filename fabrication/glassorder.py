@@ -25,6 +25,7 @@ from ppfab.errors import FabricationError
 
 from .contract import ORDER_CORNERS
 from .flatpart import FlatPart
+from .parts import _num as _r
 from .parts import order_rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -73,11 +74,6 @@ def reference_frame(outline: np.ndarray) -> np.ndarray:
     out[0] = 0.0
     out[1, 1] = 0.0
     return out
-
-
-def _r(v: float, digits: int) -> float:
-    r = round(float(v), digits)
-    return 0.0 if r == 0 else r
 
 
 def shape_columns(part: FlatPart) -> dict[str, float]:

@@ -269,8 +269,8 @@ class Studio:
             self.build_msg.content = f"{text}\n\nreport: `{report}`" if report else text
             self.open_report.visible = report is not None
 
-        self.job = BuildJob(self.model.design(), out, tell)
-        self.job.start()
+        job = BuildJob(self.model.design(), out, tell)
+        self.job = job.start()                  # published once its thread runs (join before start raises)
 
     def _show_report(self) -> None:
         """Open the build's report in the browser of the machine the studio runs on (a page served over http

@@ -11,30 +11,17 @@ format is one new module.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 from ppfab.registry import Registry
 
+from .base import Files, Writer
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
     from ..pipeline.progress import Progress
     from ..pipeline.records import Build
-
-Files = dict[str, "str | list[str]"]
-"""The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""
-
-
-@dataclass(frozen=True)
-class Writer:
-    """One entry of :data:`WRITERS`."""
-
-    name: str
-    order: int
-    write: Callable[["Build", Path, Files], str]
-    enabled: Callable[["Design"], bool]
-
 
 _TABLE: Registry[Writer] = Registry("writer", "fabrication.writers")
 WRITERS: dict[str, Writer] = _TABLE.entries

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from . import Files, Writer
+from .base import Files, Writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.progress import Progress
@@ -109,8 +109,10 @@ def write_split(build: "Build", out: Path, progress: "Progress", writers: list[W
     order = [w.name for w in writers]
     added: dict[str, Files] = {}
     joined = False
+    main = [w.name for w in writers if w.name not in SECOND_PROCESS]
     proc.start()
     send.close()
+    progress.watch(out)                       # the status counts the files written so far (both processes)
     try:
         for k, w in enumerate(writers):
             if w.name in SECOND_PROCESS:
@@ -119,6 +121,8 @@ def write_split(build: "Build", out: Path, progress: "Progress", writers: list[W
                 _join(build, out, progress, proc, recv, side, added, order)
                 joined = True
             progress.start(w.name)
+            i = main.index(w.name)
+            progress.advance(i, None, f"file set {i + 1} of {len(main)}")
             try:
                 added[w.name], note = _run(w, build, out, _merged(added, order[:k]))
             except BaseException:
@@ -128,6 +132,7 @@ def write_split(build: "Build", out: Path, progress: "Progress", writers: list[W
         if not joined:
             _join(build, out, progress, proc, recv, side, added, order)
     finally:
+        progress.watch(None)
         if proc.is_alive():
             proc.terminate()
         proc.join()
