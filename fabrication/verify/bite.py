@@ -18,6 +18,11 @@ from . import Verification, check, read_csv
 from ._shapes import solid_points
 
 
+def _cross2(a: np.ndarray, b: np.ndarray) -> float:
+    """The z component of ``a × b`` for two vectors of the plane (2,)."""
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
 def _pane_plane(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c = corners.mean(axis=0)
     vt = np.linalg.svd(corners - c)[2]
@@ -47,7 +52,7 @@ def edge_bites(corners: np.ndarray, gap: float, offset: float, gaskets: dict[tup
         for j in range(4):                                   # the face edge this pane edge was inset from
             a, b = flat[j], flat[(j + 1) % 4]
             t = (b - a) / np.linalg.norm(b - a)
-            dist.append(abs(float(np.cross(t, mid - a))) + abs(float(np.cross(t, (q - p) / np.linalg.norm(q - p)))))
+            dist.append(abs(_cross2(t, mid - a)) + abs(_cross2(t, (q - p) / np.linalg.norm(q - p))))
         j = int(np.argmin(dist))
         key = tuple(sorted((int(face[j]), int(face[(j + 1) % 4]))))
         mid3 = c + mid @ uv

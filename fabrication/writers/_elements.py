@@ -163,6 +163,14 @@ def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
     return out
 
 
+def part_material(el: Element, beams: str) -> str:
+    """The material of a steel element: ``beams`` (``[beams] material``) for a beam plate, the ``material`` of
+    its ``parts.csv`` row for a glazing strip or splice cover plate (``[glazing]`` / ``[splices] material``)."""
+    if el.kind == "beam":
+        return beams
+    return str(el.props.get("material") or beams)
+
+
 def _props(row: dict) -> dict[str, Value]:
     out: dict[str, Value] = {}
     for k in EXCHANGE_PROPERTIES:
