@@ -26,6 +26,8 @@ from ppfab.errors import DesignError
 from ppfab.frame import Frame
 from ppfab.schema import param
 
+from ..contract import splice_plate_ids
+
 
 @dataclass(frozen=True)
 class SpliceParams:
@@ -169,7 +171,7 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
             xs = sorted(sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0))
             holes = np.array([at(x, y) for y in ys for x in xs])
             fits = bool(body.contains(Polygon(outline)))
-            ids = (f"SP{beam[1:]}-{a.piece:02d}A", f"SP{beam[1:]}-{a.piece:02d}B")
+            ids = splice_plate_ids(beam, a.piece)
             out.append(Splice(ids, beam, (a.part_id, b.part_id), f, outline, holes, params.hole,
                               params.plate_thickness, a.thickness, fits))
     return out

@@ -31,6 +31,7 @@ from ppfab import planes as pl
 from ppfab.frame import Frame
 from ppfab.support.structure import SupportStructure, edge_polyline_index
 
+from ..contract import strip_id
 from .params import GlazingParams
 
 
@@ -141,6 +142,6 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
         beam = beam_ids[k] if k >= 0 else "B-X"
         q = counters.get(beam, 0)
         counters[beam] = q + 1
-        out.append(Strip(f"GS{beam[1:]}-{q:02d}", e, (i, j), beam, frame, ends[0], span - ends[1],
+        out.append(Strip(strip_id(beam, q), e, (i, j), beam, frame, ends[0], span - ends[1],
                          params.width, ts, (runs[0], runs[1])))
     return out

@@ -13,7 +13,9 @@ smallest must agree with ``bites.csv`` within 0.01 mm.
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
+from ..contract import gasket_id
 from . import Verification, check, read_csv
 from ._shapes import solid_points
 
@@ -30,13 +32,17 @@ def _pane_plane(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def edge_bites(corners: np.ndarray, gap: float, offset: float, gaskets: dict[tuple[int, int], np.ndarray],
-               face: np.ndarray, stations: int = 9) -> dict[tuple[int, int], float]:
+               face: np.ndarray, stations: int = 9, tree: cKDTree | None = None) -> dict[tuple[int, int], float]:
     """Mesh edge ``(a, b)`` (sorted vertex ids) → the smallest bite (mm) of the pane edge over it.
 
     ``corners (4, 3)`` of the face ``face (4,)`` (vertex ids); ``gaskets``: mesh edge → ``(8, 3)`` vertices of
-    its gasket solid ``and`` its strip's centre (row 8)."""
+    its gasket solid ``and`` its strip's centre (row 8); ``tree``: a k-d tree of those centres in the order of
+    ``gaskets`` (built here when not given: pass one when calling per face)."""
     from shapely.geometry import LineString, Point, Polygon
 
+    values = list(gaskets.values())
+    if tree is None and values:
+        tree = cKDTree(np.array([g[8] for g in values]))
     c, uv, n = _pane_plane(corners)
     flat = (corners - c) @ uv.T
     pane = Polygon(flat)
@@ -56,10 +62,10 @@ def edge_bites(corners: np.ndarray, gap: float, offset: float, gaskets: dict[tup
         j = int(np.argmin(dist))
         key = tuple(sorted((int(face[j]), int(face[(j + 1) % 4]))))
         mid3 = c + mid @ uv
-        g = min(gaskets.values(), key=lambda x: float(np.linalg.norm(x[8] - mid3)), default=None)  # by position
-        if g is None:
+        if tree is None:
             out[key] = 0.0           # type: ignore[index]
             continue
+        g = values[int(tree.query(mid3)[1])]                   # by position: the nearest strip centre
         pts, centre = g[:8], g[8]
         side = np.sign((pts.mean(axis=0) - c) @ n) or 1.0
         normal = side * n
@@ -114,7 +120,7 @@ def check_bite(v: Verification) -> None:
         if row["kind"] != "strip":
             continue
         pid = row["part_id"]
-        strip, gasket = solids.get(pid), solids.get("GK" + pid[2:])
+        strip, gasket = solids.get(pid), solids.get(gasket_id(pid))
         if strip is None or gasket is None:
             v.error(rel, pid, "strip or its gasket has no solid")
             continue
@@ -125,11 +131,12 @@ def check_bite(v: Verification) -> None:
         for r in read_csv(v.folder / files["bites_csv"]):
             written[r["panel"]] = min(written.get(r["panel"], np.inf), float(r["bite_mm"]))
     low = []
+    tree = cKDTree(np.array([g[8] for g in gaskets.values()])) if gaskets else None
     for row in v.data.get("parts", []):
         if row["kind"] != "panel" or row.get("face", "") == "":
             continue
         face = np.asarray(mesh.faces[int(row["face"])])
-        bites = edge_bites(mesh.vertices[face], gap, offset, gaskets, face)
+        bites = edge_bites(mesh.vertices[face], gap, offset, gaskets, face, tree=tree)
         for key, bite in bites.items():
             if bite < min_bite - 1e-6:
                 low.append((bite, row["part_id"], key))

@@ -4,12 +4,10 @@ and marks.  The outlines found are kept in ``data["cut"]`` (part id → sheet fi
 from __future__ import annotations
 
 from .. import contract
+from ..contract import SHEET_KINDS
 from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
 from ._tolerance import type_tolerance
-
-SHEET_KINDS = ("panel", "beam")
-"""The kinds of part nested on cutting sheets (strips are cut from bar, cover plates from their type DXF)."""
 
 
 @check("dxf", 50)

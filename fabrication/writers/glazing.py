@@ -15,13 +15,12 @@ import numpy as np
 
 from ppfab.frame import Frame
 
+from ..contract import BITES_CSV, GLAZING_STEP, SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_CSV, WELDS_CSV, gasket_id
 from ..parts import csv_text
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
-
-SPLICE_DIR = "splices"
 
 
 def strip_solids(glazing) -> list:
@@ -37,11 +36,6 @@ def strip_solids(glazing) -> list:
         gasket.color = _colour("mesh")
         out += [strip, gasket]
     return out
-
-
-def gasket_id(strip_id: str) -> str:
-    """``GS-U03-07`` → ``GK-U03-07``."""
-    return "GK" + strip_id[2:]
 
 
 def splice_solids(glazing) -> list:
@@ -113,35 +107,35 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
     name = build.design.info.name
     notes = []
     if g.strips:
-        export_step(strip_solids(g), out / "glazing.step", name=f"{name} glazing",
+        export_step(strip_solids(g), out / GLAZING_STEP, name=f"{name} glazing",
                     description=f"glazing strips and gaskets of {name}")
-        files["glazing_step"] = "glazing.step"
+        files["glazing_step"] = GLAZING_STEP
         rows = [{"panel": b.panel, "edge": b.edge, "mesh_edge": b.mesh_edge, "strip": b.strip,
                  "bite_mm": _plain(b.bite), "supported_mm": _plain(b.supported), "edge_mm": _plain(b.length),
                  "tilt_deg": _plain(b.tilt_deg, 4)} for b in g.bites]
-        (out / "bites.csv").write_text(csv_text(rows, list(rows[0]) if rows else ["panel"]), encoding="utf-8")
-        files["bites_csv"] = "bites.csv"
+        (out / BITES_CSV).write_text(csv_text(rows, list(rows[0]) if rows else ["panel"]), encoding="utf-8")
+        files["bites_csv"] = BITES_CSV
         from ..glazing.rows import strip_rows
 
         cuts = [{"bar": r["bar"], "start_mm": r["bar_start_mm"], "length_mm": r["length_mm"],
                  "part_id": r["part_id"], "nest_tag": r["nest_tag"], "beam": r["beam"]}
                 for r in strip_rows(g, build.beams)]
         cuts.sort(key=lambda r: (r["bar"], r["start_mm"]))
-        (out / "strip_cuts.csv").write_text(csv_text(cuts, ["bar", "start_mm", "length_mm", "part_id", "nest_tag",
+        (out / STRIP_CUTS_CSV).write_text(csv_text(cuts, ["bar", "start_mm", "length_mm", "part_id", "nest_tag",
                                                              "beam"]), encoding="utf-8")
-        files["strip_cuts_csv"] = "strip_cuts.csv"
+        files["strip_cuts_csv"] = STRIP_CUTS_CSV
         notes.append(f"{len(g.strips)} strips, bite min {g.bite_min:.1f} mm")
     if g.splices:
-        export_step(splice_solids(g), out / "splices.step", name=f"{name} splices",
+        export_step(splice_solids(g), out / SPLICES_STEP, name=f"{name} splices",
                     description=f"splice cover plates of {name}")
-        files["splices_step"] = "splices.step"
+        files["splices_step"] = SPLICES_STEP
         files["splice_dxfs"] = write_splice_dxfs(g, out / SPLICE_DIR)
         notes.append(f"{len(g.splices)} splices")
     if g.welds:
         rows = [{"node": w.vertex, "part": w.part, "to": w.to, "dihedral_deg": _plain(w.dihedral_deg, 4),
                  "weld_length_mm": _plain(w.length_mm), "preparation": w.preparation, "throat_mm": w.throat_mm}
                 for w in g.welds]
-        (out / "welds.csv").write_text(csv_text(rows, list(rows[0])), encoding="utf-8")
-        files["welds_csv"] = "welds.csv"
+        (out / WELDS_CSV).write_text(csv_text(rows, list(rows[0])), encoding="utf-8")
+        files["welds_csv"] = WELDS_CSV
         notes.append(f"{len(g.welds)} welds")
     return ", ".join(notes) or "nothing to write"
