@@ -33,12 +33,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.progress import Progress
     from ..pipeline.records import Build
 
-SECOND_PROCESS: tuple[str, ...] = ("glazing", "dxf_types")
-"""Writers that read nothing of the ``files`` table and run in the second process: the glazing and splice files
-(``glazing.step`` and ``splices.step`` hold one solid per strip, gasket and cover plate: 1,692 solids on the
-bundled default, about 10 s) and the per-type DXFs (one file per panel type), beside the beam and panel STEP,
-the sheets, tables, exchange files and drawings (on the bundled default the two halves take about the same
-time)."""
+SECOND_PROCESS: tuple[str, ...] = ("dxf_types",)
+"""Writers that read nothing of the ``files`` table and run in the second process: the per-type DXFs (one file
+per panel type, the largest share of the DXF time), beside STEP, the sheets, tables, exchange files and report
+(at 22x15 to 88x60 faces the two halves take about the same time)."""
 
 READS_EVERY_FILE: tuple[str, ...] = ("report", "manifest")
 """Writers that read the whole ``files`` table: the second process is joined before the first of them."""
