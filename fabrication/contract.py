@@ -39,7 +39,15 @@ edge work and coated side (``[panels]``), the corners 1–4 in the panel's own f
 the origin, edge 12 along +x, seen from outside, counter-clockwise), the edge lengths 12, 23, 34, 41, both
 diagonals and the interior corner angles."""
 
-PART_KINDS = ("panel", "beam")
+PART_KINDS = ("panel", "beam", "strip", "splice")
+"""The ``kind`` of a ``parts.csv`` row: a glass ``panel``, a ``beam`` plate (or a piece or segment of one), a
+glazing ``strip`` (flat bar on a beam's top edge, cut from stock bars: no ``sheet``, ``bar``/``bar_start_mm``
+and ``strip_cuts.csv`` say where) and a ``splice`` cover plate (cut to its type's DXF in ``splices/``: no
+``sheet``; ``joins`` names the two beam pieces it joins)."""
+
+SHEET_KINDS = ("panel", "beam")
+"""The kinds nested on the cutting sheets (``sheet``, ``x``, ``y``, ``rotation_deg`` set, one CUT outline on
+``sheet_file``); rows of the other kinds leave those cells empty."""
 
 # -- nodes.csv / nodes.json ------------------------------------------------------------------------------
 
@@ -147,6 +155,23 @@ def piece_id(beam: str, piece: int, width: int) -> str:
     return f"{beam}-S{piece:0{width}d}"
 
 
+def strip_id(beam: str, k: int) -> str:
+    """``GS-U03-07``: glazing strip 7 (0-based, along the beam) on beam ``B-U03``."""
+    return f"GS{beam[1:]}-{k:02d}"
+
+
+def gasket_id(strip: str) -> str:
+    """``GK-U03-07``: the gasket on strip ``GS-U03-07`` (a solid of ``glazing.step``, no row of its own: the
+    strip's ``gasket`` cell describes it)."""
+    return "GK" + strip[2:]
+
+
+def splice_plate_ids(beam: str, piece: int) -> tuple[str, str]:
+    """``(SP-U03-02A, SP-U03-02B)``: the two cover plates (both faces of the plate) of the cut after piece 2
+    of beam ``B-U03``."""
+    return f"SP{beam[1:]}-{piece:02d}A", f"SP{beam[1:]}-{piece:02d}B"
+
+
 def node_id(vertex: int) -> str:
     """``N0042``: the node at OBJ vertex 42."""
     return f"N{vertex:04d}"
@@ -160,6 +185,14 @@ def nest_tag(prefix: str, sheet: int, part: int, sheet_width: int, part_width: i
 # -- file names ------------------------------------------------------------------------------------------
 
 GLASS_SHEET_DIR, GLASS_SHEET_PREFIX = "glass", "glass"
+GLAZING_STEP, SPLICES_STEP, SPLICE_DIR = "glazing.step", "splices.step", "splices"
+"""The strips (``GS-…``) and gaskets (``GK-…``); the splice cover plates with their bolt holes; the folder of
+one flat DXF per cover-plate type (``splices/SP125x285-2.dxf``: CUT outline and holes, XDATA ``part_id`` = the
+type id and ``quantity``)."""
+BITES_CSV, STRIP_CUTS_CSV, WELDS_CSV = "bites.csv", "strip_cuts.csv", "welds.csv"
+"""The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
+the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the butt-joint welds
+(``node, part, to, dihedral_deg, weld_length_mm, preparation, throat_mm``)."""
 PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
 

@@ -10,6 +10,8 @@ construction parameters)::
     [support]           how the node axes / support planes are found
     [beams]             beam plates and joints
     [panels]            glass panels
+    [glazing]           the strips the glass rests on (bite, gasket)
+    [splices]           bolted splices of beams cut into pieces
     [nesting]           stock sheets for the glass
     [beam_nesting]      stock sheets for the beam plates
     [output]            which optional files to write
@@ -35,6 +37,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ppfab.support.params import SupportParams
 
     from .beams.params import BeamParams
+    from .glazing.params import GlazingParams
+    from .glazing.splices import SpliceParams
     from .nesting import NestingParams
     from .panels import PanelParams
 
@@ -80,6 +84,14 @@ def _section_types() -> dict[str, Callable[[], type]]:
         from fabrication.nesting import NestingParams
         return NestingParams
 
+    def glazing():
+        from fabrication.glazing.params import GlazingParams
+        return GlazingParams
+
+    def splices():
+        from fabrication.glazing.splices import SpliceParams
+        return SpliceParams
+
     def optimize():
         from ppfab.optimize.params import OptimizeParams
         return OptimizeParams
@@ -95,6 +107,8 @@ def _section_types() -> dict[str, Callable[[], type]]:
         "support": support,
         "beams": beams,
         "panels": panels,
+        "glazing": glazing,
+        "splices": splices,
         "nesting": nesting,
         "beam_nesting": nesting,
         "output": lambda: OutputSection,
@@ -116,6 +130,8 @@ SECTION_TEXT: dict[str, str] = {
     "support": "How the node axes and support planes are found.",
     "beams": "Planar beam plates along the support planes and their joints.",
     "panels": "Glass panels.",
+    "glazing": "The glazing strips the panes rest on, their gaskets and the bite check (docs/glazing.md).",
+    "splices": "Bolted cover-plate splices where a long beam is cut into pieces (docs/glazing.md).",
     "nesting": "Glass stock sheets and the nesting of the panels.",
     "beam_nesting": "Plate stock for the beam plates (same keys as `[nesting]`; defaults: sheet 6000 × 2000, "
                     "budget 5 s, tag prefix `B`).",
@@ -156,6 +172,14 @@ class Design:
     @property
     def panels(self) -> "PanelParams":
         return self.sections["panels"]
+
+    @property
+    def glazing(self) -> "GlazingParams":
+        return self.sections["glazing"]
+
+    @property
+    def splices(self) -> "SpliceParams":
+        return self.sections["splices"]
 
     @property
     def nesting(self) -> "NestingParams":

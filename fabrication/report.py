@@ -236,6 +236,10 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
     rep.heading("Cutting sheets — beam plates")
     rep.raw('<div class="figs">' + "".join(_sheets(list(nest.beam_parts), nest.plates)) + "</div>")
 
+    from .repetition import repetition
+    from .report_glazing import glazing_sections
+
+    glazing_sections(rep, build, repetition(build))
     place = {r["part_id"]: r for r in parts_rows}
     rep.heading("Panels")
     rep.table(["panel", "type", "face", "area [m²]", "weight [kg]", "min/max corner [°]", "deviation [mm]",

@@ -437,6 +437,8 @@ CASES = [
          build(), 1, "the mesh is folded"),
     Case("geometry", "beams meeting at too small an angle", design(GEOMETRY + "[beams]\nmin_angle_deg = 89.5\n"),
          build(), 1, "B-U00-S00 and B-W00-S00 meet at node 0 at 86.3° (< min_angle_deg 89.5°)"),
+    Case("geometry", "panes without enough bite on their glazing strips", design(GEOMETRY + "[glazing]\nwidth = 30.0\n"),
+         build(), 1, "bite less than panels.min_bite = 15 mm on their glazing strip"),
     Case("geometry", "a part larger than the stock sheet",
          design(GEOMETRY + "[nesting]\nsheet = [1500.0, 1000.0]\ntime_budget = 0.3\n", False), build(), 1,
          "part P-U00-V00 (2161.2 x 2061.4 mm) fits no sheet: usable area is 1500.0 x 1000.0 mm, any rotation"),

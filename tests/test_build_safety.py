@@ -36,8 +36,9 @@ def _writer_names() -> list[str]:
     return [w.name for w in load_writers()]
 
 
-def _inject(monkeypatch, stage: str, exc: BaseException) -> None:
-    """Make compute stage ``stage`` (``pipeline.stage_<name>``) or the writer ``stage`` raise ``exc``."""
+def _inject(monkeypatch, stage: str, exc: BaseException, writer: bool | None = None) -> None:
+    """Make compute stage ``stage`` (``pipeline.stage_<name>``) or the writer ``stage`` raise ``exc``;
+    ``writer`` says which when a stage and a writer share the name (``glazing``), else it is found."""
     import dataclasses
 
     from fabrication import writers
@@ -45,7 +46,9 @@ def _inject(monkeypatch, stage: str, exc: BaseException) -> None:
     def boom(*args, **kwargs):
         raise exc
 
-    if stage in pipeline.STAGES:
+    if writer is None:
+        writer = stage not in pipeline.STAGES
+    if not writer:
         monkeypatch.setattr(pipeline, f"stage_{stage}", boom)
     else:
         writers.load_writers()
@@ -59,10 +62,11 @@ def test_stage_list_names_the_stage_functions():
     assert _writer_names()[-1] == "manifest"
 
 
-@pytest.mark.parametrize("stage", list(pipeline.STAGES) + _writer_names())
-def test_failure_at_any_stage_leaves_no_partial_folder(tmp_path, small_design, monkeypatch, capsys, stage):
+@pytest.mark.parametrize("kind,stage", [("stage", s) for s in pipeline.STAGES] + [("writer", w) for w in _writer_names()],
+                         ids=lambda x: x if x not in ("stage", "writer") else None)
+def test_failure_at_any_stage_leaves_no_partial_folder(tmp_path, small_design, monkeypatch, capsys, kind, stage):
     out = tmp_path / "out"
-    _inject(monkeypatch, stage, RuntimeError(f"injected failure in {stage}"))
+    _inject(monkeypatch, stage, RuntimeError(f"injected failure in {kind} {stage}"), writer=kind == "writer")
     with pytest.raises(RuntimeError, match="injected"):
         main(["build", str(small_design), "-o", str(out), "--quiet"])
     assert not out.exists()

@@ -27,7 +27,8 @@ CORE_THIRD_PARTY = {"numpy", "scipy"}
 # fabrication's layers, lowest first; a module may import its own layer and the ones below
 FAB_LAYERS = [
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
-     "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter"},
+     "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter", "glazing", "repetition",
+     "report_glazing"},
     {"writers", "verify"},
     {"pipeline"},
     {"cli", "studio"},

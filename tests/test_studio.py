@@ -50,12 +50,14 @@ def test_tangent_plane_handle_moves_one_node_and_keeps_pp(default):
     p1 = m.params
     assert p1["h"] == p0["h"] and p1["c"] == p0["c"]
     # the new face plane f(u_1, v̄) = g(u_1) + h(v̄) − c passes through the moved handle (construction units)
-    u = np.linspace(p0["u_range"][0], p0["u_range"][1], 4)
+    # g's D + 1 interpolation nodes spread uniformly over u_range (D its largest degree: 4 in the default)
+    u = np.linspace(p0["u_range"][0], p0["u_range"][1], max(len(c) for c in p0["g"]))
+    assert len(u) == 5
     vbar = 0.5 * sum(p0["v_range"])
     plane = _poly(p1["g"], u[1]) + _poly(p1["h"], vbar) - np.asarray(p1["c"])
     x = target * 1000.0 / m.geometry["scale"]
     assert abs(plane[:3] @ x + plane[3]) / np.linalg.norm(plane[:3]) < 1e-9
-    for k in (0, 2, 3):                                            # the other nodes keep their values
+    for k in (0, 2, 3, 4):                                         # the other nodes keep their values
         assert np.allclose(_poly(p1["g"], u[k]), _poly(p0["g"], u[k]), atol=1e-12)
     moved = np.abs(m.state.placed.vertices - default.state.placed.vertices).max()
     assert moved > 50.0                                            # mm

@@ -46,7 +46,7 @@ class BeamSet:
 
 
 def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
-                max_height: float = 0.0) -> BeamSet:
+                max_height: float = 0.0, cut_clearance: float = 0.0) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
@@ -58,6 +58,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         naming every defective plate (with its measured value) instead of returning them in ``report.defects``
     max_height : the widest flat piece the plate stock holds across its length, mm (0 = no limit): long
         curved beams are cut so that their pieces fit it
+    cut_clearance : how much further (mm) than the joints need a cut stays from a node (half the length of the
+        splice that joins the pieces, :mod:`fabrication.glazing.splices`)
 
     Returns
     -------
@@ -68,7 +70,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
     if strict:
         check_torsion(support, params)
-    plates, defects = layout_plates(support, params, max_height)
+    plates, defects = layout_plates(support, params, max_height, cut_clearance)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
         raise DesignError("beams", "duplicate part ids")

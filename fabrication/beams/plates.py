@@ -262,8 +262,8 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
     return out
 
 
-def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0
-                  ) -> tuple[list[BeamPlate], list[Defect]]:
+def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0,
+                  cut_clearance: float = 0.0) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
@@ -271,7 +271,8 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
     and, with segmented joints, belongs to the continuous family; otherwise one plate per
     edge in the edge's support plane.  Polylines the support left out of the planar families
     (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.
-    ``max_height``: the widest flat piece the plate stock holds across its length (0 = no limit).  With half-lap
+    ``max_height``: the widest flat piece the plate stock holds across its length (0 = no limit);
+    ``cut_clearance``: how much further (mm) a cut stays from the joints (half a splice's length).  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -308,7 +309,7 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
-            plates.extend(_continuous(support, params, l, ids[l], defects, max_height))
+            plates.extend(_continuous(support, params, l, ids[l], defects, max_height, cut_clearance))
         else:
             a, b = vs[:-1], vs[1:]
             if line.closed and len(vs) > 2:
@@ -362,7 +363,7 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
 
 
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
-                defects: list[Defect], max_height: float = 0.0) -> list[BeamPlate]:
+                defects: list[Defect], max_height: float = 0.0, cut_clearance: float = 0.0) -> list[BeamPlate]:
     """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
     room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
     bottom-edge overhang at the ends included) at most ``max_length`` and its height across at most
@@ -371,7 +372,7 @@ def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: 
     vs = line.vertices
     closed = bool(line.closed and len(vs) > 2)
     plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
-                     params.max_length, _node_clearance(support, params, l), max_height)
+                     params.max_length, _node_clearance(support, params, l) + cut_clearance, max_height)
     pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
     sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
     long_x = max(x for x, _ in sizes)

@@ -278,7 +278,7 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
         k = int(small[np.argmin(used[small])])
         log.warning("panels.mark_size %g mm does not fit %d panel(s): their reference marks are drawn smaller, "
                     "down to %.3g mm on %s", p.mark_size, len(small), used[k], ids[k])
-    types = group_congruent(list(outline), p.congruence_tolerance, p.mirror_allowed)
+    types = group_congruent(list(outline), p.type_tol, p.mirror_allowed)
     wt = max(3, len(str(int(types.max()) + 1)))
     panels: list[Panel] = []
     for f in range(len(corners)):

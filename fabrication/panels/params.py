@@ -36,7 +36,14 @@ class PanelParams:
                                   length=2, exclusive_min=0)
     min_corner_angle_deg: float = param(20.0, doc="corners more acute than this are flagged, degrees", min=0, max=90)
     congruence_tolerance: float = param(1.0, doc="panels whose outlines match within this (mm, after a rigid "
-                                                 "motion) share a type id", min=0)
+                                                 "motion) share a type id (type_tolerance, when given, wins)",
+                                        min=0)
+    type_tolerance: float | None = param(None, doc="panels whose outlines match within this (mm, largest corner "
+                                                   "distance after a rigid motion) share a type id and are cut "
+                                                   "to one outline; default: congruence_tolerance", min=0)
+    min_bite: float = param(15.0, doc="smallest overlap of a pane edge with the gasket it rests on, mm, measured "
+                                      "in 3D across the edge (edge cover of linearly supported glass, "
+                                      "DIN 18008-2; see docs/glazing.md); a build below it stops", min=0)
     mirror_allowed: bool = param(False, doc="the make-up is symmetric (no coating, no print): a panel may be "
                                             "turned over, so mirror images are the same type and may be nested mirrored")
     outside: str = param("auto", doc="which side of a face is the outside: 'normal' (the side its corner order "
@@ -54,6 +61,11 @@ class PanelParams:
     coated_side: str = param("none", doc="the side of the pane that carries a coating or print, written to the "
                                          "glass order; the per-type DXF shows the pane seen from outside",
                              choices=("none", "outside", "inside"))
+
+    @property
+    def type_tol(self) -> float:
+        """The congruence tolerance that groups panels into types (mm)."""
+        return self.congruence_tolerance if self.type_tolerance is None else float(self.type_tolerance)
 
     def __post_init__(self):
         if min(self.min_size) > 0 and (max(self.min_size) > max(self.max_size) or min(self.min_size) > min(self.max_size)):

@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..beams import BeamSet
     from ..flatpart import FlatPart
+    from ..glazing import Glazing
     from ..nesting import Nesting
     from ..panels import Panel
     from ..design import Design
@@ -108,6 +109,7 @@ class Build:
     nesting: NestingSet
     nodes: NodeTable
     summary: Summary
+    glazing: "Glazing | None" = None
     times: dict[str, float] = field(default_factory=dict, compare=False)
     _written: list[Path] = field(default_factory=list, repr=False, compare=False)
 

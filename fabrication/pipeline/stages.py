@@ -1,4 +1,5 @@
-"""``build(design) -> Build``: design → geometry → quality → support → panels → beams → nesting → nodes → summary.
+"""``build(design) -> Build``: design → geometry → quality → support → panels → beams → glazing → nesting → nodes →
+summary.
 
 One function per stage, each returning a frozen record (:mod:`fabrication.pipeline.records`); :data:`STAGES`
 names them in order and :func:`build` calls them in that order with typed arguments.  Every check that can
@@ -9,6 +10,8 @@ module.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,7 +27,11 @@ from ..design import Design
 from .progress import Progress
 from .records import Build, NestingSet, NodeTable, PanelSet, Summary
 
-STAGES: tuple[str, ...] = ("geometry", "quality", "support", "panels", "beams", "nesting", "nodes", "summary")
+if TYPE_CHECKING:  # pragma: no cover
+    from ..glazing import Glazing
+
+STAGES: tuple[str, ...] = ("geometry", "quality", "support", "panels", "beams", "glazing", "nesting", "nodes",
+                           "summary")
 """The compute stages in order; stage ``name`` is the function ``stage_<name>`` of this module.  Panel
 planarity (mm) is the root cause of most beam defects, so ``panels`` is checked before ``beams``."""
 
@@ -48,13 +55,15 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         support = stage_support(design, geometry, p)
         panels = stage_panels(design, geometry, p, quality)
         beams = stage_beams(design, support, p)
+        glazing = stage_glazing(design, support, panels, beams, p)
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)
         summary = stage_summary(geometry, panels, beams, nesting, support)
     except BaseException:
         p.fail()
         raise
-    return Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, times=p.times)
+    return Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
+                 times=p.times)
 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:
@@ -143,7 +152,9 @@ def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality
 
 
 def stage_beams(design: Design, support: SupportStructure, progress: Progress) -> BeamSet:
-    """Planar beam plates with joints; a degenerate plate stops the build naming its part id."""
+    """Planar beam plates with joints; a degenerate plate stops the build naming its part id.  Cuts of split
+    beams stay clear of the joints by half a splice's length more, plus half the depth (a slot leaning up to
+    45° along the node axis)."""
     from ..beams import build_beams
 
     progress.start("beams")
@@ -155,10 +166,25 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
                                               f"usable plate length {usable_len:g} mm of [beam_nesting]; "
                                               "set beams.max_length to at most the usable length")
     usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
-    beams = build_beams(support, params, strict=True, max_height=usable_width)
+    beams = build_beams(support, params, strict=True, max_height=usable_width,
+                        cut_clearance=0.5 * (design.splices.length + params.depth))
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams
+
+
+def stage_glazing(design: Design, support: SupportStructure, panels: PanelSet, beams: BeamSet,
+                  progress: Progress) -> "Glazing":
+    """Glazing strips on the beams, the bite of every pane edge on them (a pane edge below ``[panels] min_bite``
+    stops the build, naming it), the splices of split beams and the weld data of butt joints
+    (:mod:`fabrication.glazing`)."""
+    from ..glazing import make_glazing
+
+    progress.start("glazing")
+    g = make_glazing(support, list(panels.panels), beams, design.glazing, design.splices, design.panels.min_bite)
+    bite = f"bite min {g.bite_min:.1f} mm, " if g.bites else ""
+    progress.done(f"{len(g.strips)} strips, {bite}{len(g.splices)} splices, {len(g.welds)} welds")
+    return g
 
 
 def stage_nesting(design: Design, panels: PanelSet, beams: BeamSet, progress: Progress) -> NestingSet:

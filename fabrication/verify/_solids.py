@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import Verification
+from ._tolerance import type_tolerance
 from ._shapes import literal
 
 
@@ -93,7 +94,7 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
     if row["kind"] == "panel":
         # a pane is modelled on its own face while its area_mm2 is that of its type's outline, which is cut:
         # congruent within congruence_tolerance, so the two areas differ by at most perimeter × tolerance
-        tol = float(fab.get("panels", {}).get("congruence_tolerance", 0.0))
+        tol = type_tolerance(fab)
         allowed = max(allowed, float(row.get("perimeter_mm") or 0.0) * tol * t)
     if t > 0 and area > 0 and abs(volume - area * t) > allowed:
         v.error(rel, pid, f"volume {volume:.6g} mm³ ≠ area × thickness {area * t:.6g} mm³")

@@ -4,8 +4,10 @@ and marks.  The outlines found are kept in ``data["cut"]`` (part id → sheet fi
 from __future__ import annotations
 
 from .. import contract
+from ..contract import SHEET_KINDS
 from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
+from ._tolerance import type_tolerance
 
 
 @check("dxf", 50)
@@ -22,7 +24,7 @@ def check_dxf(v: Verification) -> None:
     parts = {r["part_id"]: r for r in v.data.get("parts", [])}
     mesh = v.data.get("mesh")
     panels_fab = fab.get("panels", {})
-    ctol = float(panels_fab.get("congruence_tolerance", 0.0))
+    ctol = type_tolerance(fab)
     marks_wanted = float(panels_fab.get("mark_size", 0.0)) > 0
     seen: dict[str, str] = {}
     cut = v.data.setdefault("cut", {})
@@ -79,6 +81,6 @@ def check_dxf(v: Verification) -> None:
                         what = "overlaps" if d == 0 else f"is {d:.3g} mm from"
                         v.error(rel, pid, f"{what} {polys[j][0]} (spacing {spacing:g} mm)")
     for pid, row in parts.items():
-        if pid not in seen and (files.get("glass_sheets") or files.get("beam_sheets")):
+        if pid not in seen and row["kind"] in SHEET_KINDS and (files.get("glass_sheets") or files.get("beam_sheets")):
             v.error("parts.csv", pid, "part is on no cutting sheet")
     v.checked.append("dxf")

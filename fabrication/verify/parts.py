@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..contract import PARTS_CONTRACT_COLUMNS as PARTS_COLUMNS
+from ..contract import PART_KINDS, PARTS_CONTRACT_COLUMNS as PARTS_COLUMNS
 from . import Verification, check, read_csv
 
 
@@ -27,8 +27,8 @@ def check_parts(v: Verification) -> None:
         if row["nest_tag"] in tags:
             v.error(rel, f"line {r}", f"nest tag {row['nest_tag']} appears twice")
         tags.add(row["nest_tag"])
-        if row["kind"] not in ("panel", "beam"):
-            v.error(rel, row["part_id"], f"kind must be panel or beam, got {row['kind']!r}")
+        if row["kind"] not in PART_KINDS:
+            v.error(rel, row["part_id"], f"kind must be one of {', '.join(PART_KINDS)}, got {row['kind']!r}")
     mesh = v.data.get("mesh")
     panels = [row for row in rows if row["kind"] == "panel"]
     if mesh is not None and panels:

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ..contract import csv_value
 from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
+from ._tolerance import type_tolerance
 
 
 @check("types", 52)
@@ -20,7 +21,7 @@ def check_types(v: Verification) -> None:
     mesh = v.data.get("mesh")
     parts = v.data.get("parts", [])
     fab = m.get("fabrication", {})
-    ctol = float(fab.get("panels", {}).get("congruence_tolerance", 0.0))
+    ctol = type_tolerance(fab)
     gap = float(fab.get("panel_gap", 0.0))
     by_type: dict[str, list[dict]] = {}
     for p in parts:

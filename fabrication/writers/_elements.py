@@ -138,7 +138,37 @@ def elements(build: "Build", files: Files) -> list[Element]:
         t = float(b.thickness)
         out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.outline, b.frame, -0.5 * t, t,
                            _props(row)))
+    return out + _glazing_elements(build, rows)
+
+
+def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
+    """The glazing strips (on their beams' top edges) and the splice cover plates (without their holes: the
+    exchange models carry each part as one prism)."""
+    g = build.glazing
+    if g is None:
+        return []
+    out = []
+    for s in g.strips:
+        row = dict(rows[s.part_id])
+        row["weight_kg"] = row.get("mass_kg", "")
+        out.append(Element(s.part_id, "strip", str(row.get("family") or "rows"), "", s.outline(), s.frame, 0.0,
+                           float(s.thickness), _props(row)))
+    for sp in g.splices:
+        for pid, sign in zip(sp.part_ids, (1.0, -1.0)):
+            row = dict(rows[pid])
+            row["weight_kg"] = row.get("mass_kg", "")
+            z0 = 0.5 * sp.beam_thickness if sign > 0 else -0.5 * sp.beam_thickness - sp.thickness
+            out.append(Element(pid, "splice", str(row.get("family") or "rows"), "", sp.outline, sp.frame, z0,
+                               float(sp.thickness), _props(row)))
     return out
+
+
+def part_material(el: Element, beams: str) -> str:
+    """The material of a steel element: ``beams`` (``[beams] material``) for a beam plate, the ``material`` of
+    its ``parts.csv`` row for a glazing strip or splice cover plate (``[glazing]`` / ``[splices] material``)."""
+    if el.kind == "beam":
+        return beams
+    return str(el.props.get("material") or beams)
 
 
 def _props(row: dict) -> dict[str, Value]:

@@ -61,6 +61,23 @@ def _fixed_metadata():
         ezdxf.options.write_fixed_meta_data_for_testing = old
 
 
+def sort_classes(doc) -> None:
+    """ezdxf adds a CLASS per entity type in use in set order (varies with the hash seed): add them now and
+    sort them, so that the CLASSES section is the same in every process."""
+    classes = doc.classes
+    classes.add_required_classes(doc.dxfversion)
+    ordered = sorted(classes.classes.items())
+    classes.classes.clear()
+    classes.classes.update(ordered)
+
+
+def save_doc(doc, path: str | os.PathLike) -> None:
+    """Save ``doc`` with deterministic bytes (sorted classes, fixed ezdxf metadata)."""
+    sort_classes(doc)
+    with _fixed_metadata():
+        doc.saveas(path)
+
+
 def _new_doc(version: str = DXF_VERSION):
     import ezdxf
 
@@ -199,13 +216,7 @@ class CuttingSheet:
     def write(self, path: str | os.PathLike) -> Path:
         """Save (deterministic bytes)."""
         path = Path(path)
-        # ezdxf adds a CLASS per entity type in use in set order (varies with the hash seed): add them
-        # now and sort them, so the CLASSES section is the same in every process
-        classes = self.doc.classes
-        classes.add_required_classes(self.doc.dxfversion)
-        ordered = sorted(classes.classes.items())
-        classes.classes.clear()
-        classes.classes.update(ordered)
+        sort_classes(self.doc)
         with _fixed_metadata():
             if self.version == "R12":
                 from ._dxf_r12 import save_r12

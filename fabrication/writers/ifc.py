@@ -33,7 +33,7 @@ from ppfab import __version__
 
 from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
 from . import Files, writer
-from ._elements import Element, elements, object_uuid
+from ._elements import Element, elements, object_uuid, part_material
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
@@ -253,14 +253,16 @@ def material_category(name: str) -> str | None:
 
 
 def ifc_model(build: "Build", files: Files) -> IfcModel:
-    """The IFC model of a build (panels, then beams grouped by beam id)."""
+    """The IFC model of a build (panels, then beams grouped by beam id, then glazing strips and splice cover
+    plates with the materials of their ``parts.csv`` rows)."""
     design = build.design
     model = IfcModel(design.info.name, design.info.description)
     for el in elements(build, files):
         if el.kind == "panel":
             model.add(el, design.panels.makeup, "glass")
         else:
-            model.add(el, design.beams.material, material_category(design.beams.material))
+            material = part_material(el, design.beams.material)
+            model.add(el, material, material_category(material))
     return model
 
 

@@ -50,7 +50,7 @@ def fabrication_params(design: "Design") -> dict[str, Any]:
                 "max_crease_deg": panels.max_crease_deg,
                 "glass_thickness": panels.thickness, "glass_makeup": panels.makeup,
                 "sheet": list(nesting.sheet), "sheet_margin": nesting.margin, "part_spacing": nesting.spacing})
-    for name in ("support", "beams", "panels", "nesting", "beam_nesting", "output"):
+    for name in ("support", "beams", "panels", "glazing", "splices", "nesting", "beam_nesting", "output"):
         out[name] = as_plain(design.section(name))
     return out
 
@@ -89,6 +89,15 @@ def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
         "quality": dict(build.quality.as_dict().items()),
         "summary": build.summary.as_dict(),
     }
+    from ..repetition import repetition
+
+    doc["repetition"] = repetition(build)
+    g = build.glazing
+    if g is not None:
+        doc["glazing"] = {"support": g.params.support, "strips": len(g.strips), "offset_mm": g.offset,
+                          "bite_min_mm": None if not g.bites else round(g.bite_min, 4),
+                          "min_bite_mm": design.panels.min_bite, "splices": len(g.splices),
+                          "cover_plates": 2 * len(g.splices), "welds": len(g.welds)}
     doc["sha256"] = {name: sha256_of(out / name) for name in listed_files(files)}
     return doc
 

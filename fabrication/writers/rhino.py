@@ -31,7 +31,7 @@ from ppfab import __version__
 
 from ..contract import COLOURS, RHINO_FILE, RHINO_LAYERS
 from . import Files, writer
-from ._elements import Element, elements, node_axes, object_uuid
+from ._elements import Element, elements, node_axes, object_uuid, part_material
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
@@ -177,7 +177,7 @@ def rhino_model(build: "Build", files: Files) -> RhinoModel:
     design = build.design
     model = RhinoModel(design.info.name)
     for el in elements(build, files):
-        model.add(el, design.panels.makeup if el.kind == "panel" else design.beams.material)
+        model.add(el, design.panels.makeup if el.kind == "panel" else part_material(el, design.beams.material))
     for axis in node_axes(build):
         model.add_axis(axis.node_id, axis.start, axis.end, axis.props)
     mesh = build.mesh

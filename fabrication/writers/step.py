@@ -154,6 +154,8 @@ def _make_reproducible(path: Path, description: str = "") -> None:
     counter = itertools.count(1)
     rest = re.sub(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')[0-9]+(')",
                   lambda m: m.group(1) + str(next(counter)).encode() + m.group(2), rest)
+    # the kernel wraps an entity's line by the width of its own (process-wide) id: unwrap these entities
+    rest = re.sub(rb"NEXT_ASSEMBLY_USAGE_OCCURRENCE\([^;]*;", lambda m: re.sub(rb"\r?\n[ ]*", b"", m.group(0)), rest)
     before, data_sep, data = rest.partition(b"DATA;")
     body, end_sep, after = data.partition(b"ENDSEC;")
     try:

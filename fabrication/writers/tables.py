@@ -22,8 +22,24 @@ def parts_table(build: "Build", files: Files) -> list[dict]:
     glass_sheets = files.get("glass_sheets", [])
     beam_sheets = files.get("beam_sheets", [])
     assert isinstance(glass_sheets, list) and isinstance(beam_sheets, list)
-    return part_rows(list(nest.glass_parts), nest.glass.placements, glass_sheets) + \
+    rows = part_rows(list(nest.glass_parts), nest.glass.placements, glass_sheets) + \
         part_rows(list(nest.beam_parts), nest.plates.placements, beam_sheets)
+    g = build.glazing
+    if g is None:
+        return rows
+    from ..glazing.rows import beam_joins, splice_rows, strip_rows
+
+    joins = beam_joins(g)
+    bite: dict[str, float] = {}
+    for b in g.bites:
+        bite[b.panel] = min(bite.get(b.panel, float("inf")), b.bite)
+    for row in rows:
+        if row["kind"] == "beam" and row["part_id"] in joins:
+            row.update(joins[row["part_id"]])
+        elif row["kind"] == "panel" and row["part_id"] in bite:
+            row["bite_min_mm"] = round(bite[row["part_id"]], 3)
+            row["setting_blocks"] = f"2 x {g.params.setting_block_length:g} mm"
+    return rows + strip_rows(g, build.beams) + splice_rows(g, build.beams)
 
 
 @writer("tables", order=50)

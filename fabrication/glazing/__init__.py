@@ -1,0 +1,77 @@
+"""How the glass bears on the structure and how the structure's pieces are joined.
+
+* :mod:`.strips` — a flat-bar glazing strip with a gasket on the top edge of every beam span;
+* :mod:`.bite` — the bite of every pane edge on its strip, measured in 3D (``[panels] min_bite``);
+* :mod:`.splices` — bolted cover-plate splices where a beam is cut into pieces;
+* :mod:`.welds` — weld length, dihedral angle and preparation of the butt joints;
+* :mod:`.cutlist` — the strips cut from stock bars.
+
+:func:`make_glazing` runs them for a build (the ``glazing`` stage of :mod:`fabrication.pipeline.stages`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
+from .params import GlazingParams
+from .splices import Splice, SpliceParams, make_splices
+from .strips import Strip, make_strips
+from .welds import Weld, butt_welds
+
+__all__ = ["BiteError", "EdgeBite", "Glazing", "GlazingParams", "Splice", "SpliceParams", "Strip", "Weld",
+           "make_glazing"]
+
+
+@dataclass(frozen=True, eq=False)
+class Glazing:
+    """The glass support and the joints of a build: strips, the bite of every pane edge, splices, welds, and
+    the height ``offset`` (mm) of the panes' underside above the mesh faces (strip + gasket)."""
+
+    params: GlazingParams
+    splice_params: SpliceParams
+    strips: tuple[Strip, ...]
+    bites: tuple[EdgeBite, ...]
+    splices: tuple[Splice, ...]
+    welds: tuple[Weld, ...]
+    offset: float
+
+    @property
+    def bite_min(self) -> float:
+        return min((b.bite for b in self.bites), default=float("nan"))
+
+
+def make_glazing(support, panels, beams, params: GlazingParams, splice_params: SpliceParams,
+                 min_bite: float, strict: bool = True) -> Glazing:
+    """Strips, bites (checked against ``min_bite`` when ``strict``), splices and welds of a build.
+
+    Raises :class:`BiteError` naming the pane edges below ``min_bite`` (or steeper than
+    ``params.max_tilt_deg``), and :class:`~ppfab.errors.FabricationError` naming splices whose cover plates do
+    not fit on their pieces.
+    """
+    from ppfab.errors import FabricationError
+
+    from ..beams.plates import beam_ids
+
+    splices = make_splices(beams.plates, splice_params)
+    bad = [s for s in splices if not s.fits]
+    if strict and bad:
+        names = ", ".join(f"{s.pieces[0]}/{s.pieces[1]}" for s in bad[:8])
+        raise FabricationError(f"{len(bad)} splice cover plate(s) of {splice_params.length:g} mm do not fit on their "
+                               f"beam pieces (a slot or an end is in the way): {names}; lower splices.columns or "
+                               "splices.e1/p1")
+    welds = butt_welds(beams.joints, beams.params.depth, beams.params.thickness)
+    if params.support == "none":
+        return Glazing(params, splice_params, (), (), tuple(splices), tuple(welds), 0.0)
+    normals = edge_normals(panels, support.vertices, support.edges)
+    strips = make_strips(support, beam_ids(support), params, normals)
+    short = [s for s in strips if s.length <= 0]
+    if short:
+        raise FabricationError(f"{len(short)} glazing strip(s) have no length left between the strips running "
+                               f"through their nodes: {', '.join(s.part_id for s in short[:8])}; lower "
+                               "glazing.width or glazing.clearance")
+    bites = measure_bites(panels, strips, support.vertices, support.edges, params.gasket_thickness)
+    if strict:
+        check_bites(bites, min_bite, params.max_tilt_deg)
+    return Glazing(params, splice_params, tuple(strips), tuple(bites), tuple(splices), tuple(welds),
+                   params.thickness + params.gasket_thickness)

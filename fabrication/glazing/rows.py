@@ -1,0 +1,96 @@
+"""The parts-list rows of the glazing strips and the splice cover plates, and what each beam piece joins.
+
+Strips (``kind = "strip"``) are cut from flat bar (:mod:`.cutlist`): no sheet, their nest tag names the bar and
+the cut (``F03-07``).  Cover plates (``kind = "splice"``) are cut from plate to the per-type DXF
+``splices/<type>.dxf`` (outline and bolt holes): nest tag ``J<splice>-A|B``.  ``area_mm2`` of a cover plate
+is its outline's (before holes); ``mass_kg`` is net of the holes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ppfab.topology import FAMILY_NAMES
+
+from .cutlist import cut_bars
+
+
+def _r(x: float, digits: int = 3) -> float:
+    v = round(float(x), digits)
+    return 0.0 if v == 0 else v
+
+
+def splice_types(splices) -> dict[str, str]:
+    """Cover plate part id → type id ``SP<height>x<length>[-<skew>]``: plates of one size, skew (the angle of the
+    ends off square, whole degrees) and hole pattern."""
+    out = {}
+    for s in splices:
+        w, h = np.ptp(s.flat_outline, axis=0)
+        o = s.flat_outline
+        e0, e1 = o[1] - o[0], o[3] - o[0]
+        skew = int(round(abs(90.0 - np.degrees(np.arccos(abs(e0 @ e1) / np.linalg.norm(e0) / np.linalg.norm(e1))))))
+        key = f"SP{int(round(h))}x{int(round(w))}" + (f"-{skew}" if skew else "")
+        for pid in s.part_ids:
+            out[pid] = key
+    return out
+
+
+def strip_rows(glazing, beams) -> list[dict]:
+    """One row per glazing strip (with its bar, gasket and weld)."""
+    p = glazing.params
+    lengths = {s.part_id: s.length for s in glazing.strips}
+    cuts, _ = cut_bars(lengths, p.bar_length, p.saw_kerf) if lengths else ([], 0)
+    family = {pl.beam_id: FAMILY_NAMES[pl.family] for pl in beams.plates}
+    rows = []
+    for s, c in zip(glazing.strips, cuts):
+        rows.append({
+            "part_id": s.part_id, "kind": "strip", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "nest_tag": c.nest_tag, "area_mm2": _r(s.length * s.width), "mirrored": "", "sheet_file": "",
+            "type_id": "", "material": p.material, "thickness_mm": p.thickness, "width_mm": _r(s.width),
+            "height_mm": _r(s.length), "length_mm": _r(s.length), "family": family.get(s.beam_id, ""),
+            "beam": s.beam_id, "edge_nodes": f"{s.vertices[0]};{s.vertices[1]}",
+            "bar": c.bar + 1, "bar_start_mm": _r(c.start),
+            "mass_kg": _r(s.length * s.width * p.thickness * p.density * 1e-9),
+            "gasket": f"{p.gasket_material} {s.width:g} x {p.gasket_thickness:g} mm, {s.length:.0f} mm",
+            "weld": f"double fillet a=4 to {s.beam_id}, 2 x {s.length:.0f} mm",
+        })
+    return rows
+
+
+def splice_rows(glazing, beams) -> list[dict]:
+    """Two rows per splice (the cover plates on both faces of the beam), with the pieces they join."""
+    sp = glazing.splice_params
+    types = splice_types(glazing.splices)
+    family = {pl.beam_id: FAMILY_NAMES[pl.family] for pl in beams.plates}
+    rows = []
+    width = max(4, len(str(len(glazing.splices))))
+    for k, s in enumerate(glazing.splices):
+        w, h = np.ptp(s.flat_outline, axis=0)
+        x, y = s.flat_outline.T
+        gross = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))   # the parallelogram
+        net = gross - len(s.holes) * math.pi * 0.25 * s.hole ** 2
+        for side, pid in zip("AB", s.part_ids):
+            rows.append({
+                "part_id": pid, "kind": "splice", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+                "nest_tag": f"J{k + 1:0{width}d}-{side}", "area_mm2": _r(gross), "mirrored": "", "sheet_file": "",
+                "type_id": types[pid], "material": sp.material, "thickness_mm": s.thickness, "width_mm": _r(w),
+                "height_mm": _r(h), "family": family.get(s.beam_id, ""), "beam": s.beam_id,
+                "joins": f"{s.pieces[0]};{s.pieces[1]}", "holes": len(s.holes), "hole_mm": s.hole,
+                "bolts": f"{len(s.holes)} x {sp.bolt}" if side == "A" else "",
+                "mass_kg": _r(net * s.thickness * 7850.0 * 1e-9),
+            })
+    return rows
+
+
+def beam_joins(glazing) -> dict[str, dict[str, str]]:
+    """Beam piece part id → ``{"joins": neighbouring pieces, "splices": cover plates}`` (``;``-separated)."""
+    out: dict[str, dict[str, list[str]]] = {}
+    for s in glazing.splices:
+        a, b = s.pieces
+        for me, other in ((a, b), (b, a)):
+            rec = out.setdefault(me, {"joins": [], "splices": []})
+            rec["joins"].append(other)
+            rec["splices"].extend(s.part_ids)
+    return {k: {"joins": ";".join(v["joins"]), "splices": ";".join(v["splices"])} for k, v in out.items()}

@@ -1,0 +1,177 @@
+"""Bolted splices where a long beam is cut into pieces (:mod:`fabrication.beams.splitting`).
+
+A cut runs down the (interpolated) node axis from a point inside an edge; both pieces share that line.  The
+splice is a pair of cover plates, one on each face of the beam plate (double shear), centred on the cut
+and squared to the beam's top edge there: in the beam plate's 2D frame, with ``c`` the cut's top point,
+``t`` the unit top-edge direction and ``s`` the in-plane downward normal of the top edge,
+
+    corner = c + α·s + β·t,   e_top ≤ α ≤ h − e_bot,   |β| ≤ L/2,
+
+``h`` the depth of the plate under the top edge, the least over the cover plate's length (a ray down ``s``
+through the joined pieces' outlines at nine stations).  Bolt holes lie in ``rows × 2·cols`` positions:
+``cols`` columns each side of the cut at ``e1 + k·p1`` from it, rows evenly between ``e2`` from the cover
+plate's edges.  Spacing and edge distances follow EN 1993-1-8 Table 3.3 (``e1, e2 ≥ 1.2 d0``,
+``p1 ≥ 2.2 d0``, ``p2 ≥ 2.4 d0``, ``d0`` the hole diameter); the beam pieces are drilled through the cover
+plates at trial assembly (match drilling), so their holes are marked, not cut.  Two cover plates of
+thickness ``t_c`` with ``2 t_c ≥ t`` carry at least the beam plate's section.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ppfab.errors import DesignError
+from ppfab.frame import Frame
+from ppfab.schema import param
+
+from ..contract import splice_plate_ids
+
+
+@dataclass(frozen=True)
+class SpliceParams:
+    """Bolted cover-plate splices of split beams (the ``[splices]`` table; mm)."""
+
+    plate_thickness: float = param(10.0, doc="thickness of each of the two cover plates, mm (2 × this ≥ beam "
+                                             "thickness)", exclusive_min=0)
+    bolt: str = param("M20 8.8", doc="bolt size and grade, written to the parts list")
+    hole: float = param(22.0, doc="hole diameter d0, mm (normal clearance, EN 1090-2: M20 → 22)",
+                        exclusive_min=0)
+    columns: int = param(2, doc="bolt columns on each side of the cut", min=1, max=6)
+    e1: float = param(40.0, doc="distance of a bolt from the cut and from the cover plate's end, mm", exclusive_min=0)
+    p1: float = param(60.0, doc="pitch of the bolt columns along the beam, mm", exclusive_min=0)
+    e2: float = param(40.0, doc="distance of a bolt row from the cover plate's long edges, mm", exclusive_min=0)
+    p2_min: float = param(55.0, doc="smallest pitch between bolt rows across the beam, mm", exclusive_min=0)
+    top_clear: float = param(15.0, doc="gap between the cover plates and the beam's top edge (room for the "
+                                       "glazing strip's fillet weld), mm", min=0)
+    bottom_clear: float = param(10.0, doc="gap between the cover plates and the beam's bottom edge, mm", min=0)
+    material: str = param("S355 plate", doc="material of the cover plates")
+
+    def __post_init__(self):
+        d0 = self.hole
+        for key, value, factor in (("e1", self.e1, 1.2), ("e2", self.e2, 1.2), ("p1", self.p1, 2.2),
+                                   ("p2_min", self.p2_min, 2.4)):
+            if value < factor * d0 - 1e-9:
+                raise DesignError(key, f"{value:g} mm is below {factor:g} × hole = {factor * d0:g} mm "
+                                       "(EN 1993-1-8 Table 3.3)")
+
+    @property
+    def length(self) -> float:
+        """Length of a cover plate along the beam, mm."""
+        return 2.0 * (2.0 * self.e1 + (self.columns - 1) * self.p1)
+
+
+@dataclass(frozen=True, eq=False)
+class Splice:
+    """One splice: part ids of its two cover plates, the beam, the two pieces it joins, the cover plate's
+    outline ``(4, 2)`` and holes ``(h, 2)`` in the beam plate frame (``frame``), thickness and the beam's."""
+
+    part_ids: tuple[str, str]
+    beam_id: str
+    pieces: tuple[str, str]
+    frame: Frame
+    outline: np.ndarray
+    holes: np.ndarray
+    hole: float
+    thickness: float
+    beam_thickness: float
+    fits: bool
+
+    @property
+    def flat_outline(self) -> np.ndarray:
+        """The cover plate in its own frame: ``(4, 2)`` rectangle with the origin at its lower-left corner."""
+        o = self.outline
+        t = (o[1] - o[0]) / np.linalg.norm(o[1] - o[0])
+        n = np.array([-t[1], t[0]])
+        rel = o - o[0]
+        q = np.stack([rel @ t, rel @ n], axis=1)
+        return q - q.min(axis=0)
+
+    @property
+    def flat_holes(self) -> np.ndarray:
+        o = self.outline
+        t = (o[1] - o[0]) / np.linalg.norm(o[1] - o[0])
+        n = np.array([-t[1], t[0]])
+        rel_o = o - o[0]
+        q0 = np.stack([rel_o @ t, rel_o @ n], axis=1).min(axis=0)
+        rel = self.holes - o[0]
+        return np.stack([rel @ t, rel @ n], axis=1) - q0
+
+
+def make_splices(plates, params: SpliceParams) -> list[Splice]:
+    """The splice at every cut between consecutive pieces of a beam (closed beams: also last → first);
+    ``fits`` says whether the cover plate lies on the two pieces' outlines (clear of slots and ends)."""
+    from shapely.geometry import LineString, Point, Polygon
+    from shapely.ops import unary_union
+
+    by_beam: dict[str, list] = {}
+    for p in plates:
+        if p.n_pieces > 1 and not p.meta.get("segment"):     # one-edge segments meet at nodes: welded
+            by_beam.setdefault(p.beam_id, []).append(p)
+    out: list[Splice] = []
+    L = params.length
+    for beam, pieces in by_beam.items():
+        pieces = sorted(pieces, key=lambda p: p.piece)
+        pairs = list(zip(pieces[:-1], pieces[1:]))
+        first3 = pieces[0].frame.to3d(pieces[0].top[0])
+        last3 = pieces[-1].frame.to3d(pieces[-1].top[-1])
+        if np.linalg.norm(first3 - last3) < 1e-6:                 # closed beam: the last cut joins back
+            pairs.append((pieces[-1], pieces[0]))
+        for a, b in pairs:
+            f = a.frame
+            c = a.top[-1]                                       # the cut's top point, in a's frame
+            s = a.bottom[-1] - a.top[-1]                        # down the cut line (the node axis there)
+            s = s / np.linalg.norm(s)
+            t = np.array([-s[1], s[0]])                         # square to the cut, along the beam
+            u = a.top[-1] - a.top[-2]                           # along the top edge
+            u = u / np.linalg.norm(u)
+            if t @ u < 0:
+                t = -t
+            m = np.array([u[1], -u[0]])                         # square to the top edge, down
+            if m @ s < 0:
+                m = -m
+            to_xy = np.array([t, m])                            # P − c ↦ (x across the cut, y under the top edge)
+            to_p = np.linalg.inv(to_xy)
+            body = unary_union([Polygon(a.outline).buffer(1e-3),
+                                Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
+            depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
+            reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in (0.0, depth)]
+            top, bottom = -np.inf, np.inf
+            for tau in np.linspace(min(reach), max(reach), 9):  # the plate's depth under the top edge
+                foot = c + tau * u
+                ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
+                hit = ray.intersection(body)
+                spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
+                if not spans:
+                    top, bottom = np.inf, -np.inf
+                    break
+                main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
+                yy = sorted(float((q - foot) @ m) for q in main)
+                top, bottom = max(top, yy[0]), min(bottom, yy[-1])
+            h = bottom - top
+            lo, hi = top + params.top_clear, bottom - params.bottom_clear
+            if hi - lo < 2 * params.e2:
+                raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
+                                             f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "
+                                             "or the clearances")
+
+            def at(x: float, y: float) -> np.ndarray:
+                return c + to_p @ np.array([x, y])
+
+            outline = np.array([at(-0.5 * L, lo), at(0.5 * L, lo), at(0.5 * L, hi), at(-0.5 * L, hi)])
+            if (outline[1, 0] - outline[0, 0]) * (outline[2, 1] - outline[0, 1]) - \
+                    (outline[1, 1] - outline[0, 1]) * (outline[2, 0] - outline[0, 0]) < 0:
+                outline = outline[::-1]
+            usable = hi - lo - 2 * params.e2
+            rows = 1 + int(usable // params.p2_min) if usable >= params.p2_min else 1
+            rows = min(rows, 2) if usable < 2 * params.p2_min else rows
+            ys = [lo + params.e2 + k * usable / max(rows - 1, 1) for k in range(rows)] if rows > 1 else \
+                [0.5 * (lo + hi)]
+            xs = sorted(sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0))
+            holes = np.array([at(x, y) for y in ys for x in xs])
+            fits = bool(body.contains(Polygon(outline)))
+            ids = splice_plate_ids(beam, a.piece)
+            out.append(Splice(ids, beam, (a.part_id, b.part_id), f, outline, holes, params.hole,
+                              params.plate_thickness, a.thickness, fits))
+    return out

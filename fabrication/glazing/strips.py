@@ -1,0 +1,147 @@
+"""Glazing strips: one flat bar on the top edge of every beam span, and its gasket.
+
+A span is a mesh edge ``a b`` with its beam plane ``(n, d)`` (``support.edge_planes``).  Its strip lies on the
+beam's top edge, in the plane through the edge that bisects the one or two panes on it (the panes are
+nearly coplanar across an edge, the beam plane need not be square to them: a PP support plane ``U_i``
+can lean 20° off the glass), in the frame
+
+    ex = (b − a) / |b − a|   (a, b projected into the beam plane),
+    ez = up: N_1 + N_2 (the outside normals of the panes on the edge), made perpendicular to ex,
+    ey = ez × ex,
+
+so the strip is the rectangle ``x0 ≤ x ≤ x1, |y| ≤ w/2`` at ``0 ≤ z ≤ t_s`` (the gasket on it at
+``t_s ≤ z ≤ t_s + t_g``), drawn in 2D and extruded once.
+
+At every node one polyline *runs through*: the one with two spans there, of the lowest family (rows before
+columns); at a corner where no polyline continues, the lowest family.  Its strips end at the node, set back by
+``t_s · tan(κ/2)`` (κ the kink between the two spans in the beam plane) so that their top faces do not
+overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
+``|distance| ≤ w/2`` by the clearance ``c``: with ``θ`` the angle between the two spans,
+
+    x_stop = (w/2 + c + (w/2)·|cos θ|) / sin θ.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ppfab import planes as pl
+from ppfab.frame import Frame
+from ppfab.support.structure import SupportStructure, edge_polyline_index
+
+from ..contract import strip_id
+from .params import GlazingParams
+
+
+@dataclass(frozen=True, eq=False)
+class Strip:
+    """The glazing strip of one span: part id ``GS-<beam>-<k>``, the mesh edge ``(a, b)`` it carries, its frame
+    (origin at ``a``'s top point, normal = up), its extent ``x0 … x1`` along the span and its width."""
+
+    part_id: str
+    edge: int
+    vertices: tuple[int, int]
+    beam_id: str
+    frame: Frame
+    x0: float
+    x1: float
+    width: float
+    thickness: float
+    runs: tuple[bool, bool]
+
+    @property
+    def length(self) -> float:
+        return self.x1 - self.x0
+
+    def outline(self) -> np.ndarray:
+        """``(4, 2)`` counter-clockwise rectangle in the strip frame."""
+        b = 0.5 * self.width
+        return np.array([[self.x0, -b], [self.x1, -b], [self.x1, b], [self.x0, b]])
+
+    def top_corners(self, gasket: float) -> np.ndarray:
+        """``(4, 3)`` corners of the gasket's top face (the surface the glass rests on), mm."""
+        up = self.frame.normal
+        return self.frame.to3d(self.outline()) + (self.thickness + gasket) * up
+
+
+def _in_plane(v: np.ndarray, n: np.ndarray) -> np.ndarray:
+    return v - np.outer(v @ n, n) if v.ndim == 2 else v - (v @ n) * n
+
+
+def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingParams,
+                edge_normals: np.ndarray | None = None) -> list[Strip]:
+    """One :class:`Strip` per mesh edge (see the module docstring); ``beam_ids`` per polyline;
+    ``edge_normals (E, 3)`` the sum of the outside normals of the panes on each edge (zero rows, or ``None``:
+    the strip lies square to its beam plane)."""
+    mesh = support.mesh
+    edges = support.edges
+    v = support.vertices
+    axes = support.axes
+    line_of = edge_polyline_index(mesh)
+    lines = mesh.polylines
+    family = np.array([lines[k].family if k >= 0 else 9 for k in line_of])
+    b, c, ts = 0.5 * params.width, params.clearance, params.thickness
+    at: dict[int, list[int]] = {}
+    for e, (i, j) in enumerate(edges.tolist()):
+        at.setdefault(i, []).append(e)
+        at.setdefault(j, []).append(e)
+    running: dict[int, int] = {}                       # node -> polyline that runs through it
+    for node, es in at.items():
+        count: dict[int, int] = {}
+        for e in es:
+            count[int(line_of[e])] = count.get(int(line_of[e]), 0) + 1
+        through = [k for k, m in count.items() if m >= 2 and k >= 0]
+        pool = through or [int(line_of[e]) for e in es]
+        running[node] = min(pool, key=lambda k: (lines[k].family if k >= 0 else 9, k))
+    direction = v[edges[:, 1]] - v[edges[:, 0]]
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    counters: dict[str, int] = {}
+    out: list[Strip] = []
+    for e, (i, j) in enumerate(edges.tolist()):
+        plane = pl.normalize(support.edge_planes[e])
+        n, d = plane[:3], plane[3]
+        pa, pb = (v[[i, j]] - np.outer(v[[i, j]] @ n + d, n))
+        ex = pb - pa
+        span = float(np.linalg.norm(ex))
+        ex = ex / span
+        down = _in_plane(axes[[i, j]], n).sum(axis=0)
+        up = -down
+        if edge_normals is not None and np.linalg.norm(edge_normals[e]) > 1e-9:
+            up = edge_normals[e]
+        up = up - (up @ ex) * ex
+        up = up / np.linalg.norm(up)
+        ey = np.cross(up, ex)
+        frame = Frame(pa, ex, ey)
+        ends = []
+        runs = []
+        for node, sign in ((i, 1.0), (j, -1.0)):
+            own = sign * direction[e]                   # from the node into this span
+            if running[node] == line_of[e]:
+                other = [f for f in at[node] if f != e and line_of[f] == line_of[e]]
+                setback = 0.0
+                for f in other:
+                    of = direction[f] if edges[f, 0] == node else -direction[f]
+                    kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
+                    setback = max(setback, ts * float(np.tan(0.5 * kink)))
+                ends.append(setback)
+                runs.append(True)
+            else:
+                x = 0.0
+                for f in at[node]:
+                    if line_of[f] != running[node]:
+                        continue
+                    of = direction[f] if edges[f, 0] == node else -direction[f]
+                    cos = float(np.clip(own @ of, -1.0, 1.0))
+                    sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)
+                    x = max(x, (b + c + b * abs(cos)) / sin)
+                ends.append(x)
+                runs.append(False)
+        k = int(line_of[e])
+        beam = beam_ids[k] if k >= 0 else "B-X"
+        q = counters.get(beam, 0)
+        counters[beam] = q + 1
+        out.append(Strip(strip_id(beam, q), e, (i, j), beam, frame, ends[0], span - ends[1],
+                         params.width, ts, (runs[0], runs[1])))
+    return out
