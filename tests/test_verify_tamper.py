@@ -8,6 +8,7 @@ import csv
 import hashlib
 import io
 import json
+import re
 import shutil
 
 import numpy as np
@@ -255,3 +256,40 @@ def test_torsion_beyond_tolerance(copy, capsys):
     capsys.readouterr()
     main(["verify", str(copy), "--quiet"])
     assert "at beam depth 150 mm (>" not in capsys.readouterr().err
+
+
+def test_bite_overstated_in_bites_csv(copy, capsys):
+    """bites.csv edited to claim 5 mm more bite for one pane than glazing.step and mesh.obj give: verify
+    recomputes the bite from the files and names the pane."""
+    rows = read_rows(copy / "bites.csv")
+    r = rows[0]
+    for x in rows:
+        if x["panel"] == r["panel"]:
+            x["bite_mm"] = f"{float(x['bite_mm']) + 5.0:.3f}"
+    write_rows(copy / "bites.csv", rows)
+    reseal(copy, "bites.csv")
+    err = findings(copy, capsys)
+    assert f"glazing.step: {r['panel']}: smallest bite is" in err and "bites.csv says" in err
+
+
+def test_min_bite_raised_above_what_the_panes_have(copy, capsys):
+    """A manifest whose panels.min_bite is raised to 40 mm (the panes bite about 20 mm): every pane edge below
+    it is a finding naming pane, mesh edge and bite."""
+    m = manifest(copy)
+    m["fabrication"]["panels"]["min_bite"] = 40.0
+    (copy / "manifest.json").write_text(json.dumps(m, indent=2))
+    err = findings(copy, capsys)
+    assert re.search(r"glazing\.step: P-\S+: the pane edge over mesh edge \d+-\d+ bites \d+\.\d\d mm on its gasket, "
+                     r"less than panels\.min_bite = 40 mm", err)
+
+
+def test_splice_cover_plate_removed_from_parts_csv(copy, capsys):
+    """One splice's two cover plates deleted from parts.csv: verify names the two beam pieces left unjoined."""
+    rows = read_rows(copy / "parts.csv")
+    splice = next(r for r in rows if r["kind"] == "splice")
+    joins = splice["joins"]
+    write_rows(copy / "parts.csv", [r for r in rows if not (r["kind"] == "splice" and r["joins"] == joins)])
+    reseal(copy, "parts.csv")
+    err = findings(copy, capsys)
+    a, b = joins.split(";")
+    assert f"parts.csv: {a}/{b}: the cut between these pieces of" in err and "has 0 splice cover plate(s)" in err
