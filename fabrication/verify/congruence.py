@@ -35,10 +35,14 @@ def shape_signature(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lengths, ang
 
 
-def congruence_error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """Smallest (max edge-length difference, max angle difference) over cyclic shifts and reversal."""
+def congruence_error(a: np.ndarray, b: np.ndarray, limits: tuple[float, float] = (1.0, 1.0)
+                     ) -> tuple[float, float]:
+    """(max edge-length difference, max angle difference) of ``b`` against ``a`` for the corner
+    correspondence (cyclic shift, with or without reversal) that fits best against ``limits`` (mm, rad): the
+    one with the smallest ``max(dl / limits[0], da / limits[1])``, so a near-symmetric outline is not matched
+    by a shift whose edge lengths happen to agree while its angles do not."""
     la, aa = shape_signature(a)
-    best = (np.inf, np.inf)
+    best, score = (np.inf, np.inf), np.inf
     for poly in (np.asarray(b, dtype=float), np.asarray(b, dtype=float)[::-1]):
         lb, ab = shape_signature(poly)
         if len(lb) != len(la):
@@ -46,8 +50,9 @@ def congruence_error(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
         for k in range(len(lb)):
             dl = float(np.abs(np.roll(lb, k) - la).max())
             da = float(np.abs(np.roll(ab, k) - aa).max())
-            if dl + da < best[0] + best[1]:
-                best = (dl, da)
+            here = max(dl / limits[0], da / limits[1])
+            if here < score:
+                best, score = (dl, da), here
     return best
 
 

@@ -67,8 +67,8 @@ def check_dxf(v: Verification) -> None:
                 if key == "glass_sheets" and mesh is not None and row is not None and row.get("face", "") != "":
                     face = int(row["face"])
                     ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))
-                    dl, da = congruence_error(ref, part.points)
                     tl, ta = congruence_limits(ref, ctol)
+                    dl, da = congruence_error(ref, part.points, (tl, ta))
                     if dl > tl or da > ta:
                         v.error(rel, pid, f"outline is not the face {face} inset by half the gap within the "
                                           f"congruence tolerance {ctol:g} mm (edge lengths differ by {dl:.3g} mm, "

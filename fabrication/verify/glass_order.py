@@ -103,7 +103,7 @@ def check_glass_order(v: Verification) -> None:
         first = parts.get(members[0]) if members else None
         if mesh is not None and first is not None and first.get("face", "") != "":
             ref = inset_face_2d(mesh.vertices[mesh.faces[int(first["face"])]], 0.5 * gap)
-            dl, da = congruence_error(ref, c)
+            dl, da = congruence_error(ref, c, (0.02, 1e-4))
             if dl > 0.02 or da > 1e-4:
                 v.error(rel, tid, f"shape is not face {first['face']} inset by half the gap "
                                   f"(edges differ by {dl:.3g} mm, angles by {da:.3g} rad)")

@@ -51,8 +51,8 @@ def check_types(v: Verification) -> None:
                 continue
             face = int(row["face"])
             ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * gap)
-            dl, da = congruence_error(ref, part.points)
             tl, ta = congruence_limits(ref, ctol)
+            dl, da = congruence_error(ref, part.points, (tl, ta))
             if dl > tl or da > ta:
                 v.error(rel, tid, f"outline is not congruent with face {face} ({row['part_id']}) inset by half the gap: "
                                   f"edge lengths differ by {dl:.3g} mm, angles by {da:.3g} rad (congruence "
