@@ -64,10 +64,13 @@ def test_file_writers_report_their_sets_in_order(run):
 
 
 def test_long_stages_are_kept_alive(run):
-    """A stage longer than a few intervals shows keep-alives between its reports, counted rather than timed (a
-    call into the CAD kernel or rhino3dm holds the interpreter lock and delays the ticker while it runs)."""
+    """A stage of this process longer than a few intervals shows keep-alives between its reports, counted rather
+    than timed (a call into the CAD kernel or rhino3dm holds the interpreter lock and delays the ticker)."""
     p, _, _ = run
-    long = {s: t for s, t in p.times.items() if t > 3 * (p.interval + p.tick)}
+    # a writer of the second process is reported whole when it is joined (start and done at once, with the
+    # child's wall time); this process kept reporting its own stages meanwhile
+    elsewhere = {e.stage for e in p.events if e.kind == "start" and "second process" in e.text}
+    long = {s: t for s, t in p.times.items() if t > 3 * (p.interval + p.tick) and s not in elsewhere}
     for stage, seconds in long.items():
         events = [e for e in p.events if e.stage == stage and e.kind in ("tick", "advance", "update")]
         assert len(events) >= 2 and any(e.kind == "tick" for e in events), (stage, seconds, len(events))
