@@ -54,7 +54,13 @@ class GeometryError(PpfabError, ValueError):
 
 
 class FoldError(GeometryError):
-    """The mesh passes through a cuspidal edge: a face is flipped."""
+    """The mesh passes through a cuspidal edge: a face is flipped.
+
+    ``mask``: boolean ``(m, n')`` of the folded faces, in the face layout of the mesh that was refused (set by
+    :func:`ppfab.folds.check_folds`; ``None`` when the raiser had none).
+    """
+
+    mask: Any = None
 
 
 class FabricationError(PpfabError):

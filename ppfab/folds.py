@@ -109,7 +109,7 @@ def check_folds(grid: QuadGrid, u: np.ndarray | None = None, v: np.ndarray | Non
 
     The message names the first folded face (row-major), how many faces fold,
     and the largest block of face parameters ``[u_a, u_b] × [v_c, v_d]`` that
-    stays fold-free.
+    stays fold-free; the error's ``mask`` is the boolean ``(m, n')`` of the folded faces.
     """
     bad = folded_faces(grid, reference)
     if not bad.any():
@@ -134,6 +134,8 @@ def check_folds(grid: QuadGrid, u: np.ndarray | None = None, v: np.ndarray | Non
         valid = f"the face parameters {ru}, {rv} stay valid (faces [{i0}:{i1}, {j0}:{j1}])"
     else:
         valid = "no block of faces stays valid"
-    raise FoldError(f"{context} folds over (passes through a cuspidal edge): face ({i}, {j}){where} is flipped "
+    err = FoldError(f"{context} folds over (passes through a cuspidal edge): face ({i}, {j}){where} is flipped "
                     f"({int(bad.sum())} of {bad.size} faces); {valid}",
                     element=f"face ({i}, {j})", value=float(bad.sum()))
+    err.mask = bad
+    raise err

@@ -315,6 +315,9 @@ class Studio:
         lines = [f"re-solve {1000 * st.seconds:.0f} ms · {dp}"]
         if folds:
             lines.append(f"**{folds} faces fold** (marked red)")
+        refused = self.model.refused_folds
+        if refused is not None and refused.any():
+            lines.append(f"**the refused edit folds {int(refused.sum())} faces** (marked red on the last valid mesh)")
         if self.model.error:
             lines.append(f"**not applied:** {self.model.error}")
         self.status.content = "\n\n".join(lines)
@@ -337,6 +340,8 @@ class Studio:
         else:
             colours = ramp(values)
         colours[st.folded.reshape(-1)] = FOLD_RGB
+        if self.model.refused_folds is not None:
+            colours[self.model.refused_folds.reshape(-1)] = FOLD_RGB
         self._draw_panels(corners.reshape(-1, 4, 3), colours)
         depth = float(self.model.doc.get("beams", {}).get("depth", 200.0)) / 1000.0
         axes = st.placed.axes

@@ -16,6 +16,11 @@ parameters are plain numbers that a design file stores and that reproduce the me
 ``conical_spheres`` (§4.2.3, Steps 1 and 4)
     The centres of the control spheres ``(x, y, z, r)`` (the radii are number inputs) and, with a Step 4
     profile, its control points in the frame of ``W_k`` (moved points are projected into that plane).
+``translational``, ``profile_curves``, ``conical_sections``, ``plane_splines``, ``bisector``,
+``conical_spheres_pp``
+    Point and plane handles, see :mod:`fabrication.studio.point_handles` (``cauchy`` and ``conical_pp`` are
+    edited with the controls alone: their boundary points must stay on given lines, resp. their parameters are
+    series coefficients).
 """
 
 from __future__ import annotations
@@ -185,9 +190,18 @@ class SphereHandles(HandleSet):
         return [radius(k) for k in range(len(params["spheres"]))]
 
 
+from .point_handles import (BisectorHandles, PlaneSplineHandles, ProfileHandles, SectionHandles,  # noqa: E402
+                            SpinePPHandles, TranslationalHandles)
+
 HANDLE_SETS: dict[str, HandleSet] = {
     "face_image_curves": FaceImageHandles(),
     "conical_spheres": SphereHandles(),
+    "translational": TranslationalHandles(),
+    "profile_curves": ProfileHandles(),
+    "conical_sections": SectionHandles(),
+    "plane_splines": PlaneSplineHandles(),
+    "bisector": BisectorHandles(),
+    "conical_spheres_pp": SpinePPHandles(),
 }
 """Construction name → its handles; constructions not named here are edited with the sliders alone."""
 

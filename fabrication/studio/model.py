@@ -5,7 +5,8 @@ re-solve, the PP check, the live figures, undo/redo and saving.
 (:meth:`StudioModel.set_param`, :meth:`StudioModel.move_handle`, …) makes a new document and re-solves it
 through :func:`ppfab.geometry.build_geometry` (the construction registry's closed-form constructions).  An edit
 the construction refuses (invalid parameters, a fold, a cusp) leaves the last valid state in place and is kept
-as :attr:`Solve.error`, with the folded faces marked where the mesh could be built.
+as :attr:`StudioModel.error`; when the refusal is a fold (:class:`~ppfab.errors.FoldError`) with the same face
+layout as the shown mesh, :attr:`StudioModel.refused_folds` marks the faces that the refused edit folds.
 
 The PP check is ``δ_P`` (§3.3, :func:`ppfab.metrics.polyline_planarity`) of every polyline of the
 families the construction keeps planar.
@@ -145,6 +146,7 @@ class StudioModel:
         self.doc = copy.deepcopy(doc)
         self.history = History()
         self.error = ""
+        self.refused_folds: np.ndarray | None = None
         self.state = solve(self.doc, self.base_dir)
         self._drag_base: tuple[dict, Solve] | None = None
 
@@ -191,11 +193,20 @@ class StudioModel:
         """Re-solve ``doc``; keep it (and push the old one on the undo stack) when it solves, else keep the
         current state and set :attr:`error`.  Returns whether the edit was taken; an edit that changes
         nothing is taken without an undo step."""
+        from ppfab.errors import FoldError
+
+        self.refused_folds = None
         if doc == self.doc:
             self.error = ""
             return True
         try:
             state = solve(doc, self.base_dir)
+        except FoldError as exc:
+            self.error = str(exc)
+            mask = None if exc.mask is None else np.asarray(exc.mask, dtype=bool)
+            if mask is not None and mask.shape == self.state.folded.shape:
+                self.refused_folds = mask
+            return False
         except PpfabError as exc:
             self.error = str(exc)
             return False
@@ -265,7 +276,7 @@ class StudioModel:
         """Show ``mesh`` (construction units, e.g. the optimiser's result for ``[optimize]``) as the current
         state; the document is unchanged (a build optimises again from it)."""
         self.state = measure(self.doc, mesh, families)
-        self.error = ""
+        self.error, self.refused_folds = "", None
 
     def undo(self) -> bool:
         if not self.history.undo:
@@ -273,6 +284,7 @@ class StudioModel:
         doc = self.history.undo.pop()
         self.history.redo.append(self.doc)
         self.doc, self.state, self.error = doc, solve(doc, self.base_dir), ""
+        self.refused_folds = None
         return True
 
     def redo(self) -> bool:
@@ -281,6 +293,7 @@ class StudioModel:
         doc = self.history.redo.pop()
         self.history.undo.append(self.doc)
         self.doc, self.state, self.error = doc, solve(doc, self.base_dir), ""
+        self.refused_folds = None
         return True
 
     # -- files ----------------------------------------------------------------------------------------
