@@ -26,47 +26,13 @@ parameters are plain numbers that a design file stores and that reproduce the me
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-Params = dict[str, Any]
-
-
-@dataclass(frozen=True)
-class Handle:
-    """One handle: ``position (3,)`` in construction units, whether it turns, a label and its RGB colour."""
-
-    key: str
-    position: np.ndarray
-    label: str
-    color: tuple[int, int, int]
-    rotatable: bool = False
-
-
-@dataclass(frozen=True)
-class Scalar:
-    """A number the handle set offers besides the points (e.g. a sphere's radius): ``get(params)``,
-    ``set(params, value) -> params``."""
-
-    label: str
-    get: Callable[[Params], float]
-    set: Callable[[Params, float], Params]
-
-
-class HandleSet:
-    """The handles of one construction (none by default: the sliders still edit every number)."""
-
-    def handles(self, params: Params, grid: Any) -> list[Handle]:
-        return []
-
-    def apply(self, params: Params, grid: Any, key: str, position: np.ndarray, rotation: np.ndarray) -> Params:
-        """New parameters after handle ``key`` moved to ``position (3,)`` and turned by ``rotation (3, 3)``."""
-        raise KeyError(key)
-
-    def scalars(self, params: Params) -> list[Scalar]:
-        return []
+from .handle_base import Handle, HandleSet, Params, Scalar
+from .point_handles import (BisectorHandles, PlaneSplineHandles, ProfileHandles, SectionHandles,
+                            SpinePPHandles, TranslationalHandles)
 
 
 def _rot_z(deg: float) -> np.ndarray:
@@ -189,9 +155,6 @@ class SphereHandles(HandleSet):
             return Scalar(f"sphere {k} radius", lambda p: float(p["spheres"][k][3]), set_r)
         return [radius(k) for k in range(len(params["spheres"]))]
 
-
-from .point_handles import (BisectorHandles, PlaneSplineHandles, ProfileHandles, SectionHandles,  # noqa: E402
-                            SpinePPHandles, TranslationalHandles)
 
 HANDLE_SETS: dict[str, HandleSet] = {
     "face_image_curves": FaceImageHandles(),

@@ -43,7 +43,7 @@ import numpy as np
 
 from ppfab.frame import Frame
 
-from .handles import Handle, HandleSet, Params
+from .handle_base import Handle, HandleSet, Params
 
 _COLOURS = ((230, 90, 40), (40, 110, 230), (40, 170, 90), (150, 70, 200))
 
