@@ -123,6 +123,11 @@ class PlanarCurve:
         return t, s - s0
 
     @cached_property
+    def _samples(self) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Dense samples of a curve found strictly convex, by their number (:func:`support_values`)."""
+        return {}
+
+    @cached_property
     def _chord_table(self) -> tuple[np.ndarray, np.ndarray]:
         """``t`` at 2001 samples of ``[t0, t1]`` and the length of the inscribed polyline up to each."""
         tt = np.linspace(self.t0, self.t1, 2001)
@@ -329,6 +334,25 @@ class ConvexSection:
         return np.interp(phi, self.phi_table[order], self.t_table[order])
 
 
+def _convex_samples(curve: PlanarCurve, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """``t`` at ``samples`` points of ``[t0, t1]`` and ``c(t) (samples, 2)`` of a curve checked to be strictly
+    convex there (kept on the curve: a construction asks for support values of one curve more than once)."""
+    cache = curve._samples
+    if samples not in cache:
+        t = np.linspace(curve.t0, curve.t1, samples)
+        pts = curve(t)
+        kappa = curve.curvature(t)
+        ks = np.sign(np.median(kappa))
+        weak = ks * kappa <= 1e-9 / _size(pts)
+        if ks == 0 or np.any(weak):
+            k = int(np.argmax(weak))
+            raise DesignError(curve.name, f"is not strictly convex: its curvature changes sign or vanishes near "
+                                          f"({pts[k, 0]:.6g}, {pts[k, 1]:.6g}); the profile must be convex "
+                                          f"(Remark 4.2: inflections would reverse the profile's direction)")
+        cache[samples] = (t, pts)
+    return cache[samples]
+
+
 def support_values(curve: PlanarCurve, directions: np.ndarray, samples: int = 20001
                    ) -> tuple[np.ndarray, np.ndarray]:
     """Support function ``h(ω) = max_t c(t)·ω`` of a convex curve for unit directions ``(k, 2)``.
@@ -340,16 +364,7 @@ def support_values(curve: PlanarCurve, directions: np.ndarray, samples: int = 20
     end point: the curve does not have a tangent with that normal.
     """
     w = np.asarray(directions, dtype=float)
-    t = np.linspace(curve.t0, curve.t1, samples)
-    pts = curve(t)
-    kappa = curve.curvature(t)
-    ks = np.sign(np.median(kappa))
-    weak = ks * kappa <= 1e-9 / _size(pts)
-    if ks == 0 or np.any(weak):
-        k = int(np.argmax(weak))
-        raise DesignError(curve.name, f"is not strictly convex: its curvature changes sign or vanishes near "
-                                      f"({pts[k, 0]:.6g}, {pts[k, 1]:.6g}); the profile must be convex "
-                                      f"(Remark 4.2: inflections would reverse the profile's direction)")
+    t, pts = _convex_samples(curve, samples)
     proj = w @ pts.T                                    # (k, samples)
     best = np.argmax(proj, axis=1)
     if not curve.closed:

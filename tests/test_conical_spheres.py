@@ -222,3 +222,30 @@ def test_axes_after_a_profile_change_are_the_torsion_free_cone_axes(plane):
     to_centre /= np.linalg.norm(to_centre, axis=-1, keepdims=True)
     assert np.degrees(np.arccos(np.clip(np.einsum("ijk,ijk->ij", grid.axes, to_centre), -1, 1))).max() > 1.0
     assert torsion(grid, grid.axes.reshape(-1, 3)).max() < 1e-8
+
+
+@pytest.mark.parametrize("faces", [None, 30])
+def test_strip_planes_are_the_reflections_applied_strip_by_strip(faces):
+    """Step 3 (Remark 4.4): each strip's planes are the previous strip's reflected in ``σ_a``
+    (``T_a = σ_a(T_{a−1})`` beyond the designed strip, ``σ_{a+1}`` before it), one reflection at a time by
+    :meth:`LaguerreMap.planes`, on the bundled example with its Step 4 profile."""
+    from ppfab.conical.spheres import reflections
+
+    params = tomllib.loads((EXAMPLES / "conical_spheres.toml").read_text(encoding="utf-8"))["geometry"]["params"]
+    if faces:
+        params = {**params, "faces_spine": faces, "faces_profile": faces}
+    grid = build_construction("conical_spheres", params)
+    E, meta = grid.extended_face_planes, grid.meta
+    sigma = reflections(meta["spheres"], meta["H"])
+    N = len(sigma) - 1
+    s0 = min(meta["profile_plane"], N - 1)
+    worst = 0.0
+    for a in range(-1, N + 1):
+        if a == s0:
+            continue
+        step = sigma[a].planes(E[a]) if a > s0 else sigma[a + 1].planes(E[a + 2])
+        worst = max(worst, float(np.abs(step - E[a + 1]).max()))
+    assert worst < 1e-12 * float(np.abs(E[..., 3]).max())
+    # and the rows lie in the planes W_i (the vault is about 32 m long)
+    W = pl.normalize(grid.support_u)
+    assert np.abs(np.einsum("ijk,ik->ij", grid.vertices, W[:, :3]) + W[:, None, 3]).max() < 1e-12 * 32

@@ -104,6 +104,26 @@ def test_laguerre_map_preserves_oriented_contact(seed):
     assert np.allclose(L.inverse().spheres(L.spheres(X)), X)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_plane_matrix_composes_and_keeps_oriented_contact(seed):
+    """``(Y[:3], Y[4]) / −Y[3]`` with ``Y = B X``, ``X = (n, −1, d)``: a plane touching a sphere maps to a plane
+    touching its image; the product of two matrices is the composed map (the propagation of conical_spheres)."""
+    rng = np.random.default_rng(seed)
+    L, L2 = random_map(seed), random_map(seed + 10)
+    planes = pl.normalize(np.c_[rng.normal(size=(20, 3)), rng.normal(size=20)])
+    c = rng.normal(scale=3, size=(20, 3))
+    X = np.c_[c, -(np.einsum("ki,ki->k", planes[:, :3], c) + planes[:, 3])]    # spheres touching the planes
+
+    def act(B: np.ndarray) -> np.ndarray:
+        Y = np.c_[planes[:, :3], -np.ones(20), planes[:, 3]] @ B.T
+        return np.c_[Y[:, :3], Y[:, 4]] / -Y[:, 3:4]
+
+    for P2, S2 in ((act(L.plane_matrix()), L.spheres(X)),
+                   (act(L.plane_matrix() @ L2.plane_matrix()), L.spheres(L2.spheres(X)))):
+        assert np.abs(np.linalg.norm(P2[:, :3], axis=1) - 1).max() < 1e-12
+        assert np.abs(np.einsum("ki,ki->k", P2[:, :3], S2[:, :3]) + P2[:, 3] + S2[:, 3]).max() < 1e-10
+
+
 def test_mobius_transform_keeps_circles_on_the_sphere():
     rng = np.random.default_rng(3)
     axis = rng.normal(size=3)

@@ -212,3 +212,151 @@ def test_a_refused_fold_marks_the_faces_it_folds():
     i, j = (int(x) for x in re.search(r"face \((\d+), (\d+)\)", m.error).groups())
     assert m.refused_folds[i, j]                                     # the face the message names
     assert m.set_param("faces_profile", 13) and m.refused_folds is None
+
+
+# ----------------------------------------------------------------------------------------------------------
+# cauchy: initial vertices slide on their node axes, support planes move and turn
+
+
+def _unit_plane(e) -> np.ndarray:
+    e = np.asarray(e, dtype=float)
+    return e / np.linalg.norm(e[:3])
+
+
+def _axis_direction(a, b) -> np.ndarray:
+    """Unit direction of the line of planes ``a`` and ``b`` (the cross product of their normals)."""
+    d = np.cross(np.asarray(a, float)[:3], np.asarray(b, float)[:3])
+    return d / np.linalg.norm(d)
+
+
+def _plane_residual(params: dict, v: np.ndarray) -> float:
+    """Largest distance (construction units) of a row ``v[i, :]`` from ``U_i`` and of a column ``v[:, j]`` from
+    ``W_j`` (so also of each initial vertex from the two planes of its node axis)."""
+    U = np.stack([_unit_plane(e) for e in params["support_u"]])
+    W = np.stack([_unit_plane(e) for e in params["support_w"]])
+    rows = np.abs(np.einsum("ijk,ik->ij", v, U[:, :3]) + U[:, None, 3]).max()
+    cols = np.abs(np.einsum("ijk,jk->ij", v, W[:, :3]) + W[None, :, 3]).max()
+    return float(max(rows, cols))
+
+
+def _off_axis(params: dict, name: str, k: int) -> float:
+    """Distance of the stored initial vertex ``name[k]`` from the two planes of its node axis."""
+    i, j = (k, 0) if name == "boundary_u" else (0, k)
+    x = np.asarray(params[name][k], float)
+    return max(abs(_unit_plane(params["support_u"][i]) @ np.r_[x, 1.0]),
+               abs(_unit_plane(params["support_w"][j]) @ np.r_[x, 1.0]))
+
+
+# (handle, along its node axis (m), across it (m), rotation)
+CAUCHY = [
+    ("boundary_u_5", 0.8, 0.3, None),
+    ("boundary_w_3", -0.6, 0.5, None),
+    ("boundary_u_0", 0.5, 0.2, None),                 # v_00: both lists
+    ("support_u_4", None, [0.3, 0.0, 0.1], (1, 2.0)),
+    ("support_w_9", None, [0.0, 0.2, 0.0], (0, -3.0)),
+    ("support_u_0", None, [0.2, 0.0, 0.0], (2, 1.5)),   # U_0: every v_0j follows its axis
+    ("support_w_0", None, [0.0, -0.3, 0.2], None),      # W_0: every v_i0 follows its axis
+]
+
+
+@pytest.fixture(scope="module")
+def cauchy() -> StudioModel:
+    return StudioModel.load(EX / "pp_cauchy.toml")
+
+
+@pytest.mark.parametrize("key, along, across, turn", CAUCHY, ids=[c[0] for c in CAUCHY])
+def test_cauchy_handle_keeps_the_initial_vertices_on_their_axes(cauchy, tmp_path, key, along, across, turn):
+    m = StudioModel(cauchy.doc, cauchy.base_dir)
+    p0 = cauchy.params
+    h = {x.key: x for x in m.handles()}[key]
+    name, k = key.rsplit("_", 1)
+    k = int(k)
+    rot = np.eye(3) if turn is None else _rot(*turn)
+    if along is not None:
+        # the node axis by the cross product of the normals; the drag has a part across the axis, which is dropped
+        i, j = (k, 0) if name == "boundary_u" else (0, k)
+        d = _axis_direction(p0["support_u"][i], p0["support_w"][j])
+        off = np.cross(d, [0.0, 0.0, 1.0] if abs(d[2]) < 0.9 else [1.0, 0.0, 0.0])
+        target = h.position + along * d + across * off / np.linalg.norm(off)
+        expect = h.position + along * d
+    else:
+        target = expect = h.position + np.asarray(across)
+    assert m.move_handle(key, target, rot), m.error
+    v0, v = cauchy.state.placed.vertices, m.state.placed.vertices
+    assert float(np.abs(v - v0).max()) > 20.0                          # mm
+    assert _line_planarity(v) < 1e-9 and _face_planarity(v) < 1e-9
+    # the rows lie in the (edited) planes U_i, the columns in W_j, the initial vertices on both of their planes
+    size = float(np.linalg.norm(np.ptp(m.state.raw.vertices.reshape(-1, 3), 0)))
+    assert _plane_residual(m.params, m.state.raw.vertices) < 1e-9 * size
+    x = expect * 1000.0 / m.geometry["scale"]                           # display metres -> construction units
+    if along is not None:
+        # the point moved by the drag's component along its axis, and the mesh vertex is there
+        after = {x.key: x for x in m.handles()}[key]
+        assert np.abs(after.position - expect).max() < 1e-9
+        assert np.abs(m.state.raw.vertices[i, j] - x).max() < 1e-9 * size
+        assert _off_axis(m.params, name, k) < 1e-12 * size
+        if k == 0:
+            assert m.params["boundary_w"][0] == m.params["boundary_u"][0]
+        others = [q for q in range(len(p0[name])) if q != k]
+        assert all(m.params[name][q] == p0[name][q] for q in others)
+    else:
+        # the edited plane passes through the dragged point with the turned normal, of the same length
+        new, old = np.asarray(m.params[name][k], float), np.asarray(p0[name][k], float)
+        assert abs(new[:3] @ x + new[3]) < 1e-9 * np.linalg.norm(new[:3]) * size
+        assert np.allclose(new[:3], rot @ old[:3], atol=1e-12 * np.linalg.norm(old[:3]))
+        other = "support_w" if name == "support_u" else "support_u"
+        assert m.params[other] == p0[other]
+        # the initial vertices on the axes through the edited plane were moved onto the new axes, exactly
+        if name == "support_u":
+            moved = [("boundary_u", k)] + [("boundary_w", q) for q in range(len(p0["boundary_w"])) if k == 0]
+        else:
+            moved = [("boundary_w", k)] + [("boundary_u", q) for q in range(len(p0["boundary_u"])) if k == 0]
+        if ("boundary_u", 0) in moved or ("boundary_w", 0) in moved:            # v_00 is in both lists
+            moved += [("boundary_u", 0), ("boundary_w", 0)]
+            assert m.params["boundary_w"][0] == m.params["boundary_u"][0]
+        assert max(_off_axis(m.params, *e) for e in moved) < 1e-12 * size
+        for list_name in ("boundary_u", "boundary_w"):                       # the others stay as they were
+            assert all(m.params[list_name][q] == x for q, x in enumerate(p0[list_name]) if (list_name, q) not in moved)
+    assert len(m.history.undo) == 1
+    assert m.undo() and np.array_equal(m.state.placed.vertices, v0)
+    assert m.redo() and np.array_equal(m.state.placed.vertices, v)
+    out = m.save(tmp_path / "edited.toml")
+    again = solve(tomllib.loads(out.read_text(encoding="utf-8")), tmp_path)
+    assert np.abs(again.placed.vertices - v).max() <= 1e-9
+
+
+def test_cauchy_refused_edits_keep_the_last_valid_design(cauchy):
+    m = StudioModel(cauchy.doc, cauchy.base_dir)
+    before = m.state
+    h = {x.key: x for x in m.handles()}
+    # v_10,0 up its axis to the dome's centre, where every node axis meets: the propagation breaks down
+    p = h["boundary_u_10"].position.copy()
+    p[2] = 40.0
+    assert not m.move_handle("boundary_u_10", p)
+    assert "breaks down at vertex (11, 1)" in m.error and "\n" not in m.error
+    # W_3 turned onto U_0's normal: their node axis is undefined
+    nw, nu = (np.asarray(cauchy.params[s][k][:3], float) for s, k in (("support_w", 3), ("support_u", 0)))
+    a, b = nw / np.linalg.norm(nw), nu / np.linalg.norm(nu)
+    c, ax = float(a @ b), np.cross(a, b)
+    K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
+    R = np.eye(3) + K + K @ K / (1 + c)                                # Rodrigues: R a = b
+    assert np.allclose(R @ a, b)
+    assert not m.move_handle("support_w_3", h["support_w_3"].position, R)
+    assert "nearly parallel" in m.error and "W_3" in m.error and "\n" not in m.error
+    assert not m.move_handle("boundary_w_0", h["boundary_u_0"].position) and "boundary_u_0" in m.error
+    assert not m.move_handle("boundary_u_99", p) and "boundary_u_99" in m.error
+    assert m.state is before and m.doc == cauchy.doc and not m.history.undo
+
+
+def test_cauchy_drag_is_one_undo_step(cauchy):
+    m = StudioModel(cauchy.doc, cauchy.base_dir)
+    h = {x.key: x for x in m.handles()}["support_u_12"]
+    m.begin_drag()
+    for a in (1.0, 2.0, 3.0):
+        assert m.drag("support_u_12", h.position + np.array([0.1 * a, 0.0, 0.0]), _rot(1, a))
+    m.end_drag()
+    direct = StudioModel(cauchy.doc, cauchy.base_dir)
+    assert direct.move_handle("support_u_12", h.position + np.array([0.3, 0.0, 0.0]), _rot(1, 3.0))
+    assert np.abs(m.state.placed.vertices - direct.state.placed.vertices).max() < 1e-9
+    assert len(m.history.undo) == 1 and m.undo()
+    assert np.array_equal(m.state.placed.vertices, cauchy.state.placed.vertices)

@@ -18,9 +18,11 @@ parameters are plain numbers that a design file stores and that reproduce the me
     profile, its control points in the frame of ``W_k`` (moved points are projected into that plane).
 ``translational``, ``profile_curves``, ``conical_sections``, ``plane_splines``, ``bisector``,
 ``conical_spheres_pp``
-    Point and plane handles, see :mod:`fabrication.studio.point_handles` (``cauchy`` and ``conical_pp`` are
-    edited with the controls alone: their boundary points must stay on given lines, resp. their parameters are
-    series coefficients).
+    Point and plane handles, see :mod:`fabrication.studio.point_handles`.
+``cauchy`` (§3.1.2, Fig. 7)
+    The initial vertices, each sliding on its node axis, and the turnable support planes, see
+    :mod:`fabrication.studio.cauchy_handles` (``conical_pp`` is edited with the controls alone: its parameters
+    are series coefficients).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from .cauchy_handles import CauchyHandles
 from .handle_base import Handle, HandleSet, Params, Scalar
 from .point_handles import (BisectorHandles, PlaneSplineHandles, ProfileHandles, SectionHandles,
                             SpinePPHandles, TranslationalHandles)
@@ -165,6 +168,7 @@ HANDLE_SETS: dict[str, HandleSet] = {
     "plane_splines": PlaneSplineHandles(),
     "bisector": BisectorHandles(),
     "conical_spheres_pp": SpinePPHandles(),
+    "cauchy": CauchyHandles(),
 }
 """Construction name → its handles; constructions not named here are edited with the sliders alone."""
 

@@ -74,14 +74,26 @@ def profile_angles(faces: int, angle_range: tuple[float, float], closed: bool) -
 
 
 def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
-    """Strip planes ``T_a`` for ``a = −1 … N`` from strip ``s0`` by the reflections (Step 3) → ``(N+2, k, 4)``."""
+    """Strip planes ``T_a`` for ``a = −1 … N`` from strip ``s0`` by the reflections (Step 3) → ``(N+2, k, 4)``.
+
+    ``T_a = σ_a(T_{a−1})`` for ``a > s0`` and ``T_a = σ_{a+1}(T_{a+1})`` for ``a < s0``: with the homogeneous
+    matrices ``B_a`` of the reflections (:meth:`~ppfab.transforms.laguerre.LaguerreMap.plane_matrix`) strip
+    ``a`` is ``C_a X_0``, ``C_a = B_a ⋯ B_{s0+1}`` (resp. ``B_{a+1} ⋯ B_{s0}``), applied to all planes of all
+    strips in one product.
+    """
     N = len(sigma) - 1
-    out = np.empty((N + 2,) + T0.shape)
-    out[s0 + 1] = T0
+    B = np.stack([m.plane_matrix() for m in sigma])
+    C = np.empty((N + 2, 5, 5))
+    C[s0 + 1] = np.eye(5)
     for a in range(s0 + 1, N + 1):                # a = N is the ghost strip beyond W_N
-        out[a + 1] = sigma[a].planes(out[a])
+        C[a + 1] = B[a] @ C[a]
     for a in range(s0 - 1, -2, -1):               # a = −1 is the ghost strip before W_0
-        out[a + 1] = sigma[a + 1].planes(out[a + 2])
+        C[a + 1] = B[a + 1] @ C[a + 2]
+    P = pl.normalize(T0)
+    X = np.concatenate([P[:, :3], -np.ones((len(P), 1)), P[:, 3:]], axis=1)
+    Y = np.einsum("aij,kj->aki", C, X)
+    out = np.concatenate([Y[..., :3], Y[..., 4:]], axis=-1) / -Y[..., 3:4]
+    out[s0 + 1] = T0
     return out
 
 

@@ -189,6 +189,16 @@ class LaguerreMap:
         k = -M[..., 3]
         return np.concatenate([M[..., :3], d[..., None]], axis=-1) / k[..., None]
 
+    def plane_matrix(self) -> np.ndarray:
+        """``B (5, 5)`` of the action on planes in homogeneous form: a unit plane ``(n, d)`` written as
+        ``X = (n, −1, d)`` maps to ``Y = B X``, ``B = [[A, 0], [−(J T)ᵀ A, λ]]``, and :meth:`planes` is
+        ``(Y[:3], Y[4]) / (−Y[3])``.  Composed maps are products of these matrices."""
+        B = np.zeros((5, 5))
+        B[:4, :4] = self.A
+        B[4, :4] = -(J @ self.T) @ self.A
+        B[4, 4] = self.lam
+        return B
+
     def normals(self, n: np.ndarray) -> np.ndarray:
         """The Möbius transformation of unit normals ``(..., 3)`` induced by the map (§2.1.2)."""
         n = np.asarray(n, dtype=float)
