@@ -455,7 +455,8 @@ def build_cell(opt: dict) -> str:
     return cell(b["result"], 320) + f" ({extra})"
 
 
-def table(records: list[dict], quick: bool, max_iter: int | None = None, missing: list[str] | None = None) -> str:
+def table(records: list[dict], quick: bool, max_iter: int | None = None, missing: list[str] | None = None,
+          note: str | None = None) -> str:
     ok = sum(1 for r in records for lab in ("P", "PP")
              if (r[lab].get("build") or {}).get("result") == "built and verified")
     meshes = sorted({r["name"] for r in records for lab in ("P", "PP")
@@ -498,6 +499,7 @@ def table(records: list[dict], quick: bool, max_iter: int | None = None, missing
             "'iteration limit 500' comes from an earlier run of the same optimiser code with its default "
             "(reused with `--reuse`)." if max_iter else "")),
         "",
+        *([note, ""] if note else []),
         f"Built and verified: {ok} of {2 * len(records)} builds ({by_kind['P']} P, {by_kind['PP']} PP) on "
         f"{len(meshes)} meshes: " + ", ".join(f"`{m}`" for m in meshes) + ".",
         "",
@@ -537,6 +539,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--reuse", action="store_true", help="with --workdir: take the optimisations (mesh, record and "
                                                         "time) of an earlier run there instead of running them again")
     ap.add_argument("--no-build", action="store_true", help="only check and optimise (a later --reuse run builds)")
+    ap.add_argument("--note", help="with --table-from: a paragraph placed under the header (e.g. which commit "
+                                   "each run was recorded at)")
     ap.add_argument("--data", type=Path, action="append", help="folder of meshes (repeatable; default the shared "
                                                                "real-mesh set and tests/data/meshes)")
     args = ap.parse_args(argv)
@@ -549,7 +553,7 @@ def main(argv: list[str] | None = None) -> int:
         for src in args.table_from:
             merged.update({r["name"]: r for r in json.loads(src.read_text())})
         missing = sorted({p.name for p in paths} - set(merged), key=str.lower)
-        (args.out or OUT_MD).write_text(table(list(merged.values()), args.quick, args.max_iter, missing))
+        (args.out or OUT_MD).write_text(table(list(merged.values()), args.quick, args.max_iter, missing, args.note))
         return 0
     if args.only:
         paths = [p for p in paths if any(o in p.name for o in args.only)]
