@@ -54,6 +54,17 @@ def _cone_defect(v: np.ndarray) -> float:
     return float(np.abs(ang[0] - ang[1] + ang[2] - ang[3]).max())
 
 
+def _one_undo_step_and_the_same_after_reload(m: StudioModel, v0: np.ndarray, v: np.ndarray, tmp_path) -> None:
+    """The edit is one undo step back to ``v0`` exactly and redo forward to ``v``; saved and read back, the
+    design gives the same geometry to 1e-9 mm."""
+    assert len(m.history.undo) == 1
+    assert m.undo() and np.array_equal(m.state.placed.vertices, v0)
+    assert m.redo() and np.array_equal(m.state.placed.vertices, v)
+    out = m.save(tmp_path / "edited.toml")
+    again = solve(tomllib.loads(out.read_text(encoding="utf-8")), tmp_path)
+    assert np.abs(again.placed.vertices - v).max() <= 1e-9
+
+
 def _rot(axis: int, deg: float) -> np.ndarray:
     c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
     i, j = [k for k in range(3) if k != axis]
@@ -123,13 +134,7 @@ def test_handle_keeps_pp_lands_where_dragged_and_undoes(models, tmp_path, exampl
         # a point handle lands exactly where it was dragged (the moves here lie in the handle's plane)
         assert np.abs(after[key].position - target).max() < 1e-9
     # one undo step back to the example exactly, redo forward again
-    assert len(m.history.undo) == 1
-    assert m.undo() and np.array_equal(m.state.placed.vertices, v0)
-    assert m.redo() and np.array_equal(m.state.placed.vertices, v)
-    # saved and read back: the same geometry
-    out = m.save(tmp_path / "edited.toml")
-    again = solve(tomllib.loads(out.read_text(encoding="utf-8")), tmp_path)
-    assert np.abs(again.placed.vertices - v).max() <= 1e-9
+    _one_undo_step_and_the_same_after_reload(m, v0, v, tmp_path)
 
 
 def test_profile_edit_restores_the_meeting_point_by_moving_the_other_plane(models):
@@ -317,12 +322,7 @@ def test_cauchy_handle_keeps_the_initial_vertices_on_their_axes(cauchy, tmp_path
         assert max(_off_axis(m.params, *e) for e in moved) < 1e-12 * size
         for list_name in ("boundary_u", "boundary_w"):                       # the others stay as they were
             assert all(m.params[list_name][q] == x for q, x in enumerate(p0[list_name]) if (list_name, q) not in moved)
-    assert len(m.history.undo) == 1
-    assert m.undo() and np.array_equal(m.state.placed.vertices, v0)
-    assert m.redo() and np.array_equal(m.state.placed.vertices, v)
-    out = m.save(tmp_path / "edited.toml")
-    again = solve(tomllib.loads(out.read_text(encoding="utf-8")), tmp_path)
-    assert np.abs(again.placed.vertices - v).max() <= 1e-9
+    _one_undo_step_and_the_same_after_reload(m, v0, v, tmp_path)
 
 
 def test_cauchy_refused_edits_keep_the_last_valid_design(cauchy):
