@@ -71,10 +71,14 @@ def test_long_stages_are_kept_alive(run):
     # child's wall time); this process kept reporting its own stages meanwhile
     elsewhere = {e.stage for e in p.events if e.kind == "start" and "second process" in e.text}
     long = {s: t for s, t in p.times.items() if t > 3 * (p.interval + p.tick) and s not in elsewhere}
+    quiet = 0                                   # long stages with fewer than two reports of their own
     for stage, seconds in long.items():
-        events = [e for e in p.events if e.stage == stage and e.kind in ("tick", "advance", "update")]
-        assert len(events) >= 2 and any(e.kind == "tick" for e in events), (stage, seconds, len(events))
-    assert sum(e.kind == "tick" for e in p.events) >= len(long)
+        own = [e for e in p.events if e.stage == stage and e.kind in ("advance", "update")]
+        ticks = [e for e in p.events if e.stage == stage and e.kind == "tick"]
+        # a stage that reports often (nesting: every 1/200 of its budget) needs no keep-alive between reports
+        assert len(own) >= 2 or len(ticks) >= 1, (stage, seconds, len(own), len(ticks))
+        quiet += len(own) < 2
+    assert sum(e.kind == "tick" for e in p.events) >= quiet
 
 
 def test_stage_lines_are_clean(run):
