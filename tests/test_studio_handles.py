@@ -175,19 +175,24 @@ def test_a_sphere_centre_stays_in_the_plane_of_the_others(models):
     assert _line_planarity(m.state.placed.vertices) < 1e-9 and _cone_defect(m.state.placed.vertices) < 1e-9
 
 
-def test_drag_of_a_plane_handle_is_one_undo_step(models):
-    base = models["pp_plane_splines"]
+def _three_step_drag_is_one_undo_step(base: StudioModel, key: str, step: np.ndarray, axis: int) -> None:
+    """Dragging ``key`` three steps (``step`` and 1° about ``axis`` each) ends where one move of the whole way
+    ends, to 1e-9, and is one undo step back to ``base``."""
     m = StudioModel(base.doc, base.base_dir)
-    h = {x.key: x for x in m.handles()}["v_planes_3"]
+    h = {x.key: x for x in m.handles()}[key]
     m.begin_drag()
     for a in (1.0, 2.0, 3.0):
-        assert m.drag("v_planes_3", h.position + np.array([0.0, 0.0, 0.1 * a]), _rot(0, a))
+        assert m.drag(key, h.position + a * step, _rot(axis, a))
     m.end_drag()
     direct = StudioModel(base.doc, base.base_dir)
-    assert direct.move_handle("v_planes_3", h.position + np.array([0.0, 0.0, 0.3]), _rot(0, 3.0))
+    assert direct.move_handle(key, h.position + 3.0 * step, _rot(axis, 3.0))
     assert np.abs(m.state.placed.vertices - direct.state.placed.vertices).max() < 1e-9
     assert len(m.history.undo) == 1 and m.undo()
     assert np.array_equal(m.state.placed.vertices, base.state.placed.vertices)
+
+
+def test_drag_of_a_plane_handle_is_one_undo_step(models):
+    _three_step_drag_is_one_undo_step(models["pp_plane_splines"], "v_planes_3", np.array([0.0, 0.0, 0.1]), 0)
 
 
 def test_refused_handle_edit_keeps_the_last_valid_design(models):
@@ -349,14 +354,4 @@ def test_cauchy_refused_edits_keep_the_last_valid_design(cauchy):
 
 
 def test_cauchy_drag_is_one_undo_step(cauchy):
-    m = StudioModel(cauchy.doc, cauchy.base_dir)
-    h = {x.key: x for x in m.handles()}["support_u_12"]
-    m.begin_drag()
-    for a in (1.0, 2.0, 3.0):
-        assert m.drag("support_u_12", h.position + np.array([0.1 * a, 0.0, 0.0]), _rot(1, a))
-    m.end_drag()
-    direct = StudioModel(cauchy.doc, cauchy.base_dir)
-    assert direct.move_handle("support_u_12", h.position + np.array([0.3, 0.0, 0.0]), _rot(1, 3.0))
-    assert np.abs(m.state.placed.vertices - direct.state.placed.vertices).max() < 1e-9
-    assert len(m.history.undo) == 1 and m.undo()
-    assert np.array_equal(m.state.placed.vertices, cauchy.state.placed.vertices)
+    _three_step_drag_is_one_undo_step(cauchy, "support_u_12", np.array([0.1, 0.0, 0.0]), 1)
