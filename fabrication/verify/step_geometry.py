@@ -18,7 +18,6 @@ The outline of each plate in its frame is kept in ``data["plate_outlines"]`` for
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
@@ -33,10 +32,8 @@ def _node_plates(v: Verification) -> dict[int, dict[str, dict]]:
     rel = files.get("nodes_json")
     if rel is None:
         return {}
-    try:
-        doc = json.loads((v.folder / rel).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    doc = v.read_json(rel)
+    if doc is None:
         return {}
     v.data["nodes_json"] = doc
     out: dict[int, dict[str, dict]] = {}
