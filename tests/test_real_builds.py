@@ -388,22 +388,14 @@ def default_at(faces_u: int, faces_v: int):
     return parse_design(doc, str(DEFAULT_DESIGN), base_dir=DEFAULT_DESIGN.parent)
 
 
-SPLICES_TOO_LONG = pytest.mark.xfail(
-    raises=FabricationError, strict=True,
-    reason="known defect: at 88 × 60 faces the edges (about 390 mm) are shorter than a bolted splice needs "
-           "clear of the joints (a 280 mm cover plate plus half the depth each side); a welded splice for short "
-           "edges is not built yet")
-
-
 @pytest.mark.parametrize("faces", [(22, 15), pytest.param((44, 30), marks=pytest.mark.slow),
-                                   pytest.param((88, 60), marks=[pytest.mark.slow, SPLICES_TOO_LONG] + (
-                                       [] if FULL else [pytest.mark.skip(reason="PPFAB_FULL=1 runs it (about "
-                                                                                "80 CPU s to fail)")]))],
+                                   pytest.param((88, 60), marks=pytest.mark.slow)],
                          ids=["22x15", "44x30", "88x60"])
 def test_default_design_beams_fit_the_stock_at_finer_meshes(faces):
     """The beams of the bundled default at two and four times its resolution are cut, as the build's beam
-    stage cuts them (strict, cuts clear of the joints by half a splice), to max_length (5900 mm) without any
-    change to it."""
+    stage cuts them (strict, cuts clear of the joints by what their splice needs: bolted at 22 × 15 and
+    44 × 30, welded at 88 × 60 where the edges are too short for a cover plate), to max_length (5900 mm)
+    without any change to it."""
     from fabrication.pipeline.progress import Progress
     from fabrication.pipeline.stages import stage_beams
 

@@ -14,7 +14,7 @@ from ppfab.topology import FAMILY_NAMES
 from .flat import flat_parts, type_ids
 from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
 from .params import BeamParams
-from .plates import BeamPlate, layout_plates
+from .plates import BeamPlate, SpliceClearances, layout_plates
 from .report import BeamRecord, BeamReport, Defect
 from .torsion import check_torsion
 
@@ -46,7 +46,7 @@ class BeamSet:
 
 
 def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
-                max_height: float = 0.0, cut_clearance: float = 0.0) -> BeamSet:
+                max_height: float = 0.0, splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
@@ -58,8 +58,9 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         naming every defective plate (with its measured value) instead of returning them in ``report.defects``
     max_height : the widest flat piece the plate stock holds across its length, mm (0 = no limit): long
         curved beams are cut so that their pieces fit it
-    cut_clearance : how much further (mm) than the joints need a cut stays from a node (half the length of the
-        splice that joins the pieces, :mod:`fabrication.glazing.splices`)
+    splice_clearances : the splice kinds a split beam may get, in order, each with how much further (mm) than
+        the joints need its cuts stay from a node (:mod:`fabrication.glazing.splices`); a beam takes the first
+        kind its cuts fit with (``meta["splice"]`` of its pieces)
 
     Returns
     -------
@@ -70,7 +71,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
     if strict:
         check_torsion(support, params)
-    plates, defects = layout_plates(support, params, max_height, cut_clearance)
+    plates, defects = layout_plates(support, params, max_height, splice_clearances)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
         raise DesignError("beams", "duplicate part ids")

@@ -36,6 +36,10 @@ from .params import BeamParams
 from .report import Defect
 from .splitting import Cut, plan_cuts
 
+SpliceClearances = tuple[tuple[str, float], ...]
+"""The splice kinds a split beam may get, in order, each with the extra clearance (mm) its cuts keep from the
+joints: ``(("bolted", 240.0), ("welded", 50.0))``."""
+
 
 @dataclass(frozen=True, eq=False)
 class Slot:
@@ -263,7 +267,7 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
 
 
 def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0,
-                  cut_clearance: float = 0.0) -> tuple[list[BeamPlate], list[Defect]]:
+                  splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> tuple[list[BeamPlate], list[Defect]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
@@ -272,7 +276,10 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
     edge in the edge's support plane.  Polylines the support left out of the planar families
     (``support.left_out``) and those ``[beams] segment`` names are always cut into one-edge plates.
     ``max_height``: the widest flat piece the plate stock holds across its length (0 = no limit);
-    ``cut_clearance``: how much further (mm) a cut stays from the joints (half a splice's length).  With half-lap
+    ``splice_clearances``: the splice kinds a split beam may get, in order of preference, each with how much
+    further (mm) than the joints need its cuts stay from a node (a bolted splice: half its cover plate; a
+    welded one: room for the weld preparation); a beam takes the first kind its cuts fit with, and its pieces
+    carry it in ``meta["splice"]``.  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -309,7 +316,7 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
                                   f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
-            plates.extend(_continuous(support, params, l, ids[l], defects, max_height, cut_clearance))
+            plates.extend(_continuous(support, params, l, ids[l], defects, max_height, splice_clearances))
         else:
             a, b = vs[:-1], vs[1:]
             if line.closed and len(vs) > 2:
@@ -363,29 +370,43 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
 
 
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
-                defects: list[Defect], max_height: float = 0.0, cut_clearance: float = 0.0) -> list[BeamPlate]:
+                defects: list[Defect], max_height: float = 0.0,
+                splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> list[BeamPlate]:
     """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
     room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
     bottom-edge overhang at the ends included) at most ``max_length`` and its height across at most
-    ``max_height``."""
+    ``max_height``.  The splice kinds of ``splice_clearances`` are tried in order; the beam takes the first
+    whose clearance leaves room for its cuts (a beam in one piece takes none)."""
     line = support.polylines[l]
     vs = line.vertices
     closed = bool(line.closed and len(vs) > 2)
-    plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
-                     params.max_length, _node_clearance(support, params, l) + cut_clearance, max_height)
-    pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
-    sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
-    long_x = max(x for x, _ in sizes)
-    high_y = max(y for _, y in sizes)
-    over = ((params.max_length > 0 and long_x > params.max_length + 1e-6)
-            or (max_height > 0 and high_y > max_height + 1e-6))
-    if plan.problem or over:
-        limit = f"{params.max_length:g} mm" + (f" × {max_height:g} mm" if max_height > 0 else "")
-        why = plan.problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
-        defects.append(Defect(beam_id, "too_long", long_x, params.max_length, f"polyline {l}",
-                              f"{beam_id}: cannot be cut into pieces of at most {limit} clear of the joints: "
-                              f"{why}; raise beams.max_length (up to the usable plate length), use wider plate "
-                              "stock ([beam_nesting] sheet) or lower beams.depth"))
+    joints = _node_clearance(support, params, l)
+    tried: list[str] = []
+    for kind, extra in splice_clearances:
+        plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
+                         params.max_length, joints + extra, max_height)
+        pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
+        sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
+        long_x = max(x for x, _ in sizes)
+        high_y = max(y for _, y in sizes)
+        over = ((params.max_length > 0 and long_x > params.max_length + 1e-6)
+                or (max_height > 0 and high_y > max_height + 1e-6))
+        if not (plan.problem or over):
+            if len(pieces) > 1:
+                for p in pieces:
+                    p.meta["splice"] = kind
+            return pieces
+        tried.append(f"{kind} splices {extra:.0f} mm")
+    limit = f"{params.max_length:g} mm" + (f" × {max_height:g} mm" if max_height > 0 else "")
+    why = plan.problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
+    clear = f" (cuts kept from the joints by {' or '.join(tried)} more)" if any(e for _, e in splice_clearances) \
+        else ""
+    welded = "" if any(k == "welded" for k, _ in splice_clearances) else \
+        "set splices.kind = \"welded\" or \"auto\" (welded splices need less room), "
+    defects.append(Defect(beam_id, "too_long", long_x, params.max_length, f"polyline {l}",
+                          f"{beam_id}: cannot be cut into pieces of at most {limit} clear of the joints{clear}: "
+                          f"{why}; {welded}raise beams.max_length (up to the usable plate length), use wider plate "
+                          "stock ([beam_nesting] sheet) or lower beams.depth"))
     return pieces
 
 

@@ -116,17 +116,53 @@ class _Beam:
 
 
 def _windows(beam: _Beam, clear: np.ndarray) -> list[tuple[int, float, float]]:
-    """Per edge the allowed cut fractions ``(edge, t_lo, t_hi)`` (only edges with room for a cut)."""
-    out = []
-    for e in range(beam.n_edges):
-        L = float(beam.edge_len[e])
-        if L <= 0:
-            continue
-        lo = clear[e] / L
-        hi = 1.0 - clear[(e + 1) % beam.k] / L
-        if hi > lo:
-            out.append((e, lo, hi))
-    return out
+    """Per edge the allowed cut fractions ``(edge, t_lo, t_hi)`` (only edges with room for a cut).
+
+    A cut at ``t`` runs from ``c(t)`` down the interpolated axis to ``c(t) + D·â(t)``; a node's joint runs
+    down its own axis from ``p_e`` to ``p_e + D·a_e``.  The cut keeps ``clear`` from both nodes of its edge,
+    measured along the edge ``u = (p_{e+1} − p_e)/L``, at the top edge and at the bottom edge alike (the
+    separation is nearly linear in the depth, so the two ends bound it): a cut line leaning towards a node
+    does not come closer to its slot at the bottom than ``clear``.  The limits are found by bisection on
+    every edge at once: ``sep_0(t)`` grows with ``t`` and ``sep_1(t)`` shrinks.
+    """
+    m = beam.n_edges
+    if m == 0:
+        return []
+    i = np.arange(m)
+    j = (i + 1) % beam.k
+    p0, p1 = beam.top[i], beam.top[j]
+    a0, a1 = beam.axes[i], beam.axes[j]
+    L = beam.edge_len
+    u = (p1 - p0) / np.maximum(L, 1e-300)[:, None]
+    D = beam.depth
+    q0, q1 = p0 + D * a0, p1 + D * a1
+    c0, c1 = clear[i], clear[j]
+
+    def seps(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = p0 + t[:, None] * (p1 - p0)
+        a = (1 - t)[:, None] * a0 + t[:, None] * a1
+        b = c + D * a / np.linalg.norm(a, axis=1, keepdims=True)
+        s0 = np.minimum(np.einsum("ij,ij->i", c - p0, u), np.einsum("ij,ij->i", b - q0, u))
+        s1 = np.minimum(np.einsum("ij,ij->i", p1 - c, u), np.einsum("ij,ij->i", q1 - b, u))
+        return s0, s1
+
+    # t_lo: the first t with sep_0 ≥ clear_e; t_hi: the last with sep_1 ≥ clear_{e+1}
+    lo_a, lo_b = np.zeros(m), np.ones(m)
+    hi_a, hi_b = np.zeros(m), np.ones(m)
+    for _ in range(40):
+        lo_m, hi_m = 0.5 * (lo_a + lo_b), 0.5 * (hi_a + hi_b)
+        s0, _ = seps(lo_m)
+        _, s1 = seps(hi_m)
+        ok0, ok1 = s0 >= c0, s1 >= c1
+        lo_b = np.where(ok0, lo_m, lo_b)
+        lo_a = np.where(ok0, lo_a, lo_m)
+        hi_a = np.where(ok1, hi_m, hi_a)
+        hi_b = np.where(ok1, hi_b, hi_m)
+    lo, hi = lo_b, hi_a
+    s0_lo, _ = seps(lo)
+    _, s1_hi = seps(hi)
+    good = (L > 0) & (hi > lo) & (s0_lo >= c0 - 1e-9) & (s1_hi >= c1 - 1e-9)
+    return [(int(e), float(lo[e]), float(hi[e])) for e in np.flatnonzero(good)]
 
 
 def _furthest(beam: _Beam, start: Cut | None, windows: list[tuple[int, float, float]], limit: float,

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
 from .params import GlazingParams
-from .splices import Splice, SpliceParams, make_splices
+from .splices import Splice, SpliceParams, make_splices, welded_splices
 from .strips import Strip, make_strips
 from .welds import Weld, butt_welds
 
@@ -60,7 +60,7 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
         raise FabricationError(f"{len(bad)} splice cover plate(s) of {splice_params.length:g} mm do not fit on their "
                                f"beam pieces (a slot or an end is in the way): {names}; lower splices.columns or "
                                "splices.e1/p1")
-    welds = butt_welds(beams.joints, beams.params.depth, beams.params.thickness)
+    welds = butt_welds(beams.joints, beams.params.depth, beams.params.thickness) + welded_splices(beams.plates)
     if params.support == "none":
         return Glazing(params, splice_params, (), (), tuple(splices), tuple(welds), 0.0)
     normals = edge_normals(panels, support.vertices, support.edges)

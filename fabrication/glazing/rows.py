@@ -85,12 +85,14 @@ def splice_rows(glazing, beams) -> list[dict]:
 
 
 def beam_joins(glazing) -> dict[str, dict[str, str]]:
-    """Beam piece part id → ``{"joins": neighbouring pieces, "splices": cover plates}`` (``;``-separated)."""
+    """Beam piece part id → ``{"joins": neighbouring pieces, "splices": cover plates}`` (``;``-separated); a
+    welded splice joins its pieces without cover plates (its weld is a ``joint = "splice"`` row of welds.csv)."""
     out: dict[str, dict[str, list[str]]] = {}
-    for s in glazing.splices:
-        a, b = s.pieces
+    pairs = [(s.pieces, list(s.part_ids)) for s in glazing.splices]
+    pairs += [((w.part, w.to), []) for w in glazing.welds if w.joint == "splice"]
+    for (a, b), plates in pairs:
         for me, other in ((a, b), (b, a)):
             rec = out.setdefault(me, {"joins": [], "splices": []})
             rec["joins"].append(other)
-            rec["splices"].extend(s.part_ids)
+            rec["splices"].extend(plates)
     return {k: {"joins": ";".join(v["joins"]), "splices": ";".join(v["splices"])} for k, v in out.items()}

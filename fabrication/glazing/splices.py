@@ -1,4 +1,13 @@
-"""Bolted splices where a long beam is cut into pieces (:mod:`fabrication.beams.splitting`).
+"""Splices where a long beam is cut into pieces (:mod:`fabrication.beams.splitting`): bolted cover plates, or a
+full-penetration butt weld where the edges are too short for a cover plate clear of the joints.
+
+``[splices] kind`` chooses: ``"bolted"``, ``"welded"``, or ``"auto"`` (the default): each beam is cut for
+bolted splices where its edges leave room for a cover plate clear of the joints, and for welded splices
+otherwise (fine meshes: a 280 mm cover plate needs edges of about 550 mm, a weld about 140 mm).  A welded
+cut keeps ``weld_clear`` from every joint, at the top and the bottom edge (:func:`~fabrication.beams.
+splitting.plan_cuts`); its weld is a row of ``welds.csv`` (:func:`welded_splices`).
+
+Bolted:
 
 A cut runs down the (interpolated) node axis from a point inside an edge; both pieces share that line.  The
 splice is a pair of cover plates, one on each face of the beam plate (double shear), centred on the cut
@@ -27,6 +36,7 @@ from ppfab.frame import Frame
 from ppfab.schema import param
 
 from ..contract import splice_plate_ids
+from .welds import Weld, splice_preparation
 
 
 @dataclass(frozen=True)
@@ -47,6 +57,12 @@ class SpliceParams:
                                        "glazing strip's fillet weld), mm", min=0)
     bottom_clear: float = param(10.0, doc="gap between the cover plates and the beam's bottom edge, mm", min=0)
     material: str = param("S355 plate", doc="material of the cover plates")
+    kind: str = param("auto", doc="'bolted' (cover plates), 'welded' (full-penetration butt weld across the cut) "
+                                  "or 'auto': bolted where a beam's edges leave room for a cover plate clear of "
+                                  "the joints, welded elsewhere", choices=("auto", "bolted", "welded"))
+    weld_clear: float = param(50.0, doc="distance of a welded splice from every slot and plate end, at the top and "
+                                        "the bottom edge, mm (room for the weld preparation and run-off plates)",
+                              min=0)
 
     def __post_init__(self):
         d0 = self.hole
@@ -60,6 +76,14 @@ class SpliceParams:
     def length(self) -> float:
         """Length of a cover plate along the beam, mm."""
         return 2.0 * (2.0 * self.e1 + (self.columns - 1) * self.p1)
+
+    def clearances(self, depth: float) -> tuple[tuple[str, float], ...]:
+        """The splice kinds a split beam may get, in order, with how much further than its joints need (mm) a cut
+        stays from a node: half a cover plate plus half the depth (the plate is squared to a cut that may lean)
+        for a bolted splice, ``weld_clear`` for a welded one (:func:`fabrication.beams.build_beams`)."""
+        bolted = ("bolted", 0.5 * (self.length + depth))
+        welded = ("welded", self.weld_clear)
+        return {"bolted": (bolted,), "welded": (welded,), "auto": (bolted, welded)}[self.kind]
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,79 +123,101 @@ class Splice:
         return np.stack([rel @ t, rel @ n], axis=1) - q0
 
 
-def make_splices(plates, params: SpliceParams) -> list[Splice]:
-    """The splice at every cut between consecutive pieces of a beam (closed beams: also last → first);
-    ``fits`` says whether the cover plate lies on the two pieces' outlines (clear of slots and ends)."""
-    from shapely.geometry import LineString, Point, Polygon
-    from shapely.ops import unary_union
-
+def cut_pairs(plates, kind: str) -> list[tuple]:
+    """``(a, b)`` for every cut between consecutive pieces ``a``, ``b`` of a beam split for ``kind`` splices
+    (``meta["splice"]``), in beam and piece order; a closed beam's last piece joins its first.  One-edge
+    segments are left out: they meet at nodes and are welded there (:func:`~fabrication.glazing.welds.butt_welds`)."""
     by_beam: dict[str, list] = {}
     for p in plates:
-        if p.n_pieces > 1 and not p.meta.get("segment"):     # one-edge segments meet at nodes: welded
+        if p.n_pieces > 1 and not p.meta.get("segment") and p.meta.get("splice", "bolted") == kind:
             by_beam.setdefault(p.beam_id, []).append(p)
-    out: list[Splice] = []
-    L = params.length
-    for beam, pieces in by_beam.items():
+    out: list[tuple] = []
+    for pieces in by_beam.values():
         pieces = sorted(pieces, key=lambda p: p.piece)
-        pairs = list(zip(pieces[:-1], pieces[1:]))
+        out.extend(zip(pieces[:-1], pieces[1:]))
         first3 = pieces[0].frame.to3d(pieces[0].top[0])
         last3 = pieces[-1].frame.to3d(pieces[-1].top[-1])
         if np.linalg.norm(first3 - last3) < 1e-6:                 # closed beam: the last cut joins back
-            pairs.append((pieces[-1], pieces[0]))
-        for a, b in pairs:
-            f = a.frame
-            c = a.top[-1]                                       # the cut's top point, in a's frame
-            s = a.bottom[-1] - a.top[-1]                        # down the cut line (the node axis there)
-            s = s / np.linalg.norm(s)
-            t = np.array([-s[1], s[0]])                         # square to the cut, along the beam
-            u = a.top[-1] - a.top[-2]                           # along the top edge
-            u = u / np.linalg.norm(u)
-            if t @ u < 0:
-                t = -t
-            m = np.array([u[1], -u[0]])                         # square to the top edge, down
-            if m @ s < 0:
-                m = -m
-            to_xy = np.array([t, m])                            # P − c ↦ (x across the cut, y under the top edge)
-            to_p = np.linalg.inv(to_xy)
-            body = unary_union([Polygon(a.outline).buffer(1e-3),
-                                Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
-            depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
-            reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in (0.0, depth)]
-            top, bottom = -np.inf, np.inf
-            for tau in np.linspace(min(reach), max(reach), 9):  # the plate's depth under the top edge
-                foot = c + tau * u
-                ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
-                hit = ray.intersection(body)
-                spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
-                if not spans:
-                    top, bottom = np.inf, -np.inf
-                    break
-                main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
-                yy = sorted(float((q - foot) @ m) for q in main)
-                top, bottom = max(top, yy[0]), min(bottom, yy[-1])
-            h = bottom - top
-            lo, hi = top + params.top_clear, bottom - params.bottom_clear
-            if hi - lo < 2 * params.e2:
-                raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
-                                             f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "
-                                             "or the clearances")
+            out.append((pieces[-1], pieces[0]))
+    return out
 
-            def at(x: float, y: float) -> np.ndarray:
-                return c + to_p @ np.array([x, y])
 
-            outline = np.array([at(-0.5 * L, lo), at(0.5 * L, lo), at(0.5 * L, hi), at(-0.5 * L, hi)])
-            if (outline[1, 0] - outline[0, 0]) * (outline[2, 1] - outline[0, 1]) - \
-                    (outline[1, 1] - outline[0, 1]) * (outline[2, 0] - outline[0, 0]) < 0:
-                outline = outline[::-1]
-            usable = hi - lo - 2 * params.e2
-            rows = 1 + int(usable // params.p2_min) if usable >= params.p2_min else 1
-            rows = min(rows, 2) if usable < 2 * params.p2_min else rows
-            ys = [lo + params.e2 + k * usable / max(rows - 1, 1) for k in range(rows)] if rows > 1 else \
-                [0.5 * (lo + hi)]
-            xs = sorted(sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0))
-            holes = np.array([at(x, y) for y in ys for x in xs])
-            fits = bool(body.contains(Polygon(outline)))
-            ids = splice_plate_ids(beam, a.piece)
-            out.append(Splice(ids, beam, (a.part_id, b.part_id), f, outline, holes, params.hole,
-                              params.plate_thickness, a.thickness, fits))
+def welded_splices(plates) -> list[Weld]:
+    """The full-penetration butt weld across every cut of a beam split for welded splices: along the cut line
+    (the interpolated node axis, length ``|bottom − top|`` at the cut), the pieces in line (dihedral 0),
+    throat the plate thickness (:func:`~fabrication.glazing.welds.splice_preparation`)."""
+    out = []
+    for a, b in cut_pairs(plates, "welded"):
+        length = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
+        prep, throat = splice_preparation(a.thickness)
+        out.append(Weld(-1, a.part_id, b.part_id, 0.0, length, prep, throat, "splice"))
+    return out
+
+
+def make_splices(plates, params: SpliceParams) -> list[Splice]:
+    """The bolted splice at every cut between consecutive pieces of a beam split for bolted splices (closed
+    beams: also last → first); ``fits`` says whether the cover plate lies on the two pieces' outlines (clear of
+    slots and ends)."""
+    from shapely.geometry import LineString, Point, Polygon
+    from shapely.ops import unary_union
+
+    out: list[Splice] = []
+    L = params.length
+    for a, b in cut_pairs(plates, "bolted"):
+        beam = a.beam_id
+        f = a.frame
+        c = a.top[-1]                                       # the cut's top point, in a's frame
+        s = a.bottom[-1] - a.top[-1]                        # down the cut line (the node axis there)
+        s = s / np.linalg.norm(s)
+        t = np.array([-s[1], s[0]])                         # square to the cut, along the beam
+        u = a.top[-1] - a.top[-2]                           # along the top edge
+        u = u / np.linalg.norm(u)
+        if t @ u < 0:
+            t = -t
+        m = np.array([u[1], -u[0]])                         # square to the top edge, down
+        if m @ s < 0:
+            m = -m
+        to_xy = np.array([t, m])                            # P − c ↦ (x across the cut, y under the top edge)
+        to_p = np.linalg.inv(to_xy)
+        body = unary_union([Polygon(a.outline).buffer(1e-3),
+                            Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
+        depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
+        reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in (0.0, depth)]
+        top, bottom = -np.inf, np.inf
+        for tau in np.linspace(min(reach), max(reach), 9):  # the plate's depth under the top edge
+            foot = c + tau * u
+            ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
+            hit = ray.intersection(body)
+            spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
+            if not spans:
+                top, bottom = np.inf, -np.inf
+                break
+            main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
+            yy = sorted(float((q - foot) @ m) for q in main)
+            top, bottom = max(top, yy[0]), min(bottom, yy[-1])
+        h = bottom - top
+        lo, hi = top + params.top_clear, bottom - params.bottom_clear
+        if hi - lo < 2 * params.e2:
+            raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
+                                         f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "
+                                         "or the clearances")
+
+        def at(x: float, y: float) -> np.ndarray:
+            return c + to_p @ np.array([x, y])
+
+        outline = np.array([at(-0.5 * L, lo), at(0.5 * L, lo), at(0.5 * L, hi), at(-0.5 * L, hi)])
+        if (outline[1, 0] - outline[0, 0]) * (outline[2, 1] - outline[0, 1]) - \
+                (outline[1, 1] - outline[0, 1]) * (outline[2, 0] - outline[0, 0]) < 0:
+            outline = outline[::-1]
+        usable = hi - lo - 2 * params.e2
+        rows = 1 + int(usable // params.p2_min) if usable >= params.p2_min else 1
+        rows = min(rows, 2) if usable < 2 * params.p2_min else rows
+        ys = [lo + params.e2 + k * usable / max(rows - 1, 1) for k in range(rows)] if rows > 1 else \
+            [0.5 * (lo + hi)]
+        xs = sorted(sgn * (params.e1 + k * params.p1) for k in range(params.columns) for sgn in (-1.0, 1.0))
+        holes = np.array([at(x, y) for y in ys for x in xs])
+        fits = bool(body.contains(Polygon(outline)))
+        ids = splice_plate_ids(beam, a.piece)
+        out.append(Splice(ids, beam, (a.part_id, b.part_id), f, outline, holes, params.hole,
+                          params.plate_thickness, a.thickness, fits))
     return out

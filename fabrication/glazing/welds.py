@@ -13,6 +13,11 @@ preparations of EN ISO 9692-1:
 * ``30° ≤ dihedral < 60°``: single bevel (HV, 45°) on the acute side, full penetration, fillet on the
   obtuse side;
 * ``dihedral < 30°``: the plates are nearly in line: single-V butt weld, 60° included angle, 2 mm root gap.
+
+A welded splice (:func:`~fabrication.glazing.splices.welded_splices`) joins two pieces of one beam in line
+across their cut: a full-penetration butt weld over the cut line, single V up to 10 mm plate and double V
+(welded from both faces, less distortion) above (EN ISO 9692-1 1.3 and 2.5.1), ``joint = "splice"`` and no
+node in ``welds.csv``.
 """
 
 from __future__ import annotations
@@ -23,8 +28,10 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Weld:
-    """One welded joint: node (vertex id), the ending part, the part it is welded to, dihedral (degrees), total
-    weld length (mm), preparation and throat (mm)."""
+    """One welded joint: node (vertex id; −1 for a splice, which lies inside an edge), the ending part, the part
+    it is welded to, dihedral (degrees), total weld length (mm), preparation, throat (mm) and the joint:
+    ``"T"`` (a plate ending against one that runs through a node) or ``"splice"`` (two pieces of a beam in line
+    across a cut)."""
 
     vertex: int
     part: str
@@ -33,6 +40,7 @@ class Weld:
     length_mm: float
     preparation: str
     throat_mm: float
+    joint: str = "T"
 
 
 def preparation(dihedral_deg: float, thickness: float) -> tuple[str, float]:
@@ -42,6 +50,14 @@ def preparation(dihedral_deg: float, thickness: float) -> tuple[str, float]:
     if dihedral_deg >= 30.0:
         return "single bevel HV 45 deg full penetration + fillet", float(thickness)
     return "single V 60 deg, root gap 2 mm, full penetration", float(thickness)
+
+
+def splice_preparation(thickness: float) -> tuple[str, float]:
+    """``(preparation, throat mm)`` of a full-penetration butt weld joining two plates of ``thickness`` mm in
+    line."""
+    if thickness <= 10.0:
+        return "single V 60 deg, root gap 2 mm, full penetration, root back-gouged and sealed", float(thickness)
+    return "double V 60 deg, root face 2 mm, root gap 2 mm, full penetration", float(thickness)
 
 
 def butt_welds(joints, depth: float, thickness: float) -> list[Weld]:

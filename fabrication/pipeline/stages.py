@@ -153,8 +153,9 @@ def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality
 
 def stage_beams(design: Design, support: SupportStructure, progress: Progress) -> BeamSet:
     """Planar beam plates with joints; a degenerate plate stops the build naming its part id.  Cuts of split
-    beams stay clear of the joints by half a splice's length more, plus half the depth (a slot leaning up to
-    45° along the node axis)."""
+    beams stay clear of the joints by what their splice needs (``[splices] kind``,
+    :meth:`~fabrication.glazing.splices.SpliceParams.clearances`): half a cover plate plus half the depth for a
+    bolted splice, ``weld_clear`` for a welded one."""
     from ..beams import build_beams
 
     progress.start("beams")
@@ -167,7 +168,7 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
                                               "set beams.max_length to at most the usable length")
     usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
     beams = build_beams(support, params, strict=True, max_height=usable_width,
-                        cut_clearance=0.5 * (design.splices.length + params.depth))
+                        splice_clearances=design.splices.clearances(params.depth))
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams

@@ -132,8 +132,9 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
         files["splice_dxfs"] = write_splice_dxfs(g, out / SPLICE_DIR)
         notes.append(f"{len(g.splices)} splices")
     if g.welds:
-        rows = [{"node": w.vertex, "part": w.part, "to": w.to, "dihedral_deg": _plain(w.dihedral_deg, 4),
-                 "weld_length_mm": _plain(w.length_mm), "preparation": w.preparation, "throat_mm": w.throat_mm}
+        rows = [{"node": w.vertex if w.vertex >= 0 else "", "part": w.part, "to": w.to,
+                 "dihedral_deg": _plain(w.dihedral_deg, 4), "weld_length_mm": _plain(w.length_mm),
+                 "preparation": w.preparation, "throat_mm": w.throat_mm, "joint": w.joint}
                 for w in g.welds]
         (out / WELDS_CSV).write_text(csv_text(rows, list(rows[0])), encoding="utf-8")
         files["welds_csv"] = WELDS_CSV
