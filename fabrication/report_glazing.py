@@ -39,6 +39,12 @@ def glazing_sections(rep: "HtmlReport", build: "Build", repetition: dict[str, An
             rep.table(["cover plates", "beam", "joins"],
                       [(" / ".join(s.part_ids), s.beam_id, " + ".join(s.pieces)) for s in g.splices[:12]],
                       left=(0, 1, 2))
+        welded = [w for w in g.welds if w.joint == "splice"]
+        if welded:
+            rep.paragraph(f"{len(welded)} welded splices (splices.kind = \"{sp.kind}\"): where a beam's edges are "
+                          "too short for a cover plate clear of the joints, its pieces are butt-welded across the "
+                          f"cut with full penetration, at least {sp.weld_clear:g} mm from every slot and plate end "
+                          "at the top and the bottom edge (welds.csv, joint = splice).")
         if g.welds:
             kinds: dict[str, list[float]] = {}
             for w in g.welds:

@@ -97,7 +97,8 @@ def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
         doc["glazing"] = {"support": g.params.support, "strips": len(g.strips), "offset_mm": g.offset,
                           "bite_min_mm": None if not g.bites else round(g.bite_min, 4),
                           "min_bite_mm": design.panels.min_bite, "splices": len(g.splices),
-                          "cover_plates": 2 * len(g.splices), "welds": len(g.welds)}
+                          "cover_plates": 2 * len(g.splices), "welds": len(g.welds),
+                          "welded_splices": sum(w.joint == "splice" for w in g.welds)}
     doc["sha256"] = {name: sha256_of(out / name) for name in listed_files(files)}
     return doc
 
