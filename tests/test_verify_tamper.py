@@ -293,3 +293,66 @@ def test_splice_cover_plate_removed_from_parts_csv(copy, capsys):
     err = findings(copy, capsys)
     a, b = joins.split(";")
     assert f"parts.csv: {a}/{b}: the cut between these pieces of" in err and "has 0 splice cover plate(s)" in err
+
+
+def _in_metres(grid, pos) -> bool:
+    """Whether mesh.json's vertices are in metres where mesh.obj's are in mm (compared at one vertex)."""
+    v = np.asarray(grid["vertices"], dtype=float).reshape(-1, 3)
+    return bool(np.abs(v).max() < 0.01 * np.abs(pos).max())
+
+
+def test_node_moved_down_its_axis_into_the_plates(copy, capsys):
+    """One interior vertex moved 30 mm down its own node axis in every file that carries it: the node stays in
+    both its beams' planes and its axis is unchanged, but its top point now lies inside the plates, 30 mm
+    under their top edges.  The row plate's half-lap slot opens from above, so the point lies in its slot,
+    within half the slot width (about 6.5 mm) of the outline, which is right; the column plate's slot opens
+    from below, so the point lies in solid plate 30 mm from the outline, where the slot (about 13 mm wide,
+    square to the top edge) allows a few mm: verify names that plate at that node."""
+    lines = (copy / "mesh.obj").read_text().splitlines()
+    vs = [i for i, s in enumerate(lines) if s.startswith("v ")]
+    rows = read_rows(copy / "nodes.csv")
+    r = next(r for r in rows if r["boundary"] == "0" and int(r["valence"]) == 4)
+    k = int(r["vertex"])
+    pos = np.array([float(x) for x in lines[vs[k]].split()[1:4]])
+    axis = np.array([float(r[c]) for c in ("axis_x", "axis_y", "axis_z")])
+    moved = pos + 30.0 * axis / np.linalg.norm(axis)
+    lines[vs[k]] = "v " + " ".join(repr(float(x)) for x in moved)
+    (copy / "mesh.obj").write_text("\n".join(lines) + "\n")
+    for c, x in zip("xyz", moved):                      # every file that carries the node agrees
+        r[c] = repr(float(x))
+    write_rows(copy / "nodes.csv", rows)
+    nodes = json.loads((copy / "nodes.json").read_text())
+    nodes["nodes"][k]["position"] = moved.tolist()
+    (copy / "nodes.json").write_text(json.dumps(nodes, indent=1))
+    grid = json.loads((copy / "mesh.json").read_text())
+    at = grid.get("obj_vertex", list(range(len(grid["vertices"])))).index(k)
+    grid["vertices"][at] = (moved / 1000.0 if _in_metres(grid, pos) else moved).tolist()
+    (copy / "mesh.json").write_text(json.dumps(grid, indent=2))
+    reseal(copy, "mesh.obj", "nodes.csv", "nodes.json", "mesh.json")
+    err = findings(copy, capsys)
+    hit = re.search(rf"beams\.step: (B-\S+) at N{k:04d}: the node's top point is (\d+\.?\d*) mm from the plate's "
+                    r"outline \(at most (\d+\.?\d*) mm", err)
+    assert hit, err[:2000]
+    assert float(hit.group(2)) > 25.0 > 3 * float(hit.group(3))
+    plates = set(re.findall(rf"beams\.step: (B-\S+) at N{k:04d}: the node's top point", err))
+    assert len(plates) == 1 and plates.pop().startswith("B-W") and "from the plate's plane" not in err
+
+
+def test_the_strip_bound_follows_the_angle_of_the_top_edge_to_the_axis():
+    """The verify bound for a node's top point inside an end cut or slot is ``r / sin θ``: a top edge 24° off
+    the in-plane axis (as at the valence-6 nodes of a real P mesh, DOS planarizednormalized_six_quad) puts the
+    corner 2.46 r from the node; only neighbours in the plate's plane count, and the smallest angle wins."""
+    from fabrication.verify.step_geometry import _smallest_sine
+
+    frame = {"origin": np.zeros(3), "x_dir": np.array([1.0, 0, 0]), "y_dir": np.array([0, 0, 1.0]),
+             "normal": np.array([0, -1.0, 0])}
+    plane = np.array([0.0, 1.0, 0.0, 0.0])                        # y = 0: the plate's plane
+    theta = np.radians(24.0)
+    s = np.array([np.cos(theta), -np.sin(theta)])                  # the axis, 24° below the top edge (+x)
+    verts = np.array([[0.0, 0, 0], [650.0, 0, 0], [-500.0, 0, 40.0], [0.0, 300.0, 0]])
+    ahead = _smallest_sine(np.zeros(2), s, frame, plane, verts, {1, 3}, 0.5)   # vertex 3: 300 mm off the plane
+    assert ahead == pytest.approx(np.sin(theta), rel=1e-12) and 12.467 / ahead == pytest.approx(30.65, abs=0.05)
+    back = np.arctan2(40.0, 500.0)               # the edge to vertex 2 runs back, rising 4.6°: 19.4° off the axis
+    both = _smallest_sine(np.zeros(2), s, frame, plane, verts, {1, 2, 3}, 0.5)
+    assert both == pytest.approx(np.sin(theta - back), rel=1e-12)
+    assert _smallest_sine(np.zeros(2), s, frame, plane, verts, {3}, 0.5) == 1.0

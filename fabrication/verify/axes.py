@@ -71,9 +71,13 @@ def check_axes(v: Verification) -> None:
     mrel = files.get("mesh_json")
     if mrel is not None:
         grid = v.read_json(mrel) or {}
-        shape = (int(grid.get("rows", 0)), int(grid.get("cols", 0)))
-        gv = np.asarray(grid.get("vertices", []), dtype=float).reshape(-1, 3)
-        order = np.asarray(grid.get("obj_vertex", np.arange(len(gv))), dtype=np.int64).reshape(-1)
+        try:
+            shape = (int(grid.get("rows", 0)), int(grid.get("cols", 0)))
+            gv = np.asarray(grid.get("vertices", []), dtype=float).reshape(-1, 3)
+            order = np.asarray(grid.get("obj_vertex", np.arange(len(gv))), dtype=np.int64).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            v.error(mrel, "vertices", f"cannot be read as rows × cols points ({exc})")
+            grid, gv, order = {}, np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
         if (len(gv) == len(mesh.vertices) and len(order) == len(gv)
                 and np.array_equal(np.sort(order), np.arange(len(gv)))
                 and np.abs(gv - mesh.vertices[order]).max(initial=0.0) <= 1e-6):

@@ -8,7 +8,10 @@ For each beam solid (read by the ``step`` check) and its ``parts.csv`` row:
 * every node of the plate (``parts.csv`` ``nodes``): its position (``mesh.obj``) lies in the plane within
   ``beams.plane_tolerance``, its axis (``nodes.csv``) lies in the plane within the torsion tolerance at beam
   depth, and its top point lies on the plate's outline — or, where a half-lap slot or an end cut takes
-  material away (``nodes.json``), within twice half the slot width plus the set-back of it;
+  material away (``nodes.json``), within the distance at which the plate's top edge leaves the strip cut
+  away: the strip is ``r = w/2 + set-back`` wide either side of the node axis (``w`` the slot width), so
+  along a top edge at angle ``θ`` to the in-plane axis the corner lies ``r / sin θ`` from the node (the
+  smallest ``θ`` over the mesh edges from the node that lie in the plate's plane);
 * every half-lap slot: at a through node of a ``halflap`` joint, the outline has edges on both lines
   parallel to the in-plane node axis at half the slot width; every end cut: an edge on the line parallel to
   the axis at the set-back.
@@ -59,6 +62,19 @@ def _common_line(a: np.ndarray, b: np.ndarray, near: np.ndarray) -> tuple[np.nda
     return x, d
 
 
+def _smallest_sine(q: np.ndarray, s: np.ndarray, frame: dict, plane: np.ndarray, vertices: np.ndarray,
+                   others: set[int], plane_tol: float) -> float:
+    """``sin θ`` of the smallest angle between the in-plane node axis ``s`` (unit, 2D) at the top point ``q``
+    and the mesh edges from the node to ``others`` that lie in the plate's ``plane`` (its top edges); 1 when
+    none does (the strip's half-width is then the distance)."""
+    near = [w for w in others if abs(float(vertices[w] @ plane[:3] + plane[3])) <= plane_tol + 1e-6]
+    if not near:
+        return 1.0
+    d = to_frame(vertices[near], frame)[:, :2] - q
+    d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    return max(float(np.abs(d[:, 0] * s[1] - d[:, 1] * s[0]).min()), 1e-3)
+
+
 @check("step_geometry", 65)
 def check_step_geometry(v: Verification) -> None:
     solids = v.data.get("beam_solids")
@@ -76,6 +92,10 @@ def check_step_geometry(v: Verification) -> None:
     axes = {int(r["vertex"]): np.array([number(r[c]) for c in ("axis_x", "axis_y", "axis_z")]) for r in node_rows}
     plates_at = _node_plates(v)
     outlines = v.data.setdefault("plate_outlines", {})
+    neighbours: dict[int, set[int]] = {}
+    for i, j in np.asarray(mesh.edges, dtype=int).tolist():
+        neighbours.setdefault(i, set()).add(j)
+        neighbours.setdefault(j, set()).add(i)
     planes: dict[str, np.ndarray] = {}
     for row in v.data.get("parts", []):
         pl_ = literal(row.get("plane", "")) if row["kind"] == "beam" else None
@@ -133,16 +153,17 @@ def check_step_geometry(v: Verification) -> None:
             width = number(info.get("slot_width_mm"), 0.0) if info.get("role") == "through" else 0.0
             trim = number(info.get("trim_mm"), 0.0)
             q = to_frame(p[None], frame)[0, :2]
-            gap = float(boundary_distance(q[None], poly)[0])
-            allowed = 2.0 * (0.5 * width + trim)      # the cut corners lie along the bent top edge
-            if gap > allowed + 1e-6:
-                v.error(rel, name, f"the node's top point is {gap:.3g} mm from the plate's outline "
-                                   f"(at most {allowed:.3g} mm where slot and end cut take material away)")
-                continue
             s = to_frame((p + a)[None], frame)[0, :2] - q            # the node axis in the plate, 2D
             if np.linalg.norm(s) < 1e-9:
                 continue
             s = s / np.linalg.norm(s)
+            gap = float(boundary_distance(q[None], poly)[0])
+            allowed = (0.5 * width + trim) / _smallest_sine(q, s, frame, plane, mesh.vertices,
+                                                           neighbours.get(k, set()), plane_tol)
+            if gap > allowed + 1e-6:
+                v.error(rel, name, f"the node's top point is {gap:.3g} mm from the plate's outline "
+                                   f"(at most {allowed:.3g} mm where slot and end cut take material away)")
+                continue
             side = np.array([-s[1], s[0]])
             if info.get("joint") == "halflap" and info.get("role") == "through" and width > 0:
                 # the slot is centred on the common line of this plate's plane and its partner's: the node
