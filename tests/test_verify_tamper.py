@@ -16,7 +16,7 @@ import pytest
 
 from fabrication.cli import main
 
-from conftest import built_folder, small_vault
+from conftest import REPO, built_folder, small_vault
 
 DESIGN = small_vault("tamper", max_length=5000.0, joint="halflap")
 built = built_folder("tamper", DESIGN)
@@ -356,3 +356,79 @@ def test_the_strip_bound_follows_the_angle_of_the_top_edge_to_the_axis():
     both = _smallest_sine(np.zeros(2), s, frame, plane, verts, {1, 2, 3}, 0.5)
     assert both == pytest.approx(np.sin(theta - back), rel=1e-12)
     assert _smallest_sine(np.zeros(2), s, frame, plane, verts, {3}, 0.5) == 1.0
+
+
+def test_verify_on_two_cores_finds_what_one_core_finds(copy):
+    """Findings on both sides of the split (a cover plate row gone: the splices check, second process; a plate
+    outline moved in its cutting sheet: the dxf and placement checks, this process) come out the same, in the
+    same order, whether the checks run in one process or two; a check that raises in the second process is
+    run again here and raises its own error."""
+    from fabrication import verify as verify_mod
+
+    rows = read_rows(copy / "parts.csv")
+    splice = next(r for r in rows if r["kind"] == "splice")
+    write_rows(copy / "parts.csv", [r for r in rows if r["part_id"] != splice["part_id"]])
+    rel, doc, ent = cut_outline(copy, "beam")
+    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
+    pts[0] = (pts[0][0] + 3.0, pts[0][1])
+    ent.set_points(pts, format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, "parts.csv", rel)
+    one = verify_mod.verify(copy, parallel=False)
+    two = verify_mod.verify(copy, parallel=True)
+    assert [str(f) for f in one.findings] == [str(f) for f in two.findings]
+    assert one.checked == two.checked
+    files = {f.file for f in two.findings}
+    assert "parts.csv" in files and rel in files                  # both halves found something
+    assert any(c in verify_mod.SECOND_PROCESS for c in ("splices",))
+
+    def broken(v):
+        raise RuntimeError("the ifc check broke")
+
+    ifc = verify_mod.CHECKS["ifc"]
+    verify_mod._TABLE.entries["ifc"] = verify_mod.Check("ifc", ifc.order, broken)
+    try:
+        with pytest.raises(RuntimeError, match="the ifc check broke"):
+            verify_mod.verify(copy, parallel=True)
+    finally:
+        verify_mod._TABLE.entries["ifc"] = ifc
+
+
+def test_the_second_process_reads_nothing_the_first_writes_after_the_fork():
+    """The checks of ``SECOND_PROCESS`` see ``Verification.data`` as it was when the process forked: no key
+    they read (in their modules or the shared helpers they import) may be written by a check that runs after
+    ``FORK_AFTER`` in this process.  Parsed from the sources, so a new dependency fails here, not in a build."""
+    import ast
+
+    from fabrication import verify as verify_mod
+
+    root = REPO / "fabrication" / "verify"
+    order = {c.name: c.order for c in verify_mod.load_checks()}
+    fork = order[verify_mod.FORK_AFTER]
+
+    def keys(path):
+        reads, writes = set(), set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) and \
+                    isinstance(node.value, ast.Attribute) and node.value.attr == "data":
+                (writes if isinstance(node.ctx, ast.Store) else reads).add(node.slice.value)
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.args and \
+                    isinstance(node.func.value, ast.Attribute) and node.func.value.attr == "data" and \
+                    isinstance(node.args[0], ast.Constant):
+                (writes if node.func.attr == "setdefault" else reads).add(node.args[0].value)
+        return reads, writes
+
+    def helpers(path):
+        tree = ast.parse(path.read_text())
+        return [root / f"{n.module}.py" for n in ast.walk(tree)
+                if isinstance(n, ast.ImportFrom) and n.level == 1 and n.module and (root / f"{n.module}.py").exists()]
+
+    late = set()
+    for name, o in order.items():
+        if name not in verify_mod.SECOND_PROCESS and o > fork:
+            late |= keys(root / f"{name}.py")[1]
+    assert late, "the checks after the fork write data (beam_solids, plate_outlines, …)"
+    for name in verify_mod.SECOND_PROCESS:
+        path = root / f"{name}.py"
+        read = set().union(*(keys(p)[0] for p in [path, *helpers(path)]))
+        assert not read & late, f"{name} reads {sorted(read & late)}, written after the fork"

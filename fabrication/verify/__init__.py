@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -82,14 +83,112 @@ def load_checks() -> list[Check]:
     return sorted(_TABLE.load().values(), key=lambda c: (c.order, c.name))
 
 
-def verify(folder: str | Path) -> Verification:
-    """Run every check on an output folder (stopping after the manifest if it cannot be read)."""
+SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "panels_step", "ifc", "rhino", "glb")
+"""Checks that read only what the checks up to :data:`FORK_AFTER` put into :attr:`Verification.data` (the
+manifest, the mesh, the parts list, the nodes, the DXF outlines the exchange models are compared with) and put
+nothing there that another check reads: on two cores they run in a forked process beside the others (about
+half of the work at every size: the exchange models and the splice and panel STEP files on one side,
+beams.step, glazing.step and the DXF types on the other)."""
+
+FORK_AFTER = "dxf"
+"""The second process starts once this check (and every check before it) has run in this one."""
+
+
+def verify(folder: str | Path, parallel: bool | None = None) -> Verification:
+    """Run every check on an output folder (stopping after the manifest if it cannot be read).
+
+    ``parallel`` (default: on with two cores and fork, :func:`fabrication.writers._parallel.parallel_enabled`)
+    runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`FORK_AFTER` has run; the
+    findings and the list of checks are assembled in check order, so the result equals a serial run.  When the
+    second process fails (a check raising, the process dying), its checks run again here, so an error is the
+    check's own."""
     v = Verification(Path(folder))
     if not v.folder.is_dir():
         v.error(str(folder), "", "is not a folder")
         return v
-    for c in load_checks():
-        c.run(v)
-        if not v.data.get("manifest"):
-            break
+    checks = load_checks()
+    if parallel is None:
+        from ..writers._parallel import parallel_enabled
+
+        parallel = parallel_enabled()
+    second = [c for c in checks if parallel and c.name in SECOND_PROCESS]
+    first = [c for c in checks if c not in second]
+    done: dict[str, tuple[list[Finding], list[str]]] = {}
+    child = None
+    try:
+        for c in first:
+            _run_one(v, c, done)
+            if not v.data.get("manifest"):
+                return v
+            if c.name == FORK_AFTER and second:
+                try:
+                    child = _Second(v, second)
+                except OSError:                 # no process to be had: the checks run here
+                    child = None
+        results = child.results() if child is not None else None
+    finally:
+        if child is not None:
+            child.close()
+    if second:
+        if results is None:                     # no second process, or it failed: run its checks here
+            for c in second:
+                _run_one(v, c, done)
+        else:
+            done.update(results)
+    v.findings = [f for c in checks if c.name in done for f in done[c.name][0]]
+    v.checked = [n for c in checks if c.name in done for n in done[c.name][1]]
     return v
+
+
+def _run_one(v: Verification, c: Check, done: dict[str, tuple[list[Finding], list[str]]]) -> None:
+    """Run one check and keep what it found and what it says it checked."""
+    nf, nc = len(v.findings), len(v.checked)
+    c.run(v)
+    done[c.name] = (v.findings[nf:], v.checked[nc:])
+
+
+class _Second:
+    """The checks ``second`` run in a forked process on a copy of ``v`` (its data as read so far)."""
+
+    def __init__(self, v: Verification, second: list[Check]):
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("fork")
+        self._recv, send = ctx.Pipe(duplex=False)
+        self._proc = ctx.Process(target=_second_main, args=(v, second, send), daemon=True)
+        self._proc.start()
+        send.close()
+
+    def results(self) -> dict[str, tuple[list[Finding], list[str]]] | None:
+        """The second process's findings per check, or ``None`` when it failed."""
+        try:
+            out = self._recv.recv()
+        except (EOFError, OSError):
+            return None
+        self._proc.join()
+        return out if self._proc.exitcode == 0 else None
+
+    def close(self) -> None:
+        if self._proc.is_alive():
+            self._proc.terminate()
+        self._proc.join()
+        self._recv.close()
+
+
+def _second_main(v: Verification, second: list[Check], send: Any) -> None:
+    """Body of the second process: Ctrl-C is this process's parent's to handle; a failing check sends
+    nothing (the parent runs the checks itself)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    done: dict[str, tuple[list[Finding], list[str]]] = {}
+    try:
+        for c in second:
+            _run_one(v, c, done)
+    except BaseException:  # noqa: BLE001 - the parent runs the checks again and raises the error itself
+        send.close()
+        os._exit(1)
+    send.send(done)
+    send.close()
