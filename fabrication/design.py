@@ -11,7 +11,7 @@ construction parameters)::
     [beams]             beam plates and joints
     [panels]            glass panels
     [glazing]           the strips the glass rests on (bite, gasket)
-    [splices]           bolted splices of beams cut into pieces
+    [splices]           bolted or welded splices of beams cut into pieces
     [nesting]           stock sheets for the glass
     [beam_nesting]      stock sheets for the beam plates
     [output]            which optional files to write
@@ -131,7 +131,8 @@ SECTION_TEXT: dict[str, str] = {
     "beams": "Planar beam plates along the support planes and their joints.",
     "panels": "Glass panels.",
     "glazing": "The glazing strips the panes rest on, their gaskets and the bite check (docs/glazing.md).",
-    "splices": "Bolted cover-plate splices where a long beam is cut into pieces (docs/glazing.md).",
+    "splices": "Splices where a long beam is cut into pieces: bolted cover plates, or full-penetration butt welds "
+               "where the edges are too short for a cover plate (docs/glazing.md).",
     "nesting": "Glass stock sheets and the nesting of the panels.",
     "beam_nesting": "Plate stock for the beam plates (same keys as `[nesting]`; defaults: sheet 6000 × 2000, "
                     "budget 5 s, tag prefix `B`).",
