@@ -1,5 +1,7 @@
-"""panels.step against the mesh: one solid per panel, named by its part id, whose vertices are the face's
-corners on its least-squares plane and the same moved by the glass thickness along the face normal."""
+"""panels.step against the mesh: one solid per panel, named by its part id, under the glass assembly, whose
+vertices are the face's corners on its least-squares plane and the same moved by the glass thickness along
+the face normal; its header names ppfab.  The file is read once (it was read twice, here and by the ``step``
+check, before the two were merged)."""
 
 from __future__ import annotations
 
@@ -20,23 +22,33 @@ def check_panels_step(v: Verification) -> None:
 
     from ..writers.step import named_solids
 
+    from ..contract import STEP_GLASS_GROUP
+    from .step import _check_header, solid_paths
+
+    _check_header(v, rel)
     try:
-        pairs = named_solids(import_step(str(v.folder / rel)))
+        shape = import_step(str(v.folder / rel))
+        pairs = named_solids(shape)
     except Exception as exc:  # noqa: BLE001
         v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
         return
+    every = {r["part_id"] for r in v.data.get("parts", []) if r["kind"] == "panel"}
+    for path, solid in solid_paths(shape):
+        if solid.label not in every:
+            v.error(rel, solid.label or "(unnamed)", "solid is not a panel in parts.csv")
+        elif path[-1:] != (STEP_GLASS_GROUP,):
+            v.error(rel, solid.label, f"sits under {'/'.join(path)}, expected the {STEP_GLASS_GROUP} assembly")
     t = float(m.get("fabrication", {}).get("glass_thickness", 0.0))
     panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
     names = [n for n, _ in pairs]
-    for name in sorted(set(panels) - set(names)):
+    for name in sorted(every - set(names)):
         v.error(rel, name, "panel has no solid")
     for name in sorted({n for n in names if names.count(n) > 1}):
         v.error(rel, name, "more than one solid carries this name")
     for name, solid in pairs:
         row = panels.get(name)
         if row is None:
-            v.error(rel, name or "(unnamed)", "solid is not a panel of parts.csv")
-            continue
+            continue                                    # not a panel: named above
         c = mesh.vertices[mesh.faces[int(row["face"])]]
         centre = c.mean(axis=0)
         n = np.linalg.svd(c - centre)[2][2]

@@ -51,7 +51,6 @@ def check_step(v: Verification) -> None:
         if t and area and abs(solid.volume - area * t) > 1e-4 * area * t:
             v.error(rel, name, f"volume {solid.volume:.6g} mm³ ≠ outline area × thickness {area * t:.6g} mm³")
     _check_tree(v, rel, beams, shape)
-    _check_panels(v, files.get("panels_step"))
     v.checked.append("step")
 
 
@@ -97,28 +96,3 @@ def _check_tree(v: Verification, rel: str, beams: dict, shape) -> None:
         rgb = COLOURS.get(want[0])
         if rgb is not None and (colour is None or max(abs(a - b) for a, b in zip(tuple(colour), rgb)) > 1e-3):
             v.error(rel, solid.label, f"colour {colour} is not the colour of family {want[0]}")
-
-
-def _check_panels(v: Verification, rel: str | None) -> None:
-    """panels.step: one solid per panel of parts.csv, named by its part id, under the glass assembly."""
-    if rel is None:
-        return
-    from build123d import import_step
-
-    from ..contract import STEP_GLASS_GROUP
-
-    _check_header(v, rel)
-    panels = {r["part_id"] for r in v.data.get("parts", []) if r["kind"] == "panel"}
-    try:
-        pairs = solid_paths(import_step(str(v.folder / rel)))
-    except Exception as exc:  # noqa: BLE001
-        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
-        return
-    names = [s.label for _, s in pairs]
-    for name in sorted(panels - set(names)):
-        v.error(rel, name, "panel has no solid")
-    for path, solid in pairs:
-        if solid.label not in panels:
-            v.error(rel, solid.label or "(unnamed)", "solid is not a panel in parts.csv")
-        elif path[-1:] != (STEP_GLASS_GROUP,):
-            v.error(rel, solid.label, f"sits under {'/'.join(path)}, expected the {STEP_GLASS_GROUP} assembly")
