@@ -56,6 +56,16 @@ def write_rows(path, rows):
     path.write_text(buf.getvalue())
 
 
+def set_node(folder, rows, row, columns, key, value):
+    """Give the node of ``row`` the vector ``value`` in nodes.csv (``columns``) and nodes.json (``key``)."""
+    for c, x in zip(columns, value):
+        row[c] = repr(float(x))
+    write_rows(folder / "nodes.csv", rows)
+    nodes = json.loads((folder / "nodes.json").read_text())
+    nodes["nodes"][int(row["vertex"])][key] = np.asarray(value, dtype=float).tolist()
+    (folder / "nodes.json").write_text(json.dumps(nodes, indent=1))
+
+
 def manifest(folder):
     return json.loads((folder / "manifest.json").read_text())
 
@@ -236,12 +246,7 @@ def test_torsion_beyond_tolerance(copy, capsys):
     k = int(r["vertex"])
     a = np.array([float(r[c]) for c in ("axis_x", "axis_y", "axis_z")])
     b = _turn(a, 0.5, np.cross(a, [1.0, 0.3, 0.0]))
-    for c, x in zip(("axis_x", "axis_y", "axis_z"), b):
-        r[c] = repr(float(x))
-    write_rows(copy / "nodes.csv", rows)
-    nodes = json.loads((copy / "nodes.json").read_text())
-    nodes["nodes"][k]["axis"] = b.tolist()
-    (copy / "nodes.json").write_text(json.dumps(nodes, indent=1))
+    set_node(copy, rows, r, ("axis_x", "axis_y", "axis_z"), "axis", b)
     grid = json.loads((copy / "mesh.json").read_text())
     grid["axes"][int(r["i"])][int(r["j"])] = b.tolist()
     (copy / "mesh.json").write_text(json.dumps(grid, indent=2))
@@ -318,12 +323,7 @@ def test_node_moved_down_its_axis_into_the_plates(copy, capsys):
     moved = pos + 30.0 * axis / np.linalg.norm(axis)
     lines[vs[k]] = "v " + " ".join(repr(float(x)) for x in moved)
     (copy / "mesh.obj").write_text("\n".join(lines) + "\n")
-    for c, x in zip("xyz", moved):                      # every file that carries the node agrees
-        r[c] = repr(float(x))
-    write_rows(copy / "nodes.csv", rows)
-    nodes = json.loads((copy / "nodes.json").read_text())
-    nodes["nodes"][k]["position"] = moved.tolist()
-    (copy / "nodes.json").write_text(json.dumps(nodes, indent=1))
+    set_node(copy, rows, r, ("x", "y", "z"), "position", moved)   # every file that carries the node agrees
     grid = json.loads((copy / "mesh.json").read_text())
     at = grid.get("obj_vertex", list(range(len(grid["vertices"])))).index(k)
     grid["vertices"][at] = (moved / 1000.0 if _in_metres(grid, pos) else moved).tolist()
