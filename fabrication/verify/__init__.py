@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -107,10 +106,10 @@ def verify(folder: str | Path, parallel: bool | None = None) -> Verification:
     if not v.folder.is_dir():
         v.error(str(folder), "", "is not a folder")
         return v
+    from ..writers._parallel import Forked, parallel_enabled
+
     checks = load_checks()
     if parallel is None:
-        from ..writers._parallel import parallel_enabled
-
         parallel = parallel_enabled()
     second = [c for c in checks if parallel and c.name in SECOND_PROCESS]
     first = [c for c in checks if c not in second]
@@ -123,22 +122,30 @@ def verify(folder: str | Path, parallel: bool | None = None) -> Verification:
                 return v
             if c.name == FORK_AFTER and second:
                 try:
-                    child = _Second(v, second)
+                    child = Forked(lambda: _run_all(v, second), "ppfab-verify")
                 except OSError:                 # no process to be had: the checks run here
                     child = None
-        results = child.results() if child is not None else None
+        outcome: tuple[str, Any] = child.result() if child is not None else ("failed", "no second process")
     finally:
         if child is not None:
             child.close()
     if second:
-        if results is None:                     # no second process, or it failed: run its checks here
+        if outcome[0] != "ok":                  # no second process, or it failed: run its checks here
             for c in second:
                 _run_one(v, c, done)
         else:
-            done.update(results)
+            done.update(outcome[1])
     v.findings = [f for c in checks if c.name in done for f in done[c.name][0]]
     v.checked = [n for c in checks if c.name in done for n in done[c.name][1]]
     return v
+
+
+def _run_all(v: Verification, checks: list[Check]) -> dict[str, tuple[list[Finding], list[str]]]:
+    """The second process's work: ``checks`` run on its copy of ``v``; what each found and checked."""
+    done: dict[str, tuple[list[Finding], list[str]]] = {}
+    for c in checks:
+        _run_one(v, c, done)
+    return done
 
 
 def _run_one(v: Verification, c: Check, done: dict[str, tuple[list[Finding], list[str]]]) -> None:
@@ -146,50 +153,3 @@ def _run_one(v: Verification, c: Check, done: dict[str, tuple[list[Finding], lis
     nf, nc = len(v.findings), len(v.checked)
     c.run(v)
     done[c.name] = (v.findings[nf:], v.checked[nc:])
-
-
-class _Second:
-    """The checks ``second`` run in a forked process on a copy of ``v`` (its data as read so far)."""
-
-    def __init__(self, v: Verification, second: list[Check]):
-        import multiprocessing
-
-        ctx = multiprocessing.get_context("fork")
-        self._recv, send = ctx.Pipe(duplex=False)
-        self._proc = ctx.Process(target=_second_main, args=(v, second, send), daemon=True)
-        self._proc.start()
-        send.close()
-
-    def results(self) -> dict[str, tuple[list[Finding], list[str]]] | None:
-        """The second process's findings per check, or ``None`` when it failed."""
-        try:
-            out = self._recv.recv()
-        except (EOFError, OSError):
-            return None
-        self._proc.join()
-        return out if self._proc.exitcode == 0 else None
-
-    def close(self) -> None:
-        if self._proc.is_alive():
-            self._proc.terminate()
-        self._proc.join()
-        self._recv.close()
-
-
-def _second_main(v: Verification, second: list[Check], send: Any) -> None:
-    """Body of the second process: Ctrl-C is this process's parent's to handle; a failing check sends
-    nothing (the parent runs the checks itself)."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGHUP, signal.SIG_DFL)
-    done: dict[str, tuple[list[Finding], list[str]]] = {}
-    try:
-        for c in second:
-            _run_one(v, c, done)
-    except BaseException:  # noqa: BLE001 - the parent runs the checks again and raises the error itself
-        send.close()
-        os._exit(1)
-    send.send(done)
-    send.close()

@@ -23,9 +23,9 @@ def check_panels_step(v: Verification) -> None:
     from ..writers.step import named_solids
 
     from ..contract import STEP_GLASS_GROUP
-    from .step import _check_header, solid_paths
+    from .step import check_header, solid_paths
 
-    _check_header(v, rel)
+    check_header(v, rel)
     try:
         shape = import_step(str(v.folder / rel))
         pairs = named_solids(shape)

@@ -69,7 +69,7 @@ def solid_paths(shape: Any, path: tuple[str, ...] = ()) -> list[tuple[tuple[str,
     return out
 
 
-def _check_header(v: Verification, rel: str) -> None:
+def check_header(v: Verification, rel: str) -> None:
     from ppfab import __version__
 
     from ..contract import FIXED_TIMESTAMP
@@ -84,7 +84,7 @@ def _check_tree(v: Verification, rel: str, beams: dict, shape) -> None:
     """The product tree of beams.step: design → family → beam id → plate, each solid in its family's colour."""
     from ..contract import COLOURS
 
-    _check_header(v, rel)
+    check_header(v, rel)
     for path, solid in solid_paths(shape):
         row = beams.get(solid.label)
         if row is None:

@@ -25,7 +25,7 @@ import os
 import signal
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 from .base import Files, Writer
 
@@ -78,47 +78,78 @@ def _run(w: Writer, build: "Build", out: Path, before: Files) -> tuple[Files, st
     return {k: v for k, v in files.items() if k not in before or before[k] != v}, note
 
 
-def _child(build: "Build", out: Path, writers: list[Writer], conn: Any) -> None:
-    """The second process: run ``writers`` (each on an empty table) and send their additions, notes and times."""
+class Forked:
+    """``job()`` run in a forked process (``multiprocessing``), its result sent back through a pipe.
+
+    The child ignores SIGINT (a Ctrl-C reaches the whole process group: the parent decides), dies on
+    SIGTERM/SIGHUP and ends with ``os._exit`` (never unwinding the parent's ``with`` blocks).  :meth:`result`
+    waits for it: ``("ok", value)``, or ``("failed", why)`` when ``job`` raised or the process died first;
+    :meth:`close` terminates it if still running and joins it (call it in a ``finally``).  Used by the writers
+    here and by ``ppfab verify`` (:func:`fabrication.verify.verify`)."""
+
+    def __init__(self, job: Callable[[], Any], name: str):
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("fork")
+        self._recv, send = ctx.Pipe(duplex=False)
+        self._proc = ctx.Process(target=_forked_main, args=(job, send), name=name, daemon=True)
+        self._proc.start()
+        send.close()
+
+    def result(self) -> tuple[str, Any]:
+        try:
+            out = self._recv.recv()
+        except EOFError:                        # killed (e.g. out of memory) before it could report
+            out = ("failed", f"the {self._proc.name} process ended with code {self._proc.exitcode}")
+        self._proc.join()
+        return out
+
+    def close(self) -> None:
+        if self._proc.is_alive():
+            self._proc.terminate()
+        self._proc.join()
+        self._recv.close()
+
+
+def _forked_main(job: Callable[[], Any], conn: Any) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)):
         if s is not None:
             signal.signal(s, signal.SIG_DFL)
-    results = []
     try:
-        for w in writers:
-            t0 = time.perf_counter()
-            added, note = _run(w, build, out, {})
-            results.append((w.name, added, note, time.perf_counter() - t0))
-        conn.send(("ok", results))
-    except BaseException as exc:                # reported; the parent runs the writer again for its error
+        conn.send(("ok", job()))
+    except BaseException as exc:                # reported; the parent runs the work again for its error
         conn.send(("failed", f"{type(exc).__name__}: {exc}"))
     finally:
         conn.close()
 
 
+def _side_writers(build: "Build", out: Path, writers: list[Writer]) -> list[tuple[str, Files, str, float]]:
+    """The second process's work: run ``writers`` (each on an empty table); their additions, notes and times."""
+    results = []
+    for w in writers:
+        t0 = time.perf_counter()
+        added, note = _run(w, build, out, {})
+        results.append((w.name, added, note, time.perf_counter() - t0))
+    return results
+
+
 def write_split(build: "Build", out: Path, progress: "Progress", writers: list[Writer]) -> Files:
     """Run ``writers`` (enabled, in order) with those of :data:`SECOND_PROCESS` in a forked process; returns the
     ``files`` table, equal to that of a serial run."""
-    import multiprocessing
-
     side = [w for w in writers if w.name in SECOND_PROCESS]
-    ctx = multiprocessing.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(build, out, side, send), name="ppfab-writer", daemon=True)
     order = [w.name for w in writers]
     added: dict[str, Files] = {}
     joined = False
     main = [w.name for w in writers if w.name not in SECOND_PROCESS]
-    proc.start()
-    send.close()
+    proc = Forked(lambda: _side_writers(build, out, side), "ppfab-writer")
     progress.watch(out)                       # the status counts the files written so far (both processes)
     try:
         for k, w in enumerate(writers):
             if w.name in SECOND_PROCESS:
                 continue
             if not joined and w.name in READS_EVERY_FILE:
-                _join(build, out, progress, proc, recv, side, added, order)
+                _join(build, out, progress, proc, side, added, order)
                 joined = True
             progress.start(w.name)
             i = main.index(w.name)
@@ -130,24 +161,17 @@ def write_split(build: "Build", out: Path, progress: "Progress", writers: list[W
                 raise
             progress.done(note)
         if not joined:
-            _join(build, out, progress, proc, recv, side, added, order)
+            _join(build, out, progress, proc, side, added, order)
     finally:
         progress.watch(None)
-        if proc.is_alive():
-            proc.terminate()
-        proc.join()
-        recv.close()
+        proc.close()
     return _merged(added, order)
 
 
-def _join(build: "Build", out: Path, progress: "Progress", proc: Any, recv: Any, side: list[Writer],
+def _join(build: "Build", out: Path, progress: "Progress", proc: Forked, side: list[Writer],
           added: dict[str, Files], order: list[str]) -> None:
     """Wait for the second process; record its writers (progress and times), or run them here if it failed."""
-    try:
-        status, payload = recv.recv()
-    except EOFError:                            # killed (e.g. out of memory) before it could report
-        status, payload = "failed", f"the writer process ended with code {proc.exitcode}"
-    proc.join()
+    status, payload = proc.result()
     if status == "ok":
         for name, files, note, seconds in payload:
             progress.start(name, "(second process)")
