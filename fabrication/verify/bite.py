@@ -18,6 +18,7 @@ from scipy.spatial import cKDTree
 from ..contract import gasket_id
 from . import Verification, check, read_csv
 from ._shapes import solid_points
+from ._step_read import read_or_report
 
 
 def _cross2(a: np.ndarray, b: np.ndarray) -> float:
@@ -101,20 +102,15 @@ def check_bite(v: Verification) -> None:
     mesh = v.data.get("mesh")
     if rel is None or mesh is None:
         return
-    from build123d import import_step
-
-    from ..writers.step import named_solids
-
     fab = m.get("fabrication", {})
     gl = fab.get("glazing", {})
     offset = float(gl.get("thickness", 0.0)) + float(gl.get("gasket_thickness", 0.0))
     min_bite = float(fab.get("panels", {}).get("min_bite", 0.0))
     gap = float(fab.get("panel_gap", 0.0))
-    try:
-        solids = dict(named_solids(import_step(str(v.folder / rel))))
-    except Exception as exc:  # noqa: BLE001 - reported as a finding
-        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+    read = read_or_report(v, rel)
+    if read is None:
         return
+    solids = {s.name: s.solid for s in read}
     gaskets: dict[tuple[int, int], np.ndarray] = {}
     for row in v.data.get("parts", []):
         if row["kind"] != "strip":

@@ -18,26 +18,21 @@ def check_panels_step(v: Verification) -> None:
     mesh = v.data.get("mesh")
     if rel is None or mesh is None:
         return
-    from build123d import import_step
-
-    from ..writers.step import named_solids
-
     from ..contract import STEP_GLASS_GROUP
-    from .step import check_header, solid_paths
+    from ._step_read import read_or_report
+    from .step import check_header
 
     check_header(v, rel)
-    try:
-        shape = import_step(str(v.folder / rel))
-        pairs = named_solids(shape)
-    except Exception as exc:  # noqa: BLE001
-        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+    read = read_or_report(v, rel)
+    if read is None:
         return
+    pairs = [(s.name, s.solid) for s in read]
     every = {r["part_id"] for r in v.data.get("parts", []) if r["kind"] == "panel"}
-    for path, solid in solid_paths(shape):
-        if solid.label not in every:
-            v.error(rel, solid.label or "(unnamed)", "solid is not a panel in parts.csv")
-        elif path[-1:] != (STEP_GLASS_GROUP,):
-            v.error(rel, solid.label, f"sits under {'/'.join(path)}, expected the {STEP_GLASS_GROUP} assembly")
+    for s in read:
+        if s.name not in every:
+            v.error(rel, s.name or "(unnamed)", "solid is not a panel in parts.csv")
+        elif s.path[-1:] != (STEP_GLASS_GROUP,):
+            v.error(rel, s.name, f"sits under {'/'.join(s.path)}, expected the {STEP_GLASS_GROUP} assembly")
     t = float(m.get("fabrication", {}).get("glass_thickness", 0.0))
     panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
     names = [n for n, _ in pairs]

@@ -89,15 +89,12 @@ def check_splices(v: Verification) -> None:
     if splice_rows and rel is None:
         v.error("manifest.json", "files", "parts.csv lists splice cover plates but no splices_step file")
     elif rel is not None:
-        from build123d import import_step
+        from ._step_read import read_or_report
 
-        from ..writers.step import named_solids
-
-        try:
-            solids = dict(named_solids(import_step(str(v.folder / rel))))
-        except Exception as exc:  # noqa: BLE001 - reported as a finding
-            v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+        read = read_or_report(v, rel)
+        if read is None:
             return
+        solids = {s.name: s.solid for s in read}
         for r in splice_rows:
             s = solids.get(r["part_id"])
             if s is None:

@@ -3,11 +3,10 @@ and family in the product tree, in its family's colour; panels.step: one solid p
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from . import Verification, check
+from ._step_read import StepSolid
 
 
 @check("step", 60)
@@ -17,16 +16,12 @@ def check_step(v: Verification) -> None:
     rel = files.get("beams_step")
     if rel is None:
         return
-    from build123d import import_step
+    from ._step_read import read_or_report
 
-    from ..writers.step import named_solids
-
-    try:
-        shape = import_step(str(v.folder / rel))
-        pairs = named_solids(shape)
-    except Exception as exc:  # noqa: BLE001
-        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+    read = read_or_report(v, rel, colours=True)
+    if read is None:
         return
+    pairs = [(s.name, s.solid) for s in read]
     v.data["beam_solids"] = {name: solid for name, solid in reversed(pairs)}
     beams = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "beam"}
     t = float(v.data["manifest"].get("fabrication", {}).get("beam_thickness", 0.0))
@@ -50,23 +45,8 @@ def check_step(v: Verification) -> None:
         area = float(beams[name].get("area_mm2") or 0.0)
         if t and area and abs(solid.volume - area * t) > 1e-4 * area * t:
             v.error(rel, name, f"volume {solid.volume:.6g} mm³ ≠ outline area × thickness {area * t:.6g} mm³")
-    _check_tree(v, rel, beams, shape)
+    _check_tree(v, rel, beams, read)
     v.checked.append("step")
-
-
-def solid_paths(shape: Any, path: tuple[str, ...] = ()) -> list[tuple[tuple[str, ...], Any]]:
-    """``(labels of the assemblies above, solid)`` of every solid below ``shape`` (root first)."""
-    from build123d import Solid
-
-    if isinstance(shape, Solid):
-        return [(path, shape)]
-    kids = list(getattr(shape, "children", ()) or ())
-    if not kids:
-        return [(path, s) for s in shape.solids()]
-    out: list[tuple[tuple[str, ...], Any]] = []
-    for kid in kids:
-        out.extend(solid_paths(kid, path + (shape.label,)))
-    return out
 
 
 def check_header(v: Verification, rel: str) -> None:
@@ -80,19 +60,19 @@ def check_header(v: Verification, rel: str) -> None:
             v.error(rel, "header", f"does not name {needed} (ppfab, its version, the fixed time stamp)")
 
 
-def _check_tree(v: Verification, rel: str, beams: dict, shape) -> None:
+def _check_tree(v: Verification, rel: str, beams: dict, read: list[StepSolid]) -> None:
     """The product tree of beams.step: design → family → beam id → plate, each solid in its family's colour."""
     from ..contract import COLOURS
 
     check_header(v, rel)
-    for path, solid in solid_paths(shape):
-        row = beams.get(solid.label)
+    for s in read:
+        row = beams.get(s.name)
         if row is None:
             continue
         want = (row.get("family", ""), row.get("beam_id", ""))
-        if tuple(path[-2:]) != want:
-            v.error(rel, solid.label, f"sits under {'/'.join(path[1:]) or 'the root'}, expected {'/'.join(want)}")
-        colour = getattr(solid, "color", None)
+        if tuple(s.path[-2:]) != want:
+            v.error(rel, s.name, f"sits under {'/'.join(s.path[1:]) or 'the root'}, expected {'/'.join(want)}")
         rgb = COLOURS.get(want[0])
-        if rgb is not None and (colour is None or max(abs(a - b) for a, b in zip(tuple(colour), rgb)) > 1e-3):
-            v.error(rel, solid.label, f"colour {colour} is not the colour of family {want[0]}")
+        if rgb is not None and (s.colour is None or max(abs(a - b) for a, b in zip(s.colour, rgb)) > 1e-3):
+            colour = "none" if s.colour is None else "(" + ", ".join(f"{c:.3g}" for c in s.colour[:3]) + ")"
+            v.error(rel, s.name, f"colour {colour} is not the colour of family {want[0]}")

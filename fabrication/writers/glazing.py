@@ -23,6 +23,20 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
 
 
+def by_beam(solids: list, beams: list[str], name: str):
+    """The product tree ``name → beam id → solids`` (``beams[k]`` the beam of ``solids[k]``), beams in first-seen
+    order and solids in their given order under each."""
+    from build123d import Compound
+
+    from ._step_text import step_label
+
+    groups: dict[str, list] = {}
+    for solid, beam in zip(solids, beams):
+        groups.setdefault(beam, []).append(solid)
+    return Compound(children=[Compound(children=kids, label=beam) for beam, kids in groups.items()],
+                    label=step_label(name))
+
+
 def strip_solids(glazing) -> list:
     """The strip and gasket solids of every strip (strip ``GS-…``, gasket ``GK-…``)."""
     from .step import _colour, _placed_prism
@@ -107,7 +121,8 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
     name = build.design.info.name
     notes = []
     if g.strips:
-        export_step(strip_solids(g), out / GLAZING_STEP, name=f"{name} glazing",
+        beams = [s.beam_id for s in g.strips for _ in range(2)]
+        export_step(by_beam(strip_solids(g), beams, f"{name} glazing"), out / GLAZING_STEP,
                     description=f"glazing strips and gaskets of {name}")
         files["glazing_step"] = GLAZING_STEP
         rows = [{"panel": b.panel, "edge": b.edge, "mesh_edge": b.mesh_edge, "strip": b.strip,
@@ -126,7 +141,8 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
         files["strip_cuts_csv"] = STRIP_CUTS_CSV
         notes.append(f"{len(g.strips)} strips, bite min {g.bite_min:.1f} mm")
     if g.splices:
-        export_step(splice_solids(g), out / SPLICES_STEP, name=f"{name} splices",
+        beams = [s.beam_id for s in g.splices for _ in s.part_ids]
+        export_step(by_beam(splice_solids(g), beams, f"{name} splices"), out / SPLICES_STEP,
                     description=f"splice cover plates of {name}")
         files["splices_step"] = SPLICES_STEP
         files["splice_dxfs"] = write_splice_dxfs(g, out / SPLICE_DIR)

@@ -1,0 +1,92 @@
+"""verify's STEP reader (``fabrication/verify/_step_read.py``) against build123d's ``import_step`` on every STEP
+file of a real build, and the product trees of ``glazing.step`` and ``splices.step`` (design → beam → solids).
+
+The reader walks the kernel's XCAF labels itself instead of build123d's Python assembly tree; both must give
+the same solids: names, the assemblies above each, vertices, volumes and, for ``beams.step``, colours.
+"""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from conftest import built_folder, small_vault
+from fabrication.verify import verify
+from fabrication.verify._step_read import read_step_solids
+
+built = built_folder("step_read", small_vault("step read", max_length=3000.0))
+
+
+def _build123d_solids(path) -> list[tuple[tuple[str, ...], object]]:
+    """``(labels of the assemblies above, solid)`` of every solid, walking build123d's imported tree."""
+    from build123d import Solid, import_step
+
+    def walk(node, above):
+        if isinstance(node, Solid):
+            return [(above, node)]
+        kids = list(getattr(node, "children", ()) or ())
+        if not kids:
+            return [(above, s) for s in node.solids()]
+        return [pair for kid in kids for pair in walk(kid, above + (node.label,))]
+
+    return walk(import_step(str(path)), ())
+
+
+def _points(solid) -> np.ndarray:
+    pts = np.array([tuple(p) for p in solid.vertices()])
+    return pts[np.lexsort(pts.T[::-1])]
+
+
+@pytest.mark.parametrize("name", ["beams.step", "glazing.step", "splices.step", "panels.step"])
+def test_reader_gives_the_solids_build123d_gives(built, name):
+    path = built / name
+    assert path.exists(), f"the build wrote no {name}"
+    theirs = _build123d_solids(path)
+    ours = read_step_solids(path, colours=(name == "beams.step"))
+    assert len(ours) == len(theirs) > 0
+    for (above, solid), mine in zip(theirs, ours):
+        assert mine.name == solid.label
+        # build123d folds " .()" of a label into "_"; below the root the labels are part and beam ids
+        assert mine.path[1:] == above[1:] and len(mine.path) == len(above)
+        assert np.abs(_points(mine.solid) - _points(solid)).max() <= 1e-9
+        assert mine.solid.volume == pytest.approx(solid.volume, rel=1e-9)
+        if name == "beams.step":
+            assert mine.colour is not None
+            assert np.allclose(mine.colour, tuple(solid.color), atol=1e-6)
+
+
+def _rows(built) -> dict[str, dict[str, str]]:
+    with open(built / "parts.csv", newline="", encoding="utf-8") as f:
+        return {r["part_id"]: r for r in csv.DictReader(f)}
+
+
+@pytest.mark.parametrize("name, kind", [("glazing.step", "strip"), ("splices.step", "splice")])
+def test_glazing_and_splice_solids_sit_under_their_beam(built, name, kind):
+    rows = _rows(built)
+    read = read_step_solids(built / name)
+    wanted = {pid for pid, r in rows.items() if r["kind"] == kind}
+    assert wanted, f"the build has no {kind} parts"
+    seen = set()
+    for s in read:
+        pid = "GS" + s.name[2:] if s.name.startswith("GK") else s.name      # a gasket belongs to its strip
+        assert pid in rows, s.name
+        assert len(s.path) == 2 and s.path[1] == rows[pid]["beam"], (s.name, s.path)
+        seen.add(s.name)
+    assert wanted <= seen
+    groups = {s.path[1] for s in read}
+    assert len(groups) == len({rows[pid]["beam"] for pid in wanted})        # one assembly per beam, no more
+
+
+def test_unreadable_step_is_a_finding(built, tmp_path):
+    import shutil
+
+    out = tmp_path / "out"
+    shutil.copytree(built, out)
+    text = (out / "glazing.step").read_bytes()
+    (out / "glazing.step").write_bytes(text[: len(text) // 3])                # cut off mid-file
+    report = verify(out)
+    assert not report.ok
+    assert any(f.file == "glazing.step" and "cannot be read by the CAD kernel" in f.message
+               for f in report.findings), [str(f) for f in report.findings]
