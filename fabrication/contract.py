@@ -251,7 +251,8 @@ COLOURS = {"glass": (0.55, 0.75, 0.90, 0.35), "rows": (0.80, 0.36, 0.12, 1.0), "
 """RGBA (0–1) of the glass, each beam family, the node axes and the mesh in STEP, IFC, Rhino and glTF."""
 
 STEP_GLASS_GROUP = "glass"
-"""The assembly of the panels in ``panels.step`` (below the design's assembly); in ``beams.step`` the design's
+"""The assembly of the panels in ``panels.step`` (below the design's assembly; the panels sit in one assembly
+per row below it); in ``beams.step`` the design's
 assembly holds one assembly per family (``rows``, ``cols``), each one per beam (``B-U03``) holding its plates."""
 
 

@@ -90,3 +90,23 @@ def test_unreadable_step_is_a_finding(built, tmp_path):
     assert not report.ok
     assert any(f.file == "glazing.step" and "cannot be read by the CAD kernel" in f.message
                for f in report.findings), [str(f) for f in report.findings]
+
+
+def test_panels_sit_in_glass_by_row(built):
+    rows = _rows(built)
+    read = read_step_solids(built / "panels.step")
+    panels = {pid for pid, r in rows.items() if r["kind"] == "panel"}
+    assert {s.name for s in read} == panels
+    for s in read:
+        assert s.path[1:] == ("glass", f"P-U{int(rows[s.name]['face_i']):02d}"), (s.name, s.path)
+
+
+def test_panel_groups_of_a_general_mesh_are_blocks_of_consecutive_panels():
+    from fabrication.writers.step import PANEL_BLOCK, panel_groups
+
+    ids = [f"P-{k:04d}" for k in range(2 * PANEL_BLOCK + 7)]
+    groups = panel_groups(ids)
+    assert groups[0] == groups[PANEL_BLOCK - 1] == f"P-0000-{PANEL_BLOCK - 1:04d}"
+    assert groups[-1] == f"P-{2 * PANEL_BLOCK:04d}-{2 * PANEL_BLOCK + 6:04d}"
+    assert len(set(groups)) == 3
+    assert panel_groups(["P-U03-V00", "P-U03-V01", "P-U04-V00"]) == ["P-U03", "P-U03", "P-U04"]

@@ -1,4 +1,5 @@
-"""panels.step against the mesh: one solid per panel, named by its part id, under the glass assembly, whose
+"""panels.step against the mesh: one solid per panel, named by its part id, in the glass assembly (directly, as
+builds before 0.2 wrote it, or in a row assembly below it), whose
 vertices are the face's corners on its least-squares plane and the same moved by the glass thickness along
 the face normal; its header names ppfab.  The file is read once (it was read twice, here and by the ``step``
 check, before the two were merged)."""
@@ -31,8 +32,9 @@ def check_panels_step(v: Verification) -> None:
     for s in read:
         if s.name not in every:
             v.error(rel, s.name or "(unnamed)", "solid is not a panel in parts.csv")
-        elif s.path[-1:] != (STEP_GLASS_GROUP,):
-            v.error(rel, s.name, f"sits under {'/'.join(s.path)}, expected the {STEP_GLASS_GROUP} assembly")
+        elif s.path[1:2] != (STEP_GLASS_GROUP,):
+            v.error(rel, s.name, f"sits under {'/'.join(s.path)}, expected the {STEP_GLASS_GROUP} assembly "
+                                 "(below the design's)")
     t = float(m.get("fabrication", {}).get("glass_thickness", 0.0))
     panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
     names = [n for n, _ in pairs]

@@ -296,19 +296,41 @@ def panel_solids(corners: np.ndarray, thickness: float, ids: Iterable[str]) -> l
     return out
 
 
+PANEL_BLOCK = 100
+"""Panels per assembly below ``glass`` in ``panels.step`` when the panels carry no row (see :func:`panel_groups`)."""
+
+
+def panel_groups(ids: Sequence[str]) -> list[str]:
+    """The assembly of each panel below ``glass``: its row of a regular patch (``P-U07`` for ``P-U07-V12``), else
+    a block of :data:`PANEL_BLOCK` consecutive panels (``P-0100-0199``).  One flat assembly of thousands of
+    panels is slow to read back: the kernel's STEP reader compares every component with its siblings."""
+    rows = [pid.rsplit("-", 1)[0] for pid in ids]
+    if all(pid.count("-") == 2 for pid in ids):
+        return rows
+    out = []
+    for k, pid in enumerate(ids):
+        lo = k - k % PANEL_BLOCK
+        hi = min(lo + PANEL_BLOCK, len(ids)) - 1
+        out.append(f"{ids[lo]}-{ids[hi].split('-')[-1]}")
+    return out
+
+
 def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: float = 10.0,
                        ids: Sequence[str] | None = None, name: str = "") -> Path:
     """``panels.step``: glass panels as thin solids on the outside of the mesh, for clash checks; the assembly
-    ``name`` → ``glass`` → one solid per pane, in the glass colour."""
+    ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per pane, in the glass colour."""
     from build123d import Compound
 
     ids = list(ids) if ids is not None else [f"P{k:04d}" for k in range(len(corners))]
     if len(ids) != len(corners):
         raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
     solids = panel_solids(corners, thickness, ids)
-    for s in solids:
+    rows: dict[str, list] = {}
+    for s, group in zip(solids, panel_groups(ids)):
         s.color = _colour("glass")
-    glass = Compound(children=solids, label=STEP_GLASS_GROUP)
+        rows.setdefault(group, []).append(s)
+    glass = Compound(children=[Compound(children=kids, label=step_label(group)) for group, kids in rows.items()],
+                     label=STEP_GLASS_GROUP)
     root = Compound(children=[glass], label=step_label(name or "panels"))
     return export_step(root, path, description=f"glass panels of {name}" if name else "glass panels")
 
