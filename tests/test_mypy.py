@@ -2,7 +2,7 @@
 pyproject.toml reports no error.
 
 The settings ignore missing imports only for third-party modules that ship without type information
-(scipy, shapely, mpl_toolkits; tomli where Python has tomllib), so an untyped import of ppfab or fabrication
+(scipy, shapely, mpl_toolkits, OCP; tomli where Python has tomllib), so an untyped import of ppfab or fabrication
 itself, a wrong annotation or an unchecked ``None`` fails here.
 """
 
