@@ -298,7 +298,11 @@ def test_beams_step_product_tree_as_a_reader_sees_it(built, parts):
 def test_panels_step_product_tree(built, parts):
     tree, roots = step_tree(built / "panels.step")
     assert roots == ["exchange test Uberdach"] and tree[roots[0]] == ["glass"]
-    assert sorted(tree["glass"]) == sorted(k for k, r in parts.items() if r["kind"] == "panel")
+    panels = {k: r for k, r in parts.items() if r["kind"] == "panel"}
+    rows = {f"P-U{int(r['face_i']):02d}" for r in panels.values()}
+    assert sorted(tree["glass"]) == sorted(rows)                          # one assembly per row of faces
+    assert sorted(k for row in tree["glass"] for k in tree[row]) == sorted(panels)
+    assert all(k.startswith(row + "-") for row in tree["glass"] for k in tree[row])
 
 
 # -- GLB --------------------------------------------------------------------------------------------------
