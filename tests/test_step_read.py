@@ -110,3 +110,25 @@ def test_panel_groups_of_a_general_mesh_are_blocks_of_consecutive_panels():
     assert groups[-1] == f"P-{2 * PANEL_BLOCK:04d}-{2 * PANEL_BLOCK + 6:04d}"
     assert len(set(groups)) == 3
     assert panel_groups(["P-U03-V00", "P-U03-V01", "P-U04-V00"]) == ["P-U03", "P-U03", "P-U04"]
+
+
+def test_reader_places_a_solid_by_the_locations_of_the_assemblies_above_it(tmp_path):
+    """A box in an assembly placed 100 mm along x and turned 90° about z, inside a second assembly placed
+    50 mm along z: its vertices are R·p + t of the box's own, composed by hand."""
+    from build123d import Box, Compound, Location, export_step
+
+    box = Box(10, 20, 30)
+    box.label = "box"
+    inner = Compound(children=[box], label="inner").moved(Location((100, 0, 0), (0, 0, 1), 90))
+    inner.label = "inner"
+    outer = Compound(children=[inner], label="outer").moved(Location((0, 0, 50)))
+    outer.label = "outer"
+    export_step(Compound(children=[outer], label="root"), str(tmp_path / "placed.step"))
+    (solid,) = read_step_solids(tmp_path / "placed.step")
+    assert solid.name == "box" and solid.path == ("root", "outer", "inner")
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    own = np.array([[x, y, z] for x in (-5, 5) for y in (-10, 10) for z in (-15, 15)], dtype=float)
+    want = own @ turn.T + np.array([100.0, 0.0, 50.0])
+    got = np.array([tuple(p) for p in solid.solid.vertices()])
+    assert len(got) == 8
+    assert max(np.linalg.norm(want - g, axis=1).min() for g in got) <= 1e-9
