@@ -86,6 +86,21 @@ def test_pp_package_on_a_mesh_with_singular_vertices(dome_build, capsys):
     assert sum(j == "halflap" for j in joints.values()) > 20
 
 
+def test_panels_step_of_a_general_mesh_in_blocks_of_consecutive_faces(dome_build):
+    """quad_dome has no rows: its panes sit under ``glass`` in blocks of 100 consecutive faces, named by the first
+    and last panel's number (read back with verify's STEP reader; the face of each pane from parts.csv)."""
+    from fabrication.verify._step_read import read_step_solids
+
+    faces = {r["part_id"]: int(r["face"]) for r in rows(dome_build / "parts.csv") if r["kind"] == "panel"}
+    width = len(next(iter(faces))) - 2                                     # "P-0042": digits after "P-"
+    read = read_step_solids(dome_build / "panels.step")
+    assert sorted(s.name for s in read) == sorted(faces)          # 48 panes: one block (more: test_step_read)
+    for s in read:
+        lo = faces[s.name] - faces[s.name] % 100
+        hi = min(lo + 99, len(faces) - 1)
+        assert s.path[1:] == ("glass", f"P-{lo:0{width}d}-{hi:0{width}d}"), (s.name, s.path)
+
+
 def test_verify_fails_a_build_beyond_its_torsion_tolerance(dome_build, tmp_path, capsys):
     import shutil
 
