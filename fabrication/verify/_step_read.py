@@ -15,7 +15,10 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from . import Verification
 
 
 @dataclass(frozen=True)
@@ -105,9 +108,9 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[Ste
             if shapes.IsAssembly_s(ref):
                 walk(ref, here, above + (name,))
                 continue
-            shape = shapes.GetShape_s(ref).Moved(here)
-            colour = colour_of(sub, ref, shapes.GetShape_s(ref)) if colours else None
-            found = TopExp_Explorer(shape, TopAbs_SOLID)
+            own = shapes.GetShape_s(ref)
+            colour = colour_of(sub, ref, own) if colours else None
+            found = TopExp_Explorer(own.Moved(here), TopAbs_SOLID)
             while found.More():
                 out.append(StepSolid(name, above, Solid(TopoDS.Solid(found.Current())), colour))
                 found.Next()
@@ -116,9 +119,9 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[Ste
     return out
 
 
-def read_or_report(v: Any, rel: str, colours: bool = False) -> list[StepSolid] | None:
+def read_or_report(v: "Verification", rel: str, colours: bool = False) -> list[StepSolid] | None:
     """The solids of the build's file ``rel`` (:func:`read_step_solids`), or ``None`` after a finding on ``v``
-    (a :class:`~fabrication.verify.Verification`) when the kernel cannot read it."""
+    when the kernel cannot read it."""
     try:
         return read_step_solids(v.folder / rel, colours)
     except Exception as exc:  # noqa: BLE001 - reported as a finding

@@ -1,8 +1,7 @@
-"""panels.step against the mesh: one solid per panel, named by its part id, in the glass assembly (directly, as
-builds before 0.2 wrote it, or in a row assembly below it), whose
-vertices are the face's corners on its least-squares plane and the same moved by the glass thickness along
-the face normal; its header names ppfab.  The file is read once (it was read twice, here and by the ``step``
-check, before the two were merged)."""
+"""panels.step against the mesh: one solid per panel, named by its part id, in the glass assembly (in a row
+assembly below it, or directly in it as earlier builds wrote it), whose vertices are the face's corners on its
+least-squares plane and the same moved by the glass thickness along the face normal; its header names ppfab.
+The file is read once (it was read twice, here and by the ``step`` check, before the two were merged)."""
 
 from __future__ import annotations
 

@@ -24,17 +24,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def by_beam(solids: list, beams: list[str], name: str):
-    """The product tree ``name → beam id → solids`` (``beams[k]`` the beam of ``solids[k]``), beams in first-seen
-    order and solids in their given order under each."""
+    """The product tree ``name → beam id → solids`` (``beams[k]`` the beam of ``solids[k]``)."""
     from build123d import Compound
 
     from ._step_text import step_label
+    from .step import grouped
 
-    groups: dict[str, list] = {}
-    for solid, beam in zip(solids, beams):
-        groups.setdefault(beam, []).append(solid)
-    return Compound(children=[Compound(children=kids, label=beam) for beam, kids in groups.items()],
-                    label=step_label(name))
+    return Compound(children=grouped(solids, beams), label=step_label(name))
 
 
 def strip_solids(glazing) -> list:

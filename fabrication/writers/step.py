@@ -96,6 +96,19 @@ def build_solids(plates: Sequence[BeamPlate], check: bool = True) -> list:
     return solids
 
 
+def grouped(solids: Sequence, keys: Sequence[str]) -> list:
+    """One assembly per key, labelled by it (folded to ASCII), holding the solids of that key (``keys[k]`` that
+    of ``solids[k]``); keys in first-seen order, solids in their given order.  ppfab's STEP trees are built
+    from these so no assembly holds thousands of components: the kernel's STEP reader compares every
+    component with its siblings (docs/performance.md)."""
+    from build123d import Compound
+
+    groups: dict[str, list] = {}
+    for solid, key in zip(solids, keys):
+        groups.setdefault(key, []).append(solid)
+    return [Compound(children=kids, label=step_label(key)) for key, kids in groups.items()]
+
+
 def beam_assembly(plates: Sequence[BeamPlate], solids: Sequence, name: str):
     """The product tree of ``beams.step``: ``name`` → family → beam id → the plate solids, in plate order."""
     from build123d import Compound
@@ -304,9 +317,8 @@ def panel_groups(ids: Sequence[str]) -> list[str]:
     """The assembly of each panel below ``glass``: its row of a regular patch (``P-U07`` for ``P-U07-V12``), else
     a block of :data:`PANEL_BLOCK` consecutive panels (``P-0100-0199``).  One flat assembly of thousands of
     panels is slow to read back: the kernel's STEP reader compares every component with its siblings."""
-    rows = [pid.rsplit("-", 1)[0] for pid in ids]
     if all(pid.count("-") == 2 for pid in ids):
-        return rows
+        return [pid.rsplit("-", 1)[0] for pid in ids]
     out = []
     for k, pid in enumerate(ids):
         lo = k - k % PANEL_BLOCK
@@ -325,12 +337,9 @@ def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: 
     if len(ids) != len(corners):
         raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
     solids = panel_solids(corners, thickness, ids)
-    rows: dict[str, list] = {}
-    for s, group in zip(solids, panel_groups(ids)):
+    for s in solids:
         s.color = _colour("glass")
-        rows.setdefault(group, []).append(s)
-    glass = Compound(children=[Compound(children=kids, label=step_label(group)) for group, kids in rows.items()],
-                     label=STEP_GLASS_GROUP)
+    glass = Compound(children=grouped(solids, panel_groups(ids)), label=STEP_GLASS_GROUP)
     root = Compound(children=[glass], label=step_label(name or "panels"))
     return export_step(root, path, description=f"glass panels of {name}" if name else "glass panels")
 
