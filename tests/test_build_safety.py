@@ -224,8 +224,14 @@ def test_leftovers_of_killed_runs_are_recognised_safely(tmp_path, small_design):
     assert main(["build", str(small_design), "-o", str(tmp_path / "prev"), "--quiet"]) == 0
     before = tree(tmp_path / "prev")
     (tmp_path / "prev").rename(tmp_path / f".out.old-{pid}-0000beef")
+    # killed between making its folder and writing the marker: nothing in it, or a marker not yet written
+    unstarted = tmp_path / ".out.tmp-0000e111"
+    unstarted.mkdir()
+    half = tmp_path / ".out.tmp-0000e222"
+    half.mkdir()
+    (half / MARKER).write_text("")
     removed = remove_stale(out.absolute(), previous_build_problem)
-    assert removed == [stale]
+    assert removed == [stale, unstarted, half]
     assert alive.exists() and unmarked.exists() and other.exists()
     assert tree(out) == before                                        # put back, unchanged
     # a full run removes the dead one's folder too and replaces the restored build (it is one)
@@ -234,6 +240,42 @@ def test_leftovers_of_killed_runs_are_recognised_safely(tmp_path, small_design):
     with AtomicFolder(out, force=True) as tmp:
         (tmp / "manifest.json").write_text(json.dumps({"generator": "ppfab", "sha256": {}}))
     assert not stale.exists() and sorted(p.name for p in out.iterdir()) == ["manifest.json"]
+
+
+def test_a_forked_helper_dies_with_its_killed_parent(tmp_path):
+    """A parent killed with SIGKILL cleans nothing up: its forked helper (writers, verify) must not live on,
+    writing into the temporary folder and holding the output folder's lock (it shares the lock file)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        "import time, pathlib\n"
+        "from fabrication.writers._parallel import Forked\n"
+        "def job():\n"
+        f"    pathlib.Path({str(tmp_path / 'child.pid')!r}).write_text(str(__import__('os').getpid()))\n"
+        "    time.sleep(60)\n"
+        "f = Forked(job, 'ppfab-test')\n"
+        "time.sleep(60)\n")
+    parent = subprocess.Popen([sys.executable, "-c", script])
+    t0 = time.monotonic()
+    while not (tmp_path / "child.pid").exists() or not (tmp_path / "child.pid").read_text():
+        assert time.monotonic() - t0 < 60, "the helper did not start"
+        time.sleep(0.02)
+    child = int((tmp_path / "child.pid").read_text())
+    parent.send_signal(signal.SIGKILL)
+    parent.wait(timeout=30)
+    t0 = time.monotonic()
+    while True:                                   # gone, or a zombie waiting for init to reap it
+        try:
+            state = open(f"/proc/{child}/stat").read().rsplit(")", 1)[-1].split()[0]
+        except OSError:
+            break
+        if state == "Z":
+            break
+        assert time.monotonic() - t0 < 10, f"the helper {child} outlived its killed parent (state {state})"
+        time.sleep(0.02)
 
 
 def test_a_failed_build_leaves_no_new_parent_folders(tmp_path, small_design, monkeypatch, capsys):

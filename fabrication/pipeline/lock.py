@@ -2,14 +2,16 @@
 
 :class:`OutputLock` holds an exclusive ``flock`` on ``.NAME.lock`` beside the output folder ``NAME`` for as
 long as a run works on it; a second run to the same folder is refused at once with the first one's pid
-(the kernel drops the lock when a process dies, even by SIGKILL, so a lock is never stale).  The lock
+(the kernel drops the lock when a process dies, even by SIGKILL, so a lock is never stale; a forked
+helper process, which shares the lock, dies with its parent: :mod:`fabrication.writers._parallel`).  The lock
 is re-entrant within one process: the command line takes it before the compute stages and
 :meth:`~fabrication.pipeline.records.Build.write` takes it again around the writers.
 
 A temporary folder carries :data:`MARKER`, a small JSON record ``{pid, host, start}`` of the run writing
 it (``start`` is the process start time, so a recycled pid is not mistaken for the writer).
 :func:`remove_stale` deletes, while the lock is held, the temporary folders of ``NAME`` whose marker
-names a process of this host that no longer runs, and the ``.NAME.old-<pid>-…`` folders (a previous
+names a process of this host that no longer runs (or that hold nothing but an unfinished marker: the run
+died between making the folder and writing it), and the ``.NAME.old-<pid>-…`` folders (a previous
 build moved aside during a replacement) of dead pids that are still complete ppfab builds — put back as
 ``NAME`` when the run died before its own folder took that name.  Nothing without these signs is ever
 deleted.
@@ -91,6 +93,17 @@ def _read_marker(folder: Path) -> dict[str, Any] | None:
     except (OSError, ValueError):
         return None
     return doc if isinstance(doc, dict) else None
+
+
+def _unstarted(folder: Path) -> bool:
+    """Whether ``folder`` holds nothing but, at most, an unfinished :data:`MARKER`: a run killed between
+    making its temporary folder and writing the marker.  A live run writing it would hold the lock the
+    caller of :func:`remove_stale` holds, and there is nothing in it to lose."""
+    try:
+        entries = list(folder.iterdir())
+    except OSError:
+        return False
+    return all(e.name == MARKER and e.is_file() and not e.is_symlink() for e in entries)
 
 
 def lock_path(target: Path) -> Path:
@@ -202,7 +215,9 @@ def remove_stale(target: Path, is_build: Any) -> list[Path]:
             continue
         if tmp_re.match(p.name):
             rec = _read_marker(p)
-            if rec is None or process_alive(rec):
+            if rec is None and not _unstarted(p):
+                continue
+            if rec is not None and process_alive(rec):
                 continue
         else:
             m = old_re.match(p.name)

@@ -82,7 +82,7 @@ class Forked:
     """``job()`` run in a forked process (``multiprocessing``), its result sent back through a pipe.
 
     The child ignores SIGINT (a Ctrl-C reaches the whole process group: the parent decides), dies on
-    SIGTERM/SIGHUP and ends with ``os._exit`` (never unwinding the parent's ``with`` blocks).  :meth:`result`
+    SIGTERM/SIGHUP and with its parent (:func:`_die_with_parent`), and ends with ``os._exit`` (never unwinding the parent's ``with`` blocks).  :meth:`result`
     waits for it: ``("ok", value)``, or ``("failed", why)`` when ``job`` raised or the process died first;
     :meth:`close` terminates it if still running and joins it (call it in a ``finally``).  Used by the writers
     here and by ``ppfab verify`` (:func:`fabrication.verify.verify`)."""
@@ -92,7 +92,7 @@ class Forked:
 
         ctx = multiprocessing.get_context("fork")
         self._recv, send = ctx.Pipe(duplex=False)
-        self._proc = ctx.Process(target=_forked_main, args=(job, send), name=name, daemon=True)
+        self._proc = ctx.Process(target=_forked_main, args=(job, send, os.getpid()), name=name, daemon=True)
         self._proc.start()
         send.close()
 
@@ -111,7 +111,25 @@ class Forked:
         self._recv.close()
 
 
-def _forked_main(job: Callable[[], Any], conn: Any) -> None:
+def _die_with_parent(parent: int) -> None:
+    """Ask the kernel to SIGKILL this process when its parent dies (Linux ``prctl(PR_SET_PDEATHSIG)``).
+
+    A parent killed with SIGKILL runs no clean-up; without this its forked child would go on writing into the
+    temporary folder and, sharing the parent's lock file, keep the output folder locked.  Ends at once when
+    the parent is already gone.  Elsewhere (no ``prctl``) nothing is done."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)          # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        return
+    if os.getppid() != parent:                                  # the parent died before prctl
+        os._exit(1)
+
+
+def _forked_main(job: Callable[[], Any], conn: Any, parent: int) -> None:
+    _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)):
         if s is not None:
