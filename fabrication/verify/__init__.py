@@ -82,16 +82,18 @@ def load_checks() -> list[Check]:
     return sorted(_TABLE.load().values(), key=lambda c: (c.order, c.name))
 
 
-SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite")
+SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "ifc")
 """Checks that read only what the checks up to :data:`FORK_AFTER` put into :attr:`Verification.data` (the
-manifest, the mesh, the parts list, the nodes) and put nothing there that another check reads: on two cores
-they run in a forked process beside the others.  Chosen by the CPU seconds of each check on the bundled
-default (single process): at 22 × 15 faces bite 8.3, splices 6.6, glass_order 3.7 of 44 s; at 88 × 60 the
-bite check alone (glazing.step, 21,416 solids) takes about half of the whole, so the split is near even at
-both ends (docs/performance.md)."""
+manifest, the mesh, the parts list, the nodes, the cutting-sheet outlines and the per-type DXFs as read) and put
+nothing there that another check reads: on two cores they run in a forked process beside the others.  Chosen
+by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30 faces
+the fork gets bite 21, ifc 11, splices 6 and glass order 1 (it no longer reads the per-type DXFs: the types
+check did) against step 16, panels_step 6, step_geometry 4, rhino and glb 2 each after it here; at 88 × 60
+the bite check alone (glazing.step, 21,416 solids) is about a quarter of the whole."""
 
-FORK_AFTER = "nodes"
-"""The second process starts once this check (and every check before it) has run in this one."""
+FORK_AFTER = "types"
+"""The second process starts once this check (and every check before it) has run in this one: after the
+per-type DXFs are read, so the glass order check finds them in ``data["type_dxf"]``."""
 
 
 def verify(folder: str | Path, parallel: bool | None = None) -> Verification:

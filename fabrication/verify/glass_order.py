@@ -12,6 +12,7 @@ from ..glassorder import reference_frame
 from . import Verification, check, read_csv
 from ._shapes import number
 from .congruence import congruence_error, inset_face_2d
+from .types import type_dxf
 
 
 @check("order", 35)
@@ -63,8 +64,6 @@ def check_glass_order(v: Verification) -> None:
     rel = files.get("glass_order_csv")
     if rel is None:
         return
-    from ..writers.dxf import check_sheet_dxf
-
     rows = read_csv(v.folder / rel)
     missing = [c for c in ORDER_COLUMNS + ORDER_SHAPE_COLUMNS if rows and c not in rows[0]]
     if missing:
@@ -109,7 +108,7 @@ def check_glass_order(v: Verification) -> None:
                                   f"(edges differ by {dl:.3g} mm, angles by {da:.3g} rad)")
         if row["file"]:
             try:
-                dxf = check_sheet_dxf(v.folder / row["file"], require_sheet=False)
+                dxf = type_dxf(v, row["file"])
             except Exception as exc:  # noqa: BLE001 - reported as a finding
                 v.error(row["file"], "", str(exc))
                 continue

@@ -1,10 +1,13 @@
 """The per-type DXFs (the files the glass order sends the supplier): one flat outline each, congruent, within
 the congruence tolerance, with the 3D face (inset by half the gap) of every panel of its type.
 
-The outlines are kept in ``data["type_outlines"]`` (type id → outline) for the placement check.
+The outlines are kept in ``data["type_outlines"]`` (type id → outline) for the placement check, and each file as
+read in ``data["type_dxf"]`` (:func:`type_dxf`), so the glass order check reads none of them again.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 from ..contract import csv_value
 from .congruence import congruence_error, congruence_limits, inset_face_2d
@@ -12,10 +15,26 @@ from . import Verification, check
 from ._tolerance import type_tolerance
 
 
-@check("types", 52)
-def check_types(v: Verification) -> None:
+def type_dxf(v: Verification, rel: str) -> Any:
+    """The per-type DXF ``rel`` read and checked once per verification (``check_sheet_dxf`` without a sheet):
+    its content, or the exception that reading raised, raised again at every call.  Kept in
+    ``data["type_dxf"]`` (relative path → content or exception)."""
     from ..writers.dxf import check_sheet_dxf
 
+    memo = v.data.setdefault("type_dxf", {})
+    if rel not in memo:
+        try:
+            memo[rel] = check_sheet_dxf(v.folder / rel, require_sheet=False)
+        except Exception as exc:  # noqa: BLE001 - kept and raised again to each caller
+            memo[rel] = exc
+    got = memo[rel]
+    if isinstance(got, Exception):
+        raise got
+    return got
+
+
+@check("types", 52)
+def check_types(v: Verification) -> None:
     m = v.data.get("manifest", {})
     files = m.get("files", {})
     mesh = v.data.get("mesh")
@@ -30,7 +49,7 @@ def check_types(v: Verification) -> None:
     outlines = v.data.setdefault("type_outlines", {})
     for rel in files.get("panel_type_dxfs", []):
         try:
-            content = check_sheet_dxf(v.folder / rel, require_sheet=False)
+            content = type_dxf(v, rel)
         except Exception as exc:  # noqa: BLE001 - reported as a finding
             v.error(rel, "", str(exc))
             continue
