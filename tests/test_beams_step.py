@@ -91,3 +91,36 @@ def test_panels_step_for_clash_checks(tmp_path):
         assert len(dist) == 8
         assert np.sort(dist)[:4] == pytest.approx(np.zeros(4), abs=1e-6)    # on the mesh face …
         assert np.sort(dist)[4:] == pytest.approx(np.full(4, 10.0), abs=1e-6)  # … and 10 mm outside
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_placed_prism_is_the_outline_extruded_along_the_frame_normal(clockwise):
+    """The kernel-built prism against the formula: vertices ``frame.to3d(outline) + z·n`` for ``z = z0`` and
+    ``z0 + h``, volume = shoelace area × ``h``, valid for the kernel; for a non-convex (notched) outline in a
+    tilted frame far from the origin, in either turning sense."""
+    from OCP.BRepCheck import BRepCheck_Analyzer
+
+    from fabrication.writers.step import _placed_prism
+    from ppfab.frame import Frame
+
+    outline = np.array([[0, 0], [900, 0], [900, 180], [520, 180], [520, 90], [480, 90], [480, 180], [0, 180]], float)
+    if clockwise:
+        outline = outline[::-1]
+    rng = np.random.default_rng(7)
+    ex = rng.normal(size=3)
+    ex /= np.linalg.norm(ex)
+    ey = np.cross(rng.normal(size=3), ex)
+    ey /= np.linalg.norm(ey)
+    frame = Frame(np.array([31_250.0, -18_400.0, 7_250.0]), ex, ey)
+    z0, h = -7.5, 15.0
+    solid = _placed_prism(outline, frame, z0, h, "B-U03-S00")
+    assert BRepCheck_Analyzer(solid.wrapped).IsValid() and solid.label == "B-U03-S00"
+    got = np.array([[v.X, v.Y, v.Z] for v in solid.vertices()])
+    want = np.vstack([frame.to3d(outline) + z * frame.normal for z in (z0, z0 + h)])
+    assert len(got) == len(want) == 16
+    d = np.linalg.norm(got[:, None, :] - want[None, :, :], axis=2)
+    assert d.min(axis=1).max() < 1e-6 and d.min(axis=0).max() < 1e-6
+    x, y = outline.T
+    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    assert solid.volume == pytest.approx(area * h, rel=1e-9)
+    assert len(solid.faces()) == len(outline) + 2

@@ -40,9 +40,10 @@ def strip_solids(glazing) -> list:
     out = []
     g = glazing.params.gasket_thickness
     for s in glazing.strips:
-        strip = _placed_prism(s.outline(), s.frame, 0.0, s.thickness, s.part_id)
+        outline = s.outline()
+        strip = _placed_prism(outline, s.frame, 0.0, s.thickness, s.part_id)
         strip.color = _colour("rows")
-        gasket = _placed_prism(s.outline(), s.frame, s.thickness, g, gasket_id(s.part_id))
+        gasket = _placed_prism(outline, s.frame, s.thickness, g, gasket_id(s.part_id))
         gasket.color = _colour("mesh")
         out += [strip, gasket]
     return out
