@@ -199,10 +199,12 @@ def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, 
     sn = np.linalg.svd(pl.normalize(P)[..., :3], compute_uv=False)
     span = sn[..., 2] / np.maximum(sn[..., 0], 1e-300)          # 0: the normals span a plane, the planes a line
     if np.min(span) <= min_span:
-        idx = tuple(int(k) for k in np.argwhere(span == span.min())[0])
+        bad = np.argwhere(span <= min_span)                     # the first in index order (not the smallest:
+        idx = tuple(int(k) for k in bad[0])                     # among exact zeros that is rounding noise)
+        more = f"; {len(bad) - 1} more vertices like it" if len(bad) > 1 else ""
         raise GeometryError(f"the four face planes at vertex {idx} do not meet in a single point (their normals span "
-                            f"only a plane, s₂/s₀ = {span.min():.3g}; repeated ghost faces at a boundary?)",
-                            element=f"vertex {idx}", value=float(span.min()))
+                            f"only a plane, s₂/s₀ = {span[idx]:.3g}{more}; repeated ghost faces at a boundary?)",
+                            element=f"vertex {idx}", value=float(span[idx]))
     U, s, Vt = np.linalg.svd(P)
     h = Vt[..., 3, :]                                           # null vector (x, w) of the four planes
     rel = s[..., 3] / np.maximum(s[..., 0], 1e-300)
