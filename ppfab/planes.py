@@ -151,10 +151,13 @@ def line_of_two_planes(p1: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def angle_between(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
-    """Unsigned angle in ``[0, π/2]`` between plane normals (the dihedral angle of the two planes)."""
+    """Unsigned angle in ``[0, π/2]`` between plane normals (the dihedral angle of the two planes):
+    ``atan2(|n₁ × n₂|, |n₁ · n₂|)``, accurate at every angle (``arccos`` of the dot product turns one rounding
+    near parallel planes into about 2e-8 rad)."""
     a, b = normalize(p1), normalize(p2)
     c = np.abs(np.einsum("...i,...i->...", a[..., :3], b[..., :3]))
-    return np.arccos(np.clip(c, 0.0, 1.0))
+    s = np.linalg.norm(np.cross(a[..., :3], b[..., :3]), axis=-1)
+    return np.arctan2(s, c)
 
 
 def minkowski_inner(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:

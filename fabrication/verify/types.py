@@ -7,15 +7,18 @@ read in ``data["type_dxf"]`` (:func:`type_dxf`), so the glass order check reads 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..contract import csv_value
 from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
 from ._tolerance import type_tolerance
 
+if TYPE_CHECKING:  # pragma: no cover
+    from ..writers.dxf import DXFContent
 
-def type_dxf(v: Verification, rel: str) -> Any:
+
+def type_dxf(v: Verification, rel: str) -> "DXFContent":
     """The per-type DXF ``rel`` read and checked once per verification (``check_sheet_dxf`` without a sheet):
     its content, or the exception that reading raised, raised again at every call.  Kept in
     ``data["type_dxf"]`` (relative path → content or exception)."""

@@ -82,8 +82,8 @@ class Forked:
     """``job()`` run in a forked process (``multiprocessing``), its result sent back through a pipe.
 
     The child ignores SIGINT (a Ctrl-C reaches the whole process group: the parent decides), dies on
-    SIGTERM/SIGHUP and with its parent (:func:`_die_with_parent`), and ends with ``os._exit`` (never unwinding the parent's ``with`` blocks).  :meth:`result`
-    waits for it: ``("ok", value)``, or ``("failed", why)`` when ``job`` raised or the process died first;
+    SIGTERM/SIGHUP and with its parent (:func:`_die_with_parent`), and ends with ``os._exit`` (never
+    unwinding the parent's ``with`` blocks).  :meth:`result` waits for it: ``("ok", value)``, or ``("failed", why)`` when ``job`` raised or the process died first;
     :meth:`close` terminates it if still running and joins it (call it in a ``finally``).  Used by the writers
     here and by ``ppfab verify`` (:func:`fabrication.verify.verify`)."""
 

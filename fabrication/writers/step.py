@@ -36,6 +36,7 @@ from ppfab.frame import Frame
 from ppfab.topology import FAMILY_NAMES
 
 from ..beams.plates import BeamPlate
+from ..panels.geometry import polygon_area
 from ..contract import COLOURS, FIXED_TIMESTAMP, STEP_GLASS_GROUP
 from ._step_text import canonical_styles, replace_header, step_label
 
@@ -58,9 +59,9 @@ def _placed_prism(outline: np.ndarray, frame: Frame, z0: float, height: float, l
 
     Made with the kernel directly (polygon → planar face → one prism → a location), which gives the same
     vertices and volume as build123d's ``Solid.extrude(Face(wire))`` followed by ``moved`` (checked in
-    tests/test_beams_step.py) at a quarter of the cost: build123d's face runs shape healing and ``moved`` copies the
-    solid, and a glazing.step of an 88 × 60 roof holds 21,416 of these.  The outline is made counter-clockwise
-    first, so the face's normal is the extrusion direction (the healing did that before)."""
+    tests/test_beams_step.py) at a quarter of the cost: build123d's face runs shape healing and ``moved``
+    copies the solid, and a glazing.step of an 88 × 60 roof holds 21,416 of these.  The outline is made
+    counter-clockwise first, so the face's normal is the extrusion direction (the healing did that before)."""
     from build123d import Solid
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
     from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
@@ -68,8 +69,7 @@ def _placed_prism(outline: np.ndarray, frame: Frame, z0: float, height: float, l
     from OCP.TopLoc import TopLoc_Location
 
     q = np.asarray(outline, dtype=float)
-    x, y = q.T
-    if float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) < 0:
+    if polygon_area(q) < 0:
         q = q[::-1]
     polygon = BRepBuilderAPI_MakePolygon()
     for px, py in q.tolist():
@@ -322,11 +322,7 @@ def panel_solids(corners: np.ndarray, thickness: float, ids: Iterable[str]) -> l
         ex = proj[1] - proj[0]
         ex /= np.linalg.norm(ex)
         frame = Frame(proj.mean(axis=0), ex, np.cross(nrm, ex))
-        q = frame.to2d(proj)
-        x, y = q.T
-        if 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) < 0:
-            q = q[::-1]
-        out.append(_placed_prism(q, frame, 0.0, thickness, name))
+        out.append(_placed_prism(frame.to2d(proj), frame, 0.0, thickness, name))
     return out
 
 

@@ -43,6 +43,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .. import planes as pl
 from ..errors import DesignError, GeometryError
 from ..faceimage import pp_from_curves
 from ..mesh import QuadGrid
@@ -310,8 +311,7 @@ class PlaneSplinesParams:
         a = plane_from_entry(self.u_planes[0], "u_planes[0]")
         b = plane_from_entry(self.v_planes[0], "v_planes[0]")
         sign = 1.0 if a[:3] @ b[:3] >= 0 else -1.0
-        # the angle from sine and cosine: arccos(a·b) near 0 turns one rounding of the dot product into 1.2e-6°
-        ang = float(np.degrees(np.arctan2(np.linalg.norm(np.cross(a[:3], b[:3])), abs(a[:3] @ b[:3]))))
+        ang = float(np.degrees(pl.angle_between(a, b)))
         if ang > 1e-6 or abs(a[3] - sign * b[3]) > 1e-9 * max(1.0, abs(a[3])):
             raise DesignError("v_planes[0]", f"must be the same plane as u_planes[0] (the common corner plane "
                                              f"g_0 = h_0); they differ by {ang:.3g}° and in offset by "
