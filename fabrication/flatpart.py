@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ppfab.metrics import polygon_area
+
 
 @dataclass(frozen=True, eq=False)
 class FlatPart:
@@ -47,8 +49,7 @@ class FlatPart:
 
     @property
     def area(self) -> float:
-        x, y = np.asarray(self.outline, dtype=float).T
-        return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        return float(polygon_area(self.outline))
 
 
 @dataclass(frozen=True)

@@ -279,6 +279,18 @@ def corner_angles(corners: np.ndarray) -> np.ndarray:
     return np.degrees(_angle(np.roll(c, 1, axis=-2) - c, np.roll(c, -1, axis=-2) - c))
 
 
+def polygon_area(q: np.ndarray) -> np.ndarray:
+    """Signed areas ``(...)`` of plane polygons ``(..., k, 2)`` by the shoelace formula
+    ``½ Σ (x_i y_{i+1} − x_{i+1} y_i)``: positive when the corners run counter-clockwise.
+
+    >>> float(polygon_area(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]])))
+    2.0
+    """
+    q = np.asarray(q, dtype=float)
+    x, y = q[..., 0], q[..., 1]
+    return 0.5 * (np.sum(x * np.roll(y, -1, axis=-1), axis=-1) - np.sum(y * np.roll(x, -1, axis=-1), axis=-1))
+
+
 def flipped_edges(face_planes: np.ndarray, edge_faces: np.ndarray) -> np.ndarray:
     """Interior edges whose two faces have opposite oriented normals, ``(k,)`` edge indices."""
     ef = edge_faces

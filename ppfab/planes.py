@@ -150,14 +150,22 @@ def line_of_two_planes(p1: np.ndarray, p2: np.ndarray) -> tuple[np.ndarray, np.n
     return point, direction
 
 
+def line_angle(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Unsigned angle in ``[0, π/2]`` between lines with directions ``u`` and ``w`` ``(..., 3)`` of any length:
+    ``atan2(|u × w|, |u · w|)``, accurate at every angle (``arccos`` of a normalised dot product turns one
+    rounding near parallel lines into about 2e-8 rad).  A zero direction is no line; it reads ``π/2``, the
+    worst angle, so that it cannot pass a check for small angles."""
+    u, w = np.asarray(u, dtype=float), np.asarray(w, dtype=float)
+    s = np.linalg.norm(np.cross(u, w), axis=-1)
+    c = np.abs(np.einsum("...i,...i->...", u, w))
+    degenerate = (np.linalg.norm(u, axis=-1) == 0) | (np.linalg.norm(w, axis=-1) == 0)
+    return np.where(degenerate, np.pi / 2, np.arctan2(s, c))
+
+
 def angle_between(p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
-    """Unsigned angle in ``[0, π/2]`` between plane normals (the dihedral angle of the two planes):
-    ``atan2(|n₁ × n₂|, |n₁ · n₂|)``, accurate at every angle (``arccos`` of the dot product turns one rounding
-    near parallel planes into about 2e-8 rad)."""
-    a, b = normalize(p1), normalize(p2)
-    c = np.abs(np.einsum("...i,...i->...", a[..., :3], b[..., :3]))
-    s = np.linalg.norm(np.cross(a[..., :3], b[..., :3]), axis=-1)
-    return np.arctan2(s, c)
+    """Unsigned angle in ``[0, π/2]`` between plane normals (the dihedral angle of the two planes), by
+    :func:`line_angle` of the normals; a plane with a zero normal raises (:func:`normalize`)."""
+    return line_angle(normalize(p1)[..., :3], normalize(p2)[..., :3])
 
 
 def minkowski_inner(x1: np.ndarray, x2: np.ndarray) -> np.ndarray:

@@ -93,3 +93,29 @@ def test_radical_plane_of_spheres_is_bisector_for_points():
     pt = np.array([x, np.sqrt(s1[3] ** 2 - x * x), 0])
     gp = pl.sphere_to_plane_coordinates(s1) - pl.sphere_to_plane_coordinates(s2)
     assert abs(pl.evaluate(gp, pt)) < 1e-12
+
+
+def test_line_angle_matches_a_rotation_at_every_angle_and_reads_zero_directions_as_worst():
+    """Directions built at a known angle θ by rotating ``u`` about a perpendicular axis (rotation formula,
+    independent of the function): ``line_angle`` reads ``min(θ, π − θ)`` to 1e-15 rad even at θ = 1e-9,
+    where ``arccos`` of the normalised dot product is off by more than the angle itself."""
+    rng = np.random.default_rng(7)
+    for theta in (0.0, 1e-12, 1e-9, 1e-4, 0.3, np.pi / 2, 2.0, np.pi - 1e-9):
+        u = rng.normal(size=3)
+        k = np.cross(u, rng.normal(size=3))
+        k /= np.linalg.norm(k)
+        w = u * np.cos(theta) + np.cross(k, u) * np.sin(theta)             # Rodrigues, k ⟂ u
+        expect = min(theta, np.pi - theta)
+        got = float(pl.line_angle(u, 3.7 * w))
+        assert abs(got - expect) < 1e-15 + 1e-13 * expect, (theta, got)
+    near = float(np.arccos(np.clip(np.dot([1.0, 0, 0], [np.cos(1e-9), np.sin(1e-9), 0]), -1, 1)))
+    assert abs(near - 1e-9) >= 1e-9                                         # arccos reads 0: why it is not used
+    assert np.allclose(pl.line_angle(np.zeros((2, 3)), np.eye(3)[:2]), np.pi / 2)
+    batch = pl.line_angle(np.eye(3)[None, :, :], np.array([[[1.0, 1, 0], [0, 1, 0], [0, 0, -2]]]))
+    assert batch.shape == (1, 3) and np.allclose(batch, [[np.pi / 4, 0, 0]])
+
+
+def test_angle_between_planes_still_refuses_a_zero_normal():
+    with pytest.raises(GeometryError):
+        pl.angle_between(np.array([0.0, 0, 0, 1]), np.array([0.0, 0, 1, 0]))
+    assert np.isclose(float(pl.angle_between(np.array([0.0, 0, 2, 1]), np.array([0.0, 1, 1, 0]))), np.pi / 4)

@@ -13,6 +13,7 @@ import numpy as np
 from shapely.geometry import LineString, Polygon
 
 from fabrication.flatpart import FlatPart
+from ppfab.metrics import polygon_area
 
 from .plates import BeamPlate
 
@@ -53,8 +54,7 @@ def congruence_key(outline: np.ndarray, mirror: bool = True, grid: float = 0.1) 
     keys = []
     for sx, sy in ((1, 1), (-1, -1)) + (((-1, 1), (1, -1)) if mirror else ()):
         q = base * np.array([sx, sy])
-        x, y = q.T
-        if np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) < 0:
+        if polygon_area(q) < 0:
             q = q[::-1]
         keys.append(_signature(q, grid))
     return min(keys)

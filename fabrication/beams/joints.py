@@ -32,6 +32,7 @@ from shapely.ops import unary_union
 from shapely.validation import explain_validity
 
 from ppfab import planes as pl
+from ppfab.metrics import polygon_area
 from ppfab.support.structure import SupportStructure
 
 from .joint_types import get_joint_type
@@ -173,9 +174,7 @@ def _clean(coords: np.ndarray) -> np.ndarray:
     cross = (q[:, 0] - prev[:, 0]) * (nxt[:, 1] - q[:, 1]) - (q[:, 1] - prev[:, 1]) * (nxt[:, 0] - q[:, 0])
     span = np.linalg.norm(nxt - prev, axis=1)
     q = q[np.abs(cross) > 1e-9 * np.maximum(span, 1.0)]
-    x, y = q.T
-    area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-    return q if area > 0 else q[::-1]
+    return q if polygon_area(q) > 0 else q[::-1]
 
 
 def _single(geom, plate: BeamPlate, stage: str, defects: list[Defect]) -> Polygon | None:

@@ -28,6 +28,7 @@ import numpy as np
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
 from ppfab.frame import Frame
+from ppfab.metrics import polygon_area
 from ppfab.support.structure import SupportStructure
 
 from .. import contract
@@ -64,7 +65,7 @@ class Slot:
         w = 0.5 * self.width
         pts = np.array([self.origin + a0 * s - w * t, self.origin + a1 * s - w * t,
                         self.origin + a1 * s + w * t, self.origin + a0 * s + w * t])
-        return pts if _signed_area(pts) > 0 else pts[::-1]
+        return pts if polygon_area(pts) > 0 else pts[::-1]
 
     def inner_corners(self) -> np.ndarray:
         """``(2, 2)`` the corners of the slot's closed end (where the mating plate's edge seats)."""
@@ -154,7 +155,7 @@ class BeamPlate:
     @property
     def area(self) -> float:
         """Area of the final outline, mm²."""
-        return _signed_area(self.outline)
+        return float(polygon_area(self.outline))
 
     def node_top(self, vertex: int) -> np.ndarray:
         """Top point (2D) of a node of this plate."""
@@ -179,13 +180,8 @@ class BeamPlate:
         return b / np.linalg.norm(b)
 
 
-def _signed_area(p: np.ndarray) -> float:
-    x, y = np.asarray(p, dtype=float).T
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-
-
 def _ccw(p: np.ndarray) -> np.ndarray:
-    return p if _signed_area(p) >= 0 else p[::-1]
+    return p if polygon_area(p) >= 0 else p[::-1]
 
 
 # -- naming ------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from ppfab.metrics import polygon_area
 from ppfab.topology import FAMILY_NAMES
 
 from .cutlist import cut_bars
@@ -68,8 +69,7 @@ def splice_rows(glazing, beams) -> list[dict]:
     width = max(4, len(str(len(glazing.splices))))
     for k, s in enumerate(glazing.splices):
         w, h = np.ptp(s.flat_outline, axis=0)
-        x, y = s.flat_outline.T
-        gross = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))   # the parallelogram
+        gross = abs(float(polygon_area(s.flat_outline)))                   # the parallelogram
         net = gross - len(s.holes) * math.pi * 0.25 * s.hole ** 2
         for side, pid in zip("AB", s.part_ids):
             rows.append({

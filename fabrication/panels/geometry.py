@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ppfab import planes as pl
+from ppfab.metrics import polygon_area as polygon_area   # signed shoelace areas, (F, k, 2) → (F,)
 
 
 def oriented_planes(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -42,12 +43,6 @@ def oriented_planes(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ref = np.cross(c[..., 2 % k, :] - c[..., 0, :], c[..., 3 % k, :] - c[..., 1, :])
     sign = np.where(np.einsum("...i,...i->...", planes[..., :3], ref) < 0, -1.0, 1.0)
     return planes * sign[..., None], deviation
-
-
-def polygon_area(q: np.ndarray) -> np.ndarray:
-    """Signed areas ``(F,)`` of polygons ``(F, k, 2)`` (shoelace; positive = counter-clockwise)."""
-    x, y = q[..., 0], q[..., 1]
-    return 0.5 * (np.sum(x * np.roll(y, -1, axis=-1), axis=-1) - np.sum(y * np.roll(x, -1, axis=-1), axis=-1))
 
 
 def edge_vectors(q: np.ndarray) -> np.ndarray:

@@ -127,9 +127,7 @@ def figures(v: np.ndarray, axes: np.ndarray | None, families: tuple[str, ...], c
     if min(w.shape[:2]) >= 3:
         tr = w[2:, 1:-1] - w[:-2, 1:-1]
         tc = w[1:-1, 2:] - w[1:-1, :-2]
-        cos = np.einsum("...i,...i", tr, tc) / np.maximum(np.linalg.norm(tr, axis=-1) * np.linalg.norm(tc, axis=-1),
-                                                          1e-300)
-        ang = np.degrees(np.arccos(np.clip(np.abs(cos), 0.0, 1.0)))
+        ang = np.degrees(pl.line_angle(tr, tc))
         node = (float(ang.min()), float(ang.max()))
     else:
         node = (math.nan, math.nan)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ppfab.metrics import polygon_area
+
 
 def inset_face_2d(corners: np.ndarray, delta: float) -> np.ndarray:
     """Independent reference for a panel: the face ``(4, 3)`` in its own plane, counter-clockwise,
@@ -11,8 +13,7 @@ def inset_face_2d(corners: np.ndarray, delta: float) -> np.ndarray:
     c = corners - corners.mean(axis=0)
     _, _, vt = np.linalg.svd(c)
     p = c @ vt[:2].T
-    x, y = p[:, 0], p[:, 1]
-    if np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) < 0:
+    if polygon_area(p) < 0:
         p = p[::-1]
     e = np.roll(p, -1, axis=0) - p
     n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1)[:, None]

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ppfab.metrics import polygon_area
+
 from ..contract import ORDER_COLUMNS, ORDER_CORNERS, ORDER_SHAPE_COLUMNS, csv_value
 from ..glassorder import reference_frame
 from . import Verification, check, read_csv
@@ -95,8 +97,7 @@ def check_glass_order(v: Verification) -> None:
             v.error(rel, tid, "edge lengths or diagonals do not match the corners")
         if abs(angles.sum() - 180.0 * (n - 2)) > 0.01:
             v.error(rel, tid, f"corner angles sum to {angles.sum():.4f}°, not {180 * (n - 2)}°")
-        x, y = c.T
-        area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        area = float(polygon_area(c))
         if abs(area - float(row["area_mm2"])) > 1e-4 * abs(area) + 1.0:
             v.error(rel, tid, f"corners enclose {area:.1f} mm², area_mm2 is {row['area_mm2']}")
         first = parts.get(members[0]) if members else None

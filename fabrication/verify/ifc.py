@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from ppfab.metrics import polygon_area
+
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
 from ._solids import check_names, check_part_solid, same_value
@@ -38,8 +40,7 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
     top = local.copy()
     top[:, :3] += s.Depth * (pos[:3, :3] @ direction)
     world = np.concatenate([local, top]) @ m.T
-    x, y = q.T
-    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    area = abs(float(polygon_area(q)))
     height = s.Depth * abs(float(direction[2]))
     return world[:, :3], area * height
 

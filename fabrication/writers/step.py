@@ -36,7 +36,7 @@ from ppfab.frame import Frame
 from ppfab.topology import FAMILY_NAMES
 
 from ..beams.plates import BeamPlate
-from ..panels.geometry import polygon_area
+from ppfab.metrics import polygon_area
 from ..contract import COLOURS, FIXED_TIMESTAMP, STEP_GLASS_GROUP
 from ._step_text import canonical_styles, replace_header, step_label
 

@@ -204,7 +204,7 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
     """
     eps = Frame.from_axes(eps_origin, eps_axes, "eps_axes")
     phi = Frame.from_axes(phi_origin, phi_axes, "phi_axes")
-    ang = float(np.degrees(np.arccos(np.clip(abs(eps.normal @ phi.normal), 0.0, 1.0))))
+    ang = float(np.degrees(pl.line_angle(eps.normal, phi.normal)))
     if abs(90.0 - ang) > angle_tolerance_deg:
         raise DesignError("phi_axes", f"planes eps and phi are not orthogonal: they meet at {ang:.4g}° "
                                       f"(needs 90° ± {angle_tolerance_deg:g}°)")
@@ -228,7 +228,7 @@ def profile_surface(c_points, d_points, fit: str = "interpolate",
     signs = []
     for curve, t, key in ((c, u0, "c_points"), (d, v0, "d_points")):
         m = curve.unit_normal(np.array([t]))[0]
-        dev = float(np.degrees(np.arccos(np.clip(abs(m @ line), 0.0, 1.0))))
+        dev = float(np.degrees(pl.line_angle(m, line)))
         if dev > angle_tolerance_deg:
             raise DesignError(key, f"curve {curve.name} has no common normal with the other curve at the common "
                                    f"point: its normal there makes {dev:.4g}° with the line eps∩phi (its tangent must "

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import planes as pl
 from ..metrics import CreaseReport
 from ..topology import Polyline
 
@@ -66,9 +67,7 @@ def axis_normal_angles(v: np.ndarray, faces: np.ndarray, planes: np.ndarray, lin
     vn = np.zeros_like(v)
     np.add.at(vn, faces.ravel(), np.repeat(fn, 4, axis=0))
     nv = vn[vid]
-    den = np.linalg.norm(axis, axis=1) * np.linalg.norm(nv, axis=1)
-    cos = np.abs(np.einsum("ij,ij->i", axis, nv)) / np.where(den > 0, den, 1.0)
-    return np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
+    return np.degrees(pl.line_angle(axis, nv))
 
 
 @dataclass(frozen=True)

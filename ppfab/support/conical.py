@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ppfab import planes as pl
 from ppfab.conical.cones import cone_axes, vertex_face_normals
 from ppfab.errors import GeometryError
 from ppfab.mesh import QuadGrid, QuadMesh
@@ -63,8 +64,7 @@ def conical_axis_residual(mesh: QuadMesh, axes: np.ndarray) -> np.ndarray:
     """``(N,)`` spread ``max_k − min_k`` of the angles between the axis and the adjacent unit face
     normals, radians; ``nan`` at vertices with fewer than 3 faces.  Zero for cone axes of a conical mesh."""
     fn, mask = vertex_face_normals(mesh)
-    c = np.einsum("nki,ni->nk", fn, np.asarray(axes, dtype=float))
-    ang = np.arccos(np.clip(np.abs(c), 0.0, 1.0))
+    ang = pl.line_angle(fn, np.asarray(axes, dtype=float)[:, None, :])
     hi = np.where(mask, ang, -np.inf).max(axis=1)
     lo = np.where(mask, ang, np.inf).min(axis=1)
     out = hi - lo

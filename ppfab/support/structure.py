@@ -118,8 +118,7 @@ class SupportStructure:
     def normal_angle_deg(self) -> np.ndarray:
         """``(N,)`` angle between each node axis and the surface normal at its vertex, degrees (0…90; the
         normal taken as a line, :func:`vertex_normals`)."""
-        c = np.abs(np.einsum("ij,ij->i", self.axes, vertex_normals(self.mesh)))
-        return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
+        return np.degrees(pl.line_angle(self.axes, vertex_normals(self.mesh)))
 
     def torsion_offset(self, depth: float) -> np.ndarray:
         """``(E,)`` how far (mesh units) the axis at one end of an edge, followed for ``depth``,
