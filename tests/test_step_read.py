@@ -132,3 +132,25 @@ def test_reader_places_a_solid_by_the_locations_of_the_assemblies_above_it(tmp_p
     got = np.array([tuple(p) for p in solid.solid.vertices()])
     assert len(got) == 8
     assert max(np.linalg.norm(want - g, axis=1).min() for g in got) <= 1e-9
+
+
+def test_the_kernel_floor_benchmark_reads_every_solid_and_touches_nothing(built):
+    """``benchmarks/step_floor.py`` times the kernel's plain reader and writer on each STEP file: the plain
+    reader must see exactly the solids the self-check's reader sees (else the floor would be of another
+    file), every file of the build must be measured, and the build's files must be byte-identical after."""
+    import hashlib
+    import importlib.util
+
+    from conftest import REPO
+
+    spec = importlib.util.spec_from_file_location("step_floor", REPO / "benchmarks" / "step_floor.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    steps = sorted(p.name for p in built.glob("*.step"))
+    before = {n: hashlib.sha256((built / n).read_bytes()).hexdigest() for n in steps}
+    rows = mod.measure(built, 1)
+    assert sorted(r["file"] for r in rows) == steps
+    for r in rows:
+        assert r["solids"] == r["ppfab_solids"] == len(read_step_solids(built / r["file"])) > 0, r
+        assert r["read"] > 0 and r["write"] > 0 and r["ppfab"] > 0
+    assert {n: hashlib.sha256((built / n).read_bytes()).hexdigest() for n in steps} == before
