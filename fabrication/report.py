@@ -1,7 +1,7 @@
 """``report.html``: one self-contained page a fabricator can read offline.
 
 Sections: summary (size, counts, areas, weights, lengths, sheets and
-utilisation against the area lower bound), quality (δ_f, δ_P, panel
+utilisation against a lower bound of the sheets), quality (δ_f, δ_P, panel
 deviation in mm, torsion, conical residual, panels above tolerance), figures
 (3D structure, histograms), drawings for installers (key plan, elevations, node sheets, node types, kerf
 notes), cutting sheets (inline SVG with part labels), and
@@ -174,9 +174,9 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
         ("glass weight", f"{s.glass_weight_kg / 1000:.2f} t"),
         ("total beam length", f"{s.beam_length_m:.1f} m"),
         ("plate area / weight", f"{s.plate_area_m2:.1f} m² / {s.beam_mass_kg / 1000:.2f} t"),
-        ("glass sheets (utilisation; area lower bound)",
+        ("glass sheets (utilisation; lower bound)",
          f"{s.glass_sheets} ({100 * s.glass_utilisation:.1f} %; ≥ {s.glass_lower_bound})"),
-        ("plate sheets (utilisation; area lower bound)",
+        ("plate sheets (utilisation; lower bound)",
          f"{s.plate_sheets} ({100 * s.plate_utilisation:.1f} %; ≥ {s.plate_lower_bound})"),
     ])
 

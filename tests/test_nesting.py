@@ -203,3 +203,42 @@ def test_params_validation():
         parse_params(NestingParams, {"spaceing": 3}, "nesting")
     with pytest.raises(DesignError, match="nesting.mode"):
         parse_params(NestingParams, {"mode": "fast"}, "nesting")
+
+
+def test_the_lower_bound_counts_half_the_spacing_around_every_part_and_is_met_by_a_grid():
+    """100 squares of 100 mm, 10 mm apart, on 1000 × 1000 sheets: a 9 × 9 grid (9·100 + 8·10 = 980 mm) holds 81,
+    so 2 sheets are needed and enough.  The plain area bound says 1; grown by 5 mm each square covers
+    100² + 5·400 + 25π = 12,078.5 mm² of (1000 + 10)² per sheet: 100 of them need 1.18 sheets, so the bound
+    is 2, and the nesting meets it."""
+    sq = np.array([[0.0, 0], [100, 0], [100, 100], [0, 100]])
+    parts = [FlatPart(f"Q{i:03d}", "panel", sq + i) for i in range(100)]
+    params = NestingParams(sheet=[1000.0, 1000.0], spacing=10.0, margin=0.0, time_budget=1.0, mode="rectangles")
+    assert int(np.ceil(sum(p.area for p in parts) / 1e6)) == 1
+    assert lower_bound(parts, params) == 2
+    res = nest(parts, params)
+    verify_nesting(parts, res, params)
+    assert res.sheets == res.lower_bound == 2
+    # a trim shrinks the usable area: 1000 − 2·150 = 700 mm leaves 710² per sheet for the grown squares
+    assert lower_bound(parts, replace(params, margin=150.0)) == int(np.ceil(100 * 12078.5398 / 710 ** 2)) == 3
+
+
+def test_grown_area_is_steiners_formula_and_never_above_the_true_grown_area():
+    """Convex: ``A + r·P + π r²`` against a fine buffer.  Non-convex (an L of six corners, one reflex): the true
+    grown area is the L's area, plus ``r`` times its perimeter, plus a quarter disc at each of the five convex
+    corners, minus the ``r × r`` square the two offset edges at the reflex corner would count twice; the value
+    may be below it by the chords of the arcs only."""
+    from fabrication.nesting.result import grown_area
+
+    r = 5.0
+    quad = np.array([[0.0, 0], [1300, 40], [1250, 1500], [-30, 1460]])
+    per = np.linalg.norm(np.roll(quad, -1, axis=0) - quad, axis=1).sum()
+    from shapely.geometry import Polygon
+
+    steiner = Polygon(quad).area + r * per + np.pi * r * r
+    assert grown_area(quad, r) == pytest.approx(steiner, rel=1e-12)
+    assert Polygon(quad).buffer(r, quad_segs=256).area == pytest.approx(steiner, abs=0.01)
+    ell = np.array([[0.0, 0], [1000, 0], [1000, 400], [400, 400], [400, 1000], [0, 1000]])
+    true = 640_000 + r * 4000 + 5 * np.pi * r * r / 4 - r * r
+    got = grown_area(ell, r)
+    assert true - 0.5 <= got <= true
+    assert grown_area(ell, 0.0) == 640_000

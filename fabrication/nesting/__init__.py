@@ -2,9 +2,9 @@
 
 >>> from fabrication.nesting import NestingParams, nest, verify_nesting   # doctest: +SKIP
 
-:func:`nest` returns a :class:`Nesting` (placements with unique nest tags ``S03-017``,
-sheets used, utilisation, area lower bound); :func:`verify_nesting` re-checks any nesting
-with shapely and raises :class:`~ppfab.errors.NestingError` naming the part at fault.
+:func:`nest` returns a :class:`Nesting` (placements with unique nest tags ``S03-017``, sheets used,
+utilisation, a lower bound of the sheets from the parts grown by half the spacing); :func:`verify_nesting`
+re-checks any nesting with shapely and raises :class:`~ppfab.errors.NestingError` naming the part at fault.
 """
 
 from .budget import UNITS_PER_SECOND

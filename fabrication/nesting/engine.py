@@ -14,7 +14,6 @@ when it starts.  A result depends on the parts, the parameters, the seed and tha
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Callable
 
@@ -27,7 +26,7 @@ from .budget import COST_PART, COST_POSE, COST_VERIFY_PART, UNITS_PER_SECOND, Wo
 from .catalog import Catalog, build_catalog
 from .params import NestingParams
 from .registry import Run, get_strategy, rank_of
-from .result import Nesting
+from .result import Nesting, lower_bound
 from .rows import Sheet
 from .search import first_solution, improve
 
@@ -80,7 +79,7 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None,
     Returns
     -------
     Nesting : one placement per part (in the order given), the number of sheets, the
-        utilisation (part area / area of the sheets used), the area lower bound, and the work
+        utilisation (part area / area of the sheets used), a lower bound of the sheets (:func:`~.result.lower_bound`), and the work
         count spent (``work_units``) out of the budget (``work_budget``)
 
     Raises
@@ -100,8 +99,7 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None,
     cat = build_catalog(parts, p)
     fixed.add(COST_PART * cat.n_parts + COST_POSE * len(cat.orients) + COST_VERIFY_PART * cat.n_parts)
     total = float(cat.part_area.sum())
-    x0, y0, x1, y1 = p.usable()
-    lb_usable = int(math.ceil(total / ((x1 - x0) * (y1 - y0)) - 1e-12))
+    lb = lower_bound(parts, p)
     runs = strategy.runs(cat, p)
     spent = fixed.units
     best = None
@@ -118,7 +116,7 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None,
         units = share * max(budget - spent, 0.0)
         if best is not None and run.floor is not None and run.floor(cat) > units:
             continue                    # cannot pay even its cheapest first solution: left out
-        sheets, work, history = _solve(cat, run, units, p.seed, k, lb_usable, meter if on_progress else None)
+        sheets, work, history = _solve(cat, run, units, p.seed, k, lb, meter if on_progress else None)
         spent += work.units
         key = (len(sheets), rank_of(run.mode))
         if best is None or key < best[0]:
@@ -134,7 +132,7 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None,
         placements=placements,
         sheets=len(sheets),
         utilisation=total / (len(sheets) * sheet_area),
-        lower_bound=int(math.ceil(total / sheet_area - 1e-12)),
+        lower_bound=lb,
         mode=mode,
         sheet_size=(float(p.sheet[0]), float(p.sheet[1])),
         usable=p.usable(),

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ppfab.errors import NestingError
+from ppfab.metrics import polygon_area
 
 from ..flatpart import FlatPart, Placement, place_points
 from .params import NestingParams
@@ -22,7 +23,7 @@ class Nesting:
     placements : one per part, in the order of the parts given
     sheets : number of sheets used
     utilisation : part area / area of the sheets used (whole sheets)
-    lower_bound : ``ceil(Σ part area / sheet area)``
+    lower_bound : no layout uses fewer sheets (:func:`lower_bound`: the parts grown by half the spacing)
     mode : the strategy that produced this result (``"rectangles"``, ``"guillotine"`` or ``"irregular"``)
     sheet_fill : (sheets,) part area / sheet area per sheet
     work_units : the work count spent (:mod:`.budget`): with the same parts, parameters and seed, a
@@ -133,10 +134,37 @@ def verify_nesting(parts: list[FlatPart], nesting: Nesting, params: NestingParam
                                    f"{d:.4g} mm apart, spacing is {s:g} mm")
 
 
+def grown_area(outline: np.ndarray, r: float) -> float:
+    """Area of the polygon ``outline`` ``(k, 2)`` grown by ``r ≥ 0`` (its Minkowski sum with a disk of radius
+    ``r``): Steiner's formula ``A + r·P + π r²`` when it is convex; otherwise shapely's buffer, whose round
+    corners are chords of their arcs, so the value never exceeds the true grown area."""
+    q = np.asarray(outline, dtype=float)
+    area = abs(float(polygon_area(q)))
+    if r <= 0:
+        return area
+    e_in, e_out = q - np.roll(q, 1, axis=0), np.roll(q, -1, axis=0) - q
+    turn = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
+    if np.all(turn >= 0) or np.all(turn <= 0):
+        return area + r * float(np.linalg.norm(e_out, axis=1).sum()) + math.pi * r * r
+    from shapely.geometry import Polygon
+
+    return float(Polygon(q).buffer(r, quad_segs=16).area)
+
+
 def lower_bound(parts: list[FlatPart], params: NestingParams) -> int:
-    """``ceil(Σ part area / sheet area)`` — no nesting can use fewer sheets."""
-    total = float(sum(p.area for p in parts))
-    return int(math.ceil(total / (params.sheet[0] * params.sheet[1]) - 1e-12)) if total > 0 else 0
+    """No layout of ``parts`` uses fewer sheets: ``ceil(Σ grown area / ((W + s)(H + s)))``.
+
+    Parts at least the spacing ``s`` apart stay disjoint when each grows by ``s/2`` (:func:`grown_area`), and a
+    part inside the usable ``W × H`` of a sheet (after the trim) grows into that rectangle grown by ``s/2`` on
+    every side; so the grown parts of one sheet fit disjointly in ``(W + s)(H + s)``.  With ``s = 0`` and no
+    trim this is the plain area bound ``ceil(Σ area / sheet area)``; spacing and trim only raise it.
+    """
+    if not parts:
+        return 0
+    s = float(params.spacing)
+    x0, y0, x1, y1 = params.usable()
+    total = float(sum(grown_area(p.outline, 0.5 * s) for p in parts))
+    return int(math.ceil(total / ((x1 - x0 + s) * (y1 - y0 + s)) - 1e-9))
 
 
-__all__ = ["Nesting", "verify_nesting", "placed_outline", "lower_bound"]
+__all__ = ["Nesting", "verify_nesting", "placed_outline", "lower_bound", "grown_area"]
