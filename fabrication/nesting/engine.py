@@ -79,8 +79,9 @@ def nest(parts: list[FlatPart], params: NestingParams | None = None,
     Returns
     -------
     Nesting : one placement per part (in the order given), the number of sheets, the
-        utilisation (part area / area of the sheets used), a lower bound of the sheets (:func:`~.result.lower_bound`), and the work
-        count spent (``work_units``) out of the budget (``work_budget``)
+        utilisation (part area / area of the sheets used), a lower bound of the sheets
+        (:func:`~.result.lower_bound`), and the work count spent (``work_units``) out of the budget
+        (``work_budget``)
 
     Raises
     ------
