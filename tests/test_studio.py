@@ -153,7 +153,20 @@ def test_figures_against_independent_formulas(default):
     tri = 0.5 * (np.linalg.norm(np.cross(c[..., 1, :] - c[..., 0, :], c[..., 2, :] - c[..., 0, :]), axis=-1) +
                  np.linalg.norm(np.cross(c[..., 2, :] - c[..., 0, :], c[..., 3, :] - c[..., 0, :]), axis=-1))
     assert f.glass_area_m2 == pytest.approx(tri.sum() / 1e6, rel=1e-9)
-    assert f.glass_sheets_min == math.ceil(tri.sum() / (5980.0 * 3190.0))
+    # the bound a nesting of the real panes reports: make_panels insets every face, lower_bound grows the panes
+    from fabrication.design import load_design
+    from fabrication.nesting import lower_bound
+    from fabrication.panels import make_panels
+
+    d = load_design(None)
+    panes = [p.flat_part() for p in make_panels(st.placed, d.section("panels"))]
+    assert f.glass_sheets_min == lower_bound(panes, d.section("nesting"))
+    from fabrication.nesting.result import grown_area
+    from fabrication.studio.figures import grown_pane_areas
+
+    assert grown_pane_areas(c, 10.0, d.section("panels").gap) == pytest.approx(
+        [grown_area(p.outline, 5.0) for p in panes], rel=1e-9)                # closed form = the real panes
+    assert f.glass_sheets_min >= math.ceil(sum(p.area for p in panes) / (6000.0 * 3210.0))
     assert f.beams == (m + 1) + (n + 1)
     lengths = np.linalg.norm(np.diff(v, axis=1), axis=-1).sum() + np.linalg.norm(np.diff(v, axis=0), axis=-1).sum()
     assert f.beam_length_m == pytest.approx(lengths / 1000.0, rel=1e-12)

@@ -7,7 +7,9 @@ All lengths in mm (the placed mesh), angles in degrees.  For a grid ``v (m+1, n+
 * panel area ``A = ½ |d₁ × d₂|`` (the diagonals ``d₁ = c₂ − c₀``, ``d₂ = c₃ − c₁``; exact for a planar quad);
 * the smallest rectangle around a panel has a side along one of its edges (rotating calipers), so the
   sheet it needs is the least-area of the four edge-aligned boxes in the panel's plane;
-* glass sheets: at least ``⌈Σ A / ((W − 2 margin)(H − 2 margin))⌉`` (an area bound, no nesting);
+* glass sheets: at least :func:`sheets_lower_bound` — the panes (faces inset by half the panel gap) grown by
+  half the nesting spacing, over the trimmed sheet grown alike: the bound a nesting reports
+  (:func:`fabrication.nesting.lower_bound`), from the faces alone;
 * beams: the polylines of the planar families, their length ``Σ |v_{k+1} − v_k|`` and pieces
   ``Σ ⌈L / max_length⌉``;
 * torsion: the largest distance of a node axis's end ``v + depth · a`` from the plane of a beam through
@@ -25,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ppfab import planes as pl
-from ppfab.metrics import corner_angles
+from ppfab.metrics import corner_angles, nonconvex_faces
 
 
 @dataclass(frozen=True)
@@ -100,14 +102,47 @@ def _polylines(v: np.ndarray, family: str, closed: bool) -> np.ndarray:
     return np.swapaxes(v, 0, 1)
 
 
+def grown_pane_areas(corners: np.ndarray, spacing: float, gap: float) -> np.ndarray:
+    """``(F,)`` area of each pane of the planar quads ``corners (F, 4, 3)`` grown by half the ``spacing``.
+
+    A pane is its face with every edge moved inward by ``d = gap/2``; for a convex quad with perimeter ``P``,
+    area ``A`` and interior angles ``θ_i`` that is the inner parallel polygon, ``A' = A − dP + d² Σ cot(θ_i/2)``
+    and ``P' = P − 2d Σ cot(θ_i/2)``.  Grown by ``r = spacing/2`` (Steiner) it covers ``A' + rP' + πr²``.  A
+    non-convex face (or one the inset would close) gives 0, which keeps a sum of these a lower bound.
+    """
+    c = np.asarray(corners, dtype=float).reshape(-1, 4, 3)
+    if len(c) == 0:
+        return np.zeros(0)
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=-1)
+    per = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=-1).sum(axis=1)
+    cot = 1.0 / np.tan(0.5 * np.radians(corner_angles(c)))
+    d, r = 0.5 * gap, 0.5 * spacing
+    pane_area = area - d * per + d * d * cot.sum(axis=1)
+    pane_per = per - 2.0 * d * cot.sum(axis=1)
+    grown = pane_area + r * pane_per + math.pi * r * r
+    keep = ~nonconvex_faces(c) & (pane_per > 0) & (pane_area > 0)
+    return np.where(keep, grown, 0.0)
+
+
+def sheets_lower_bound(corners: np.ndarray, usable: tuple[float, float], spacing: float, gap: float) -> int:
+    """No nesting of the panes of the planar quads ``corners (..., 4, 3)`` on sheets of usable size ``usable``
+    (after the trim) with ``spacing`` between parts uses fewer sheets: the grown panes
+    (:func:`grown_pane_areas`) of a sheet fit disjointly in ``(W + spacing)(H + spacing)``."""
+    total = float(grown_pane_areas(corners, spacing, gap).sum())
+    return int(math.ceil(total / ((usable[0] + spacing) * (usable[1] + spacing)) - 1e-9)) if total > 0 else 0
+
+
 def figures(v: np.ndarray, axes: np.ndarray | None, families: tuple[str, ...], closed: bool,
-            sheet: tuple[float, float], margin: float, depth: float, max_length: float) -> Figures:
-    """The figures of a placed grid ``v (m+1, n+1, 3)`` (mm) with unit node axes ``(m+1, n+1, 3)`` (or ``None``)."""
+            sheet: tuple[float, float], usable: tuple[float, float], depth: float, max_length: float,
+            spacing: float = 10.0, gap: float = 10.0) -> Figures:
+    """The figures of a placed grid ``v (m+1, n+1, 3)`` (mm) with unit node axes ``(m+1, n+1, 3)`` (or ``None``);
+    ``sheet`` is the stock sheet, ``usable`` its size after the trim, ``spacing`` the nesting's distance between
+    parts and ``gap`` the joint between panels (mm)."""
     corners = face_corners(v, closed)
     area = 0.5 * np.linalg.norm(np.cross(corners[..., 2, :] - corners[..., 0, :],
                                          corners[..., 3, :] - corners[..., 1, :]), axis=-1)
     boxes = panel_boxes(corners).reshape(-1, 2)
-    W, H = max(sheet) - 2 * margin, min(sheet) - 2 * margin
+    W, H = max(usable), min(usable)
     over = int(np.sum((boxes[:, 0] > W) | (boxes[:, 1] > H)))
     largest = boxes[int(np.argmax(boxes[:, 0] * boxes[:, 1]))]
     beams = pieces = 0
@@ -131,10 +166,10 @@ def figures(v: np.ndarray, axes: np.ndarray | None, families: tuple[str, ...], c
         node = (float(ang.min()), float(ang.max()))
     else:
         node = (math.nan, math.nan)
-    usable = max(W, 1e-9) * max(H, 1e-9)
+    sheets_min = sheets_lower_bound(corners, (max(W, 1e-9), max(H, 1e-9)), spacing, gap)
     return Figures(
         panels=int(area.size), panel_types=int(panel_types(corners).max()) + 1,
         largest_panel_mm=(float(largest[0]), float(largest[1])), sheet_mm=(float(max(sheet)), float(min(sheet))),
         panels_over_sheet=over, min_corner_deg=float(corner_angles(corners).min()),
-        glass_area_m2=float(area.sum()) / 1e6, glass_sheets_min=int(math.ceil(float(area.sum()) / usable)),
+        glass_area_m2=float(area.sum()) / 1e6, glass_sheets_min=sheets_min,
         beams=beams, beam_length_m=length / 1000.0, beam_pieces=pieces, torsion_mm=torsion, node_angle_deg=node)

@@ -89,6 +89,9 @@ def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = N
     from ppfab.schema import parse_params
     from ppfab.transforms.similarity import transform
 
+    from ..nesting.params import NestingParams
+    from ..panels.params import PanelParams
+
     t0 = time.perf_counter() if t0 is None else t0
     spec = parse_params(GeometrySpec, dict(_section(doc, "geometry")), "geometry")
     if not isinstance(raw, QuadGrid):
@@ -101,10 +104,14 @@ def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = N
     for fam in families:
         lines = placed.rows() if fam == "rows" else placed.cols()
         delta[fam] = float(polyline_planarity(lines).max()) if lines.shape[1] >= 3 else 0.0
-    nest, beams = _section(doc, "nesting"), _section(doc, "beams")
+    nest = parse_params(NestingParams, dict(_section(doc, "nesting")), "nesting")
+    gap = parse_params(PanelParams, dict(_section(doc, "panels")), "panels").gap
+    beams = _section(doc, "beams")
+    x0, y0, x1, y1 = nest.usable()
     figs = figures(placed.vertices, placed.axes, families, placed.closed,
-                   tuple(nest.get("sheet", [6000.0, 3210.0])), float(nest.get("margin", 10.0)),
-                   float(beams.get("depth", 200.0)), float(beams.get("max_length", 0.0) or 0.0))
+                   (float(nest.sheet[0]), float(nest.sheet[1])), (x1 - x0, y1 - y0),
+                   float(beams.get("depth", 200.0)), float(beams.get("max_length", 0.0) or 0.0),
+                   float(nest.spacing), float(gap))
     try:
         folded = np.asarray(folded_faces(placed), dtype=bool)
     except Exception:                            # a grid too small for the fold test: nothing to mark
