@@ -248,3 +248,21 @@ def test_optimize_job_runs_in_the_background_and_cancels():
     job.join(120)
     assert job.status == "cancelled" and job.result is None
     assert told[-1] == "optimisation cancelled"
+
+
+def test_figures_take_a_per_side_trim_and_refuse_a_bad_nesting_table(default):
+    """``[nesting] margin`` may be one number or four (left, right, bottom, top): the live bound uses the usable
+    sheet either way; a bad value is refused with the design error a build would give."""
+    import copy
+
+    from ppfab.errors import DesignError
+
+    doc = copy.deepcopy(default.doc)
+    doc.setdefault("nesting", {})["margin"] = [10.0, 10.0, 10.0, 10.0]
+    same = solve(doc, default.base_dir).figures.glass_sheets_min
+    assert same == default.state.figures.glass_sheets_min
+    doc["nesting"]["margin"] = [400.0, 400.0, 300.0, 300.0]             # 5200 × 2610 usable: more sheets
+    assert solve(doc, default.base_dir).figures.glass_sheets_min > same
+    doc["nesting"]["margin"] = "wide"
+    with pytest.raises(DesignError):
+        solve(doc, default.base_dir)
