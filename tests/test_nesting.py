@@ -242,3 +242,7 @@ def test_grown_area_is_steiners_formula_and_never_above_the_true_grown_area():
     got = grown_area(ell, r)
     assert true - 0.5 <= got <= true
     assert grown_area(ell, 0.0) == 640_000
+    from fabrication.nesting.result import grown_areas
+
+    mixed = [quad, ell, quad[::-1] + 7.0, ell[:4]]                      # batched by vertex count, order kept
+    assert grown_areas(mixed, r) == pytest.approx([grown_area(q, r) for q in mixed], rel=1e-12)

@@ -134,27 +134,42 @@ def verify_nesting(parts: list[FlatPart], nesting: Nesting, params: NestingParam
                                    f"{d:.4g} mm apart, spacing is {s:g} mm")
 
 
-def grown_area(outline: np.ndarray, r: float) -> float:
-    """Area of the polygon ``outline`` ``(k, 2)`` grown by ``r ≥ 0`` (its Minkowski sum with a disk of radius
-    ``r``): Steiner's formula ``A + r·P + π r²`` when it is convex; otherwise shapely's buffer, whose round
-    corners are chords of their arcs, so the value never exceeds the true grown area."""
-    q = np.asarray(outline, dtype=float)
-    area = abs(float(polygon_area(q)))
-    if r <= 0:
-        return area
-    e_in, e_out = q - np.roll(q, 1, axis=0), np.roll(q, -1, axis=0) - q
-    turn = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
-    if np.all(turn >= 0) or np.all(turn <= 0):
-        return area + r * float(np.linalg.norm(e_out, axis=1).sum()) + math.pi * r * r
-    from shapely.geometry import Polygon
+def grown_areas(outlines: list[np.ndarray], r: float) -> np.ndarray:
+    """``(n,)`` areas of the polygons ``outlines`` (each ``(k, 2)``) grown by ``r ≥ 0`` (the Minkowski sum with a
+    disk of radius ``r``): Steiner's formula ``A + r·P + π r²`` for the convex ones, batched by vertex count;
+    shapely's buffer for the others, whose round corners are chords of their arcs, so a value never exceeds the
+    true grown area."""
+    out = np.zeros(len(outlines))
+    by_k: dict[int, list[int]] = {}
+    for i, q in enumerate(outlines):
+        by_k.setdefault(len(q), []).append(i)
+    for idx in by_k.values():
+        q = np.asarray([outlines[i] for i in idx], dtype=float)                 # (m, k, 2)
+        area = np.abs(polygon_area(q))
+        if r <= 0:
+            out[idx] = area
+            continue
+        e_in, e_out = q - np.roll(q, 1, axis=1), np.roll(q, -1, axis=1) - q
+        turn = e_in[..., 0] * e_out[..., 1] - e_in[..., 1] * e_out[..., 0]
+        convex = np.all(turn >= 0, axis=1) | np.all(turn <= 0, axis=1)
+        out[idx] = area + r * np.linalg.norm(e_out, axis=-1).sum(axis=1) + math.pi * r * r
+        if not convex.all():
+            from shapely.geometry import Polygon
 
-    return float(Polygon(q).buffer(r, quad_segs=16).area)
+            for j in np.flatnonzero(~convex):
+                out[idx[j]] = Polygon(q[j]).buffer(r, quad_segs=16).area
+    return out
+
+
+def grown_area(outline: np.ndarray, r: float) -> float:
+    """Area of one polygon ``(k, 2)`` grown by ``r`` (:func:`grown_areas`)."""
+    return float(grown_areas([outline], r)[0])
 
 
 def lower_bound(parts: list[FlatPart], params: NestingParams) -> int:
     """No layout of ``parts`` uses fewer sheets: ``ceil(Σ grown area / ((W + s)(H + s)))``.
 
-    Parts at least the spacing ``s`` apart stay disjoint when each grows by ``s/2`` (:func:`grown_area`), and a
+    Parts at least the spacing ``s`` apart stay disjoint when each grows by ``s/2`` (:func:`grown_areas`), and a
     part inside the usable ``W × H`` of a sheet (after the trim) grows into that rectangle grown by ``s/2`` on
     every side; so the grown parts of one sheet fit disjointly in ``(W + s)(H + s)``.  With ``s = 0`` and no
     trim this is the plain area bound ``ceil(Σ area / sheet area)``; spacing and trim only raise it.
@@ -163,8 +178,8 @@ def lower_bound(parts: list[FlatPart], params: NestingParams) -> int:
         return 0
     s = float(params.spacing)
     x0, y0, x1, y1 = params.usable()
-    total = float(sum(grown_area(p.outline, 0.5 * s) for p in parts))
+    total = float(grown_areas([p.outline for p in parts], 0.5 * s).sum())
     return int(math.ceil(total / ((x1 - x0 + s) * (y1 - y0 + s)) - 1e-9))
 
 
-__all__ = ["Nesting", "verify_nesting", "placed_outline", "lower_bound", "grown_area"]
+__all__ = ["Nesting", "verify_nesting", "placed_outline", "lower_bound", "grown_area", "grown_areas"]
