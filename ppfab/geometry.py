@@ -96,7 +96,8 @@ class Geometry:
 
 def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | None = None,
                    allow_large: bool = True, note: Callable[[str], None] | None = None,
-                   on_iteration: Callable[[Any], None] | None = None) -> Geometry:
+                   on_iteration: Callable[[Any], None] | None = None,
+                   before_optimize: Callable[[QuadGrid | QuadMesh, tuple[str, ...]], None] | None = None) -> Geometry:
     """Construct the mesh (or read it and optionally optimise it) and place it in millimetres.
 
     Parameters
@@ -107,6 +108,8 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
     allow_large : go on above ``spec.max_vertices``
     note : called with a short progress text before long steps
     on_iteration : called with every optimiser :class:`~ppfab.optimize.solver.IterationRecord`
+    before_optimize : called with the mesh as read (file units) and the planar families asked for, before the
+        optimiser runs; it may raise to refuse a design whose outcome is known from the input
     """
     from .constructions import get_construction
     from .io import load_mesh
@@ -134,6 +137,9 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
         source = f"mesh:{spec.mesh}"
         if optimize is not None:
             from .optimize import optimize as run_optimize
+
+            if before_optimize is not None:
+                before_optimize(mesh, families)
 
             if note:
                 note("optimising…")

@@ -54,6 +54,11 @@ class BeamParams:
     plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)
+    fallback: str = param("refuse", doc="a polyline of a requested planar family that cannot be a planar beam "
+                                         "(its plane too far from the surface normal, or its axes conflict): "
+                                         "'refuse' stops the build naming the polylines and why; 'segmented' "
+                                         "accepts one-edge plates for them, said on the terminal and in --json",
+                           choices=("refuse", "segmented"))
 
     def __post_init__(self) -> None:
         from .joint_types import get_joint_type

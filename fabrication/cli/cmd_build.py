@@ -5,10 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 NAME = "build"
 HELP = "build a design (default: the bundled PP gridshell) into a complete fabrication folder"
 ORDER = 10
+
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -61,7 +66,23 @@ def run(args: argparse.Namespace) -> int:
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     if args.json:
         print(json.dumps({"out": str(args.out), "files": manifest["files"], "summary": manifest["summary"],
-                          "quality": manifest["quality"], "times_s": progress.times}, indent=2))
+                          "quality": manifest["quality"], "structure": structure_counts(result),
+                          "times_s": progress.times}, indent=2))
     elif not args.quiet:
         print(f"ppfab: wrote {args.out} ({len(manifest['sha256'])} files)", file=sys.stderr)
     return 0
+
+
+def structure_counts(result: "Build") -> dict[str, object]:
+    """What ``--json`` says of the structure: planar beams kept, polylines left out of the requested planar
+    families (and why), and the one-edge plates the build made."""
+    from ..beams.plates import beam_ids
+    from ..pipeline.structure_gate import structure_change
+
+    change = structure_change(result.support, beam_ids(result.support))
+    plates = result.beams.plates
+    planar = result.support.polyline_planar
+    return {"planar_polylines": int(planar.sum()) if planar is not None else 0,
+            "left_out": [{"beam": b, "polyline": k, "reason": why} for b, k, why in change.left_out],
+            "one_edge_plates": sum(1 for p in plates if p.meta.get("segment")),
+            "plates": len(plates)}

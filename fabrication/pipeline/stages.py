@@ -11,6 +11,7 @@ module.
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -68,10 +69,16 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:
     """Construct the mesh, or read (and optimise) a mesh file, placed in mm (:func:`ppfab.geometry.build_geometry`)."""
+    from .structure_gate import refuse_before_optimising
+
     geo = design.geometry
     progress.start("geometry", f"construction '{geo.method}'" if geo.method else f"mesh {geo.mesh}")
+    def before_optimize(mesh: QuadGrid | QuadMesh, families: tuple[str, ...]) -> None:
+        refuse_before_optimising(mesh, families, design.support.max_normal_angle_deg, list(design.support.exclude),
+                                 design.beams.fallback)
+
     g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note,
-                       on_iteration=progress.iteration)
+                       on_iteration=progress.iteration, before_optimize=before_optimize)
     mesh = g.mesh
     shape = mesh.shape if isinstance(mesh, QuadGrid) else (mesh.grid.shape if mesh.grid is not None else None)
     progress.done(f"{'grid ' + 'x'.join(map(str, shape)) if shape else 'quad mesh'}")
@@ -119,11 +126,20 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
     from ppfab.support.quality import check_axis_angles
     from ppfab.support.select import support_structure
 
+    from ..beams.plates import beam_ids
+    from .structure_gate import honour_structure, structure_change
+
     progress.start("support")
     beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
     support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
                                 beams=beams)
     check_axis_angles(support, design.support.max_axis_angle_deg)
+    change = structure_change(support, beam_ids(support))
+    honour_structure(change, design.beams.fallback)
+    if change.changed:
+        logging.getLogger("ppfab").warning(
+            "[beams] fallback = \"segmented\": %d polyline(s) of the requested planar families are not planar beams "
+            "and become %d one-edge plates (the report lists them and why)", len(change.left_out), change.edges)
     s = support.summary()
     progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
     return support
