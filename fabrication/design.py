@@ -23,6 +23,7 @@ printed as one line and exit code 2 by the command line.
 from __future__ import annotations
 
 import hashlib
+import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -243,6 +244,7 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
         records[name] = parse_params(types[name](), table, name)
     _check_tag_prefixes(records)
     geometry: GeometrySpec = records["geometry"]
+    _check_mesh_path(geometry)
     if geometry.method is not None:
         from ppfab.constructions import get_construction
 
@@ -254,8 +256,42 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
                   info=records["design"], geometry=geometry, sections=records, raw=doc)
 
 
-MAX_DESIGN_BYTES = 16 << 20
-"""A design file is a few kB of TOML; anything above this is refused before it is parsed."""
+MAX_DESIGN_BYTES = 1 << 20
+"""A design file is a few kB of TOML; anything above 1 MiB is refused from its size, before it is read."""
+
+MAX_DESIGN_DEPTH = 16
+"""Deepest nesting of tables and arrays in a design file (the deepest a design needs is 5: ``geometry.params``
+holding a list of points); deeper nesting is refused, as is nesting too deep for the TOML reader itself."""
+
+
+def _check_depth(doc: dict) -> None:
+    """Refuse tables and arrays nested deeper than :data:`MAX_DESIGN_DEPTH`, naming the first key path that
+    does (walked without recursion)."""
+    stack: list[tuple[Any, str, int]] = [(doc, "", 0)]
+    while stack:
+        value, key, depth = stack.pop()
+        if depth > MAX_DESIGN_DEPTH:
+            raise DesignError(key, f"tables and arrays nested more than {MAX_DESIGN_DEPTH} levels deep; "
+                                   "a design file needs at most 5")
+        if isinstance(value, dict):
+            stack.extend((v, f"{key}.{k}" if key else str(k), depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{key}[{i}]", depth + 1) for i, v in enumerate(value))
+
+
+def _check_mesh_path(geometry: GeometrySpec) -> None:
+    """``[geometry] mesh`` must be a usable path string: not empty, no NUL or other control character."""
+    from ppfab.io.pathtext import path_problem, printable
+
+    if geometry.mesh is None:
+        return
+    problem = path_problem(geometry.mesh)
+    if problem == "is empty":
+        raise DesignError("geometry.mesh", "the mesh path is empty; give the path of the mesh file (.obj or .off, "
+                                           "relative to the design file), or a construction with 'method'")
+    if problem is not None:
+        raise DesignError("geometry.mesh", f"the path '{printable(geometry.mesh)}' {problem}; give the path of "
+                                           "the mesh file (.obj or .off)")
 
 
 def _regular_design_file(p: Path) -> None:
@@ -268,12 +304,14 @@ def _regular_design_file(p: Path) -> None:
     except MeshFileError as exc:
         raise DesignError("", str(exc).replace("cannot read (", "cannot read design file (")) from None
     if size > MAX_DESIGN_BYTES:
-        raise DesignError("", f"{p}: {size / 2**20:.0f} MiB is not a design file (at most "
+        raise DesignError("", f"{p}: {size / 2**20:.1f} MiB is not a design file (at most "
                               f"{MAX_DESIGN_BYTES // 2**20} MiB of TOML)")
 
 
 def load_design(path: str | Path | None = None, sections: tuple[str, ...] | None = None) -> Design:
     """Read and validate a design file; ``None`` loads the bundled default example."""
+    if path is not None and os.fspath(path) == "":
+        raise DesignError("", "the design file path is empty; give the path of a design file (.toml)")
     p = DEFAULT_DESIGN if path is None else Path(path)
     _regular_design_file(p)
     try:
@@ -281,7 +319,7 @@ def load_design(path: str | Path | None = None, sections: tuple[str, ...] | None
     except OSError as exc:
         raise DesignError("", f"{p}: cannot read design file ({exc.strerror or exc})") from None
     if len(data) > MAX_DESIGN_BYTES:
-        raise DesignError("", f"{p}: {len(data) / 2**20:.0f} MiB is not a design file (at most "
+        raise DesignError("", f"{p}: {len(data) / 2**20:.1f} MiB is not a design file (at most "
                               f"{MAX_DESIGN_BYTES // 2**20} MiB of TOML)")
     try:
         doc = tomllib.loads(data.decode("utf-8-sig"))
@@ -289,7 +327,11 @@ def load_design(path: str | Path | None = None, sections: tuple[str, ...] | None
         raise DesignError("", f"{p}: design file is not UTF-8 text") from None
     except tomllib.TOMLDecodeError as exc:
         raise DesignError("", f"{p}: malformed TOML: {exc}") from None
+    except RecursionError:
+        raise DesignError("", f"{p}: tables and arrays nested too deep to read (more than {MAX_DESIGN_DEPTH} "
+                              "levels; a design file needs at most 5)") from None
     try:
+        _check_depth(doc)
         return parse_design(doc, str(p), hashlib.sha256(data).hexdigest(), p.resolve().parent, sections)
     except DesignError as exc:
         raise DesignError(exc.key, f"{str(exc)[len(exc.key) + 2:] if exc.key else str(exc)} (in {p})") from None

@@ -9,7 +9,10 @@ happen inside ``run`` so ``ppfab --version`` is instant.
 Errors derived from :class:`~ppfab.errors.PpfabError` print one line
 ``ppfab: error: …`` and exit with their code (2 for bad input); so does an operating-system error
 (disk full, permission denied: exit 1).  Ctrl-C, SIGTERM and SIGHUP stop a run the same way (an
-exception unwinds it, so output folders are cleaned up) and exit ``128 + signal`` (130, 143, 129).
+exception unwinds it, so output folders are cleaned up) and exit ``128 + signal`` (130, 143, 129) — at any
+moment, also while the CAD kernel and file libraries are imported (:func:`interruptible_imports`).
+Path arguments that are empty or hold a control character are refused before a command runs, and control
+characters in an error message (a quoted key, value or path) are escaped, so the error stays one line.
 Library warnings (numpy's overflow and invalid-value RuntimeWarnings, matplotlib's, any other) and the
 libraries' own logger warnings go to the log (``--verbose``), never raw to stderr.
 No traceback reaches the user unless ``PPFAB_DEBUG=1``.
@@ -68,7 +71,7 @@ class Interrupted(KeyboardInterrupt):
 STOP_SIGNALS = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
 
 
-_SIGNALS: dict[str, Any] = {"defer": 0, "pending": None}
+_SIGNALS: dict[str, Any] = {"last": None}
 
 
 def _stop(signum: int) -> None:
@@ -78,24 +81,35 @@ def _stop(signum: int) -> None:
 
 
 def _on_signal(signum: int, frame: object) -> None:
-    if _SIGNALS["defer"]:
-        _SIGNALS["pending"] = signum
-        return
+    _SIGNALS["last"] = signum
     _stop(signum)
 
 
 @contextlib.contextmanager
-def deferred_signals() -> Iterator[None]:
-    """Hold SIGINT, SIGTERM and SIGHUP until the block is done (e.g. while a C extension initialises, which
-    would turn the interruption into an ImportError), then stop as if they had come after it."""
-    _SIGNALS["defer"] += 1
+def interruptible_imports() -> Iterator[None]:
+    """Import heavy libraries (the CAD kernel, the file libraries) so that SIGINT, SIGTERM and SIGHUP still stop
+    the run at once: the signal interrupts the import like any other step, and whatever the interrupted library
+    raises instead (a C extension interrupted in its initialisation may turn it into an ImportError, a library
+    may swallow it) becomes the interruption itself.  Nothing is held: Ctrl-C during a slow import stops the run
+    as promptly as anywhere else."""
+    before = _SIGNALS["last"]
+    _SIGNALS["last"] = None
     try:
         yield
+    except BaseException as exc:
+        signum = _SIGNALS["last"] or _interrupted(exc)
+        if signum is not None and not isinstance(exc, Interrupted):
+            raise Interrupted(signum) from None
+        raise
+    else:
+        if _SIGNALS["last"] is not None:             # a library caught the interruption and went on
+            raise Interrupted(_SIGNALS["last"])
     finally:
-        _SIGNALS["defer"] -= 1
-        pending, _SIGNALS["pending"] = _SIGNALS["pending"], None
-        if pending is not None and not _SIGNALS["defer"]:
-            _stop(pending)
+        _SIGNALS["last"] = _SIGNALS["last"] or before
+
+
+deferred_signals = interruptible_imports
+"""The former name (``cmd_build.preload`` imports it): signals are no longer held, see :func:`interruptible_imports`."""
 
 
 def _interrupted(exc: BaseException) -> int | None:
@@ -124,6 +138,34 @@ def _os_error(exc: OSError) -> str:
                                              if getattr(exc, "errno", None) == 28 else "")
 
 
+PATH_ARGUMENTS = ("design", "out", "mesh")
+"""Arguments of the commands that name a file or folder: checked by :func:`_check_paths` before a command runs."""
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """Refuse a path argument that is empty or holds a NUL byte or another control character, in one line,
+    before any file is looked at (Python would raise ``ValueError`` on a NUL byte)."""
+    from ppfab.errors import DesignError
+    from ppfab.io.pathtext import path_problem, printable
+
+    for name in PATH_ARGUMENTS:
+        value = getattr(args, name, None)
+        problem = path_problem(value) if isinstance(value, str) else None
+        if problem is not None:
+            shown = f" '{printable(value)}'" if value else ""
+            positional = name == "mesh" or (name == "design" and args.command != "optimize") or \
+                (name == "out" and args.command == "verify")
+            raise DesignError(name if positional else f"--{name}",
+                              f"the path{shown} {problem}; give the path of a file or folder")
+
+
+def _printable(text: str) -> str:
+    """Control characters in a message (quoted keys, values, paths) escaped, so the error stays one line."""
+    from ppfab.io.pathtext import printable
+
+    return printable(text)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = make_parser()
@@ -150,11 +192,12 @@ def main(argv: list[str] | None = None) -> int:
                 warnings.showwarning = _showwarning
                 for name in LIBRARY_LOGGERS:
                     logging.getLogger(name).setLevel(logging.INFO if level == logging.INFO else logging.ERROR)
+            _check_paths(args)
             return int(args._run(args) or 0)
     except PpfabError as exc:
         if debug:
             raise
-        print(f"ppfab: error: {exc}", file=sys.stderr)
+        print(f"ppfab: error: {_printable(str(exc))}", file=sys.stderr)
         return exc.exit_code
     except BrokenPipeError:                      # the reader of stdout went away (``ppfab … | head``)
         try:
@@ -165,7 +208,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         if debug:
             raise
-        print(f"ppfab: error: {_os_error(exc)}", file=sys.stderr)
+        print(f"ppfab: error: {_printable(_os_error(exc))}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:
         signum = getattr(exc, "signum", signal.SIGINT)
@@ -178,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ppfab: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
         return 128 + signum
     finally:
-        _SIGNALS["defer"], _SIGNALS["pending"] = 0, None
+        _SIGNALS["last"] = None
         for s, handler in previous.items():
             signal.signal(s, handler)
 

@@ -1,4 +1,8 @@
-"""``ppfab check MESH`` — print the quality metrics of a mesh file and test them against a tolerance."""
+"""``ppfab check MESH`` — print the quality metrics of a mesh file and test them against a tolerance.
+
+A mesh file larger than a build accepts (``geometry.max_vertices``, by its size and by its vertex count, both
+known before it is parsed) is refused unless ``--allow-large`` is given; above
+:data:`ppfab.io.meshfile.MAX_MESH_BYTES` it is refused in any case."""
 
 from __future__ import annotations
 
@@ -20,14 +24,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="list every polyline (id, family, size, δ_P, tilt) and whether it can be a planar beam, "
                         "with the reason when not (the ids [support] exclude and [beams] segment take)")
     p.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    p.add_argument("--allow-large", action="store_true",
+                   help="read meshes above the default geometry.max_vertices (250000 vertices)")
 
 
 def run(args: argparse.Namespace) -> int:
+    from ppfab.geometry import GeometrySpec, check_file_size, check_size
     from ppfab.io import load_mesh
     from ppfab.metrics import quality
     from ppfab.support.report import polyline_report, tangent_polylines
 
-    mesh = load_mesh(args.mesh)
+    limit = GeometrySpec(mesh=args.mesh).max_vertices      # what a build accepts without --allow-large
+    check_file_size(args.mesh, limit, args.allow_large)
+    mesh = load_mesh(args.mesh, None if args.allow_large else lambda n: check_size(n, limit, False))
     q = quality(mesh)
     tangent = tangent_polylines(mesh)
     records = polyline_report(mesh) if args.polylines else None

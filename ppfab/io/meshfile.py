@@ -1,11 +1,12 @@
 """OBJ and OFF reading and writing for all-quad meshes.
 
 Reading validates what a fabrication tool relies on and names the first
-offence: a path that is not a regular file (a FIFO, a device, a folder — refused before
-anything is read), more vertices than the caller allows (counted from the OFF header or the
+offence: a path that is empty or holds a control character, a path that is not a regular file (a FIFO,
+a device, a folder — refused before anything is read), a file larger than :data:`MAX_MESH_BYTES`
+(refused from its size), more vertices than the caller allows (counted from the OFF header or the
 OBJ ``v`` lines before parsing), an OFF file holding more or fewer records than its header
-announces, non-quad faces (with their line), indices out of range, NaN/inf or absurdly large
-coordinates, repeated corners, duplicate faces, coincident (unwelded) vertices — allowed only
+announces, non-quad faces (with their line), indices out of range (however many digits), vertices
+used by no face, NaN/inf or absurdly large coordinates, repeated corners, duplicate faces, coincident (unwelded) vertices — allowed only
 in pairs along a seam, where the boundary edges coincide too, never as a single point where the
 surface touches itself — zero-area faces, non-manifold edges (used by more than two faces)
 and inconsistent orientation (an edge used twice in the same direction).  A UTF-8 byte-order
@@ -21,22 +22,44 @@ import os
 import re
 import stat
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
 from ..errors import MeshFileError
 from ..mesh import QuadGrid, QuadMesh
 from ..topology import grid_face_indices
+from .pathtext import path_problem, printable
 
 log = logging.getLogger("ppfab")
+
+
+_CHUNK = 1 << 20
+
+
+def _numbered_lines(text: str) -> Iterator[tuple[int, str]]:
+    """``enumerate(text.splitlines(), start=1)`` without the list of every line: the text is split in chunks of
+    about 1 MiB that end in a newline, and a chunk of blank lines is counted, not split (a file of 200 MB of
+    newlines takes seconds and little memory)."""
+    start, lineno, n = 0, 1, len(text)
+    while start < n:
+        end = text.find("\n", start + _CHUNK)
+        end = n if end < 0 else end + 1
+        chunk = text[start:end]
+        if chunk.isspace():
+            lineno += len(chunk.splitlines())
+        else:
+            for raw in chunk.splitlines():
+                yield lineno, raw
+                lineno += 1
+        start = end
 
 
 def _parse_obj(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[int]]:
     verts: list[list[float]] = []
     faces: list[list[int]] = []
     lines: list[int] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
+    for lineno, raw in _numbered_lines(text):
         line = raw.split("#", 1)[0].strip()
         if not line:
             continue
@@ -67,7 +90,7 @@ def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
     """OFF as a stream of tokens (records may span lines, as in libigl's files)."""
     tokens: list[str] = []
     token_line: list[int] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
+    for lineno, raw in _numbered_lines(text):
         for t in raw.split("#", 1)[0].split():
             tokens.append(t)
             token_line.append(lineno)
@@ -124,7 +147,15 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
         count = int((sizes != 4).sum())
         raise MeshFileError(path, f"face {k} (line {lines[k]}) has {sizes[k]} corners; "
                                   f"{count} face(s) are not quads — ppfab needs an all-quad mesh")
-    f = np.array(faces, dtype=np.int64)
+    nv = len(v)
+    try:
+        f = np.array(faces, dtype=np.int64)
+    except OverflowError:                 # an index beyond 64 bits: name it without converting it
+        at = next(j for j, face in enumerate(faces) if any(not 0 <= i < nv for i in face))
+        digits = str(next(i for i in faces[at] if not 0 <= i < nv))
+        shown = digits if len(digits) <= 24 else f"{digits[:12]}… ({len(digits)} digits)"
+        raise MeshFileError(path, f"face {at} (line {lines[at]}) refers to vertex {shown}, which does not exist "
+                                  f"(the file has {nv} vertices)") from None
     out = np.flatnonzero((f < 0).any(axis=1) | (f >= len(v)).any(axis=1))
     if len(out):
         raise MeshFileError(path, _index_problem(f, int(out[0]), lines[out[0]], len(v), path))
@@ -156,6 +187,10 @@ def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]
         faces_at = np.flatnonzero((he == e).all(axis=1)) // 4
         raise MeshFileError(path, f"faces {int(faces_at[0])} and {int(faces_at[1])} run through edge "
                                   f"({int(e[0])}, {int(e[1])}) in the same direction (inconsistent orientation)")
+    if len(used) < nv:
+        unused = np.setdiff1d(np.arange(nv), used)
+        raise MeshFileError(path, f"vertex {int(unused[0])} is used by no face ({len(unused)} unused vertex(es)); "
+                                  "remove the unused vertices (every vertex becomes a node of the structure)")
     return f
 
 
@@ -215,9 +250,19 @@ _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (s
           (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
 
 
+MAX_MESH_BYTES = 256 << 20
+"""Largest mesh file read (256 MiB, about 2.5 million OBJ vertices, ten times ``geometry.max_vertices``):
+a larger file is refused from its size, before it is read."""
+
+
 def regular_file(path: str | os.PathLike, what: str = "file") -> int:
     """The size in bytes of ``path`` if it is a regular file (symbolic links followed); otherwise
-    :class:`MeshFileError` — decided from ``stat`` alone, so a FIFO or a device is never opened."""
+    :class:`MeshFileError` — decided from ``stat`` alone, so a FIFO or a device is never opened.  An empty path
+    or one holding a NUL or another control character is refused before ``stat`` (:func:`path_problem`)."""
+    problem = path_problem(path)
+    if problem is not None:
+        shown = printable(str(path)) or f"the {what} path"
+        raise MeshFileError(shown, f"{problem}; give the path of a {what}")
     try:
         st = os.stat(path)
     except OSError as exc:
@@ -251,8 +296,11 @@ def read_mesh(path: str | os.PathLike, vertex_limit: Callable[[int], None] | Non
     ``vertex_limit(n)`` is called with the number of vertices the file holds (:func:`announced_vertices`)
     before it is parsed, and may raise to refuse it.
     """
+    size = regular_file(path, "mesh file")
     p = Path(path)
-    regular_file(p, "mesh file")
+    if size > MAX_MESH_BYTES:
+        raise MeshFileError(str(path), f"the file has {size / 2**20:.0f} MiB, more than the "
+                                       f"{MAX_MESH_BYTES >> 20} MiB a mesh file may have; give a smaller mesh")
     suffix = p.suffix.lower()
     try:
         data = p.read_bytes()
