@@ -78,7 +78,7 @@ def browser():
 
 def _open(browser, model: StudioModel, design_path: str = "") -> Studio:
     studio = Studio(model, port=_free_port(), design_path=design_path)
-    browser.get(f"http://127.0.0.1:{studio.server.get_port()}")
+    browser.get(studio.url)                                    # the address with the session key
     _wait(lambda: studio.server.get_clients(), what="the page to connect")
     _wait(lambda: browser.find_elements(By.TAG_NAME, "canvas"), what="the 3D canvas")
     for close in browser.find_elements(By.CSS_SELECTOR, ".mantine-Notification-closeButton"):
@@ -262,6 +262,35 @@ def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
         assert after["delta_p"]["rows"] <= PP_TOL                     # P: the cross-sections stay planar
         assert _delta_p(after["vertices"], ("rows",)) <= PP_TOL
     finally:
+        studio.stop()
+
+
+def test_a_page_of_another_origin_cannot_reach_the_studio(browser, tmp_path):
+    """A page served from another origin (another port on this machine) opens viser's WebSocket with the
+    right subprotocol and even the session key: Chromium sends its Origin, the studio refuses the handshake
+    and no client connects; the studio's own page (same key) connects."""
+    import http.server
+    import threading
+
+    studio = Studio(StudioModel.load(REPO / "examples" / "smallest_roof.toml"), port=_free_port())
+    (tmp_path / "evil.html").write_text("<html><body>evil</body></html>", encoding="utf-8")
+    handler = lambda *a: http.server.SimpleHTTPRequestHandler(*a, directory=str(tmp_path))  # noqa: E731
+    evil = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=evil.serve_forever, daemon=True).start()
+    try:
+        browser.get(f"http://127.0.0.1:{evil.server_address[1]}/evil.html")
+        ws = f"ws://localhost:{studio.server.get_port()}/{studio.gate.key}"
+        outcome = browser.execute_async_script(
+            "const done = arguments[arguments.length - 1];"
+            f"const s = new WebSocket('{ws}', ['viser-v{viser.__version__}']);"
+            "s.onopen = () => done('open'); s.onerror = () => done('refused');", )
+        assert outcome == "refused"
+        time.sleep(1.0)
+        assert not studio.server.get_clients()
+        browser.get(studio.url)
+        _wait(lambda: studio.server.get_clients(), what="the studio's own page to connect")
+    finally:
+        evil.shutdown()
         studio.stop()
 
 

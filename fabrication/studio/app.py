@@ -69,13 +69,19 @@ class Studio:
     def __init__(self, model: StudioModel, host: str = "127.0.0.1", port: int = 8080, design_path: str = ""):
         import viser
 
+        from .guard import Gate, guarded_server, new_key
+
         self.model = model
         self.lock = threading.RLock()
         self.metric = "panel area"
         self.job: Any = None
         self.opt_job: Any = None
-        self.server: Any = viser.ViserServer(host=host, port=port, verbose=False)
-        self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False)
+        self.gate = Gate(new_key(), host)
+        self.server: Any = guarded_server(self.gate, lambda: viser.ViserServer(host=host, port=port, verbose=False),
+                                          lambda server: server.stop())
+        self.server.gui.configure_theme(control_width="large", dark_mode=False, show_logo=False,
+                                        show_share_button=False)
+        setattr(self.server, "request_share_url", _no_share)  # a page may not open a public tunnel to the studio
         self.server.scene.set_up_direction("+z")
         # no environment map (its images would be fetched from the network): plain lights only
         self.server.scene.configure_environment_map(None)
@@ -95,6 +101,11 @@ class Studio:
         gui: Any = self.server.gui
         name = self.model.method or f"mesh {self.model.geometry.get('mesh')}"
         gui.add_markdown(f"**ppfab studio** — {name}")
+        outside = self.model.outside_files()
+        self.outside_note: Any = None
+        if outside:
+            listed = ", ".join(f"`{p}`" for p in outside)
+            self.outside_note = gui.add_markdown(f"**this design reads files outside its folder:** {listed}")
         self.status = gui.add_markdown("")
         self.figures = gui.add_markdown("")
         with gui.add_folder("View"):
@@ -120,6 +131,13 @@ class Studio:
         with gui.add_folder("Save and build"):
             default = str(Path(design_path).with_name(Path(design_path).stem + "_edited.toml")) if design_path else ""
             self.save_path = gui.add_text("save as", default)
+            self.save_path.on_update(lambda _: self._guard(self._check_target))
+            self.replace_box = gui.add_checkbox("replace the existing file", False, visible=False,
+                                                hint="the file named in 'save as' exists and this studio did "
+                                                     "not write it; tick to overwrite it")
+            self.replace_box.on_update(lambda _: self._guard(self._confirm_replace))
+            self.save_note = gui.add_markdown("")
+            self._replace_for: str | None = None
             save = gui.add_button("Save")
             save.on_click(lambda _: self._guard(self._save))
             self.out_path = gui.add_text("build folder", "")
@@ -129,6 +147,7 @@ class Studio:
             self.open_report = gui.add_button("Open report", visible=False)
             self.open_report.on_click(lambda _: self._guard(self._show_report))
             self.build_msg = gui.add_markdown("")
+        self._guard(self._check_target)
 
     def _field_types(self) -> dict[str, Any]:
         from ppfab.constructions import get_construction
@@ -246,8 +265,36 @@ class Studio:
         self.metric = str(self.metric_dd.value)
         self.redraw(handles=False)
 
+    def _check_target(self) -> None:
+        """Say what Save would do with the file named in "save as"; offer the replace box for a file that
+        exists and that this studio did not write (a new name withdraws any consent given before)."""
+        from ppfab.errors import DesignError
+
+        self._replace_for = None
+        self.replace_box.value = False
+        text = str(self.save_path.value)
+        try:
+            target = self.model.save_rules.target(text) if text.strip() else None
+        except DesignError as exc:
+            target, self.save_note.content = None, str(exc)
+        else:
+            self.save_note.content = "" if target is None else {
+                "new": "", "session": "",
+                "foreign": f"`{target.path}` exists and was not written by this studio: tick the box to replace it",
+                "input": f"`{target.path}` is the design or mesh this studio read: it is never overwritten"}[target.kind]
+        self.replace_box.visible = target is not None and target.kind == "foreign"
+
+    def _confirm_replace(self) -> None:
+        """The replace box: consent for the file named now, and only for it."""
+        self._replace_for = str(self.save_path.value) if self.replace_box.value else None
+
     def _save(self) -> None:
-        path = self.model.save(str(self.save_path.value))
+        text = str(self.save_path.value)
+        replace = self._replace_for is not None and self._replace_for == text and bool(self.replace_box.value)
+        try:
+            path = self.model.save(text, replace)
+        finally:
+            self._check_target()
         self.model.error = ""
         self.build_msg.content = f"saved `{path}`"
 
@@ -451,6 +498,16 @@ class Studio:
         self.redraw(handles=True)
 
     # -- for tests and scripts ------------------------------------------------------------------------
+    @property
+    def url(self) -> str:
+        """The page's address, with the session key (the only address the studio answers)."""
+        from .guard import is_loopback
+
+        host = self.server.get_host()
+        name = "localhost" if is_loopback(host) or host in ("0.0.0.0", "::", "") else host
+        name = f"[{name}]" if ":" in name else name
+        return f"http://{name}:{self.server.get_port()}/{self.gate.key}/"
+
     def snapshot(self) -> dict:
         """What the scene shows now: vertices (mm), δ_P per planar family, the handles (display metres), the
         last error and the number of redraws."""
@@ -462,6 +519,12 @@ class Studio:
 
     def stop(self) -> None:
         self.server.stop()
+
+
+def _no_share(verbose: bool = True) -> None:
+    """Stands in for viser's ``request_share_url``: the studio is never shared through a public tunnel."""
+    log.info("studio: a page asked for a share link; the studio is not shared")
+    return None
 
 
 def _plain(value: Any) -> Any:
@@ -482,8 +545,12 @@ def _placement(geometry: dict) -> tuple[float, np.ndarray, np.ndarray]:
 
 def serve(model: StudioModel, host: str, port: int, open_browser: bool, design_path: str = "") -> int:
     """Run the studio until Ctrl-C."""
-    studio = Studio(model, host, port, design_path)
-    url = f"http://{'localhost' if host in ('127.0.0.1', 'localhost', '::1') else host}:{studio.server.get_port()}"
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()):         # viser's banner names the address without the key
+        studio = Studio(model, host, port, design_path)
+    url = studio.url
     print(f"ppfab: studio at {url} (Ctrl-C to stop)", flush=True)
     if open_browser:
         import webbrowser

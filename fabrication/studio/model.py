@@ -146,11 +146,17 @@ class StudioModel:
     ----------
     doc : the design document (parsed TOML)
     base_dir : the folder relative paths in it are taken from (the design file's)
+    source : the design file it was read from, if any (never overwritten by :meth:`save`, nor is its mesh)
     """
 
-    def __init__(self, doc: dict, base_dir: Path | None = None):
+    def __init__(self, doc: dict, base_dir: Path | None = None, source: Path | None = None):
+        from .saving import SaveRules
+
         self.base_dir = base_dir or Path.cwd()
+        self.source = source
         self.doc = copy.deepcopy(doc)
+        mesh = self.mesh_file()
+        self.save_rules = SaveRules(tuple(p for p in (source, mesh) if p is not None))
         self.history = History()
         self.error = ""
         self.refused_folds: np.ndarray | None = None
@@ -160,10 +166,26 @@ class StudioModel:
     @classmethod
     def load(cls, path: str | Path | None) -> "StudioModel":
         """Read a design file (``None``: the bundled default) as :func:`fabrication.design.load_design` does."""
-        from ..design import load_design
+        from ..design import DEFAULT_DESIGN, load_design
 
         design = load_design(path)
-        return cls(design.raw, design.base_dir)
+        return cls(design.raw, design.base_dir, Path(DEFAULT_DESIGN if path is None else path))
+
+    def mesh_file(self) -> Path | None:
+        """The mesh file the design names (relative paths taken from :attr:`base_dir`), if any."""
+        mesh = self.geometry.get("mesh")
+        if not isinstance(mesh, str):
+            return None
+        p = Path(mesh)
+        return p if p.is_absolute() else self.base_dir / p
+
+    def outside_files(self) -> list[Path]:
+        """The files the design reads from outside its own folder (:attr:`base_dir`), resolved."""
+        mesh = self.mesh_file()
+        if mesh is None:
+            return []
+        real = mesh.resolve()
+        return [] if real.is_relative_to(self.base_dir.resolve()) else [real]
 
     # -- what is edited -------------------------------------------------------------------------------
     @property
@@ -304,27 +326,19 @@ class StudioModel:
         return True
 
     # -- files ----------------------------------------------------------------------------------------
-    def save(self, path: str | Path) -> Path:
-        """Write the design as TOML to exactly ``path`` (a ``.toml`` file in an existing folder); a relative
-        mesh path is made absolute so the saved file reads the same mesh.  Floats are written with
-        ``repr`` (shortest round trip), so loading the file gives the same numbers and the same geometry."""
+    def save(self, path: str | Path, replace: bool = False) -> Path:
+        """Write the design as TOML to exactly ``path`` (a ``.toml`` file in an existing folder) under the
+        rules of :mod:`.saving`: never over the design read or its mesh, over a file this studio did not write
+        only with ``replace``.  A relative mesh path is made absolute so the saved file reads the same mesh.
+        Floats are written with ``repr`` (shortest round trip), so loading the file gives the same numbers and
+        the same geometry."""
         import tomli_w
 
-        from ppfab.errors import DesignError
-
-        p = Path(str(path).strip()).expanduser()
-        if p.suffix.lower() != ".toml":
-            raise DesignError("save", f"{p}: give a file name ending in .toml")
-        if not p.parent.is_dir():
-            raise DesignError("save", f"{p.parent}: no such folder")
-        if p.exists() and not p.is_file():
-            raise DesignError("save", f"{p}: exists and is not a file")
         doc = copy.deepcopy(self.doc)
         mesh = _section(doc, "geometry").get("mesh")
         if mesh is not None and not Path(mesh).is_absolute():
             doc["geometry"]["mesh"] = str((self.base_dir / mesh).resolve())
-        p.write_text(tomli_w.dumps(doc), encoding="utf-8")
-        return p
+        return self.save_rules.write(path, tomli_w.dumps(doc), replace)
 
     def design(self) -> Any:
         """The whole design (every section validated) for the build pipeline."""
