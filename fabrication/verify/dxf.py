@@ -7,6 +7,7 @@ from .. import contract
 from ..contract import SHEET_KINDS
 from .congruence import congruence_error, congruence_limits, inset_face_2d
 from . import Verification, check
+from ._cells import file_list
 from ._tolerance import type_tolerance
 
 
@@ -30,7 +31,7 @@ def check_dxf(v: Verification) -> None:
     cut = v.data.setdefault("cut", {})
     for key, spacing_key in (("glass_sheets", "nesting"), ("beam_sheets", "beam_nesting")):
         spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
-        for sheet_no, rel in enumerate(files.get(key, []), start=1):
+        for sheet_no, rel in enumerate(file_list(files, key), start=1):
             try:
                 content = check_sheet_dxf(v.folder / rel)
             except Exception as exc:  # noqa: BLE001 - reported as a finding
@@ -38,6 +39,8 @@ def check_dxf(v: Verification) -> None:
                 continue
             polys = []
             v.data.setdefault("dxf_texts", {})[rel] = content.texts          # for the marking check
+            v.data.setdefault("dxf_marks", {})[rel] = content.mark_lines
+            v.data.setdefault("dxf_trim", {})[rel] = content.trim_outline
             trim = Polygon(content.trim_outline).buffer(1e-6)
             for label in content.labels:
                 if contract.one_line(label) != label:

@@ -282,6 +282,17 @@ class DXFText:
     xdata: dict
 
 
+@dataclass(frozen=True)
+class DXFDimension:
+    """A DIMENSION entity: its handle, its text override (``""`` or ``"<>"``: the measurement), its measurement and
+    the text of its rendered geometry block (the MTEXT a reader that ignores dimensions shows; ``None`` without)."""
+
+    handle: str
+    override: str
+    measurement: float
+    shown: str | None
+
+
 @dataclass
 class DXFContent:
     """What :func:`read_sheet_dxf` found in a file."""
@@ -300,6 +311,8 @@ class DXFContent:
     dimensions: list[float] = field(default_factory=list)
     texts: list[DXFText] = field(default_factory=list)
     back_marks: int = 0
+    mark_lines: list[tuple[str, np.ndarray]] = field(default_factory=list)
+    dimension_texts: list[DXFDimension] = field(default_factory=list)
 
 
 def _xdata(entity) -> dict:
@@ -323,6 +336,8 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     errors = [f"{e.code}: {e.message}" for e in auditor.errors]
     parts, labels, marks, other, dims = [], [], 0, [], []
     texts: list[DXFText] = []
+    mark_lines: list[tuple[str, np.ndarray]] = []
+    dim_texts: list[DXFDimension] = []
     back = 0
     sheet = trim = None
     e: Any
@@ -346,8 +361,10 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
                 trim = pts
             elif layer == "MARK":
                 marks += 1
+                mark_lines.append((layer, pts))
             elif layer == "MARK_BACK":
                 back += 1
+                mark_lines.append((layer, pts))
             else:
                 other.append(f"LWPOLYLINE on {layer}")
         elif kind == "TEXT" and layer in ("LABEL",) + MARK_LAYERS:
@@ -360,10 +377,13 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
                                  _xdata(e)))
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
+            block = doc.blocks.get(e.dxf.get("geometry", "")) if e.dxf.get("geometry") else None
+            shown = next((str(getattr(x, "text", "")) for x in block if x.dxftype() == "MTEXT"), None) if block is not None else None
+            dim_texts.append(DXFDimension(str(e.dxf.handle), str(e.dxf.get("text", "")), dims[-1], shown))
         else:
             other.append(f"{kind} on {layer}")
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
-                      parts, sheet, trim, labels, marks, errors, other, dims, texts, back)
+                      parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
