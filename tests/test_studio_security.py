@@ -257,3 +257,36 @@ def test_a_design_reading_files_outside_its_folder_says_so(tmp_path):
         studio.stop()
     inside = StudioModel.load(MESH_DESIGN)                           # the mesh beside its design: nothing said
     assert inside.outside_files() == [] and os.path.isfile(inside.mesh_file() or "")
+
+
+def test_ppfab_studio_prints_the_keyed_address_and_answers_only_it(tmp_path):
+    """``ppfab studio`` in its own process: the one address it prints carries the key and serves the page;
+    the same address without the key, or with another Host, is refused; viser's banner (no key) is not shown."""
+    import re
+    import subprocess
+    import sys
+
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "fabrication.cli", "studio", str(SMALL), "--port", str(port),
+                             "--no-browser"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        found = re.fullmatch(r"ppfab: studio at http://localhost:(\d+)/([A-Za-z0-9_-]{43})/ \(Ctrl-C to stop\)\n",
+                             line)
+        assert found, line
+        served, key = int(found.group(1)), found.group(2)
+        assert served == port
+        status, body, _ = _get(port, f"/{key}/", f"localhost:{port}")
+        assert status == 200 and b"<html" in body[:200].lower()
+        assert _get(port, "/", f"localhost:{port}")[0] == 403
+        assert _get(port, f"/{key}/", f"attacker.example:{port}")[0] == 403
+        assert _ws(port, f"/{key}", "http://attacker.example")[0] == 403
+        assert _ws(port, f"/{key}", f"http://localhost:{port}")[0] == 101
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(20)

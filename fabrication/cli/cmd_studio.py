@@ -14,7 +14,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--port", type=int, default=8080, help="port to serve on (default 8080)")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to bind (default 127.0.0.1: this machine only; 0.0.0.0 exposes the studio "
-                        "to the network)")
+                        "to the network). Either way only the printed address, which carries a key for this "
+                        "session, is answered")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser")
 
 
