@@ -1,9 +1,14 @@
-"""``ppfab --help`` and ``ppfab --version`` start without the numerical and CAD libraries (start-up time)."""
+"""``ppfab --help`` and ``ppfab --version`` start without the numerical and CAD libraries (start-up time), and a
+signal during start-up (while the heavy libraries are imported) stops a run at once."""
 
+import signal
 import subprocess
 import sys
+import time
 
-from conftest import REPO
+import pytest
+
+from conftest import REPO, small_design
 
 HEAVY = ("scipy", "numpy", "build123d", "OCP", "ezdxf", "matplotlib", "shapely", "trimesh", "ifcopenshell",
          "rhino3dm", "tqdm")
@@ -17,3 +22,50 @@ def test_help_imports_no_heavy_library():
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip().splitlines()[-1] == "[]"
     assert "new" in out.stdout and "examples" in out.stdout
+
+
+# A library import that takes a minute (as the CAD kernel's can on a loaded machine or a cold disk): the hook
+# writes the marker file when the import starts, then sleeps in the import.
+SLOW_IMPORT = """
+import pathlib, sys, time
+
+class SlowImport:
+    def find_spec(self, name, path=None, target=None):
+        if name == "build123d":
+            pathlib.Path(sys.argv[1]).write_text("importing")
+            time.sleep(60)
+        return None
+
+sys.meta_path.insert(0, SlowImport())
+from fabrication.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_signal_during_a_slow_import_stops_the_build_at_once(tmp_path, signum):
+    """Ctrl-C or SIGTERM while ``ppfab build`` imports its libraries stops it within 2 s (it used to be held
+    until every import was done), with the one-line message and 128 + signal, and leaves nothing behind."""
+    (tmp_path / "d.toml").write_text(small_design())
+    marker = tmp_path / "importing"
+    proc = subprocess.Popen([sys.executable, "-c", SLOW_IMPORT, str(marker), "build", str(tmp_path / "d.toml"),
+                             "-o", str(tmp_path / "out"), "--quiet"], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        t0 = time.monotonic()
+        while not marker.exists():
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() - t0 < 120, "the build never reached the import"
+            time.sleep(0.02)
+        sent = time.monotonic()
+        proc.send_signal(signum)
+        out, err = proc.communicate(timeout=30)
+        took = time.monotonic() - sent
+    finally:
+        proc.kill()
+    name = signal.Signals(signum).name
+    assert took < 2.0, f"{took:.1f} s from {name} to exit"
+    assert proc.returncode == 128 + signum, err
+    assert err == f"ppfab: interrupted ({name})\n", err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.toml", "importing"]    # no output, lock or temp
