@@ -1,4 +1,8 @@
-"""nodes.csv: contract columns, one node per vertex at its position, unit axes, known beams."""
+"""nodes.csv: contract columns, one node per vertex at its position, unit axes, known beams.
+
+The vertex, position and axis cells are read with :class:`~fabrication.verify._cells.CellReader`: a bad cell
+is a finding naming its row and column, and its row is left out of ``data["nodes"]`` (the later checks read
+only rows whose numbers they can use)."""
 
 from __future__ import annotations
 
@@ -6,6 +10,9 @@ import numpy as np
 
 from ..contract import NODES_CONTRACT_COLUMNS as NODES_COLUMNS
 from . import Verification, check, read_csv
+from ._cells import CellReader
+
+NUMBER_COLUMNS = ("x", "y", "z", "axis_x", "axis_y", "axis_z")
 
 
 @check("nodes", 40)
@@ -15,26 +22,38 @@ def check_nodes(v: Verification) -> None:
     mesh = v.data.get("mesh")
     if rel is None or mesh is None:
         return
-    rows = read_csv(v.folder / rel)
-    v.data["nodes"] = rows
-    if rows:
-        missing = [c for c in NODES_COLUMNS if c not in rows[0]]
+    try:
+        raw = read_csv(v.folder / rel)
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        v.error(rel, "", f"cannot be read ({exc})")
+        return
+    if raw:
+        missing = [c for c in NODES_COLUMNS if c not in raw[0]]
         if missing:
             v.error(rel, "columns", f"missing contract columns {missing}")
             return
-    if len(rows) != len(mesh.vertices):
-        v.error(rel, "rows", f"{len(rows)} nodes for {len(mesh.vertices)} mesh vertices")
-    part_ids = {row["part_id"] for row in v.data.get("parts", [])}
-    for row in rows:
-        k = int(row["vertex"])
-        if not 0 <= k < len(mesh.vertices):
-            v.error(rel, row["node_id"], f"vertex {k} does not exist")
+    cells = CellReader(v, rel)
+    rows: list[dict[str, str]] = []
+    points: list[tuple[int, np.ndarray, np.ndarray]] = []
+    for n, row in enumerate(raw, start=1):
+        k = cells.integer(n, row, "vertex", low=0, high=len(mesh.vertices))
+        p = cells.vector(n, row, NUMBER_COLUMNS[:3])
+        a = cells.vector(n, row, NUMBER_COLUMNS[3:])
+        tors = cells.number(n, row, "torsion_mm", empty_ok=True) if "torsion_mm" in row else 0.0
+        beams = cells.text(n, row, "beams")
+        name = cells.text(n, row, "node_id")
+        if k is None or p is None or a is None or beams is None or name is None or (tors is None and row["torsion_mm"]):
             continue
-        p = np.array([float(row[c]) for c in ("x", "y", "z")])
+        rows.append({c: ("" if x is None else x) for c, x in row.items() if isinstance(c, str)})
+        points.append((k, p, a))
+    v.data["nodes"] = rows
+    if len(raw) != len(mesh.vertices):
+        v.error(rel, "rows", f"{len(raw)} nodes for {len(mesh.vertices)} mesh vertices")
+    part_ids = {row["part_id"] for row in v.data.get("parts", [])}
+    for row, (k, p, a) in zip(rows, points):
         if np.abs(p - mesh.vertices[k]).max() > 1e-3:
             v.error(rel, row["node_id"], f"position differs from OBJ vertex {k} by "
                                           f"{np.abs(p - mesh.vertices[k]).max():.3g} mm")
-        a = np.array([float(row[c]) for c in ("axis_x", "axis_y", "axis_z")])
         if abs(np.linalg.norm(a) - 1) > 1e-6:
             v.error(rel, row["node_id"], f"axis is not a unit vector (|a| = {np.linalg.norm(a):.6f})")
         for b in filter(None, row["beams"].split(";")):
