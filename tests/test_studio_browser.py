@@ -283,7 +283,7 @@ def test_a_page_of_another_origin_cannot_reach_the_studio(browser, tmp_path):
         outcome = browser.execute_async_script(
             "const done = arguments[arguments.length - 1];"
             f"const s = new WebSocket('{ws}', ['viser-v{viser.__version__}']);"
-            "s.onopen = () => done('open'); s.onerror = () => done('refused');", )
+            "s.onopen = () => done('open'); s.onerror = () => done('refused');")
         assert outcome == "refused"
         time.sleep(1.0)
         assert not studio.server.get_clients()
