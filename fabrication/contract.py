@@ -39,6 +39,17 @@ edge work and coated side (``[panels]``), the corners 1–4 in the panel's own f
 the origin, edge 12 along +x, seen from outside, counter-clockwise), the edge lengths 12, 23, 34, 41, both
 diagonals and the interior corner angles."""
 
+ORDER_MAKEUP_COLUMNS = ["makeup", "glass", "laminated", "heat_soak", "thickness_tolerance_mm", "size_tolerance_mm",
+                        "stamp_corner", "stamp_face", "coated_face"]
+"""The make-up of a pane type as the processor orders it, after :data:`ORDER_SHAPE_COLUMNS`
+(:mod:`fabrication.panels.makeup`): the build-up outside ply first, the glass in words, laminated (``yes``/``no``),
+the heat-soak standard of toughened plies or ``no``, the ± tolerances of thickness and of the cut size (mm), the
+corner (1 = the reference corner) and face (``inside``) of the safety-glass stamp, and the face number of a coating
+(1 = outside face, counting every glass surface from outside; ``none``)."""
+
+ORDER_ALL_COLUMNS = ORDER_COLUMNS + ORDER_SHAPE_COLUMNS + ORDER_MAKEUP_COLUMNS
+"""Every column of ``glass_order.csv``, in order."""
+
 PART_KINDS = ("panel", "beam", "strip", "splice")
 """The ``kind`` of a ``parts.csv`` row: a glass ``panel``, a ``beam`` plate (or a piece or segment of one), a
 glazing ``strip`` (flat bar on a beam's top edge, cut from stock bars: no ``sheet``, ``bar``/``bar_start_mm``

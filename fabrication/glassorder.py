@@ -29,6 +29,7 @@ from .parts import _num as _r
 from .parts import order_rows
 
 if TYPE_CHECKING:  # pragma: no cover
+    from .panels.makeup import Makeup
     from .panels.params import PanelParams
 
 
@@ -103,4 +104,29 @@ def glass_order_rows(parts: list[FlatPart], rotations: list[float], type_files: 
         row.update({"weight_kg": rep.meta.get("weight_kg", ""), "perimeter_mm": rep.meta.get("perimeter_mm", ""),
                     "edge_finish": panels.edge_finish, "coated_side": panels.coated_side})
         row.update(shape_columns(rep))
+        row.update(makeup_columns(panels.layers, panels.coated_side, max(float(row["width_mm"]),
+                                                                         float(row["height_mm"]))))
     return rows
+
+
+SIZE_TOLERANCE_MM = ((2000.0, 2.0), (3000.0, 3.0), (float("inf"), 4.0))
+"""± tolerance of a pane's cut size by its longest side (mm): our order figure for heat-treated panes; the
+processor confirms it against the product standard of the glass (EN 1863-1, EN 12150-1)."""
+
+
+def makeup_columns(makeup: "Makeup", coated_side: str, longest_mm: float) -> dict[str, object]:
+    """The make-up columns (:data:`fabrication.contract.ORDER_MAKEUP_COLUMNS`) of a pane type whose longest side is
+    ``longest_mm``.
+
+    >>> from fabrication.panels.makeup import parse_makeup
+    >>> c = makeup_columns(parse_makeup("6 FT / 1.52 PVB / 6 HS"), "inside", 1800.0)
+    >>> c["laminated"], c["heat_soak"], c["thickness_tolerance_mm"], c["size_tolerance_mm"], c["coated_face"]
+    ('yes', 'EN 14179-1', 0.5, 2.0, '4')
+    """
+    faces = 2 * len(makeup.glass)
+    coated = {"none": "none", "outside": "1", "inside": str(faces)}[coated_side]
+    size_tol = next(tol for limit, tol in SIZE_TOLERANCE_MM if longest_mm <= limit)
+    return {"makeup": makeup.text(), "glass": makeup.description(), "laminated": "yes" if makeup.laminated else "no",
+            "heat_soak": "EN 14179-1" if makeup.heat_soak else "no",
+            "thickness_tolerance_mm": makeup.thickness_tolerance_mm, "size_tolerance_mm": size_tol,
+            "stamp_corner": 1, "stamp_face": "inside", "coated_face": coated}

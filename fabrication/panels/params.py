@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from ppfab.errors import DesignError
 from ppfab.schema import param
 
+from .makeup import Makeup, parse_makeup
+
 
 @dataclass(frozen=True)
 class PanelParams:
@@ -15,14 +17,21 @@ class PanelParams:
     Examples
     --------
     >>> from ppfab.schema import parse_params
-    >>> parse_params(PanelParams, {"gap": 12, "thickness": 8}, "panels").gap
-    12.0
+    >>> p = parse_params(PanelParams, {"gap": 12, "makeup": "6 HS / 0.76 PVB / 6 HS"}, "panels")
+    >>> p.gap, p.pane_thickness, round(p.mass_per_m2, 2)
+    (12.0, 12.76, 30.81)
     """
 
     gap: float = param(10.0, doc="joint width between neighbouring panels, mm; every panel edge is inset by gap/2", min=0)
-    thickness: float = param(10.0, doc="glass thickness, mm (weight and parts list)", exclusive_min=0)
-    makeup: str = param("toughened 10 mm", doc="glass make-up written to the parts and order lists")
-    density: float = param(2500.0, doc="glass density, kg/m³", exclusive_min=0)
+    thickness: float | None = param(None, doc="total glass thickness, mm; default (and after parsing): the "
+                                              "make-up's nominal thickness (given, it must equal it)",
+                                    exclusive_min=0)
+    makeup: str = param("8 HS / 1.52 PVB / 8 HS", doc="glass make-up, outside ply first: plies '<mm> <kind>' "
+                                                     "(FL, HS, FT = toughened and heat-soaked) and interlayers "
+                                                     "(PVB, SGP, EVA) separated by '/'; overhead glazing must be "
+                                                     "laminated (docs/glazing.md)")
+    density: float = param(2500.0, doc="density of the glass plies, kg/m³ (interlayers: their own)",
+                           exclusive_min=0)
     planarity_tolerance: float = param(1.0, doc="largest allowed distance of a face corner from the face's "
                                                 "least-squares plane, mm; checked before anything is written",
                                        exclusive_min=0)
@@ -63,11 +72,33 @@ class PanelParams:
                              choices=("none", "outside", "inside"))
 
     @property
+    def layers(self) -> Makeup:
+        """The parsed make-up (:mod:`fabrication.panels.makeup`)."""
+        return parse_makeup(self.makeup, "makeup")
+
+    @property
+    def pane_thickness(self) -> float:
+        """Total nominal thickness of a pane, mm (the make-up's)."""
+        return self.layers.thickness_mm
+
+    @property
+    def mass_per_m2(self) -> float:
+        """Mass of one square metre of pane, kg."""
+        return self.layers.mass_per_m2(self.density)
+
+    @property
     def type_tol(self) -> float:
         """The congruence tolerance that groups panels into types (mm)."""
         return self.congruence_tolerance if self.type_tolerance is None else float(self.type_tolerance)
 
     def __post_init__(self):
+        layers = parse_makeup(self.makeup, "makeup")
+        if self.thickness is not None and abs(self.thickness - layers.thickness_mm) > 1e-6:
+            raise DesignError("thickness", f"{self.thickness:g} mm, but the make-up {layers.text()!r} is "
+                                           f"{layers.thickness_mm:g} mm thick: leave thickness out or change makeup")
+        # the canonical make-up text and its thickness, so that every table shows the same values
+        object.__setattr__(self, "makeup", layers.text())
+        object.__setattr__(self, "thickness", layers.thickness_mm)
         if min(self.min_size) > 0 and (max(self.min_size) > max(self.max_size) or min(self.min_size) > min(self.max_size)):
             raise DesignError("min_size", f"{list(self.min_size)} exceeds max_size {list(self.max_size)}")
         if self.coated_side != "none" and self.mirror_allowed:

@@ -162,6 +162,13 @@ def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality
             raise
         raise NonPlanarPanelError(exc.offenders, exc.tolerance_mm, advice) from None
     check_creases(geometry.mesh, design.panels.max_crease_deg, part_ids_by_face(panels))
+    if panels:
+        from ..panels.makeup import check_overhead
+
+        # inclination of a pane from the vertical: arcsin |n_z| (z is up); the steepest-lying pane is named
+        incl = np.degrees(np.arcsin(np.clip([abs(float(q.frame.normal[2])) for q in panels], 0.0, 1.0)))
+        k = int(np.argmax(incl))
+        check_overhead(design.panels.layers, float(incl[k]), panels[k].part_id)
     types = panel_types(panels)
     progress.done(f"{len(panels)} panels, {len(types)} types")
     return PanelSet(tuple(panels), types)

@@ -9,8 +9,8 @@ import numpy as np
 
 from ppfab.metrics import polygon_area
 
-from ..contract import ORDER_COLUMNS, ORDER_CORNERS, ORDER_SHAPE_COLUMNS, csv_value
-from ..glassorder import reference_frame
+from ..contract import ORDER_ALL_COLUMNS, ORDER_CORNERS, ORDER_MAKEUP_COLUMNS, csv_value
+from ..glassorder import makeup_columns, reference_frame
 from . import Verification, check, read_csv
 from ._shapes import number
 from .congruence import congruence_error, inset_face_2d
@@ -26,8 +26,8 @@ def check_order(v: Verification) -> None:
     if rel is None or parts is None:
         return
     rows = read_csv(v.folder / rel)
-    if rows and list(rows[0]) != ORDER_COLUMNS + ORDER_SHAPE_COLUMNS:
-        v.error(rel, "columns", f"{list(rows[0])} differ from the contract {ORDER_COLUMNS + ORDER_SHAPE_COLUMNS}")
+    if rows and list(rows[0]) != ORDER_ALL_COLUMNS:
+        v.error(rel, "columns", f"{list(rows[0])} differ from the contract {ORDER_ALL_COLUMNS}")
         return
     panels: dict[str, list[dict]] = {}
     for p in parts:
@@ -67,7 +67,7 @@ def check_glass_order(v: Verification) -> None:
     if rel is None:
         return
     rows = read_csv(v.folder / rel)
-    missing = [c for c in ORDER_COLUMNS + ORDER_SHAPE_COLUMNS if rows and c not in rows[0]]
+    missing = [c for c in ORDER_ALL_COLUMNS if rows and c not in rows[0]]
     if missing:
         v.error(rel, "columns", f"missing columns {missing}")
         return
@@ -124,4 +124,36 @@ def check_glass_order(v: Verification) -> None:
                                           f"diagonals {[round(d, 2) for d in want]}")
     for pid in sorted(set(parts) - set(ordered)):
         v.error(rel, pid, "panel is in no row of the glass order")
+    _check_makeup(v, rel, rows, m.get("fabrication", {}).get("panels", {}))
     v.checked.append("glass_order")
+
+
+def _check_makeup(v: Verification, rel: str, rows: list[dict[str, str]], panels: dict) -> None:
+    """Every type's make-up columns and weight recomputed from the manifest's ``[panels]`` make-up, density and
+    coated side (:mod:`fabrication.panels.makeup`)."""
+    from ppfab.errors import DesignError
+
+    from ..panels.makeup import parse_makeup
+
+    try:
+        makeup = parse_makeup(str(panels.get("makeup", "")))
+        mass = makeup.mass_per_m2(float(panels.get("density", 2500.0)))
+        coated = str(panels.get("coated_side", "none"))
+    except (DesignError, TypeError, ValueError) as exc:
+        v.error("manifest.json", "fabrication.panels.makeup", f"cannot be read ({exc})")
+        return
+    for row in rows:
+        tid = row["type_id"]
+        try:
+            longest = max(float(row["width_mm"]), float(row["height_mm"]))
+            want = makeup_columns(makeup, coated, longest)
+            weight = number(row["area_mm2"]) * 1e-6 * mass
+        except (KeyError, ValueError) as exc:
+            v.error(rel, tid, f"width, height or area cannot be read ({exc})")
+            continue
+        for col in ORDER_MAKEUP_COLUMNS:
+            if csv_value(row.get(col, "")) != csv_value(str(want[col])):
+                v.error(rel, tid, f"{col} {row.get(col)!r}, but the make-up {makeup.text()!r} gives {want[col]!r}")
+        if abs(number(row["weight_kg"], -1.0) - weight) > 0.01 + 1e-4 * weight:
+            v.error(rel, tid, f"weight {row['weight_kg']} kg, but {row['area_mm2']} mm² of {makeup.text()} "
+                              f"({mass:.3f} kg/m²) weigh {weight:.3f} kg")

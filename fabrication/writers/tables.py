@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..contract import ORDER_COLUMNS, ORDER_SHAPE_COLUMNS, TYPE_DIR, type_file
+from ..contract import ORDER_ALL_COLUMNS, TYPE_DIR, type_file
 from ..glassorder import glass_order_rows
 from ..nodes import write_nodes_csv, write_nodes_json
 from ..parts import csv_text, part_rows, write_parts_csv, write_parts_json
@@ -49,7 +49,7 @@ def write_tables(build: "Build", out: Path, files: Files) -> str:
     if design.output.per_type_dxf:
         type_files = {p.type_id or p.part_id: f"{TYPE_DIR}/{type_file(p.type_id or p.part_id)}" for p in parts}
         orders = glass_order_rows(parts, list(design.nesting.rotations), type_files, design.panels)
-        (out / "glass_order.csv").write_text(csv_text(orders, ORDER_COLUMNS + ORDER_SHAPE_COLUMNS), encoding="utf-8")
+        (out / "glass_order.csv").write_text(csv_text(orders, ORDER_ALL_COLUMNS), encoding="utf-8")
         files["glass_order_csv"] = "glass_order.csv"
     rows = parts_table(build, files)
     write_parts_csv(rows, out / "parts.csv")
