@@ -1,6 +1,10 @@
 """The per-type DXFs (the files the glass order sends the supplier): one flat outline each, congruent, within
 the congruence tolerance, with the 3D face (inset by half the gap) of every panel of its type.
 
+Each DIMENSION shows its measurement: its text override is empty or ``<>`` (the measured value), and the text
+of its rendered block is that value to the one decimal the dimension style gives (a text that is no number is a
+finding too).
+
 The outlines are kept in ``data["type_outlines"]`` (type id → outline) for the placement check, and each file as
 read in ``data["type_dxf"]`` (:func:`type_dxf`), so the glass order check reads none of them again.
 """
@@ -66,6 +70,7 @@ def check_types(v: Verification) -> None:
             v.error(rel, tid or part.part_id, "type is not a panel type of parts.csv")
             continue
         outlines[tid] = part.points
+        _check_dimension_texts(v, rel, tid, content)
         if mesh is None:
             continue
         for row in members:
@@ -83,3 +88,21 @@ def check_types(v: Verification) -> None:
         if files.get("panel_type_dxfs"):
             v.error("glass/types", tid, "panel type has no per-type DXF")
     v.checked.append("types")
+
+
+def _reads(text: str, value: float) -> bool:
+    """Whether a dimension text (``"1826"``, ``"1765.1"``) is ``value`` to the style's one decimal."""
+    try:
+        return abs(float(text.strip()) - value) <= 0.05 + 1e-9
+    except ValueError:
+        return False
+
+
+def _check_dimension_texts(v: Verification, rel: str, tid: str, content: "DXFContent") -> None:
+    """Every DIMENSION of a per-type DXF reads its measurement (override ``""``/``"<>"``, block text to 0.1 mm)."""
+    for d in content.dimension_texts:
+        what = f"{tid} DIMENSION #{d.handle}"
+        if d.override not in ("", "<>") and not _reads(d.override, d.measurement):
+            v.error(rel, what, f"text is overridden to {d.override!r}; the dimension measures {d.measurement:.1f} mm")
+        if d.shown is not None and not _reads(d.shown, d.measurement):
+            v.error(rel, what, f"shows {d.shown!r}; the dimension measures {d.measurement:.1f} mm")
