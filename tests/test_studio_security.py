@@ -64,6 +64,7 @@ def _ws(port: int, path: str, origin: str | None, host: str = "localhost") -> tu
 
 
 def _get(port: int, path: str, host: str, origin: str | None = None) -> tuple[int, bytes, str | None]:
+    """``GET path`` on the loopback port with ``Host: host`` (and ``Origin``): ``(status, body, Location)``."""
     c = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
     c.putrequest("GET", path, skip_host=True)
     c.putheader("Host", host)
@@ -73,6 +74,8 @@ def _get(port: int, path: str, host: str, origin: str | None = None) -> tuple[in
     r = c.getresponse()
     body = r.read()
     c.close()
+    if r.status == 200:
+        assert r.getheader("Referrer-Policy") == "no-referrer"          # the key never leaves in a Referer
     return r.status, body, r.getheader("Location")
 
 
@@ -227,6 +230,7 @@ def test_page_asks_before_replacing_and_consent_is_for_one_file(tmp_path):
         studio.replace_box.value = True
         studio._guard(studio._save)
         assert b"[geometry]" in other.read_bytes() and not studio.replace_box.visible
+        assert "saved by this studio" in studio.save_note.content        # its own file now: no box
         studio.save_path.value = str(design)                         # the design read: no box at all
         assert not studio.replace_box.visible and "never overwritten" in studio.save_note.content
         before = design.read_bytes()

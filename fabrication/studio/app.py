@@ -279,7 +279,7 @@ class Studio:
             target, self.save_note.content = None, str(exc)
         else:
             self.save_note.content = "" if target is None else {
-                "new": "", "session": "",
+                "new": "", "session": f"`{target.path}` was saved by this studio: Save replaces it",
                 "foreign": f"`{target.path}` exists and was not written by this studio: tick the box to replace it",
                 "input": f"`{target.path}` is the design or mesh this studio read: it is never overwritten"}[target.kind]
         self.replace_box.visible = target is not None and target.kind == "foreign"
