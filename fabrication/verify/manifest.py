@@ -52,57 +52,97 @@ def _clean_mesh(v: Verification, mesh: Any) -> dict[str, Any]:
     return out
 
 
-def recompute_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
-    """The ``fabrication`` table as the build writes it from its parameter records, the records parsed from
-    ``fab`` itself; every section that does not parse is a finding (and left out of what is returned)."""
-    from ppfab.errors import DesignError
+FLAT_ALIASES = {"panel_gap": "panels.gap", "planarity_tolerance": "panels.planarity_tolerance",
+                "max_crease_deg": "panels.max_crease_deg", "glass_thickness": "panels.thickness",
+                "glass_makeup": "panels.makeup", "sheet": "nesting.sheet", "sheet_margin": "nesting.margin",
+                "part_spacing": "nesting.spacing"}
+"""The flat keys of ``fabrication`` the writer copies from a section
+(:func:`fabrication.writers.manifest.fabrication_params`); every ``beam_<key>`` is ``beams.<key>``."""
+
+
+def _defaults() -> dict[str, Any]:
+    """The ``fabrication`` table of a design with every parameter at its default."""
     from ppfab.schema import as_plain, parse_params
 
-    from ..design import Design, DesignInfo, _section_types
+    from ..design import SECTION_DEFAULTS, Design, DesignInfo, _section_types
     from ..writers.manifest import fabrication_params
 
+    types = _section_types()
+    records: dict[str, Any] = {name: parse_params(types[name](), dict(SECTION_DEFAULTS.get(name, {})), name)
+               for name in FABRICATION_SECTIONS}
+    design = Design(source="", sha256="", base_dir=Path("."), info=DesignInfo(), geometry=None,  # type: ignore[arg-type]
+                    sections=records)
+    out = fabrication_params(design)
+    out.update({name: as_plain(records[name]) for name in FABRICATION_SECTIONS})
+    return out
+
+
+def _same_kind(value: Any, default: Any) -> bool:
+    """Whether a manifest value has the type of the parameter's default (a number, a flag, text, a list of
+    numbers); a default of ``None`` takes anything."""
+    if default is None:
+        return True
+    if isinstance(default, bool):
+        return isinstance(value, bool)
+    if is_number(default):
+        return is_number(value)
+    if isinstance(default, str):
+        return isinstance(value, str)
+    if isinstance(default, list):
+        if not isinstance(value, list):
+            return False
+        if default and all(is_number(x) for x in default):
+            return all(is_number(x) for x in value)
+    return True
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if is_number(a) and is_number(b):
+        return abs(float(a) - float(b)) <= 1e-9 * max(1.0, abs(float(b)))
+    return bool(a == b)
+
+
+def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
+    """``fab`` with every value of the wrong type (a finding naming its key) replaced by the parameter's
+    default; every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
+    Types are judged against the defaults, not by parsing: a build of an older version keeps verifying when
+    a newer one tightens a parameter's limits."""
     if not isinstance(fab, dict):
         v.error("manifest.json", "fabrication", f"must be an object, got {type(fab).__name__}")
         return {}
-    types = _section_types()
-    records: dict[str, Any] = {}
-    good = True
-    for name in FABRICATION_SECTIONS:
-        try:
-            records[name] = parse_params(types[name](), fab.get(name, {}), f"fabrication.{name}")
-        except DesignError as exc:
-            v.error("manifest.json", exc.key or f"fabrication.{name}", str(exc).split(": ", 1)[-1])
-            good = False
-    if not good:
-        return {}
-    design = Design(source="", sha256="", base_dir=Path("."), info=DesignInfo(), geometry=None,  # type: ignore[arg-type]
-                    sections=records)
-    want = fabrication_params(design)
-    for name in FABRICATION_SECTIONS:
-        want[name] = as_plain(records[name])
-    return want
-
-
-def _compare(v: Verification, got: Any, want: Any, path: str) -> None:
-    """Name every key of ``got`` that differs from ``want`` (numbers within 1e-9 relative)."""
-    if isinstance(want, dict):
-        if not isinstance(got, dict):
-            v.error("manifest.json", path, f"must be an object, got {got!r}"[:200])
-            return
-        for key in want:
-            if key in got:                  # a key the build did not write reads as its default
-                _compare(v, got[key], want[key], f"{path}.{key}")
-        return
-    if is_number(want) and is_number(got):
-        if abs(float(got) - float(want)) <= 1e-9 * max(1.0, abs(float(want))):
-            return
-    elif isinstance(want, list) and isinstance(got, list) and len(want) == len(got):
-        for k, (a, b) in enumerate(zip(got, want)):
-            _compare(v, a, b, f"{path}[{k}]")
-        return
-    elif got == want:
-        return
-    v.error("manifest.json", path, f"{got!r} differs from the value its parameter section gives, {want!r}"[:240])
+    defaults = _defaults()
+    out: dict[str, Any] = {}
+    for key, value in fab.items():
+        default = defaults.get(key)
+        if isinstance(default, dict):
+            if not isinstance(value, dict):
+                v.error("manifest.json", f"fabrication.{key}", f"must be an object, got {value!r}"[:200])
+                out[key] = dict(default)
+                continue
+            section = {}
+            for k, x in value.items():
+                if k in default and not _same_kind(x, default[k]):
+                    v.error("manifest.json", f"fabrication.{key}.{k}",
+                            f"{x!r} is not of the parameter's type (default {default[k]!r})"[:200])
+                    x = default[k]
+                section[k] = x
+            out[key] = section
+        elif key in defaults and not _same_kind(value, default):
+            v.error("manifest.json", f"fabrication.{key}",
+                    f"{value!r} is not of the parameter's type (default {default!r})"[:200])
+            out[key] = default
+        else:
+            out[key] = value
+    aliases = dict(FLAT_ALIASES)
+    aliases.update({k: f"beams.{k[5:]}" for k in defaults if k.startswith("beam_") and k[5:] in defaults["beams"]})
+    for flat, path in aliases.items():
+        name, key = path.split(".")
+        part = out.get(name)
+        if flat in out and isinstance(part, dict) and key in part and not _equal(out[flat], part[key]):
+            v.error("manifest.json", f"fabrication.{flat}", f"{out[flat]!r} differs from fabrication.{path} "
+                                                            f"{part[key]!r} (the build writes one value twice)")
+            out[flat] = part[key]
+    return out
 
 
 @check("manifest", 10)
@@ -144,13 +184,7 @@ def check_manifest(v: Verification) -> None:
         listed.update([value] if isinstance(value, str) else value)
     for name in sorted(listed - set(sha)):
         v.error("manifest.json", name, "file listed without a sha256")
-    fab = m.get("fabrication", {})
-    want = recompute_fabrication(v, fab)
-    if want:
-        _compare(v, fab, want, "fabrication")
-        clean["fabrication"] = want
-    else:
-        clean["fabrication"] = {}
+    clean["fabrication"] = clean_fabrication(v, m.get("fabrication", {}))
     for key in ("summary", "glazing", "quality", "design"):
         if key in clean and not isinstance(clean[key], dict):
             v.error("manifest.json", key, f"must be an object, got {type(clean[key]).__name__}")
