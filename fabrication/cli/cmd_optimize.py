@@ -20,6 +20,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = EPILOG
     p.add_argument("mesh", help="input quad mesh (.obj or .off)")
     p.add_argument("-o", "--out", required=True, help="output mesh (.obj or .off), same vertex and face order")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing output file, if ppfab wrote it and it is unchanged (never an input)")
     p.add_argument("--families", choices=["rows", "cols", "both", "none"], default=None,
                    help="polyline families to make planar (default rows; none = planar faces only)")
     p.add_argument("--polylines", default=None,
@@ -107,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     from ppfab.io import load_mesh, write_mesh
     from ppfab.optimize import optimize
 
-    from ..pipeline.folder import atomic_file
+    from ..pipeline.overwrite import check_output_file, write_output
     from ..pipeline.progress import Progress
 
     out = Path(args.out)
@@ -117,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
         raise MeshFileError(str(out), f"unknown mesh format '{out.suffix}' (use .obj or .off)")
     if not out.parent.exists():
         raise MeshFileError(str(out), f"folder {out.parent} does not exist")
+    inputs = [args.mesh] + ([args.design] if args.design else [])
+    target = check_output_file(out, inputs=inputs, force=args.force)      # refuse before the work
     params = collect_params(args)
     mesh = load_mesh(args.mesh)
     progress = Progress(quiet=args.quiet or args.json, verbose=args.verbose)
@@ -126,8 +130,7 @@ def run(args: argparse.Namespace) -> int:
         raise MeshFileError(args.mesh, str(exc)) from None
     finally:
         progress.clear()
-    with atomic_file(out) as tmp:
-        write_mesh(result.mesh, tmp)
+    write_output(target, lambda tmp: write_mesh(result.mesh, tmp))       # atomic, stamped as ppfab's
     if args.json:
         doc = result.summary()
         doc.update({"input": str(args.mesh), "output": str(out),

@@ -8,16 +8,22 @@ and it first removes the leftovers of killed runs (:func:`~fabrication.pipeline.
 
 What may be replaced (:func:`check_target`): with ``force``, only a folder that is a previous ppfab build
 (:func:`previous_build_problem`) — never a symbolic link, the current folder or one holding it, or a
-folder holding an input (the design file, the mesh file).
+folder holding an input (the design file, the mesh file).  That is checked again right before each rename
+of the commit (a folder that appeared, a previous build that changed while the build was written: refused,
+the finished build kept in its temporary folder), and a previous build is removed file by file, only what
+its manifest lists unchanged (:func:`remove_build`), never with ``rmtree``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import os
 import shutil
+import stat
 import uuid
+from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Iterable, Iterator, Literal
@@ -25,6 +31,10 @@ from typing import Iterable, Iterator, Literal
 from ppfab.errors import PpfabError
 
 from .lock import MARKER, OutputLock, remove_stale, write_marker
+from . import overwrite
+from .overwrite import rename_noreplace
+
+log = logging.getLogger("ppfab")
 
 
 class OutputExistsError(PpfabError):
@@ -106,8 +116,115 @@ def check_target(target: str | os.PathLike, force: bool = False, protect: Iterab
                                 "--force replaces only a ppfab build: choose another output folder")
 
 
+@dataclass(frozen=True)
+class FolderState:
+    """What is at a path, to tell later whether anything changed: the path's own ``(st_dev, st_ino,
+    st_mode)``, and for a folder every entry below it as ``(relative path, mode, size, mtime_ns, inode)``
+    (symbolic links not followed)."""
+
+    root: tuple[int, int, int]
+    entries: tuple[tuple[str, int, int, int, int], ...]
+
+    def difference(self, now: "FolderState | None") -> str | None:
+        """``None`` when ``now`` is this state, else what changed (one phrase, for a message)."""
+        if now is None:
+            return "was removed"
+        if now.root != self.root:
+            return "was replaced"
+        before = {e[0]: e for e in self.entries}
+        after = {e[0]: e for e in now.entries}
+        for rel in sorted(after.keys() - before.keys()):
+            return f"gained {rel}"
+        for rel in sorted(before.keys() - after.keys()):
+            return f"lost {rel}"
+        for rel in sorted(before):
+            if before[rel] != after[rel]:
+                return f"had {rel} changed"
+        return None
+
+
+def folder_state(path: str | os.PathLike) -> FolderState | None:
+    """The :class:`FolderState` of ``path``; ``None`` when nothing is there (not even a dangling link)."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    root = (st.st_dev, st.st_ino, st.st_mode)
+    if not stat.S_ISDIR(st.st_mode):
+        return FolderState(root, ())
+    entries = []
+    for dirpath, dirnames, filenames in os.walk(os.fspath(path)):
+        for name in dirnames + filenames:
+            full = os.path.join(dirpath, name)
+            try:
+                e = os.lstat(full)
+            except FileNotFoundError:
+                continue
+            entries.append((os.path.relpath(full, path), e.st_mode, e.st_size, e.st_mtime_ns, e.st_ino))
+    return FolderState(root, tuple(sorted(entries)))
+
+
+def remove_build(folder: str | os.PathLike) -> list[str]:
+    """Remove the ppfab build ``folder`` file by file; returns the relative paths it had to leave (empty when
+    the folder is gone).
+
+    A file goes only when its manifest lists it and its sha256 is the listed one; folders go only when
+    empty (``rmdir``); ``manifest.json`` and the folder itself go last, only when nothing else remained.  A
+    file that appears or changes while this runs is therefore never removed, unlike with ``rmtree``.
+    """
+    root = Path(folder)
+    try:
+        doc = json.loads((root / "manifest.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        doc = None
+    ok = isinstance(doc, dict) and str(doc.get("generator", "")).startswith("ppfab")
+    listed: dict[str, str] = doc["sha256"] if ok and isinstance(doc.get("sha256"), dict) else {}
+    left: list[str] = []
+    for dirpath, dirnames, filenames in os.walk(root, topdown=False):
+        for name in filenames + dirnames:
+            p = Path(dirpath) / name
+            rel = p.relative_to(root).as_posix()
+            if p.is_symlink():
+                left.append(rel)
+            elif p.is_dir():
+                with contextlib.suppress(OSError):
+                    p.rmdir()
+            elif rel == "manifest.json" and ok:
+                continue
+            elif rel in listed and p.is_file() and _sha256(p) == listed[rel]:
+                p.unlink()
+            else:
+                left.append(rel)
+    if left:
+        return sorted(left)
+    if ok:
+        with contextlib.suppress(FileNotFoundError):
+            (root / "manifest.json").unlink()
+    try:
+        root.rmdir()
+    except OSError:
+        return sorted(p.name for p in root.iterdir())
+    return []
+
+
+class OutputChangedError(OutputExistsError):
+    """The output folder appeared or changed while the build was written; the finished build is kept."""
+
+    def __init__(self, message: str, kept: Path):
+        self.kept = kept
+        super().__init__(message)
+
+
 class AtomicFolder:
-    """``with AtomicFolder(out, force) as tmp:`` — write into ``tmp``; committed on success."""
+    """``with AtomicFolder(out, force) as tmp:`` — write into ``tmp``; committed on success.
+
+    The commit, under the lock, checks the target again right before each rename: when there was no
+    folder at the start and there is one now, or when (``force``) the previous build is no longer exactly
+    what was checked (:class:`FolderState` and :func:`previous_build_problem`), nothing is renamed or removed
+    and :class:`OutputChangedError` names the temporary folder that keeps the finished build.  The previous
+    build, moved aside, is removed by :func:`remove_build` only.  :data:`~fabrication.pipeline.overwrite.COMMIT_HOOKS`
+    run right before these checks.
+    """
 
     def __init__(self, target: str | os.PathLike, force: bool = False, protect: Iterable[str | os.PathLike] = ()):
         self.target = Path(os.path.abspath(target))
@@ -116,12 +233,14 @@ class AtomicFolder:
         check_target(target, force, self.protect)
         self.tmp = self.target.parent / f".{self.target.name}.tmp-{uuid.uuid4().hex[:8]}"
         self._lock = OutputLock(self.target)
+        self._start: FolderState | None = None
 
     def __enter__(self) -> Path:
         self._lock.__enter__()
         try:
             check_target(self.target, self.force, self.protect)      # again, under the lock
-            remove_stale(self.target, previous_build_problem)
+            self._start = folder_state(self.target)
+            remove_stale(self.target, previous_build_problem, remove_build)
             self.tmp.mkdir()
             write_marker(self.tmp)
         except OSError as exc:
@@ -136,25 +255,74 @@ class AtomicFolder:
         shutil.rmtree(self.tmp, ignore_errors=True)
         self._lock.__exit__(None, None, None)
 
+    def _refuse(self, what: str, old: Path | None = None) -> OutputChangedError:
+        """Keep the finished build where it is, release the lock, and say so."""
+        self._lock.__exit__(None, None, None)
+        where = f"; the previous build is in {old}" if old is not None else ""
+        return OutputChangedError(f"output folder {self.target} {what} while the build was written, so nothing "
+                                  f"was replaced or removed{where}; the finished build is in {self.tmp}",
+                                  kept=self.tmp)
+
+    def _problem(self, path: Path) -> str | None:
+        """What changed at ``path`` (the target, or the previous build moved aside) since the start."""
+        now = folder_state(path)
+        if self._start is None:
+            return None if now is None else "appeared"
+        why = self._start.difference(now)
+        if why is None:
+            why = previous_build_problem(path)
+            why = None if why is None else f"changed ({why})"
+        return why
+
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> Literal[False]:
         if exc_type is not None:
             self._cleanup()
             return False
-        old = None
         try:
             (self.tmp / MARKER).unlink()
-            if self.target.exists():
-                old = self.target.parent / f".{self.target.name}.old-{os.getpid()}-{uuid.uuid4().hex[:8]}"
-                os.replace(self.target, old)
-            os.replace(self.tmp, self.target)
+            for hook in list(overwrite.COMMIT_HOOKS):
+                hook(self.target, self.tmp)
         except BaseException:
-            if old is not None and not self.target.exists():
-                os.replace(old, self.target)
+            self._cleanup()
+            raise
+        why = self._problem(self.target)                            # right before the first rename
+        if why is not None:
+            raise self._refuse(why)
+        old = None
+        if self._start is not None:
+            old = self.target.parent / f".{self.target.name}.old-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+            try:
+                rename_noreplace(self.target, old)
+            except FileNotFoundError:
+                raise self._refuse("was removed") from None
+            why = self._problem(old)                                # written to just before it moved?
+            if why is not None:
+                try:
+                    rename_noreplace(old, self.target)
+                except OSError:
+                    raise self._refuse(why, old) from None
+                raise self._refuse(why)
+        try:
+            rename_noreplace(self.tmp, self.target)
+        except FileExistsError:
+            restored = False
+            if old is not None:
+                with contextlib.suppress(OSError):
+                    rename_noreplace(old, self.target)
+                    restored = True
+            raise self._refuse("appeared", None if restored else old) from None
+        except BaseException:
+            if old is not None:
+                with contextlib.suppress(OSError):
+                    rename_noreplace(old, self.target)
             self._cleanup()
             raise
         if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            left = remove_build(old)
+            if left:
+                log.warning("kept %s, the previous build of %s: %s appeared in it while it was replaced",
+                            old, self.target, ", ".join(left[:3]))
         self._lock.__exit__(None, None, None)
         return False
 

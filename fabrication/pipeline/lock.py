@@ -7,6 +7,12 @@ helper process, which shares the lock, dies with its parent: :mod:`fabrication.w
 is re-entrant within one process: the command line takes it before the compute stages and
 :meth:`~fabrication.pipeline.records.Build.write` takes it again around the writers.
 
+The lock file is only ever created new (``O_CREAT | O_EXCL | O_NOFOLLOW`` under a fresh name, then
+hard-linked into place, see :func:`_create_locked`): ppfab never opens what it finds at the lock path for
+writing, never follows a symbolic link there and never truncates a file.  A symbolic link, a folder or a
+file that is not a ppfab lock record at that path is refused in one line and left as it is; the lock file
+of a killed run (a ppfab record nobody holds) is removed and a new one made.
+
 A temporary folder carries :data:`MARKER`, a small JSON record ``{pid, host, start}`` of the run writing
 it (``start`` is the process start time, so a recycled pid is not mistaken for the writer).
 :func:`remove_stale` deletes, while the lock is held, the temporary folders of ``NAME`` whose marker
@@ -19,6 +25,7 @@ deleted.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import logging
@@ -26,6 +33,8 @@ import os
 import re
 import shutil
 import socket
+import stat
+import uuid
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +44,8 @@ except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]
 
 from ppfab.errors import PpfabError
+
+from .overwrite import rename_noreplace
 
 log = logging.getLogger("ppfab")
 
@@ -88,8 +99,12 @@ def write_marker(folder: Path) -> None:
 
 
 def _read_marker(folder: Path) -> dict[str, Any] | None:
+    return _read_record(folder / MARKER)
+
+
+def _read_record(path: Path) -> dict[str, Any] | None:
     try:
-        doc = json.loads((folder / MARKER).read_text(encoding="utf-8"))
+        doc = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     return doc if isinstance(doc, dict) else None
@@ -139,36 +154,15 @@ class OutputLock:
             self._made = missing
         except OSError as exc:
             raise OutputBusyError(f"cannot create the folder {self.target.parent} ({exc.strerror})") from None
-        while True:
-            try:
-                fh = open(self.path, "a+", encoding="utf-8")
-            except OSError as exc:
-                raise OutputBusyError(f"cannot create the lock file {self.path} ({exc.strerror})") from None
-            try:
-                fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                fh.seek(0)
-                other = fh.read().strip()
-                fh.close()
-                if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                    raise OutputBusyError(f"cannot lock {self.path} ({exc.strerror})") from None
-                who = f" (pid {json.loads(other).get('pid')})" if other.startswith("{") else ""
-                raise OutputBusyError(f"output folder {self.target} is being written by another ppfab run{who}; "
-                                      "wait for it to finish or choose another output folder") from None
-            # the file may have been removed by a run that just finished: lock the file that is there now
-            try:
-                same = os.path.samestat(os.fstat(fh.fileno()), os.stat(self.path))
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            fh.close()
-        fh.seek(0)
-        fh.truncate()
-        fh.write(json.dumps(process_record()) + "\n")
-        fh.flush()
-        _HELD[self.path] = [fh, 1]
-        return self
+        for _ in range(100):
+            fd = _create_locked(self.path)
+            if fd is None:
+                _take_existing(self.path, self.target)
+            else:
+                _HELD[self.path] = [fd, 1]
+                return self
+        raise OutputBusyError(f"cannot take the lock file {self.path}: it keeps changing; "
+                              "wait for the other ppfab runs to finish")
 
     def __exit__(self, *exc: object) -> None:
         held = _HELD[self.path]
@@ -176,14 +170,15 @@ class OutputLock:
         if held[1] > 0:
             return
         del _HELD[self.path]
-        fh = held[0]
-        if fh is None:  # pragma: no cover
+        fd = held[0]
+        if fd is None:  # pragma: no cover
             return
-        try:
-            os.unlink(self.path)                # while still locked: nobody can hold a lock on it now
+        try:                                    # while still locked, and only the file this run made
+            if os.path.samestat(os.fstat(fd), os.lstat(self.path)):
+                os.unlink(self.path)
         except OSError:
             pass
-        fh.close()
+        os.close(fd)
         for p in self._made:                    # innermost first; only empty ones go
             try:
                 p.rmdir()
@@ -191,26 +186,122 @@ class OutputLock:
                 break
 
 
+_OPEN_NEW = os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+_OPEN_OLD = os.O_RDWR | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
+
+
+def _create_locked(path: Path) -> int | None:
+    """A new lock file at ``path``, already locked and holding this run's record; ``None`` when anything
+    (a file, a symbolic link, a folder) is at ``path``.
+
+    The file is made under a fresh name with ``O_CREAT | O_EXCL | O_NOFOLLOW``, locked and written there,
+    then hard-linked to ``path`` (``link`` neither follows nor replaces what is at its destination), so the
+    lock file never exists empty or unlocked and nothing at ``path`` is ever opened for writing.
+    """
+    spare = path.with_name(f"{path.name}-{uuid.uuid4().hex[:8]}")
+    try:
+        fd = os.open(spare, _OPEN_NEW, 0o644)
+    except OSError as exc:
+        raise OutputBusyError(f"cannot create the lock file {path} ({exc.strerror})") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)          # nobody else can know this file yet
+        os.write(fd, (json.dumps(process_record()) + "\n").encode("utf-8"))
+        os.link(spare, path)
+    except FileExistsError:
+        os.close(fd)
+        return None
+    except OSError as exc:
+        os.close(fd)
+        raise OutputBusyError(f"cannot create the lock file {path} ({exc.strerror})") from None
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(spare)
+    return fd
+
+
+def _is_record(text: str) -> bool:
+    try:
+        doc = json.loads(text)
+    except ValueError:
+        return False
+    return isinstance(doc, dict) and {"pid", "host"} <= doc.keys()
+
+
+def _take_existing(path: Path, target: Path) -> None:
+    """Deal with what is at the lock path ``path``: raise :class:`OutputBusyError` when another run holds it
+    or when it is not a ppfab lock file (a symbolic link, a folder, a file ppfab did not write: one-line
+    refusal, nothing opened for writing, nothing truncated); remove it when it is the lock file of a run that
+    was killed.  The caller then tries to create the lock file again."""
+    try:
+        fd = os.open(path, _OPEN_OLD)               # no O_CREAT, no O_TRUNC: reads what is there
+    except FileNotFoundError:
+        return                                      # removed by a run that just finished
+    except OSError as exc:
+        if os.path.islink(path):
+            raise OutputBusyError(f"lock file {path} is a symbolic link (to {os.readlink(path)}), which ppfab "
+                                  "did not make; remove it and run again") from None
+        kind = "a folder" if path.is_dir() else exc.strerror
+        raise OutputBusyError(f"lock file {path} cannot be used ({kind}); ppfab did not make it: "
+                              "remove it and run again") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_uid != os.geteuid():
+            what = "not a regular file" if not stat.S_ISREG(st.st_mode) else "owned by another user"
+            raise OutputBusyError(f"lock file {path} is {what}, so ppfab did not make it; "
+                                  "remove it and run again")
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise OutputBusyError(f"cannot lock {path} ({exc.strerror})") from None
+            other = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+            who = f" (pid {json.loads(other).get('pid')})" if _is_record(other) else ""
+            raise OutputBusyError(f"output folder {target} is being written by another ppfab run{who}; "
+                                  "wait for it to finish or choose another output folder") from None
+        try:                                        # still the file at the path (not one just removed)?
+            if not os.path.samestat(st, os.lstat(path)):
+                return
+        except FileNotFoundError:
+            return
+        text = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+        if not _is_record(text):
+            raise OutputBusyError(f"lock file {path} was not written by ppfab ({st.st_size} bytes of something "
+                                  "else); remove it and run again")
+        os.unlink(path)                             # left by a killed run: removed, never reused
+        log.info("removed %s, left behind by a run that was killed", path)
+    finally:
+        os.close(fd)
+
+
 def holds_lock(target: str | os.PathLike) -> bool:
     """Whether this process holds the :class:`OutputLock` of ``target``."""
     return lock_path(Path(os.path.abspath(target))) in _HELD
 
 
-def remove_stale(target: Path, is_build: Any) -> list[Path]:
+def remove_stale(target: Path, is_build: Any, remove_build: Any = None) -> list[Path]:
     """Delete the leftovers of killed runs writing ``target`` (the caller holds its lock); returns them.
 
-    ``is_build(folder) -> str | None`` tells whether a folder is a complete ppfab build (``None``) or why not.
+    ``is_build(folder) -> str | None`` tells whether a folder is a complete ppfab build (``None``) or why not;
+    ``remove_build(folder) -> list[str]`` removes such a build file by file and returns what it had to leave
+    (:func:`~fabrication.pipeline.folder.remove_build`; without it the folder is removed whole).
     """
     removed: list[Path] = []
     name = re.escape(target.name)
     tmp_re = re.compile(rf"^\.{name}\.tmp-[0-9a-f]+$")
     old_re = re.compile(rf"^\.{name}\.old-([0-9]+)-[0-9a-f]+$")
+    spare_re = re.compile(rf"^\.{name}\.lock-[0-9a-f]{{8}}$")
     try:
         entries = list(target.parent.iterdir())
     except OSError:
         return removed
     host = socket.gethostname()
     for p in sorted(entries):
+        if spare_re.match(p.name) and p.is_file() and not p.is_symlink():
+            rec = _read_record(p)           # a lock file of a run killed before it took its place
+            if rec is not None and not process_alive(rec):
+                p.unlink()
+                removed.append(p)
+            continue
         if p.is_symlink() or not p.is_dir():
             continue
         if tmp_re.match(p.name):
@@ -223,9 +314,21 @@ def remove_stale(target: Path, is_build: Any) -> list[Path]:
             m = old_re.match(p.name)
             if m is None or process_alive({"pid": int(m.group(1)), "host": host}) or is_build(p) is not None:
                 continue
-            if not target.exists():         # killed between moving the old build aside and the rename
-                os.replace(p, target)
+            if not os.path.lexists(target):     # killed between moving the old build aside and the rename
+                try:
+                    rename_noreplace(p, target)
+                except FileExistsError:
+                    continue
                 log.info("restored %s from %s, left behind by a run that was killed", target, p)
+                continue
+            if remove_build is not None:
+                left = remove_build(p)
+                if left:
+                    log.warning("kept %s, left behind by a run that was killed: it holds %s, which ppfab "
+                                "did not write", p, ", ".join(left[:3]))
+                    continue
+                log.info("removed %s, left behind by a run that was killed", p)
+                removed.append(p)
                 continue
         shutil.rmtree(p, ignore_errors=True)
         log.info("removed %s, left behind by a run that was killed", p)
