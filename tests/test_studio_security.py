@@ -127,6 +127,34 @@ def test_gate_host_rules():
     assert guard.new_key() != guard.new_key() and len(guard.new_key()) >= 40
 
 
+def test_check_strips_the_key_and_logs_each_kind_of_refusal_once(caplog):
+    import logging
+
+    from websockets.datastructures import Headers
+    from websockets.http11 import Request
+
+    class Connection:
+        local_address = ("127.0.0.1", 8080)
+
+        def respond(self, status, text):
+            return int(status), text
+
+    g = guard.Gate("k3y", "127.0.0.1")
+    mine = Headers({"Host": "localhost:8080"})
+    refused, passed = guard.check(g, Connection(), Request("/k3y/index.html?x=1", mine))
+    assert refused is None and passed.path == "/index.html?x=1"
+    refused, passed = guard.check(g, Connection(), Request("/k3y/", mine))
+    assert refused is None and passed.path == "/"
+    with caplog.at_level(logging.WARNING, logger="ppfab"):
+        for _ in range(5):
+            refused, passed = guard.check(g, Connection(), Request(
+                "/k3y", Headers({"Host": "localhost:8080", "Origin": "http://evil.example"})))
+            assert passed is None and refused[0] == 403 and "Origin 'http://evil.example'" in refused[1]
+        guard.check(g, Connection(), Request("/", mine))
+    said = [r.getMessage() for r in caplog.records if r.name == "ppfab"]
+    assert len(said) == 2 and "Origin" in said[0] and "session key" in said[1]
+
+
 def test_the_hook_point_in_viser_is_where_the_guard_expects_it(studio):
     """Fails when a viser release changes how it starts its server: the guard must then be rewritten."""
     from viser.infra import _infra

@@ -30,10 +30,11 @@ from __future__ import annotations
 import hmac
 import inspect
 import ipaddress
+import logging
 import secrets
 import threading
 import urllib.parse
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, TypeVar
 
 from ppfab.errors import PpfabError
@@ -42,6 +43,7 @@ LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
 """The names of the loopback address a browser on this machine may use."""
 
 T = TypeVar("T")
+log = logging.getLogger("ppfab")
 _REINSTALL = "the studio is made for viser 1.1: pip install 'viser>=1.1.1,<1.2'"
 
 
@@ -80,10 +82,12 @@ def _split_host(value: str) -> tuple[str, int | None] | None:
 
 @dataclass(frozen=True)
 class Gate:
-    """Who may talk to one studio: ``key`` the session key, ``bind`` the address the server binds."""
+    """Who may talk to one studio: ``key`` the session key, ``bind`` the address the server binds (``told``:
+    the kinds of refusal logged so far, each once)."""
 
     key: str
     bind: str
+    told: set[str] = field(default_factory=set, compare=False, repr=False)   # refusals logged already
 
     def host_allowed(self, host: str, port: int | None, served_port: int) -> bool:
         """Whether ``host:port`` (from ``Host`` or ``Origin``) is an address the studio is served at."""
@@ -138,6 +142,10 @@ def check(gate: Gate, connection: Any, request: Any) -> tuple[Any, Any]:
     port = int(connection.local_address[1])
     reason = gate.refusal(request.headers, request.path, port)
     if reason is not None:
+        kind = reason.split()[0]
+        if kind not in gate.told:                # once per kind: a stale tab retries every second
+            gate.told.add(kind)
+            log.warning("studio: refused a request: %s", reason)
         return connection.respond(http.HTTPStatus.FORBIDDEN, f"ppfab studio: {reason}\n"), None
     path, sep, query = request.path.partition("?")
     websocket = request.headers.get("Upgrade", "").lower() == "websocket"
