@@ -71,10 +71,11 @@ def check_rhino(v: Verification) -> None:
     nodes_rel = m.get("files", {}).get("nodes_csv")
     if nodes_rel and mesh is not None:
         nodes = {r["node_id"]: r for r in read_csv(v.folder / nodes_rel)}
+        readable = {r["node_id"] for r in v.data.get("nodes", [])}     # rows whose cells the nodes check read
         check_names(v, rel, [a.Attributes.Name for a in axes], {k: "node" for k in nodes}, "node axis")
         for obj in axes:
             row = nodes.get(obj.Attributes.Name)
-            if row is None:
+            if row is None or row["node_id"] not in readable:
                 continue
             g = obj.Geometry
             start = np.array([g.PointAtStart.X, g.PointAtStart.Y, g.PointAtStart.Z])
