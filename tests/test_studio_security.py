@@ -139,12 +139,18 @@ def test_check_strips_the_key_and_logs_each_kind_of_refusal_once(caplog):
         def respond(self, status, text):
             return int(status), text
 
+    exposed = guard.Gate("k3y", "0.0.0.0")                           # the Origin must be the Host's own page
+    lan = {"Host": "192.168.1.5:8080", "Origin": "http://192.168.1.5:8080"}
+    assert guard.check(exposed, Connection(), Request("/k3y/", Headers(lan)))[0] is None
+    refused, _ = guard.check(exposed, Connection(), Request("/k3y/", Headers({**lan, "Origin": "http://10.0.0.9:8080"})))
+    assert refused[0] == 403 and "Origin" in refused[1]
     g = guard.Gate("k3y", "127.0.0.1")
     mine = Headers({"Host": "localhost:8080"})
     refused, passed = guard.check(g, Connection(), Request("/k3y/index.html?x=1", mine))
     assert refused is None and passed.path == "/index.html?x=1"
     refused, passed = guard.check(g, Connection(), Request("/k3y/", mine))
     assert refused is None and passed.path == "/"
+    caplog.clear()
     with caplog.at_level(logging.WARNING, logger="ppfab"):
         for _ in range(5):
             refused, passed = guard.check(g, Connection(), Request(

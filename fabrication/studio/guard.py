@@ -6,9 +6,9 @@ A request is let through only when
 * its ``Host`` header names the address the studio serves (``localhost``, ``127.0.0.1`` or ``[::1]`` with the
   bound port when it binds the loopback address; the bound address itself, or any IP literal, otherwise): a page
   of another site that had its DNS name pointed at this machine (DNS rebinding) sends its own name;
-* its ``Origin`` header, when there is one, is such an address too (browsers send it on every WebSocket
-  handshake and on cross-site requests; they apply no same-origin rule to WebSockets, so this is what keeps a
-  page of another site from driving the studio);
+* its ``Origin`` header, when there is one, is ``http://`` and that same address (browsers send it on every
+  WebSocket handshake and on cross-site requests; they apply no same-origin rule to WebSockets, so this is what
+  keeps a page of another site from driving the studio);
 * its path starts with the session's key, ``/<key>/`` (:func:`new_key`, ``secrets.token_urlsafe``): the page
   is served at ``http://localhost:PORT/<key>/`` and viser's client opens its WebSocket at the page's own
   address, ``ws://localhost:PORT/<key>``, so a real browser carries the key without any change to the client,
@@ -121,7 +121,7 @@ class Gate:
         if origins:
             o = urllib.parse.urlsplit(origins[0].strip())
             authority = _split_host(o.netloc) if o.scheme == "http" and not o.path else None
-            if authority is None or not self.host_allowed(*authority, served_port):
+            if authority is None or (authority[0], authority[1] or 80) != (parsed[0], parsed[1] or 80):
                 return f"Origin {origins[0]!r} is not the studio's page"
         first = path.partition("?")[0].split("/")
         if len(first) < 2 or first[0] != "" or not hmac.compare_digest(first[1].encode(), self.key.encode()):
