@@ -28,6 +28,7 @@ view of the ``websockets`` package whose ``serve`` puts :meth:`Gate.check` in fr
 from __future__ import annotations
 
 import hmac
+import http
 import inspect
 import ipaddress
 import logging
@@ -75,7 +76,7 @@ def _split_host(value: str) -> tuple[str, int | None] | None:
         host, port = parts.hostname, parts.port
     except ValueError:
         return None
-    if not host or parts.username is not None or parts.path or parts.query:
+    if not host or parts.username is not None or parts.path or parts.query or parts.fragment:
         return None
     return host.lower(), port
 
@@ -137,8 +138,6 @@ class Gate:
 def check(gate: Gate, connection: Any, request: Any) -> tuple[Any, Any]:
     """``(refusal, request)``: a ``403`` response for a refused request (``None`` otherwise) and the request
     with the session key stripped from its path (or a redirect from ``/<key>`` to ``/<key>/`` for a page)."""
-    import http
-
     port = int(connection.local_address[1])
     reason = gate.refusal(request.headers, request.path, port)
     if reason is not None:
