@@ -250,10 +250,10 @@ def _csv_formula_quoted(out: Path) -> None:
 
     with open(out / "parts.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    materials = {r["material"] for r in rows if r["kind"] == "panel"}
+    materials = {r["material"] for r in rows if r["kind"] == "beam"}
     assert materials == {"'=HYPERLINK(\"http://x\")"}, materials
     doc = json.loads((out / "parts.json").read_text())
-    assert {p["material"] for p in doc["parts"] if p["kind"] == "panel"} == {'=HYPERLINK("http://x")'}
+    assert {p["material"] for p in doc["parts"] if p["kind"] == "beam"} == {'=HYPERLINK("http://x")'}
 
 
 def _marks_on_every_panel(out: Path) -> None:
@@ -449,10 +449,16 @@ CASES = [
     Case("text", "a NUL byte and control characters in the design name (DXF TEXT)", design(GEOMETRY.replace(
         'name = "small"', 'name = "roof\\u0000\\u0007 A"')), build(), 0, "", check=_verified(_dxf_text_clean),
         new_files=("out",), note="builds; DXF TEXT without control characters (verified)"),
-    Case("text", "a spreadsheet formula as the glass make-up (CSV injection)",
-         design(GEOMETRY + "[panels]\nmakeup = '=HYPERLINK(\"http://x\")'\n"), build(), 0, "",
+    Case("text", "a spreadsheet formula as the beam material (CSV injection)",
+         design(GEOMETRY + "[beams]\nmaterial = '=HYPERLINK(\"http://x\")'\n"), build(), 0, "",
          check=_verified(_csv_formula_quoted), new_files=("out",),
          note="builds; the CSV cell is written '=HYPERLINK(…), parts.json keeps the text (verified)"),
+    Case("design file", "a glass make-up in words, not plies (\"toughened 10 mm\")",
+         design(GEOMETRY + "[panels]\nmakeup = \"toughened 10 mm\"\n"), build(), 2,
+         "panels.makeup: ply 1 'toughened 10 mm' is not '<mm> <kind>'"),
+    Case("design file", "a monolithic make-up on a roof (overhead glazing)",
+         design(GEOMETRY + "[panels]\nmakeup = \"10 FT\"\n"), build(), 2,
+         "must be laminated safety glass"),
     Case("text", "a mark_size larger than the panels", design(GEOMETRY + "[panels]\nmark_size = 1e6\n"), build(), 0,
          "", check=_verified(_marks_on_every_panel), new_files=("out",),
          note="builds; each panel's mark is reduced to the largest that fits (a warning says so), none is dropped"),
