@@ -1,0 +1,18 @@
+"""Every file in the folder is listed in the manifest: a file ppfab did not write and list (``sha256``), such as
+an extra cutting sheet copied in after the build, is a finding naming it; ``manifest.json`` itself is the only
+file that lists none."""
+
+from __future__ import annotations
+
+from . import Verification, check
+
+
+@check("files", 11)
+def check_files(v: Verification) -> None:
+    m = v.data.get("manifest", {})
+    listed = set(m.get("sha256", {})) | {"manifest.json"}
+    for path in sorted(p for p in v.folder.rglob("*") if p.is_file() or p.is_symlink()):
+        rel = path.relative_to(v.folder).as_posix()
+        if rel not in listed:
+            v.error(rel, "", "is in the folder but not listed in manifest.json (sha256): not written by this build")
+    v.checked.append("files")
