@@ -364,7 +364,11 @@ def test_glass_order_shapes_check_out_by_independent_formulas(built, parts, mesh
         q = mid @ np.linalg.svd(mid)[2][:2].T
         lengths = np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1)
         assert sorted(lengths) == pytest.approx(sorted(e.values()), abs=30.0)        # inset by 8 mm per side
-        assert float(r["weight_kg"]) == pytest.approx(float(r["area_mm2"]) * 1e-6 * 10e-3 * 2500, rel=1e-3)
+        # the default make-up 8 HS / 1.52 PVB / 8 HS: 16 mm of glass at 2500 kg/m³, 1.52 mm of PVB at 1070 kg/m³
+        assert float(r["weight_kg"]) == pytest.approx(float(r["area_mm2"]) * 1e-6 * (16e-3 * 2500 + 1.52e-3 * 1070),
+                                                      rel=1e-3)
+        assert r["makeup"] == "8 HS / 1.52 PVB / 8 HS" and r["laminated"] == "yes" and r["heat_soak"] == "no"
+        assert float(r["thickness_tolerance_mm"]) == pytest.approx(0.3 + 0.3 + 0.1)
         assert r["edge_finish"] == "ground" and r["coated_side"] == "none"
 
 

@@ -94,7 +94,7 @@ def test_ids_faces_and_parts_list_fields():
     assert fp.kind == "panel" and fp.part_id == "P-U01-V02" and fp.type_id == panels[13].type_id
     assert (fp.meta["face"], fp.meta["face_i"], fp.meta["face_j"]) == (13, 1, 2)
     assert fp.meta["material"] == PanelParams().makeup
-    w = panels[13].area_mm2 * 1e-6 * 0.010 * 2500
+    w = panels[13].area_mm2 * 1e-6 * (0.016 * 2500 + 0.00152 * 1070)     # 8 HS / 1.52 PVB / 8 HS
     assert panels[13].weight_kg == pytest.approx(w)
     # the reference-corner mark lies inside the outline
     from shapely.geometry import LineString, Polygon
