@@ -1,0 +1,121 @@
+"""welds.csv: every T-joint weld recomputed from the nodes and the plates, every row compared.
+
+At a node whose ``joint`` is ``butt`` (``nodes.csv``), every plate with the role ``end`` is welded to every
+plate of another beam with the role ``through`` (:func:`fabrication.glazing.welds.butt_welds`): the dihedral is
+the angle between the two plates' planes (``plane`` of ``parts.csv``), the weld runs down both sides of the end
+line over the beam depth (length ``2 · beams.depth``), and the preparation and throat follow from the dihedral
+and ``beams.thickness`` (:func:`fabrication.glazing.welds.preparation`).  Each recomputed weld must have exactly
+one row of ``joint = T`` with the same node, part and ``to``, and that row's dihedral (0.001°), length
+(0.01 mm), preparation and throat must be the recomputed ones; a ``T`` row that no weld recomputes is named
+too.  The ``splice`` rows are the splices check's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ppfab.planes import angle_between
+
+from ..glazing.welds import preparation
+from . import Verification, check, read_csv
+from ._cells import CellReader
+
+LENGTH_TOLERANCE_MM = 0.01
+ANGLE_TOLERANCE_DEG = 1e-3
+
+
+def recompute_t_welds(nodes: list[dict[str, str]], parts: list[dict[str, str]], depth: float,
+                      thickness: float) -> dict[tuple[int, str, str], tuple[float, float, str, float]]:
+    """``(vertex, end part, through part)`` → ``(dihedral °, length mm, preparation, throat mm)`` of every
+    T-joint weld (rows of ``nodes.csv`` and ``parts.csv`` as the nodes and parts checks keep them)."""
+    plates = {r["part_id"]: r for r in parts if r["kind"] == "beam"}
+    out: dict[tuple[int, str, str], tuple[float, float, str, float]] = {}
+    for row in nodes:
+        if row.get("joint") != "butt":
+            continue
+        ids = [b for b in row["beams"].split(";") if b]
+        roles = (row.get("roles") or "").split(";")
+        if len(roles) != len(ids):
+            continue                                           # named by check_welds
+        for i in range(len(ids)):
+            for j in range(i + 1, len(ids)):
+                a, b = plates.get(ids[i]), plates.get(ids[j])
+                if a is None or b is None or not a.get("plane") or not b.get("plane"):
+                    continue
+                if a.get("beam_id") == b.get("beam_id"):
+                    continue
+                dihedral = float(np.degrees(angle_between(np.array(eval_plane(a["plane"])),
+                                                          np.array(eval_plane(b["plane"])))))
+                for (end, re), (through, rt) in (((ids[i], roles[i]), (ids[j], roles[j])),
+                                                 ((ids[j], roles[j]), (ids[i], roles[i]))):
+                    if re == "end" and rt == "through":
+                        prep, throat = preparation(dihedral, thickness)
+                        out[(int(row["vertex"]), end, through)] = (dihedral, 2.0 * depth, prep, throat)
+    return out
+
+
+def eval_plane(text: str) -> list[float]:
+    """A ``plane`` cell ``[nx, ny, nz, d]`` (checked by the parts check) as numbers."""
+    from ._shapes import literal
+
+    return [float(x) for x in literal(text)]
+
+
+@check("welds", 48)
+def check_welds(v: Verification) -> None:
+    m = v.data.get("manifest", {})
+    files = m.get("files", {})
+    nodes, parts = v.data.get("nodes"), v.data.get("parts")
+    if nodes is None or parts is None:
+        return
+    beams = m.get("fabrication", {}).get("beams", {})
+    depth, thickness = float(beams.get("depth", 0.0)), float(beams.get("thickness", 0.0))
+    nrel = files.get("nodes_csv", "nodes.csv")
+    for row in nodes:
+        if row.get("joint") == "butt" and len((row.get("roles") or "").split(";")) != len(
+                [b for b in row["beams"].split(";") if b]):
+            v.error(nrel, row["node_id"], f"roles {row.get('roles')!r} do not name one role per beam "
+                                          f"{row['beams']!r}")
+    want = recompute_t_welds(nodes, parts, depth, thickness)
+    rel = files.get("welds_csv")
+    if rel is None:
+        if want:
+            v.error("manifest.json", "files.welds_csv", f"missing: the nodes and plates make {len(want)} T-joint welds")
+        return
+    try:
+        rows = read_csv(v.folder / rel)
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        v.error(rel, "", f"cannot be read ({exc})")
+        return
+    cells = CellReader(v, rel)
+    seen: set[tuple[int, str, str]] = set()
+    for n, r in enumerate(rows, start=1):
+        if r.get("joint", "T") != "T":
+            continue
+        node = cells.integer(n, r, "node", low=0)
+        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
+        if node is None or part is None or to is None:
+            continue
+        key = (node, part, to)
+        if key not in want:
+            v.error(rel, f"row {n}", f"node {node}: no T-joint of {part} ending against {to} there "
+                                     "(nodes.csv roles and joint, parts.csv beams)")
+            continue
+        if key in seen:
+            v.error(rel, f"row {n}", f"a second row for the weld of {part} to {to} at node {node}")
+        seen.add(key)
+        dihedral, length, prep, throat = want[key]
+        for column, value, tol in (("dihedral_deg", dihedral, ANGLE_TOLERANCE_DEG),
+                                   ("weld_length_mm", length, LENGTH_TOLERANCE_MM),
+                                   ("throat_mm", throat, LENGTH_TOLERANCE_MM)):
+            got = cells.number(n, r, column)
+            if got is not None and abs(got - value) > tol:
+                v.error(rel, f"row {n} column {column}", f"{part} to {to} at node {node}: {got:g} written, "
+                                                         f"{value:.6g} from the nodes and plates")
+        if r.get("preparation") != prep:
+            v.error(rel, f"row {n} column preparation", f"{part} to {to} at node {node}: {r.get('preparation')!r} "
+                                                        f"written, {prep!r} for a dihedral of {dihedral:.2f}°")
+    for node, part, to in sorted(set(want) - seen):
+        v.error(rel, f"node {node}", f"no row for the T-joint weld of {part} ending against {to} "
+                                     f"({want[(node, part, to)][1]:g} mm)")
+    v.checked.append("welds")
