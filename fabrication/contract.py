@@ -204,8 +204,9 @@ BITES_CSV, STRIP_CUTS_CSV, WELDS_CSV = "bites.csv", "strip_cuts.csv", "welds.csv
 """The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
 the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the welds
 (``node, part, to, dihedral_deg, weld_length_mm, preparation, throat_mm, joint``): ``joint = "T"`` a plate
-ending against one running through ``node``, ``joint = "splice"`` a welded splice across the cut between two
-pieces of a beam (no node)."""
+ending against one running through ``node``, ``joint = "halflap"`` the two plates crossing at a half-lap
+``node`` welded in its four corners, ``joint = "corner"`` two plates ending at a ``node`` where none runs
+through, ``joint = "splice"`` a welded splice across the cut between two pieces of a beam (no node)."""
 PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
 

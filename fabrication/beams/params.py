@@ -54,6 +54,9 @@ class BeamParams:
     plane_tolerance: float = param(0.5, doc="largest distance, mm, of a mesh vertex from the plane of the "
                                             "beam that carries it; a polyline further off cannot be one "
                                             "planar plate", exclusive_min=0)
+    halflap_welds: bool = param(True, doc="weld every half-lap crossing along its crossing line, in its four "
+                                         "corners over the depth (welds.csv joint 'halflap'); false: the "
+                                         "crossings are not welded (the engineer's hinge or bolted cleat)")
     fallback: str = param("refuse", doc="a polyline of a requested planar family that cannot be a planar beam "
                                          "(its plane too far from the surface normal, or its axes conflict): "
                                          "'refuse' stops the build naming the polylines and why; 'segmented' "

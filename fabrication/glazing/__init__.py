@@ -17,7 +17,7 @@ from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
 from .params import GlazingParams
 from .splices import Splice, SpliceParams, make_splices, welded_splices
 from .strips import Strip, make_strips
-from .welds import Weld, butt_welds
+from .welds import Weld, butt_welds, corner_welds, halflap_welds
 
 __all__ = ["BiteError", "EdgeBite", "Glazing", "GlazingParams", "Splice", "SpliceParams", "Strip", "Weld",
            "make_glazing"]
@@ -60,7 +60,10 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
         raise FabricationError(f"{len(bad)} splice cover plate(s) of {splice_params.length:g} mm do not fit on their "
                                f"beam pieces (a slot or an end is in the way): {names}; lower splices.columns or "
                                "splices.e1/p1")
-    welds = butt_welds(beams.joints, beams.params.depth, beams.params.thickness) + welded_splices(beams.plates)
+    bp = beams.params
+    welds = (butt_welds(beams.joints, bp.depth, bp.thickness) + corner_welds(beams.joints, bp.depth, bp.thickness)
+             + (halflap_welds(beams.joints, bp.depth, bp.thickness) if bp.halflap_welds else [])
+             + welded_splices(beams.plates))
     if params.support == "none":
         return Glazing(params, splice_params, (), (), tuple(splices), tuple(welds), 0.0)
     normals = edge_normals(panels, support.vertices, support.edges)
