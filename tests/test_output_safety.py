@@ -87,6 +87,50 @@ def test_a_folder_that_appears_during_the_write_is_left_alone(tmp_path, design, 
     assert not (tmp_path / ".out.lock").exists()
 
 
+DRIVER = """
+import pathlib, sys, time
+from fabrication.pipeline import overwrite
+from fabrication.cli import main
+ready, go = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+def wait_for_the_user(target, tmp):
+    ready.write_text(str(tmp))
+    t0 = time.monotonic()
+    while not go.exists():
+        if time.monotonic() - t0 > 600:
+            raise SystemExit("the test did not answer")
+        time.sleep(0.02)
+overwrite.COMMIT_HOOKS.append(wait_for_the_user)
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+def test_a_folder_made_by_another_process_during_the_write_is_left_alone(tmp_path, design):
+    """Two processes: the build stops when its files are complete, this test (the user) makes the output
+    folder and saves a file into it, then lets the build commit."""
+    import time
+
+    out, ready, go = tmp_path / "out", tmp_path / "ready", tmp_path / "go"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-c", DRIVER, str(ready), str(go), "build", str(design), "-o",
+                             str(out), "--quiet"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    t0 = time.monotonic()
+    while not ready.exists() or not ready.read_text():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 900, "the build did not reach its commit"
+        time.sleep(0.05)
+    out.mkdir()
+    (out / "model.3dm").write_bytes(b"the architect's model")
+    go.touch()
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 2, err
+    line = _one_error_line(err)
+    assert "appeared while the build was written" in line
+    assert kept_folder(line) == Path(ready.read_text()) and (kept_folder(line) / "manifest.json").is_file()
+    assert sorted(p.name for p in out.iterdir()) == ["model.3dm"]
+    assert (out / "model.3dm").read_bytes() == b"the architect's model"
+
+
 def test_force_refuses_when_a_file_is_saved_into_the_old_build_during_the_write(tmp_path, design, hook, capsys):
     out = tmp_path / "out"
     assert main(["build", str(design), "-o", str(out), "--quiet"]) == 0
