@@ -1,6 +1,7 @@
-"""Atomic output: folders and single files written through a temporary sibling and renamed into place.
+"""Atomic output folders: written through a temporary sibling and renamed into place (single files:
+:mod:`fabrication.pipeline.overwrite`).
 
-:func:`atomic_file` does the same for one file.  :class:`AtomicFolder` writes into a temporary folder beside the target and
+:class:`AtomicFolder` writes into a temporary folder beside the target and
 renames it into place only when the whole run succeeded; on any failure
 (exception, Ctrl-C, SIGTERM, SIGHUP) the temporary folder is removed and an existing target
 is left untouched.  While it works it holds the target's :class:`~fabrication.pipeline.lock.OutputLock`,
@@ -26,7 +27,7 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
-from typing import Iterable, Iterator, Literal
+from typing import Iterable, Literal
 
 from ppfab.errors import PpfabError
 
@@ -325,21 +326,3 @@ class AtomicFolder:
                             old, self.target, ", ".join(left[:3]))
         self._lock.__exit__(None, None, None)
         return False
-
-
-@contextlib.contextmanager
-def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
-    """``with atomic_file(p) as tmp:`` — write the file ``tmp`` (a sibling of ``p`` with the same suffix);
-    it replaces ``p`` in one rename when the block succeeds and is removed when it fails.  ``p`` must not
-    be a folder or a symbolic link."""
-    p = Path(path)
-    if p.is_symlink() or (p.exists() and not p.is_file()):
-        kind = "a symbolic link" if p.is_symlink() else "a folder" if p.is_dir() else "not a regular file"
-        raise OutputExistsError(f"output {path} is {kind}; give the path of a file")
-    tmp = p.parent / f".{p.stem}.tmp-{uuid.uuid4().hex[:8]}{p.suffix}"
-    try:
-        yield tmp
-        os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
