@@ -8,6 +8,12 @@ A mesh a designer brings is seldom a P or PP mesh yet.  When its panels are not 
   (max δ_P ≤ 1e-6) is named, and only the other family needs optimising;
 * an ``[optimize]`` section that did not meet its targets: its own message (how it stopped), and that the
   net may need other polylines (a net far from a conjugate net has no nearby planar-quad mesh).
+
+:func:`refuse_far_from_conjugate` says so before the optimiser runs, in a fraction of a second, where
+:func:`ppfab.metrics.conjugacy_defect` of the input exceeds ``[optimize] max_conjugacy_defect``.  Measured on
+the real meshes of the test set (``docs/optimisation.md``): nets above 0.4 — pillow (geodesic, 0.58), wein99
+(S-net, 0.42), conical1_diagKite (0.64) — missed their targets after 500 iterations (pillow: 17 minutes), and
+the hypar grid (0.98) met them only by moving the surface 23 % of its size; below 0.2 every net met them.
 """
 
 from __future__ import annotations
@@ -61,3 +67,17 @@ def planarity_advice(design: Design, quality: Quality, optimize_result: object =
                 "planar-quad mesh nearby: remesh along conjugate curves (e.g. the principal directions), or "
                 "relax panels.planarity_tolerance")
     return ""
+
+
+def refuse_far_from_conjugate(defect: float, limit: float) -> None:
+    """Refuse, before the optimiser, a net whose conjugacy defect ``defect`` exceeds ``limit``
+    (:class:`~ppfab.errors.DesignError` on ``optimize.max_conjugacy_defect``, one line)."""
+    from ppfab.errors import DesignError
+
+    if defect > limit:
+        raise DesignError("optimize.max_conjugacy_defect", (
+            f"the mesh's net is far from a conjugate net (defect {defect:.2f}; a conjugate net has about 0, the "
+            f"limit is {limit:g}): planar quads with planar polylines exist near it only far from the surface, so "
+            "optimising would run long and miss its targets or move the surface by tens of per cent. Remesh the "
+            "surface along conjugate curves (e.g. its principal curvature lines) and build that mesh, or raise "
+            "[optimize] max_conjugacy_defect to try anyway"))

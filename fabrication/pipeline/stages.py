@@ -69,11 +69,16 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:
     """Construct the mesh, or read (and optimise) a mesh file, placed in mm (:func:`ppfab.geometry.build_geometry`)."""
+    from .advice import refuse_far_from_conjugate
     from .structure_gate import refuse_before_optimising
 
     geo = design.geometry
     progress.start("geometry", f"construction '{geo.method}'" if geo.method else f"mesh {geo.mesh}")
     def before_optimize(mesh: QuadGrid | QuadMesh, families: tuple[str, ...]) -> None:
+        from ppfab.metrics import conjugacy_defect
+
+        if design.optimize is not None:
+            refuse_far_from_conjugate(conjugacy_defect(mesh), design.optimize.max_conjugacy_defect)
         refuse_before_optimising(mesh, families, design.support.max_normal_angle_deg, list(design.support.exclude),
                                  design.beams.fallback)
 

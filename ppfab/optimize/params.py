@@ -85,6 +85,11 @@ class OptimizeParams:
                                   exclusive_min=0.0)
     target_delta_p: float = param(1e-6, doc="stop when max δ_P of the selected polylines is at most this",
                                   exclusive_min=0.0)
+    max_conjugacy_defect: float = param(0.4, doc="ppfab build refuses, before optimising, a net whose "
+                                                 "conjugacy defect (ppfab.metrics.conjugacy_defect: twist over "
+                                                 "normal curvature, about 0 for a conjugate net) exceeds this: "
+                                                 "such nets reach planar quads only by leaving the surface or not "
+                                                 "at all; raise it to try anyway", min=0.0)
     max_iterations: int = param(500, doc="maximum number of Levenberg–Marquardt iterations "
                                          "(linear solves, rejected steps included)", min=1, max=100000)
     reg_decay: float = param(0.1, doc="factor applied to the weights of the soft goals (fairness, closeness, "
