@@ -295,6 +295,39 @@ def _numpy_warns():
     return mock.patch("ppfab.metrics.quality", noisy)
 
 
+def _unextrudable_plate():
+    """The first beam plate's outline with its second point repeated (a zero-length edge), as a degenerate end
+    cut can leave it: Rhino's extrusion of it fails, the other writers are unaffected."""
+    import dataclasses
+
+    import numpy as np
+
+    from fabrication.writers import rhino
+
+    original = rhino.elements
+
+    def spoiled(build, files):
+        els = original(build, files)
+        k = next(i for i, e in enumerate(els) if e.kind == "beam")
+        o = np.asarray(els[k].outline, dtype=float)
+        els[k] = dataclasses.replace(els[k], outline=np.insert(o, 2, o[1], axis=0))
+        return els
+    return mock.patch("fabrication.writers.rhino.elements", spoiled)
+
+
+def _sized(name: str, text: str, size: int) -> Callable[[Path], None]:
+    """``name`` holding ``text`` padded with newlines to ``size`` bytes (a sparse tail)."""
+    def make(d: Path) -> None:
+        with open(d / name, "wb") as fh:
+            fh.write(text.encode())
+            fh.truncate(size)
+    return make
+
+
+def _deep_arrays(levels: int) -> str:
+    return GEOMETRY.replace("faces_u = 5", "faces_u = 5\nnested = " + "[" * levels + "]" * levels)
+
+
 SIGNAL_DESIGN = design(GEOMETRY)
 
 CASES = [
@@ -331,6 +364,26 @@ CASES = [
          build(), 2, "pass --allow-large to proceed"),
     Case("design file", "output folder exists", {**design(GEOMETRY), "out/keep.txt": "x"}, build(), 2,
          "exists (use --force to replace it)"),
+    Case("design file", "5,000 nested arrays in 10 kB (too deep for the TOML reader)", design(_deep_arrays(5000)),
+         build(), 2, "d.toml: tables and arrays nested too deep to read (more than 16 levels; a design file needs "
+                     "at most 5)"),
+    Case("design file", "arrays nested 40 levels deep", design(_deep_arrays(40)), build(), 2,
+         "geometry.params.nested[0][0][0][0][0][0][0][0][0][0][0][0][0][0]: tables and arrays nested more than 16 "
+         "levels deep"),
+    Case("design file", "a design file of 2 MiB", {}, build(), 2,
+         "d.toml: 2.0 MiB is not a design file (at most 1 MiB of TOML)", setup=_sized("d.toml", GEOMETRY, 2 << 20)),
+    Case("design file", "an empty design path", {}, lambda d: ["build", "", "-o", str(d / "out")], 2,
+         "design: the path is empty; give the path of a file or folder"),
+    Case("design file", "an empty mesh path (mesh = \"\")", design("[geometry]\nmesh = ''\n"), build(), 2,
+         "geometry.mesh: the mesh path is empty; give the path of the mesh file (.obj or .off, relative to the "
+         "design file), or a construction with 'method'"),
+    Case("design file", "a NUL byte in the mesh path", design('[geometry]\nmesh = "m\\u0000.obj"\n'), build(), 2,
+         "geometry.mesh: the path 'm\\x00.obj' holds a NUL byte, which no file name can hold"),
+    Case("design file", "a BEL character in a key (escaped when quoted)",
+         design(GEOMETRY.replace("scale =", "\"sca\\u0007le\" =")), build(), 2,
+         "geometry.sca\\x07le: unknown key (did you mean 'scale'?)"),
+    Case("design file", "a grid of 10^12 x 4 faces", design(GEOMETRY.replace("faces_u = 5", "faces_u = " + "1" + "0" * 12)),
+         build(), 2, "geometry.params.faces_u: must be <= 4000, got 1000000000000"),
     Case("design file", "a FIFO (named pipe) as the design file", {}, build(), 2,
          "d.toml: is a FIFO (named pipe), not a regular design file", process="subprocess", setup=_mkfifo("d.toml")),
     Case("design file", "a number of 1e308", design(GEOMETRY.replace("scale = 1000.0", "scale = 1e308")), build(),
@@ -393,6 +446,27 @@ CASES = [
     Case("mesh file", "an OFF header announcing 300000 vertices (refused before parsing)",
          {"d.toml": "[geometry]\nmesh = 'm.off'\n" + FAST, "m.off": "OFF\n300000 1 0\n0 0 0\n"}, build(), 2,
          "the design makes about 300000 vertices (> geometry.max_vertices = 250000)"),
+    Case("mesh file", "a face index of 10^23 (beyond 64 bits)",
+         {"m.obj": GRID_OBJ.replace("f 1 2 5 4", "f 1 2 5 1" + "0" * 23)}, check("m.obj"), 2,
+         "m.obj: face 0 (line 10) refers to vertex 99999999999999999999999, which does not exist (the file has "
+         "9 vertices)"),
+    Case("mesh file", "a face index of 10^23 in an OFF file",
+         {"m.off": GRID_OFF.replace("4 0 1 4 3", "4 0 1 4 1" + "0" * 23)}, check("m.off"), 2,
+         "m.off: face 0 (line 12) refers to vertex 100000000000000000000000, which does not exist"),
+    Case("mesh file", "a vertex used by no face", {"m.obj": GRID_OBJ + "v 7 7 7\n"}, check("m.obj"), 2,
+         "m.obj: vertex 9 is used by no face (1 unused vertex(es)); remove the unused vertices"),
+    Case("mesh file", "300 MiB for ppfab check (refused from its size)", {}, check("m.obj"), 2,
+         "m.obj: the file has 300 MiB, more than a mesh of geometry.max_vertices = 250000 vertices needs",
+         setup=_sparse("m.obj", 300 << 20)),
+    Case("mesh file", "300 MiB for ppfab check --allow-large (above the hard limit)", {},
+         lambda d: ["check", str(d / "m.obj"), "--allow-large"], 2,
+         "m.obj: the file has 300 MiB, more than the 256 MiB a mesh file may have; give a smaller mesh",
+         setup=_sparse("m.obj", 300 << 20)),
+    Case("mesh file", "a NUL byte in the mesh path", {}, lambda d: ["check", str(d / "m\x00.obj")], 2,
+         "m\\x00.obj' holds a NUL byte, which no file name can hold; give the path of a file or folder"),
+    Case("mesh file", "an escape sequence in the mesh path (escaped when quoted)", {},
+         lambda d: ["check", str(d / "m\x1b[31m.obj")], 2,
+         "m\\x1b[31m.obj' holds the control character \\x1b; give the path of a file or folder"),
     Case("mesh file", "an OFF header announcing fewer faces than the file holds",
          {"m.off": GRID_OFF.replace("9 4 0", "9 3 0")}, check("m.off"), 2,
          "OFF header announces 9 vertices and 3 faces, but the file goes on after face 2 (line 15)"),
@@ -442,6 +516,10 @@ CASES = [
     Case("geometry", "a part larger than the stock sheet",
          design(GEOMETRY + "[nesting]\nsheet = [1500.0, 1000.0]\ntime_budget = 0.3\n", False), build(), 1,
          "part P-U00-V00 (2161.2 x 2061.4 mm) fits no sheet: usable area is 1500.0 x 1000.0 mm, any rotation"),
+    # optional files
+    Case("optional file", "a beam plate outline Rhino cannot extrude (model.3dm)", design(GEOMETRY), build(), 1,
+         "model.3dm: B-U00-S00: Rhino cannot extrude its outline (its outline has a zero-length edge: points 1 and 2 "
+         "of", patch=_unextrudable_plate, check=_no_leftovers),
     # text that goes into files
     Case("text", "a design name with a newline and an OBJ vertex line", design(GEOMETRY.replace(
         'name = "small"', 'name = "roof\\nv 1 2 3\\u2028f 1 2 3 4"')), build(), 0, "", check=_verified(_obj_one_header_line),

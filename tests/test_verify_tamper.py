@@ -432,3 +432,143 @@ def test_the_second_process_reads_nothing_the_first_writes_after_the_fork():
         path = root / f"{name}.py"
         read = set().union(*(keys(p)[0] for p in [path, *helpers(path)]))
         assert not read & late, f"{name} reads {sorted(read & late)}, written after the fork"
+
+
+def _sheet_entities(folder, kind, dxftype, layer):
+    """(sheet file, doc, entities) of the first glass ("glass") or plate ("beam") cutting sheet."""
+    import ezdxf
+
+    rel = manifest(folder)["files"]["glass_sheets" if kind == "glass" else "beam_sheets"][0]
+    doc = ezdxf.readfile(folder / rel)
+    return rel, doc, [e for e in doc.modelspace() if e.dxftype() == dxftype and e.dxf.layer == layer]
+
+
+def test_glass_sheet_label_names_another_panel(copy, capsys):
+    """The id text of one pane on a glass sheet changed to the id of the next pane on that sheet: verify names
+    the sheet, the pane the text lies on and the id it wrongly carries."""
+    rel, doc, labels = _sheet_entities(copy, "glass", "TEXT", "LABEL")
+    ids = [e for e in labels if e.dxf.text.startswith("P-")]
+    first, other = ids[0], ids[1]
+    pid, wrong = first.dxf.text, other.dxf.text
+    first.dxf.text = wrong
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: {pid}: LABEL text '{wrong}' on the outline of {pid} is another part's id" in err
+    assert f"{rel}: {pid}: part carries its id on LABEL 0 times, expected once" in err
+
+
+def test_glass_sheet_label_that_is_no_id(copy, capsys):
+    """A label text that is no id at all (control-free garbage) is a finding naming sheet and pane, no error."""
+    rel, doc, labels = _sheet_entities(copy, "glass", "TEXT", "LABEL")
+    first = next(e for e in labels if e.dxf.text.startswith("P-"))
+    pid = first.dxf.text
+    first.dxf.text = "%%not an id"
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: {pid}: LABEL text '%%not an id' on the outline of {pid} is not this part's id or nest tag" in err
+
+
+@pytest.mark.parametrize("kind", ["glass", "beam"])
+def test_mark_line_moved_30_mm(copy, capsys, kind):
+    """One MARK line (a pane's reference L, a plate's node axis line) moved 30 mm along the sheet's x: verify
+    names the sheet and the part whose mark it no longer is."""
+    from shapely.geometry import Point, Polygon
+
+    rel, doc, marks = _sheet_entities(copy, kind, "LWPOLYLINE", "MARK")
+    cuts = [e for e in doc.modelspace() if e.dxftype() == "LWPOLYLINE" and e.dxf.layer == "CUT"]
+    mark = marks[0]
+    pts = [(x, y) for x, y, *_ in mark.get_points("xyseb")]
+    owner = next(part_of(c) for c in cuts
+                 if Polygon([(x, y) for x, y, *_ in c.get_points("xyseb")]).contains(Point(*np.mean(pts[:2], axis=0))))
+    mark.set_points([(x + 30.0, y) for x, y in pts], format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: {owner}: 1 MARK line(s) missing" in err
+    assert re.search(rf"{re.escape(rel)}: [^:]+: MARK line (is 30 mm from where|1: lies at)", err) or \
+        re.search(rf"{re.escape(rel)}: MARK line \d+: lies at \(", err), err[:2000]
+
+
+def test_per_type_dimension_text_overridden(copy, capsys):
+    """A DIMENSION of a per-type DXF given a text override of 1234.5 mm: verify names the file, the type and the
+    dimension (its handle) and the length it really measures."""
+    import ezdxf
+
+    rel = manifest(copy)["files"]["panel_type_dxfs"][2]
+    doc = ezdxf.readfile(copy / rel)
+    dim = [e for e in doc.modelspace() if e.dxftype() == "DIMENSION"][1]
+    dim.dxf.text = "1234.5"
+    doc.saveas(copy / rel)
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    tid = rel.rsplit("_", 1)[1].removesuffix(".dxf")
+    assert re.search(rf"{re.escape(rel)}: {tid} DIMENSION #{dim.dxf.handle}: text is overridden to '1234.5'; the "
+                     r"dimension measures \d+\.\d mm", err), err[:2000]
+
+
+def _rewrite_named(folder, name, target, change):
+    """Rewrite the STEP file ``name`` with the solid ``target`` changed (flat, every solid keeps its name)."""
+    from build123d import Compound, export_step, import_step
+
+    from fabrication.writers.step import named_solids
+
+    solids = []
+    for n, s in named_solids(import_step(str(folder / name))):
+        if n == target:
+            s = change(s)
+        s.label = n
+        solids.append(s)
+    assert target in [s.label for s in solids]
+    export_step(Compound(children=solids), str(folder / name))
+    reseal(folder, name)
+
+
+def test_splice_cover_plate_moved_4_mm(copy, capsys):
+    """One splice cover plate moved 4 mm along its beam (across the cut) in splices.step: verify names the
+    plate and how far off the cut it is."""
+    from build123d import Pos
+
+    rows = read_rows(copy / "parts.csv")
+    plate = next(r for r in rows if r["kind"] == "splice")
+    piece = next(r for r in rows if r["part_id"] == plate["joins"].split(";")[0])
+    along = np.asarray(json.loads(piece["frame"])["x_dir"]) * 4.0
+    _rewrite_named(copy, "splices.step", plate["part_id"], lambda s: s.moved(Pos(*along)))
+    err = findings(copy, capsys)
+    hit = re.search(rf"splices\.step: {plate['part_id']}: cover plate is (\d+\.?\d*) mm off the cut between", err)
+    assert hit, err[:2000]
+    assert 3.0 < float(hit.group(1)) <= 4.0 + 1e-6
+
+
+def test_key_plan_polygon_moved(copy, capsys):
+    """One pane's polygon on the key plan moved 25 mm: verify names the drawing and the pane."""
+    rel = next(f for f in manifest(copy)["files"]["drawings"] if f.endswith("key_plan.svg"))
+    text = (copy / rel).read_text()
+    pts = re.search(r'<polygon points="([^"]*)"', text).group(1)
+    moved = " ".join(f"{float(x) + 25.0:.1f},{y}" for x, y in (p.split(",") for p in pts.split()))
+    (copy / rel).write_text(text.replace(pts, moved, 1))
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert re.search(rf"{re.escape(rel)}: P-\S+: polygon 1 nearest this pane is 25 mm from where its mesh face", err), \
+        err[:2000]
+
+
+def test_key_plan_polygon_that_is_no_number(copy, capsys):
+    """A polygon whose points are not numbers is a finding naming the drawing and the polygon, no error."""
+    rel = next(f for f in manifest(copy)["files"]["drawings"] if f.endswith("key_plan.svg"))
+    text = (copy / rel).read_text()
+    (copy / rel).write_text(re.sub(r'<polygon points="[^"]*"', '<polygon points="1,2 x,4 5,6"', text, count=1))
+    reseal(copy, rel)
+    err = findings(copy, capsys)
+    assert f"{rel}: polygon 1: points '1,2 x,4 5,6' are not x,y numbers" in err
+    assert "pane is drawn 0 times, expected once" in err
+
+
+def test_extra_dxf_not_in_the_manifest(copy, capsys):
+    """A cutting sheet copied into the folder after the build, listed nowhere: verify names it."""
+    src = copy / manifest(copy)["files"]["glass_sheets"][0]
+    shutil.copy(src, src.with_name("glass_99.dxf"))
+    err = findings(copy, capsys)
+    rel = src.with_name("glass_99.dxf").relative_to(copy).as_posix()
+    assert f"{rel}: is in the folder but not listed in manifest.json (sha256)" in err

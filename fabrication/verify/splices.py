@@ -10,13 +10,27 @@ glazing package).  Each such cut is spliced either way, never both and never nei
   weld of positive length.
 
 A splice weld between pieces that are not neighbours across a cut is a finding too.
+
+Every cover plate solid is where the joined pieces put it (:func:`check_plate_place`): the pieces' outlines
+are their cutting outlines (DXF) mapped back through placement and frame into the first piece's frame, the cut
+is the edge the two share (top point ``c``, down the cut ``s``), the top edge ``u`` the first piece's edge
+into ``c``; the plate lies flat on a face of the beam plate (``t/2 ≤ |z| ≤ t/2 + t_c``, one plate on each
+face), centred on the cut (its corners' mean on the cut line) and ``splices.top_clear`` under the top edge.
+The check runs after the dxf check (order 56), whose outlines it reads.
 """
 
 from __future__ import annotations
 
 import ast
 
+import numpy as np
+
 from . import Verification, check, read_csv
+from ._shapes import boundary_distance, face_outline, frame_of, solid_points, to_frame
+
+PLACE_TOL = 0.01
+"""How far (mm) a cover plate may be from where the pieces put it (the build measures its clearances from the
+pieces' outlines grown by 1 µm)."""
 
 
 def _nodes(row: dict[str, str]) -> set[int]:
@@ -39,7 +53,7 @@ def _splice_welds(v: Verification, files: dict) -> dict[frozenset[str], dict[str
     return {frozenset((r["part"], r["to"])): r for r in rows if r.get("joint") == "splice"}
 
 
-@check("splices", 35)
+@check("splices", 56)
 def check_splices(v: Verification) -> None:
     rows = v.data.get("parts", [])
     files = v.data.get("manifest", {}).get("files", {})
@@ -95,6 +109,7 @@ def check_splices(v: Verification) -> None:
         if read is None:
             return
         solids = {s.name: s.solid for s in read}
+        sides: dict[str, list[str]] = {}
         for r in splice_rows:
             s = solids.get(r["part_id"])
             if s is None:
@@ -104,7 +119,84 @@ def check_splices(v: Verification) -> None:
             inner = len(s.faces()) - 6                       # a plate with h holes: 6 faces + one per hole
             if inner != holes:
                 v.error(rel, r["part_id"], f"solid has {inner} hole faces, parts.csv says {holes} holes")
+            check_plate_place(v, rel, r, s, sides)
+        for joins, names in sorted(sides.items()):
+            if sorted(names) != ["+", "-"]:
+                v.error(rel, joins.replace(";", "/"), f"cover plates lie on faces {names} of the beam plate, expected "
+                                                      "one on each face")
         if len(solids) != len(splice_rows):
             v.error(rel, "", f"{len(solids)} solids for {len(splice_rows)} cover plates in parts.csv")
     v.checked.append("splices")
     v.data["splices_wanted"] = wanted
+
+
+def _piece_outline(v: Verification, pid: str, frame: dict[str, np.ndarray]) -> np.ndarray | None:
+    """The cutting outline of beam piece ``pid`` mapped back into 3D and then into ``frame`` (2D)."""
+    from ._solids import reference_outline
+
+    row = next((r for r in v.data.get("parts", []) if r["part_id"] == pid), None)
+    ref = reference_outline(v, row) if row is not None else None
+    return None if ref is None else to_frame(ref, frame)[:, :2]
+
+
+def _cut(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The cut between two pieces' outlines (2D, one frame): its top point, the unit direction down the cut and
+    the unit direction of the first piece's top edge into the cut; ``None`` when they share no edge."""
+    near = boundary_distance(a, b) <= 1e-3
+    k = len(a)
+    for i in range(k):
+        j = (i + 1) % k
+        if near[i] and near[j]:
+            top, low = (i, j) if a[i, 1] >= a[j, 1] else (j, i)
+            s = a[low] - a[top]
+            prev = (top - 1) % k if (top + 1) % k == low else (top + 1) % k
+            u = a[top] - a[prev]
+            return a[top], s / np.linalg.norm(s), u / np.linalg.norm(u)
+    return None
+
+
+def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sides: dict[str, list[str]]) -> None:
+    """One cover plate solid against the pieces it joins (module docstring)."""
+    pid = row["part_id"]
+    first, _, second = row.get("joins", "").partition(";")
+    piece = next((r for r in v.data.get("parts", []) if r["part_id"] == first), None)
+    frame = frame_of(piece) if piece is not None else None
+    if frame is None:
+        return
+    a, b = _piece_outline(v, first, frame), _piece_outline(v, second, frame)
+    if a is None or b is None:
+        return
+    cut = _cut(a, b)
+    if cut is None:
+        v.error("parts.csv", pid, f"the pieces {first} and {second} it joins share no cut edge")
+        return
+    c, s, u = cut
+    fab = v.data.get("manifest", {}).get("fabrication", {})
+    t = float(fab.get("beam_thickness", 0.0))
+    tc = float(row.get("thickness_mm") or 0.0)
+    z = to_frame(solid_points(solid), frame)[:, 2]
+    side = "+" if z.mean() > 0 else "-"
+    sides.setdefault(row.get("joins", ""), []).append(side)
+    az = np.abs(z)
+    if len(z) == 0 or abs(az.min() - 0.5 * t) > PLACE_TOL or abs(az.max() - 0.5 * t - tc) > PLACE_TOL \
+            or z.min() * z.max() < 0:
+        v.error(rel, pid, f"solid spans z = {z.min():.4g} … {z.max():.4g} mm in {first}'s frame, expected "
+                          f"{0.5 * t:g} … {0.5 * t + tc:g} mm on one face of the beam plate")
+        return
+    ring = face_outline(solid, frame["normal"])
+    if ring is None:
+        v.error(rel, pid, "solid has no face in the beam plate's plane")
+        return
+    q = to_frame(ring, frame)[:, :2]
+    across = np.array([-s[1], s[0]])
+    off = float((q.mean(axis=0) - c) @ across)
+    if abs(off) > PLACE_TOL:
+        v.error(rel, pid, f"cover plate is {abs(off):.3g} mm off the cut between {first} and {second} "
+                          "(centred on it in the build)")
+    down = np.array([u[1], -u[0]])
+    down = down if down @ s > 0 else -down
+    clear = float(((q - c) @ down).min())
+    want = float(fab.get("splices", {}).get("top_clear", 0.0))
+    if abs(clear - want) > PLACE_TOL:
+        v.error(rel, pid, f"cover plate is {clear:.4g} mm under the top edge of {first}, splices.top_clear is "
+                          f"{want:g} mm")

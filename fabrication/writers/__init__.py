@@ -45,11 +45,13 @@ def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | 
 
     With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
     per-type DXFs are written in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
-    and the table are the same either way.
+    and the table are the same either way.  An optional file that fails stops the build with an error naming the
+    file, the part and the ``[output]`` key that skips it (:mod:`fabrication.writers._failures`).
     """
+    from ._failures import guarded
     from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
 
-    enabled = [w for w in load_writers() if w.enabled(build.design)]
+    enabled = [guarded(w) for w in load_writers() if w.enabled(build.design)]
     if parallel is None:
         parallel = parallel_enabled()
     if parallel and any(w.name in SECOND_PROCESS for w in enabled):

@@ -142,7 +142,10 @@ class RhinoModel:
         if ext is None:
             from ppfab.errors import FabricationError
 
-            raise FabricationError(f"{el.part_id}: the Rhino extrusion of its outline failed")
+            from ._failures import outline_problem
+
+            raise FabricationError(f"{el.part_id}: Rhino cannot extrude its outline "
+                                   f"({outline_problem(el.outline, el.height)})")
         layer = "glass" if el.kind == "panel" else f"beams::{el.layer}"
         attrs = self._attributes(el.part_id, layer, el.props, el.part_id)
         attrs.MaterialIndex = self.material(material, "glass" if el.kind == "panel" else el.layer)
