@@ -264,6 +264,24 @@ def test_the_lock_of_a_killed_run_is_replaced_not_reused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["second-name"]
 
 
+def test_the_lock_is_taken_where_the_file_system_has_no_hard_links(tmp_path, monkeypatch):
+    import errno
+
+    def no_links(*args, **kwargs):
+        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
+
+    monkeypatch.setattr(os, "link", no_links)
+    lock = tmp_path / ".out.lock"
+    with OutputLock(tmp_path / "out"):
+        assert json.loads(lock.read_text())["pid"] == os.getpid()
+        assert not [p for p in tmp_path.iterdir() if p.name != ".out.lock"]      # no spare file left
+    assert not lock.exists()
+    lock.symlink_to(tmp_path / "victim")
+    with pytest.raises(Exception, match="is a symbolic link"):
+        OutputLock(tmp_path / "out").__enter__()
+    assert not (tmp_path / "victim").exists()
+
+
 # --- single output files ---------------------------------------------------------------------------------
 
 def test_optimize_never_writes_over_its_input(tmp_path, capsys):

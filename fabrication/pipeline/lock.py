@@ -212,10 +212,30 @@ def _create_locked(path: Path) -> int | None:
         return None
     except OSError as exc:
         os.close(fd)
+        if exc.errno in (errno.EPERM, errno.ENOTSUP, errno.ENOSYS):    # no hard links on this file system
+            return _create_in_place(path)
         raise OutputBusyError(f"cannot create the lock file {path} ({exc.strerror})") from None
     finally:
         with contextlib.suppress(OSError):
             os.unlink(spare)
+    return fd
+
+
+def _create_in_place(path: Path) -> int | None:
+    """:func:`_create_locked` where the file system has no hard links: ``O_CREAT | O_EXCL | O_NOFOLLOW`` at
+    ``path`` itself (a run that looks in the instant before the lock and record are in place refuses)."""
+    try:
+        fd = os.open(path, _OPEN_NEW, 0o644)
+    except FileExistsError:
+        return None
+    except OSError as exc:
+        raise OutputBusyError(f"cannot create the lock file {path} ({exc.strerror})") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)                    # another run took it in that instant and will say what to do
+        return None
+    os.write(fd, (json.dumps(process_record()) + "\n").encode("utf-8"))
     return fd
 
 
