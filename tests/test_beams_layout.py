@@ -61,12 +61,13 @@ def test_halflap_slots_share_the_node_axis(pp):
         (pa, sa), (pb, sb) = sorted(slots, key=lambda t: t[0].family)
         assert sa.from_top and not sb.from_top and pa.family == 0 and pb.family == 1
         cos = abs(pa.plane[:3] @ pb.plane[:3])
-        assert sa.width == pytest.approx(prm.thickness * (1 + cos) / np.sqrt(1 - cos * cos) + prm.clearance, abs=1e-12)
+        assert sa.width == pytest.approx(prm.slot_thickness * (1 + cos) / np.sqrt(1 - cos * cos) + prm.fit, abs=1e-12)
         for p, sl in ((pa, sa), (pb, sb)):
             pts = p.frame.to3d(np.array([sl.origin, sl.origin + sl.length * sl.direction]))
             assert _line_distance(pts, v, a).max() < 1e-8
-            # the closed end of both slots is the axis point at half depth
-            assert np.abs(p.frame.to3d(sl.end_center) - (v + 0.5 * prm.depth * a)).max() < 1e-8
+            # the closed end of each slot is the axis point slot_play past half depth from its edge
+            at = 0.5 * prm.depth + (prm.slot_play if sl.from_top else -prm.slot_play)
+            assert np.abs(p.frame.to3d(sl.end_center) - (v + at * a)).max() < 1e-8
             poly = Polygon(p.outline)
             inside = sl.end_center - 1.0 * sl.direction if sl.from_top else sl.end_center + 1.0 * sl.direction
             beyond = sl.end_center + 1.0 * sl.direction if sl.from_top else sl.end_center - 1.0 * sl.direction
@@ -85,7 +86,7 @@ def _check_ends_clear(bs, s):
     """Every end cut sits at its set-back; its corners clear every other plate at the node by
     exactly half the clearance (times the sine of the angle) — the set-back formula is tight."""
     prm = bs.params
-    t, cl = prm.thickness, prm.clearance
+    t, cl = prm.slot_thickness, prm.fit          # the thickest plate EN 10029 allows, and its fit
     checked = 0
     for j in bs.joints:
         for pid, c in j.trims:
@@ -121,7 +122,7 @@ def test_butt_ends_clear_the_plates_they_meet(pp):
             ma = bs.by_id[pa].frame.vec3d(bs.by_id[pa].body_direction(j.vertex))
             mb = bs.by_id[pb].frame.vec3d(bs.by_id[pb].body_direction(j.vertex))
             phi = np.arccos(np.clip(ma @ mb, -1, 1))
-            assert ca == pytest.approx(0.5 * bs.params.thickness / np.tan(phi / 2) + 0.5 * bs.params.clearance)
+            assert ca == pytest.approx(0.5 * bs.params.slot_thickness / np.tan(phi / 2) + 0.5 * bs.params.fit)
 
 
 def test_segmented_joints_on_a_p_mesh():
@@ -198,7 +199,7 @@ def test_assembly_by_sliding(tilt):
         ax = s.axes[[sl.node for sl in p.slots]]
         spread = max(np.arccos(np.clip(x @ y, -1, 1)) for x in ax for y in ax)
         assert rec.slot_spread_deg == pytest.approx(np.degrees(spread), abs=1e-7)
-        play = 0.5 * prm.depth * np.sin(spread / 2)
+        play = prm.slot_length * np.sin(spread / 2)
         assert rec.sliding_play_mm == pytest.approx(play, abs=1e-7)
         assert rec.slidable == (play <= prm.clearance)
         assert rec.extra_clearance_mm == pytest.approx(max(0.0, play - prm.clearance), abs=1e-7)

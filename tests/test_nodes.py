@@ -54,7 +54,7 @@ def test_nodes_of_a_pp_patch(tmp_path):
         assert r["joint"] == ("halflap" if interior else "butt")
         if interior:
             c = np.cos(np.radians(dih))
-            w = bs.params.thickness * (1 + c) / np.sin(np.radians(dih)) + bs.params.clearance
+            w = bs.params.slot_thickness * (1 + c) / np.sin(np.radians(dih)) + bs.params.fit
             assert float(r["slot_width_mm"]) == pytest.approx(w, abs=1e-4)
         # angle between each beam plane and the panels along its edges at the node
         faces = [(fi, fj) for fi in (i - 1, i) for fj in (j - 1, j) if 0 <= fi < g.shape[0] - 1 and 0 <= fj < g.shape[1] - 1]

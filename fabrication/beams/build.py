@@ -83,7 +83,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     types = type_ids(final)
     records = []
     for p in final:
-        spread, play, extra, ok = assembly_check(p, params.clearance)
+        spread, play, extra, ok = assembly_check(p, params.clearance_mm)
         area = p.area
         records.append(BeamRecord(p.part_id, p.beam_id, FAMILY_NAMES[p.family], p.piece, len(p.nodes),
                                   p.length, area, area * p.thickness * params.density * 1e-9, len(p.slots),

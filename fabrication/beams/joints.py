@@ -9,12 +9,14 @@ line.  For plate thickness ``t`` and the angle ``θ`` between the two planes:
   of the two planes and half the depth long.  The other plate's slab cuts this
   plate's mid-plane in a strip ``t / sin θ`` wide, shifted by ``±(t/2)·cot θ``
   across this plate's own thickness, so a slot cut square to the plate needs
-  ``w = t (1 + cos θ) / sin θ + clearance = t·cot(θ/2) + clearance``.
+  ``w = t (1 + cos θ) / sin θ + clearance = t·cot(θ/2) + clearance``; with ``clearance = "auto"`` ``t`` is the
+  thickest plate EN 10029 class A allows and the clearance is ``slot_fit``.  Each slot reaches ``slot_play``
+  past half the depth, so the two plates never bottom out on each other.
 * **butt** (a plate ends at a node): the end is cut parallel to the axis, set back
   from it so it clears every other plate there — ``(t/2)(1 + |cos θ|)/sin θ`` from a
   plate running through (same geometry as the slot), ``(t/2)·cot(φ/2)`` from
   another ending plate at angle ``φ`` between the two (the bisector then separates
-  them) — plus half the clearance.  Segmented joints (P meshes) are butt joints of
+  them) — plus half the clearance (``t`` and clearance as for the slots).  Segmented joints (P meshes) are butt joints of
   the segments against the continuous beam.
 * **none**: plain intersecting plates, nothing cut.
 
@@ -98,7 +100,7 @@ def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: Be
     trims: dict[str, list[tuple[int, float]]] = {}
     slots: dict[str, list[Slot]] = {}
     defects: list[Defect] = []
-    t, cl = params.thickness, params.clearance
+    t, cl = params.slot_thickness, params.fit
     min_ang = params.min_angle_deg
     for v, idx in sorted(_incidence(plates).items()):
         a = support.axes[v]
@@ -281,7 +283,7 @@ def assembly_check(plate: BeamPlate, clearance: float) -> tuple[float, float, fl
     ang = np.array([np.arctan2(s.direction[1], s.direction[0]) for s in plate.slots])
     ang = np.unwrap(ang)
     mid = 0.5 * (ang.max() + ang.min())
-    length = np.array([s.length for s in plate.slots])
+    length = np.array([s.cut_length for s in plate.slots])
     play = float((length * np.abs(np.sin(ang - mid))).max())
     extra = max(0.0, play - clearance)
     return float(np.degrees(ang.max() - ang.min())), play, extra, extra <= 1e-9

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from ppfab.errors import DesignError
 from ppfab.schema import param
 
+from .tolerance import en10029_upper_deviation
+
 
 @dataclass(frozen=True)
 class BeamParams:
@@ -27,8 +29,15 @@ class BeamParams:
     joint: str = param("halflap", doc="'halflap' (PP: slots from above in rows, from below in columns), "
                                       "'segmented' (P: one family continuous, the other cut into segments "
                                       "between crossings), 'none' (plain intersecting plates); see fabrication.beams.joint_types")
-    clearance: float = param(1.0, doc="extra slot width, mm; ends that butt against another plate stop "
-                                      "half of it short of its face", min=0)
+    clearance: float | str = param("auto", doc="extra slot width, mm, or 'auto': slots are cut for the thickest "
+                                               "plate EN 10029 class A allows (nominal + upper deviation, e.g. "
+                                               "15 → 16.3 mm) plus slot_fit; ends that butt against another plate "
+                                               "stop half of the fit short of that plate's thickest face", min=0)
+    slot_fit: float = param(0.5, doc="fit allowance, mm, added to the EN 10029 plate thickness when clearance = "
+                                     "'auto' (unused with a numeric clearance)", min=0)
+    slot_play: float = param(2.0, doc="vertical play of a half-lap, mm: each slot is cut this much deeper than "
+                                      "half the depth, so the crossing plates seat without bottoming out and "
+                                      "their top edges can be set flush", min=0)
     continuous: str = param("auto", doc="segmented joints: the family that runs through the nodes, 'rows', "
                                         "'cols' or 'auto' (a planar family, rows when both are)",
                             choices=("auto", "rows", "cols"))
@@ -66,6 +75,14 @@ class BeamParams:
     def __post_init__(self) -> None:
         from .joint_types import get_joint_type
 
+        if isinstance(self.clearance, str):
+            if self.clearance != "auto":
+                raise DesignError("clearance", f"expected a number of mm or 'auto', got {self.clearance!r}")
+            en10029_upper_deviation(self.thickness, "thickness")
+        if self.slot_play >= 0.5 * self.depth:
+            raise DesignError("slot_play", f"{self.slot_play:g} mm is not below half the depth "
+                                           f"({0.5 * self.depth:g} mm): the crossing plates would come apart")
+
         get_joint_type(self.joint, "joint")
         from ppfab.support.lines import RULES
 
@@ -83,6 +100,32 @@ class BeamParams:
                                             f"got {self.max_length:g}")
 
     @property
+    def thickness_deviation(self) -> float:
+        """Upper deviation of the plate thickness the slots are cut for, mm: EN 10029 class A with
+        ``clearance = "auto"``, 0 with a numeric clearance (the old rule ``t + clearance``)."""
+        return en10029_upper_deviation(self.thickness) if self.clearance == "auto" else 0.0
+
+    @property
+    def slot_thickness(self) -> float:
+        """The plate thickness a slot or end set-back is cut for, mm (nominal + :attr:`thickness_deviation`)."""
+        return self.thickness + self.thickness_deviation
+
+    @property
+    def fit(self) -> float:
+        """Fit allowance beyond :attr:`slot_thickness`, mm: ``slot_fit`` (auto) or the numeric clearance."""
+        return self.slot_fit if self.clearance == "auto" else float(self.clearance)
+
+    @property
+    def clearance_mm(self) -> float:
+        """Extra width of a square (90°) slot over the nominal thickness, mm (deviation + fit)."""
+        return self.thickness_deviation + self.fit
+
+    @property
+    def slot_length(self) -> float:
+        """Depth of every half-lap slot from its plate edge, mm: half the beam depth plus ``slot_play``."""
+        return 0.5 * self.depth + self.slot_play
+
+    @property
     def continuous_family(self) -> int | None:
         """0 (rows), 1 (cols) or ``None`` (auto)."""
         return {"rows": 0, "cols": 1}.get(self.continuous)
@@ -90,7 +133,9 @@ class BeamParams:
     def manifest(self) -> dict:
         """The entries this record contributes to ``manifest.json['fabrication']``."""
         return {"beam_depth": self.depth, "beam_thickness": self.thickness, "beam_material": self.material,
-                "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance,
+                "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance_mm,
+                "beam_slot_fit": self.fit, "beam_thickness_deviation": self.thickness_deviation,
+                "beam_slot_play": self.slot_play, "beam_slot_depth": self.slot_length,
                 "beam_min_angle_deg": self.min_angle_deg, "beam_min_segment": self.min_segment,
                 "beam_max_length": self.max_length, "beam_plane_tolerance": self.plane_tolerance,
                 "beam_tool_radius": self.tool_radius,

@@ -95,6 +95,11 @@ class Slot:
         return rect.union(discs[0]).union(discs[1])
 
     @property
+    def cut_length(self) -> float:
+        """How far the slot reaches into the plate from the edge it opens on, mm (along its line)."""
+        return self.length if self.from_top else self.depth - self.length
+
+    @property
     def end_center(self) -> np.ndarray:
         """Centre of the slot's closed end (on the slot line at ``α = length``)."""
         return self.origin + self.length * self.direction
@@ -353,7 +358,7 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
             at.setdefault(i, []).append(e)
             at.setdefault(j, []).append(e)
     out = np.full(len(vs), params.min_segment)
-    t, c = params.thickness, params.clearance
+    t, c = params.slot_thickness, params.fit
     for q, v in enumerate(vs.tolist()):
         others = at.get(v, [])
         if not others:

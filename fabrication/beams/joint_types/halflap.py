@@ -1,6 +1,9 @@
 """``joint = "halflap"`` (PP meshes): both families run through every node; where two plates cross, one slot
 from above in the rows (family 0) and one from below in the columns, both centred on the common line of the
-two planes and half the depth long; the slot width ``t·cot(θ/2) + clearance`` (:func:`~fabrication.beams.joints.slot_width`)."""
+two planes and ``slot_play`` deeper than half the depth (:attr:`~fabrication.beams.params.BeamParams.slot_length`),
+so the plates seat on each other's slot ends with ``2·slot_play`` to spare instead of bottoming out; the slot width
+``t_max·cot(θ/2) + fit`` (:func:`slot_width`), ``t_max`` the thickest plate EN 10029 allows with
+``clearance = "auto"`` (:mod:`fabrication.beams.tolerance`)."""
 
 from __future__ import annotations
 
@@ -15,11 +18,12 @@ from ..report import Defect
 from . import JointType, ThroughNode, joint_type
 
 
-def slot_width(thickness: float, cos_theta: float, clearance: float) -> float:
-    """Width of a half-lap slot for plates of ``thickness`` crossing at ``θ``: ``t(1 + |cos θ|)/sin θ + c``."""
+def slot_width(thickness: float, cos_theta: float, clearance: float, deviation: float = 0.0) -> float:
+    """Width of a half-lap slot for plates of ``thickness`` (up to ``deviation`` thicker) crossing at ``θ``:
+    ``(t + dev)(1 + |cos θ|)/sin θ + c``."""
     c = min(abs(float(cos_theta)), 1.0)
     s = max(np.sqrt(1.0 - c * c), 1e-12)
-    return thickness * (1.0 + c) / s + clearance
+    return (thickness + deviation) * (1.0 + c) / s + clearance
 
 
 def halflap_node(ps: list[BeamPlate], through: list[int], v: int, a: np.ndarray, support: SupportStructure,
@@ -43,13 +47,13 @@ def halflap_node(ps: list[BeamPlate], through: list[int], v: int, a: np.ndarray,
         d = d if d @ a >= 0 else -d
         x = support.vertices[v]
         p0 = point + ((x - point) @ d) * d
-        width = slot_width(params.thickness, cos, params.clearance)
+        width = slot_width(params.thickness, cos, params.fit, params.thickness_deviation)
         line = (p0, d)
         for plate, top in ((A, True), (B, False)):
             s2 = plate.frame.vec2d(d)
             slots.setdefault(plate.part_id, []).append(Slot(
                 v, (B if top else A).part_id, top, plate.frame.to2d(p0), s2 / np.linalg.norm(s2), width,
-                0.5 * params.depth, params.depth))
+                params.slot_length if top else params.depth - params.slot_length, params.depth))
     return ThroughNode("halflap", width, line, slots, [])
 
 
