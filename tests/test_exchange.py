@@ -150,12 +150,16 @@ def test_ifc_spatial_structure_and_beam_assemblies(built, parts):
 
 
 def test_ifc_solids_have_the_parts_volume_where_the_mesh_is(built, parts, mesh):
-    """ifcopenshell's geometry kernel tessellates every element: its volume is area × thickness, a pane lies on
-    its mesh face, a plate on its support plane (independent of ppfab's own readers)."""
+    """ifcopenshell's geometry kernel tessellates every element: its volume is area × thickness, a pane lies
+    parallel to its mesh face at the height of its solid in panels.step (on its gaskets), a plate on its support
+    plane (independent of ppfab's own readers)."""
     import ifcopenshell
     import ifcopenshell.geom
     import ifcopenshell.util.shape as us
 
+    from fabrication.verify._step_read import read_step_solids
+
+    step = {s.name: np.array([tuple(p) for p in s.solid.vertices()]) for s in read_step_solids(built / "panels.step")}
     f = ifcopenshell.open(str(built / "model.ifc"))
     settings = ifcopenshell.geom.settings()
     settings.set("use-world-coords", True)
@@ -175,8 +179,11 @@ def test_ifc_solids_have_the_parts_volume_where_the_mesh_is(built, parts, mesh):
             c = mesh.vertices[mesh.faces[int(row["face"])]]
             n = np.linalg.svd(c - c.mean(axis=0))[2][2]
             d = np.sort((x - c.mean(axis=0)) @ n)
-            d = d if abs(d[-1]) > abs(d[0]) else -d[::-1]
-            assert d[0] == pytest.approx(0, abs=1e-6) and d[-1] == pytest.approx(t, abs=1e-6)
+            sign = 1.0 if abs(d[-1]) > abs(d[0]) else -1.0
+            d = d if sign > 0 else -d[::-1]
+            seat = float(np.min(sign * (step[name] - c.mean(axis=0)) @ n))
+            assert 5.0 < seat < 20.0                                     # strip 8 + gasket 3 mm, ± the gasket tilt
+            assert d[0] == pytest.approx(seat, abs=1e-6) and d[-1] == pytest.approx(seat + t, abs=1e-6)
         elif row["kind"] == "beam":
             plane = np.array(json.loads(row["plane"]))
             d = x @ plane[:3] + plane[3]

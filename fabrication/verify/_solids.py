@@ -2,10 +2,10 @@
 
 A solid read back from a file is compared with the part's ``parts.csv`` row and the mesh (``mesh.obj``):
 
-* a panel lies on its mesh face: every vertex at a distance ``δ ∈ [−ε, t + ε]`` from the plane fitted to the
-  face's corners (oriented to the side the solid is on), ``t`` the glass thickness and ``ε`` the planarity
-  tolerance plus the file's precision, reaching ``t`` on one side and 0 on the other; its volume is the row's
-  ``area_mm2 × thickness_mm``;
+* a panel lies parallel to its mesh face on its gaskets: every vertex at a distance ``δ ∈ [z − ε, z + t + ε]``
+  from the plane fitted to the face's corners (oriented to the side the solid is on), reaching both, ``t`` the
+  glass thickness, ``ε`` the planarity tolerance plus the file's precision and the seat ``z`` within
+  :func:`seat_range`; its volume is the row's ``area_mm2 × thickness_mm``;
 * a beam plate lies on its support plane (the row's ``plane``): every vertex at ``|δ| ≤ t/2 + ε``, reaching
   ``±t/2`` on both sides; the mesh vertices of its nodes (the row's ``nodes``) on that plane within the beam
   plane tolerance; its volume is ``area_mm2 × thickness_mm``;
@@ -33,6 +33,27 @@ def polygon_area_3d(points: np.ndarray) -> float:
     p = np.asarray(points, dtype=float)
     p = p - p.mean(axis=0)
     return 0.5 * float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)))
+
+
+def seat_range(v: Verification) -> tuple[float, float]:
+    """Where a pane's underside may lie above its face's plane, mm: the glazing offset (``manifest.json``
+    ``glazing.offset_mm``, strip + gasket; 0 without strips) ± half the strip width × the tangent of the larger
+    of ``glazing.max_tilt_deg`` and the largest ``tilt_deg`` of ``bites.csv`` (a gasket tilted by that angle
+    raises or lowers the pane by at most that much over its width), ± 0.1 mm for the faces' planarity."""
+    from . import read_csv
+    from ._shapes import number
+
+    m = v.data.get("manifest", {})
+    nominal = float(m.get("glazing", {}).get("offset_mm", 0.0) or 0.0)
+    if not nominal:
+        return 0.0, 0.0
+    gl = m.get("fabrication", {}).get("glazing", {})
+    tilt = float(gl.get("max_tilt_deg", 0.0))
+    rel = m.get("files", {}).get("bites_csv")
+    if rel and (v.folder / rel).is_file():
+        tilt = max([tilt] + [number(r.get("tilt_deg"), 0.0) for r in read_csv(v.folder / rel)])
+    spread = 0.5 * float(gl.get("width", 0.0)) * float(np.tan(np.radians(min(tilt, 45.0))))
+    return nominal - spread - 0.1, nominal + spread + 0.1
 
 
 def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None:
@@ -107,9 +128,10 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
         if abs(d.max()) < abs(d.min()):
             d = -d
         tol = float(fab.get("planarity_tolerance", 0.0)) + eps
-        if d.min() < -tol or d.max() > t + tol or abs(d.max() - t) > tol or abs(d.min()) > tol:
+        lo, hi = seat_range(v)
+        if abs(d.max() - d.min() - t) > tol or not lo - tol <= d.min() <= hi + tol:
             v.error(rel, pid, f"solid spans {d.min():.4g} … {d.max():.4g} mm from face {row['face']}'s plane, "
-                              f"expected 0 … {t:g} mm")
+                              f"expected z … z + {t:g} mm with its seat z in {lo:.4g} … {hi:.4g} mm")
     elif row["kind"] == "beam":
         plane = parse_list(row.get("plane", ""))
         if len(plane) != 4:

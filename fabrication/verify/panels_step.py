@@ -1,7 +1,9 @@
 """panels.step against the mesh: one solid per panel, named by its part id, in the glass assembly (in a row
 assembly below it, or directly in it as earlier builds wrote it), whose vertices are the face's corners on its
-least-squares plane and the same moved by the glass thickness along the face normal; its header names ppfab.
-The file is read once (it was read twice, here and by the ``step`` check, before the two were merged)."""
+least-squares plane inset by half the panel gap (the pane as cut) and moved along the face normal by the pane's
+seat ``z`` and by ``z`` + the glass thickness, the seat within :func:`._solids.seat_range` (the contact with
+the gaskets is the clash check's, :mod:`.clash`); its header names ppfab.  The file is read once (it was read twice, here and by the ``step`` check,
+before the two were merged)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import numpy as np
 
 from . import Verification, check
 from ._shapes import set_distance, solid_points
+from ._solids import reference_outline, seat_range
 
 
 @check("panels_step", 62)
@@ -34,7 +37,10 @@ def check_panels_step(v: Verification) -> None:
         elif s.path[1:2] != (STEP_GLASS_GROUP,):
             v.error(rel, s.name, f"sits under {'/'.join(s.path)}, expected the {STEP_GLASS_GROUP} assembly "
                                  "(below the design's)")
-    t = float(m.get("fabrication", {}).get("glass_thickness", 0.0))
+    fab = m.get("fabrication", {})
+    t = float(fab.get("glass_thickness", 0.0))
+    gap = float(fab.get("panel_gap", 0.0))
+    lo, hi = seat_range(v)
     panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
     names = [n for n, _ in pairs]
     for name in sorted(every - set(names)):
@@ -45,12 +51,20 @@ def check_panels_step(v: Verification) -> None:
         row = panels.get(name)
         if row is None:
             continue                                    # not a panel: named above
-        c = mesh.vertices[mesh.faces[int(row["face"])]]
-        centre = c.mean(axis=0)
-        n = np.linalg.svd(c - centre)[2][2]
-        proj = c - np.outer((c - centre) @ n, n)
+        ring = reference_outline(v, row)
+        if ring is None:
+            continue
+        n = np.linalg.svd(ring - ring.mean(axis=0))[2][2]
         pts = solid_points(solid)
-        err = min(set_distance(pts, np.concatenate([proj, proj + s * t * n])) for s in (1.0, -1.0))
-        if not err <= 1e-6:
-            v.error(rel, name, f"solid is {err:.3g} mm from face {row['face']} of mesh.obj and its {t:g} mm offset")
+        mid = float(((pts - ring[0]) @ n).mean()) if len(pts) else 0.0
+        side = 1.0 if mid >= 0 else -1.0                # the side of the face the pane lies on
+        z0 = abs(mid) - 0.5 * t
+        err = set_distance(pts, np.concatenate([ring + side * z0 * n, ring + side * (z0 + t) * n]))
+        if not err <= 1e-3:
+            v.error(rel, name, f"solid is {err:.3g} mm from face {row['face']} of mesh.obj inset by "
+                               f"{0.5 * gap:g} mm and moved along its normal")
+        elif not lo - 1e-3 <= z0 <= hi + 1e-3:
+            v.error(rel, name, f"solid lies {z0:.3g} mm off face {row['face']} of mesh.obj, outside the seat "
+                               f"range {max(lo, 0.0):.3g} … {hi:.3g} mm")
     v.checked.append("panels_step")
+

@@ -6,7 +6,8 @@ Every part is a flat outline extruded once, so one record describes it for every
 ``z0 + height`` along the normal:
 
 * a glass panel: the inset outline in the panel frame (the face's least-squares plane, normal to the outside),
-  from ``z0 = 0`` to the glass thickness — the pane lies on the outside of the mesh, on the beams' top edges;
+  from its seat ``z0`` (:func:`fabrication.glazing.seat.pane_offsets`: the underside on the gaskets, about
+  strip + gasket above the mesh face) to ``z0`` + the glass thickness;
 * a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
   ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane.
 
@@ -125,11 +126,15 @@ def _value(v: Any) -> Value | None:
 
 def elements(build: "Build", files: Files) -> list[Element]:
     """The panels (in face order), then the beam plates (in plate order), as :class:`Element` records."""
+    from ..glazing.seat import pane_offsets
+
     rows = {r["part_id"]: r for r in parts_table(build, files)}
+    seat = pane_offsets(build)
     out = []
     for p in build.panels.panels:
         props = _props(rows[p.part_id])
-        out.append(Element(p.part_id, "panel", "glass", "", p.outline, p.frame, 0.0, float(p.thickness_mm), props))
+        out.append(Element(p.part_id, "panel", "glass", "", p.outline, p.frame, seat[p.part_id],
+                           float(p.thickness_mm), props))
     for b in build.beams.plates:
         row = dict(rows[b.part_id])
         row["weight_kg"] = row.get("mass_kg", "")

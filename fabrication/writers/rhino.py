@@ -2,7 +2,7 @@
 
 Layers (:data:`fabrication.contract.RHINO_LAYERS`, colours :data:`~fabrication.contract.COLOURS`)::
 
-    glass          one closed extrusion per pane (its inset outline on the face plane, thickness outwards)
+    glass          one closed extrusion per pane (its inset outline parallel to the face, on its gaskets)
     beams::rows    one closed extrusion per beam plate of the row family (centred on its support plane)
     beams::cols    … of the column family
     nodes          one line per node: from the node along its unit axis by the beam depth

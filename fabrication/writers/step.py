@@ -10,8 +10,8 @@ without p-curves; a reader sees the product tree (names survive every level)
     beams.step                                panels.step
     <design name>                             <design name>
       rows | cols          one per family       glass
-        B-U03              one per beam           P-U07-V12 …   one solid per pane
-          B-U03-S00 …      one solid per plate
+        B-U03              one per beam           P-U07 …       one per row of faces
+          B-U03-S00 …      one solid per plate      P-U07-V12 … one solid per pane, on its gaskets
 
 with every solid coloured by its family (:data:`fabrication.contract.COLOURS`) and a header naming ppfab, its
 version and the design (:mod:`fabrication.writers._step_text`).
@@ -45,6 +45,7 @@ from . import Files, writer
 if TYPE_CHECKING:  # pragma: no cover
     from build123d import Shape, Solid
 
+    from ..panels import Panel
     from ..pipeline.records import Build
 
 
@@ -344,21 +345,40 @@ def panel_groups(ids: Sequence[str]) -> list[str]:
     return out
 
 
-def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: float = 10.0,
-                       ids: Sequence[str] | None = None, name: str = "") -> Path:
-    """``panels.step``: glass panels as thin solids on the outside of the mesh, for clash checks; the assembly
-    ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per pane, in the glass colour."""
+def placed_pane_solids(panels: Sequence["Panel"], offsets: dict[str, float]) -> list:
+    """The panes as placed: each inset outline in its panel frame, from ``z = offsets[part id]`` (its seat on the
+    gaskets, :func:`fabrication.glazing.seat.pane_offsets`) to that plus the glass thickness along the outside
+    normal; the same prism as the pane of model.ifc, model.3dm and model.glb."""
+    return [_placed_prism(p.outline, p.frame, offsets[p.part_id], float(p.thickness_mm), p.part_id) for p in panels]
+
+
+def _export_glass(solids: list, ids: list[str], path: str | os.PathLike, name: str) -> Path:
+    """The assembly ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per pane, in the glass colour."""
     from build123d import Compound
 
-    ids = list(ids) if ids is not None else [f"P{k:04d}" for k in range(len(corners))]
-    if len(ids) != len(corners):
-        raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
-    solids = panel_solids(corners, thickness, ids)
     for s in solids:
         s.color = _colour("glass")
     glass = Compound(children=grouped(solids, panel_groups(ids)), label=STEP_GLASS_GROUP)
     root = Compound(children=[glass], label=step_label(name or "panels"))
     return export_step(root, path, description=f"glass panels of {name}" if name else "glass panels")
+
+
+def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: float = 10.0,
+                       ids: Sequence[str] | None = None, name: str = "") -> Path:
+    """A STEP file of whole mesh faces as thin solids on the outside of the mesh (:func:`panel_solids`), for a
+    quick look at a mesh; a build's ``panels.step`` holds the placed panes instead (:func:`export_placed_panes`)."""
+    ids = list(ids) if ids is not None else [f"P{k:04d}" for k in range(len(corners))]
+    if len(ids) != len(corners):
+        raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
+    return _export_glass(panel_solids(corners, thickness, ids), ids, path, name)
+
+
+def export_placed_panes(panels: Sequence["Panel"], offsets: dict[str, float], path: str | os.PathLike,
+                        name: str = "") -> Path:
+    """``panels.step``: the panes as cut (inset outlines) where they sit on the gaskets
+    (:func:`placed_pane_solids`), for clash checks."""
+    ids = [p.part_id for p in panels]
+    return _export_glass(placed_pane_solids(panels, offsets), ids, path, name)
 
 
 @writer("step", order=20)
@@ -371,9 +391,9 @@ def write_step_files(build: "Build", out: Path, files: Files) -> str:
                 description=f"beam plates of {name}")
     files["beams_step"] = "beams.step"
     if build.design.output.panels_step:
-        panels = build.panels.panels
-        export_panels_step(np.array([p.corners_3d for p in panels]), out / "panels.step",
-                           build.design.panels.thickness, [p.part_id for p in panels], name)
+        from ..glazing.seat import pane_offsets
+
+        export_placed_panes(build.panels.panels, pane_offsets(build), out / "panels.step", name)
         files["panels_step"] = "panels.step"
         return "beams.step, panels.step"
     return "beams.step"

@@ -1,0 +1,147 @@
+"""Where each pane sits: its underside resting on the gaskets, the one source of the panes' placed position.
+
+A pane is its inset outline in the panel frame (origin, ``ex``, ``ey`` in the face's least-squares plane, normal
+``N`` to the outside).  It rests on the gaskets of the glazing strips under its edges, whose top faces lie
+``t_s + t_g`` (strip + gasket) above the mesh edge along the strip's ``up`` (:mod:`.strips`).  The placed pane
+is the outline moved along ``N`` by its *seat* ``h``: the underside at ``z = h``, the top face at ``h + t``.
+
+The gasket tops are not parallel to the pane: each is tilted by half the kink between the panes on its edge.
+So no single height makes the whole underside touch.  The seat is the lowest height at which the pane
+penetrates no gasket: for every gasket whose top face, projected along ``N`` into the pane's plane, overlaps
+the pane's outline (the overlap polygon, by shapely), the height along ``N`` of the gasket's top plane above
+each vertex of the overlap; the pane's underside and a plane meet in a line, so the highest of these vertices
+is the highest point of the gasket under the pane,
+
+    z(v) = ((T − O − v₃)·u) / (N·u),    h = max over overlaps and their vertices of z(v),
+
+with ``T`` a corner of the gasket top, ``u`` its normal, ``O`` the frame origin and ``v₃ = x·ex + y·ey``.  The
+pane touches the highest gasket (gap 0) and stands off the others by ``h − max z`` of each (their *gap*);
+on a ridge of the roof a gasket tilts up into the pane's span, in a valley away from it, so a pane between
+a ridge edge and a valley edge stands off its valley gasket by some 30 mm × the sum of the two half-kinks'
+sines.  The strip under a gasket has the same outline, so a pane clear of the gasket is clear of its strip.
+
+Nominal seat ``t_s + t_g`` (the pane parallel to its face, on a gasket parallel to it): the bite
+(:mod:`.bite`) projects the gaskets along ``N`` and does not depend on the seat.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+
+from .strips import Strip
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..panels import Panel
+    from ..pipeline.records import Build
+
+SEAT_TOLERANCE = 0.1
+"""mm: how far a placed pane may penetrate a gasket or strip, or stand off the gasket it bears on, in the
+written models (``ppfab verify``'s clash check, tests/test_assembly_clash.py).  The seat itself is exact to
+rounding; the tolerance absorbs the STEP file's decimals and the kernel's and the mesh readers' numerics."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A gasket under a pane: the strip's part id, the area (mm²) of the gasket top under the pane (projected
+    along the pane's normal) and the gap (mm) between the pane's underside and the highest point of that
+    gasket under it (0 for the gasket the pane bears on)."""
+
+    strip: str
+    area: float
+    gap: float
+
+
+@dataclass(frozen=True)
+class PaneSeat:
+    """The placed position of one pane: its underside lies ``offset`` mm above its face's plane along the
+    outside normal; ``contacts`` are the gaskets under it, the one it bears on has ``gap`` 0."""
+
+    panel: str
+    offset: float
+    contacts: tuple[Contact, ...]
+
+    @property
+    def largest_gap(self) -> float:
+        """The largest gap (mm) of this pane over a gasket under it (0 without contacts)."""
+        return max((c.gap for c in self.contacts), default=0.0)
+
+
+def _gasket_top(strip: Strip, gasket: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(4, 3)`` corners of a gasket's top face and its unit normal (the strip's up)."""
+    return strip.top_corners(gasket), strip.frame.normal
+
+
+def seat_pane(panel: "Panel", strips: Sequence[Strip], gasket: float, nominal: float) -> PaneSeat:
+    """The :class:`PaneSeat` of ``panel`` on the gaskets of ``strips`` (those near it; others are skipped by
+    their overlap).  Without any gasket under it the pane keeps the ``nominal`` seat."""
+    from shapely.geometry import Polygon
+
+    f = panel.frame
+    N = f.normal
+    pane = Polygon(np.asarray(panel.outline, dtype=float))
+    tops: list[tuple[str, float, float]] = []
+    for s in strips:
+        top, u = _gasket_top(s, gasket)
+        denom = float(N @ u)
+        if denom <= 1e-6:                            # a gasket facing away from the pane cannot carry it
+            continue
+        under = Polygon(f.to2d(top)).convex_hull.intersection(pane)
+        if under.is_empty or under.area <= 1e-9:
+            continue
+        ring = np.array(getattr(under, "exterior", under.convex_hull.exterior).coords)[:-1]
+        v3 = f.to3d(ring)
+        z = ((top[0] - v3) @ u) / denom
+        tops.append((s.part_id, float(under.area), float(z.max())))
+    if not tops:
+        return PaneSeat(panel.part_id, float(nominal), ())
+    h = max(z for _, _, z in tops)
+    return PaneSeat(panel.part_id, h, tuple(Contact(pid, area, h - z) for pid, area, z in tops))
+
+
+def seat_panes(panels: Sequence["Panel"], strips: Sequence[Strip], gasket: float) -> tuple[PaneSeat, ...]:
+    """The :class:`PaneSeat` of every pane, in panel order (see the module docstring).  Broad phase: only the
+    strips whose centre lies within the pane's radius plus the strip's half diagonal (a k-d tree)."""
+    from scipy.spatial import cKDTree
+
+    if not strips:
+        return tuple(PaneSeat(p.part_id, 0.0, ()) for p in panels)
+    nominal = strips[0].thickness + gasket
+    centres = np.array([s.frame.to3d(np.array([0.5 * (s.x0 + s.x1), 0.0])) for s in strips])
+    reach = max(0.5 * float(np.hypot(s.length, s.width)) for s in strips) + nominal + 1.0
+    tree = cKDTree(centres)
+    out = []
+    for p in panels:
+        ring = p.outline_3d()
+        c = ring.mean(axis=0)
+        r = float(np.linalg.norm(ring - c, axis=1).max())
+        near = [strips[k] for k in sorted(tree.query_ball_point(c, r + reach))]
+        out.append(seat_pane(p, near, gasket, nominal))
+    return tuple(out)
+
+
+_SEATS: "weakref.WeakKeyDictionary[Any, tuple[PaneSeat, ...]]" = weakref.WeakKeyDictionary()
+
+
+def build_seats(build: "Build") -> tuple[PaneSeat, ...]:
+    """The :class:`PaneSeat` of every pane of a build, in panel order, computed once per build's glazing (the
+    writers of panels.step and of the exchange models ask for them): empty without glazing strips."""
+    g = build.glazing
+    if g is None or not g.strips:
+        return ()
+    seats = _SEATS.get(g)
+    if seats is None:
+        seats = seat_panes(build.panels.panels, g.strips, g.params.gasket_thickness)
+        _SEATS[g] = seats
+    return seats
+
+
+def pane_offsets(build: "Build") -> dict[str, float]:
+    """Part id → the height (mm) of each pane's underside above its face's plane along its outside normal, as
+    every model places it (``panels.step``, IFC, Rhino, glTF): the seat on the gaskets, 0 (on the mesh face)
+    for a build without glazing strips (``[glazing] support = "none"``)."""
+    seats = {s.panel: s.offset for s in build_seats(build)}
+    return {p.part_id: float(seats.get(p.part_id, 0.0)) for p in build.panels.panels}
