@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import types
 from pathlib import Path
 from typing import Any
 
@@ -60,40 +61,54 @@ FLAT_ALIASES = {"panel_gap": "panels.gap", "planarity_tolerance": "panels.planar
 (:func:`fabrication.writers.manifest.fabrication_params`); every ``beam_<key>`` is ``beams.<key>``."""
 
 
-def _defaults() -> dict[str, Any]:
-    """The ``fabrication`` table of a design with every parameter at its default."""
-    from ppfab.schema import as_plain, parse_params
+def _hints() -> dict[str, dict[str, Any]]:
+    """Section → key → the type hint of its parameter (the dataclass fields of the section's record)."""
+    import typing
 
-    from ..design import SECTION_DEFAULTS, Design, DesignInfo, _section_types
-    from ..writers.manifest import fabrication_params
+    from ..design import _section_types
 
     types = _section_types()
-    records: dict[str, Any] = {name: parse_params(types[name](), dict(SECTION_DEFAULTS.get(name, {})), name)
-               for name in FABRICATION_SECTIONS}
-    design = Design(source="", sha256="", base_dir=Path("."), info=DesignInfo(), geometry=None,  # type: ignore[arg-type]
-                    sections=records)
-    out = fabrication_params(design)
-    out.update({name: as_plain(records[name]) for name in FABRICATION_SECTIONS})
-    return out
+    return {name: typing.get_type_hints(types[name]()) for name in FABRICATION_SECTIONS}
 
 
-def _same_kind(value: Any, default: Any) -> bool:
-    """Whether a manifest value has the type of the parameter's default (a number, a flag, text, a list of
-    numbers); a default of ``None`` takes anything."""
-    if default is None:
-        return True
-    if isinstance(default, bool):
+def _accepts(value: Any, hint: Any) -> bool:
+    """Whether a JSON value has the type ``hint`` names (unions, ``None``, numbers, flags, text, literals, lists
+    and tuples of them; anything else is taken)."""
+    import typing
+
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if hint is type(None):
+        return value is None
+    if origin in (typing.Union, types.UnionType):
+        return any(_accepts(value, a) for a in args)
+    if origin is typing.Literal:
+        return value in args
+    if hint is bool:
         return isinstance(value, bool)
-    if is_number(default):
-        return is_number(value)
-    if isinstance(default, str):
+    if hint in (int, float):
+        return is_number(value) and (hint is float or float(value).is_integer())
+    if hint is str:
         return isinstance(value, str)
-    if isinstance(default, list):
+    if origin in (list, tuple) or hint in (list, tuple):
         if not isinstance(value, list):
             return False
-        if default and all(is_number(x) for x in default):
-            return all(is_number(x) for x in value)
+        inner = [a for a in args if a is not Ellipsis]
+        if origin is tuple and inner and Ellipsis not in args and len(inner) != len(value):
+            return False
+        return all(any(_accepts(x, a) for a in inner) for x in value) if inner else True
     return True
+
+
+def _name(hint: Any) -> str:
+    """A type hint as a reader says it: ``a number``, ``a number or text``."""
+    import typing
+
+    words = {bool: "true or false", int: "a whole number", float: "a number", str: "text", type(None): "null"}
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        return " or ".join(_name(a) for a in typing.get_args(hint))
+    if typing.get_origin(hint) in (list, tuple):
+        return "a list"
+    return words.get(hint, str(hint))
 
 
 def _equal(a: Any, b: Any) -> bool:
@@ -103,38 +118,37 @@ def _equal(a: Any, b: Any) -> bool:
 
 
 def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
-    """``fab`` with every value of the wrong type (a finding naming its key) replaced by the parameter's
-    default; every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
-    Types are judged against the defaults, not by parsing: a build of an older version keeps verifying when
-    a newer one tightens a parameter's limits."""
+    """``fab`` without the values of the wrong type (a finding naming each key: a later check reads the
+    parameter's default); every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
+    Types are judged by the parameter records' type hints, not by parsing: a build of an older version keeps
+    verifying when a newer one tightens a parameter's limits."""
     if not isinstance(fab, dict):
         v.error("manifest.json", "fabrication", f"must be an object, got {type(fab).__name__}")
         return {}
-    defaults = _defaults()
+    hints = _hints()
+    aliases = dict(FLAT_ALIASES)
+    aliases.update({k: f"beams.{k[5:]}" for k in fab if k.startswith("beam_") and k[5:] in hints["beams"]})
     out: dict[str, Any] = {}
     for key, value in fab.items():
-        default = defaults.get(key)
-        if isinstance(default, dict):
+        if key in hints:
             if not isinstance(value, dict):
                 v.error("manifest.json", f"fabrication.{key}", f"must be an object, got {value!r}"[:200])
-                out[key] = dict(default)
+                out[key] = {}
                 continue
             section = {}
             for k, x in value.items():
-                if k in default and not _same_kind(x, default[k]):
+                if k in hints[key] and not _accepts(x, hints[key][k]):
                     v.error("manifest.json", f"fabrication.{key}.{k}",
-                            f"{x!r} is not of the parameter's type (default {default[k]!r})"[:200])
-                    x = default[k]
+                            f"{x!r} is not {_name(hints[key][k])}"[:200])
+                    continue                                 # the later checks read the default
                 section[k] = x
             out[key] = section
-        elif key in defaults and not _same_kind(value, default):
-            v.error("manifest.json", f"fabrication.{key}",
-                    f"{value!r} is not of the parameter's type (default {default!r})"[:200])
-            out[key] = default
-        else:
-            out[key] = value
-    aliases = dict(FLAT_ALIASES)
-    aliases.update({k: f"beams.{k[5:]}" for k in defaults if k.startswith("beam_") and k[5:] in defaults["beams"]})
+            continue
+        name, _, sub = aliases.get(key, "").partition(".")
+        if name and sub in hints[name] and not _accepts(value, hints[name][sub]):
+            v.error("manifest.json", f"fabrication.{key}", f"{value!r} is not {_name(hints[name][sub])}"[:200])
+            continue
+        out[key] = value
     for flat, path in aliases.items():
         name, key = path.split(".")
         part = out.get(name)
