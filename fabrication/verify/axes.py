@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import Verification, check
+from ._cells import is_vector
 from ._shapes import literal, number, torsion_tolerance
 
 
@@ -41,14 +42,26 @@ def check_axes(v: Verification) -> None:
     jrel = files.get("nodes_json")
     if jrel is not None:
         doc = v.read_json(jrel) or {}
-        for node in doc.get("nodes", []):
-            k = int(node.get("vertex", -1))
-            if not 0 <= k < len(axes):
+        nodes = doc.get("nodes", []) if isinstance(doc, dict) else None
+        if not isinstance(nodes, list):
+            v.error(jrel, "nodes", "must be a list of nodes")
+            nodes = []
+        for n, node in enumerate(nodes):
+            vk = node.get("vertex") if isinstance(node, dict) else None
+            axis = node.get("axis") if isinstance(node, dict) else None
+            beam_list = node.get("beams", []) if isinstance(node, dict) else None
+            if not (isinstance(vk, int) and is_vector(axis, 3) and isinstance(beam_list, list)
+                    and all(isinstance(b, dict) and isinstance(b.get("part_id"), str) for b in beam_list)):
+                v.error(jrel, f"nodes[{n}]", "is not a node: an integer vertex, a 3-vector axis and a list of beams "
+                                             "with part ids")
                 continue
-            d = float(np.abs(np.asarray(node.get("axis"), dtype=float) - axes[k]).max())
+            if not 0 <= vk < len(axes):
+                continue
+            k = vk
+            d = float(np.abs(np.asarray(axis, dtype=float) - axes[k]).max())
             if not d <= 1e-8:
                 v.error(rel, node.get("node_id", f"N{k:04d}"), f"axis differs from nodes.json by {d:.3g}")
-            beams = {b["part_id"] for b in node.get("beams", [])}
+            beams = {b["part_id"] for b in beam_list}
             if beams != listed.get(k, set()):
                 v.error(rel, node.get("node_id", f"N{k:04d}"),
                         f"beams {sorted(listed.get(k, set()))} differ from nodes.json {sorted(beams)}")
@@ -81,16 +94,32 @@ def check_axes(v: Verification) -> None:
         if (len(gv) == len(mesh.vertices) and len(order) == len(gv)
                 and np.array_equal(np.sort(order), np.arange(len(gv)))
                 and np.abs(gv - mesh.vertices[order]).max(initial=0.0) <= 1e-6):
-            ga = np.asarray(grid.get("axes", np.full_like(gv, np.nan)), dtype=float).reshape(-1, 3)
+            try:
+                ga = np.asarray(grid.get("axes", np.full_like(gv, np.nan)), dtype=float).reshape(-1, 3)
+            except (TypeError, ValueError):
+                v.error(mrel, "axes", "is not a list of 3-vectors")
+                ga = np.full_like(gv, np.nan)
+            if len(ga) != len(gv):
+                v.error(mrel, "axes", f"{len(ga)} axes for {len(gv)} vertices")
+                ga = np.full_like(gv, np.nan)
             diff = np.abs(ga - axes[order]).max(axis=1)
             for k in np.flatnonzero(~(diff <= 1e-8))[:20]:
                 v.error(mrel, f"N{int(order[k]):04d}", f"axis {np.round(ga[k], 9).tolist()} differs from "
                                                        f"nodes.csv {np.round(axes[order[k]], 9).tolist()}")
-            pts, ax = gv.reshape(shape + (3,)), axes[order].reshape(shape + (3,))
+            if shape[0] * shape[1] != len(gv):
+                v.error(mrel, "rows", f"rows {shape[0]} x cols {shape[1]} do not hold its {len(gv)} vertices")
+                shape = (0, 0)
+            pts, ax = gv.reshape(shape + (3,)) if shape[0] else gv, axes[order]
+            if shape[0]:
+                ax = ax.reshape(shape + (3,))
             for key, family in (("support_u", 0), ("support_w", 1)):
-                if key not in grid:
+                if key not in grid or not shape[0]:
                     continue
-                planes = np.asarray(grid[key], dtype=float)
+                try:
+                    planes = np.asarray(grid[key], dtype=float).reshape(-1, 4)
+                except (TypeError, ValueError):
+                    v.error(mrel, key, "is not a list of planes [a, b, c, d]")
+                    continue
                 lines = (pts, ax) if family == 0 else (pts.transpose(1, 0, 2), ax.transpose(1, 0, 2))
                 for i, (plane, p, a) in enumerate(zip(planes, *lines)):
                     n = plane[:3] / np.linalg.norm(plane[:3])

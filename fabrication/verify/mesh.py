@@ -22,7 +22,7 @@ def check_mesh(v: Verification) -> None:
         v.error(rel, "vertices", f"{len(mesh.vertices)} in the file, {me.get('vertices')} in the manifest")
     if me.get("faces") not in (None, len(mesh.faces)):
         v.error(rel, "faces", f"{len(mesh.faces)} in the file, {me.get('faces')} in the manifest")
-    if "rows" in me:
+    if "rows" in me and "cols" in me:
         cols = me["cols"] if not me.get("closed") else me["cols"] + 1
         if (me["rows"] - 1) * (cols - 1) != len(mesh.faces):
             v.error(rel, "grid", f"rows {me['rows']} x cols {me['cols']} do not match {len(mesh.faces)} faces")
