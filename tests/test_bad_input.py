@@ -95,3 +95,33 @@ def test_only_optional_writers_are_guarded_and_disk_errors_keep_their_message(tm
     with pytest.raises(KeyboardInterrupt):
         stop.write(None, tmp_path, {})
     assert list(tmp_path.iterdir()) == []
+
+
+def _element(part_id, outline, kind="beam"):
+    import numpy as np
+
+    from fabrication.writers._elements import Element
+    from ppfab.frame import Frame
+
+    frame = Frame(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    return Element(part_id, kind, "rows", "B", np.array(outline, dtype=float), frame, -6.0, 12.0)
+
+
+def test_glb_names_the_part_whose_prism_cannot_be_meshed():
+    """The glTF writer on a real degenerate outline (three points on a line: no cap triangles) names the part and
+    the defect; the good part before it is no excuse to go on."""
+    from unittest import mock
+
+    from fabrication.writers.glb import glb_bytes
+    from ppfab.errors import FabricationError
+
+    good = _element("B-OK", [[0, 0], [100, 0], [100, 50], [0, 50]])
+    flat = _element("B-R0001-S02", [[0, 0], [50, 0], [100, 0]])
+    with mock.patch("fabrication.writers.glb.elements", lambda build, files: [good]):
+        assert glb_bytes(None, {})[:4] == b"glTF"
+    with mock.patch("fabrication.writers.glb.elements", lambda build, files: [good, flat]), \
+            pytest.raises(FabricationError) as info:
+        glb_bytes(None, {})
+    message = str(info.value)
+    assert message.startswith("B-R0001-S02: the glTF mesh of its prism failed (")
+    assert message.endswith("; its outline encloses no area (3 points on one line))"), message

@@ -64,6 +64,13 @@ def guarded(w: Writer) -> Writer:
     return dataclasses.replace(w, write=guarded_write)
 
 
+def part_failure(part_id: str, outline: np.ndarray, height: float, what: str, exc: Exception) -> FabricationError:
+    """The error for a part a writer could not turn into a solid: its id, what failed (``what``, e.g. "the glTF
+    mesh of its prism"), the library's reason and what is wrong with its outline."""
+    return FabricationError(f"{part_id}: {what} failed ({type(exc).__name__}: {exc}; "
+                            f"{outline_problem(outline, height)})")
+
+
 def outline_problem(outline: np.ndarray, height: float) -> str:
     """What makes a flat outline ``(k, 2)`` (mm) and an extrusion height unfit for a solid: too few points, a
     zero-length edge (two consecutive points within :data:`POINT_TOLERANCE_MM`), no enclosed area, a height that

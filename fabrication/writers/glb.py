@@ -38,7 +38,12 @@ def glb_bytes(build: "Build", files: Files) -> bytes:
                                        alphaMode="BLEND" if a < 1.0 else "OPAQUE", doubleSided=False)
     scene = trimesh.Scene()
     for el in elements(build, files):
-        v, f = el.prism_mesh()
+        try:
+            v, f = el.prism_mesh()
+        except Exception as exc:            # a degenerate outline: name the part and what is wrong with it
+            from ._failures import part_failure
+
+            raise part_failure(el.part_id, el.outline, el.height, "the glTF mesh of its prism", exc) from None
         # glTF stores float32: vertices relative to the part's centre, placed by its node's translation, keep
         # a 12 mm plate 30 m from the origin exact to well below a micrometre (absolute coordinates would not)
         c = v.mean(axis=0)

@@ -258,11 +258,16 @@ def ifc_model(build: "Build", files: Files) -> IfcModel:
     design = build.design
     model = IfcModel(design.info.name, design.info.description)
     for el in elements(build, files):
-        if el.kind == "panel":
-            model.add(el, design.panels.makeup, "glass")
-        else:
-            material = part_material(el, design.beams.material)
-            model.add(el, material, material_category(material))
+        try:
+            if el.kind == "panel":
+                model.add(el, design.panels.makeup, "glass")
+            else:
+                material = part_material(el, design.beams.material)
+                model.add(el, material, material_category(material))
+        except Exception as exc:            # a degenerate outline: name the part and what is wrong with it
+            from ._failures import part_failure
+
+            raise part_failure(el.part_id, el.outline, el.height, "its IFC solid", exc) from None
     return model
 
 
