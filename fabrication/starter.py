@@ -42,6 +42,13 @@ TARGET_EDGE_MM = 1500.0
 MAX_EDGE_MM = 2800.0
 """… and no edge longer than this (a panel then fits the default 6000 × 3210 mm glass sheet)."""
 
+CONJUGACY_LIMIT = 0.4
+"""The default of ``[optimize] max_conjugacy_defect``: above it ``ppfab build`` refuses to optimise the net."""
+
+MAX_NORMAL_ANGLE_DEG = 30.0
+"""A polyline whose plane lies further than this from the surface normal cannot be a planar beam (the default of
+``[support] max_normal_angle_deg``)."""
+
 DEFAULT_METHOD = "bisector"
 """``ppfab new`` without an argument: a small PP roof."""
 
@@ -64,6 +71,10 @@ class MeshSurvey:
     boundary_loops: int
     families_consistent: bool
     grid_shape: tuple[int, int] | None
+    conjugacy: float = 0.0
+    tilt_max: tuple[float, float] = (0.0, 0.0)
+    across: tuple[int, int] = (0, 0)
+    polylines: tuple[int, int] = (0, 0)
 
     @property
     def holes(self) -> int:
@@ -109,16 +120,26 @@ def survey(path: str | os.PathLike) -> MeshSurvey:
     from ppfab.metrics import quality
     from ppfab.support.lines import singular_vertices
 
+    from ppfab.metrics import conjugacy_defect
+    from ppfab.support.lines import polyline_planes
+    from ppfab.support.structure import vertex_normals
+
     mesh = load_mesh(path)
     qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
     q = quality(mesh)
     e = qm.edge_lengths()
     topo = qm.topology
     ext = np.ptp(qm.vertices, axis=0)
+    planes = polyline_planes(qm, vertex_normals(qm))
+    tilt = [[float(planes.tilt_deg[k]) for k, p in enumerate(qm.polylines)
+             if p.family == f and len(p) >= 3 and np.isfinite(planes.tilt_deg[k])] for f in (0, 1)]
     return MeshSurvey(Path(path), len(qm.vertices), len(qm.faces), (float(ext[0]), float(ext[1]), float(ext[2])),
                       float(e.mean()), float(e.max()), q.delta_f_max, q.delta_p_rows_max, q.delta_p_cols_max,
                       q.conical_max, int(singular_vertices(qm).sum()), _boundary_loops(topo),
-                      bool(topo.families_consistent), q.grid_shape)
+                      bool(topo.families_consistent), q.grid_shape, conjugacy_defect(qm),
+                      (max(tilt[0], default=0.0), max(tilt[1], default=0.0)),
+                      (sum(t > MAX_NORMAL_ANGLE_DEG for t in tilt[0]), sum(t > MAX_NORMAL_ANGLE_DEG for t in tilt[1])),
+                      (len(tilt[0]), len(tilt[1])))
 
 
 def propose(s: MeshSurvey) -> Proposal:
@@ -139,7 +160,37 @@ def propose(s: MeshSurvey) -> Proposal:
         families = "rows" if rows <= cols else "cols"
         reasons.append(f"δ_P rows {rows:.1e}, cols {cols:.1e}: the {families} are closer to planar; [optimize] "
                        f"makes them planar (a P mesh), the other family is not made planar")
-    if families != "both" or max(s.delta_f_max, rows, cols) > PLANAR:
+    planar_now = max(s.delta_f_max, rows, cols) <= PLANAR
+    names = ("rows", "cols")
+    usable = [s.across[f] < s.polylines[f] for f in (0, 1)]
+    if planar_now and not any(usable):
+        reasons[-1] = (f"δ_f {s.delta_f_max:.1e}, δ_P rows {rows:.1e}, cols {cols:.1e}: faces and polylines are "
+                       f"planar, but every polyline plane lies more than {MAX_NORMAL_ANGLE_DEG:g}° from the surface "
+                       f"normal (up to {max(s.tilt_max):.0f}°: a flat or nearly flat mesh), so no planar beam can "
+                       "stand in them; this is not a PP gridshell")
+    chosen = (0, 1) if families == "both" else (names.index(families),)
+    if families == "both" and usable != [True, True] and any(usable):
+        keep = names[usable.index(True)]
+        reasons.append(f"the {names[usable.index(False)]} all lie in planes more than {MAX_NORMAL_ANGLE_DEG:g}° "
+                       f"from the surface normal (up to {s.tilt_max[usable.index(False)]:.0f}°): no planar beam can "
+                       f"stand in them, so only the {keep} are made planar beams (a P mesh)")
+        families, chosen = keep, (names.index(keep),)
+    if s.conjugacy > CONJUGACY_LIMIT and not planar_now:
+        reasons.append(f"conjugacy defect {s.conjugacy:.2f} (twist over normal curvature; a conjugate net has about "
+                       f"0): the net is far from conjugate, so planar quads lie only far from this surface and "
+                       f"ppfab build refuses to optimise it above {CONJUGACY_LIMIT:g}; remesh along conjugate curves "
+                       "(e.g. principal curvature lines) first, or raise [optimize] max_conjugacy_defect")
+    elif not planar_now:
+        reasons.append(f"conjugacy defect {s.conjugacy:.2f} (at most {CONJUGACY_LIMIT:g}): close enough to a "
+                       "conjugate net for planar quads near the surface")
+    across = sum(s.across[f] for f in chosen)
+    if across:
+        reasons.append(f"{across} of {sum(s.polylines[f] for f in chosen)} polylines of the "
+                       f"{' and '.join(names[f] for f in chosen)} lie in planes more than {MAX_NORMAL_ANGLE_DEG:g}° "
+                       f"from the surface normal (up to {max(s.tilt_max[f] for f in chosen):.0f}°) and cannot be "
+                       "planar beams: [beams] fallback = \"segmented\" makes their edges one-edge plates "
+                       "(`ppfab check MESH --polylines` lists them)")
+    if families != "both" or not planar_now:
         sections["optimize"] = {"families": families}
     if families == "both":
         sections["support"] = {"method": "pp"}
@@ -147,6 +198,8 @@ def propose(s: MeshSurvey) -> Proposal:
     else:
         sections["support"] = {"method": "p", "family": families}
         sections["beams"] = {"joint": "segmented", "continuous": families}
+    if across or s.singular_vertices or s.holes or not s.families_consistent:
+        sections["beams"]["fallback"] = "segmented"
         reasons.append(f"support method \"p\" (axes in the planes of the {families}); segmented joints: the "
                        f"{families} run through the nodes, the other members are cut between them")
     if s.conical_max <= 1e-3 and "optimize" in sections:
@@ -156,7 +209,8 @@ def propose(s: MeshSurvey) -> Proposal:
         reasons.append(f"{s.singular_vertices} singular vertices, {s.holes} holes"
                        + ("" if s.families_consistent else ", polyline families not consistent")
                        + ": polylines that cannot be planar beams are left out ([support] exclude = [\"auto\"]; "
-                         "`ppfab check MESH --polylines` lists them)")
+                         "`ppfab check MESH --polylines` lists them) and become one-edge plates ([beams] fallback "
+                         "= \"segmented\")")
     return Proposal(sections, reasons)
 
 

@@ -161,3 +161,24 @@ def test_new_refuses_what_it_cannot_start_from(tmp_path, capsys):
     assert (tmp_path / "b.toml").read_text(encoding="utf-8") == "keep"
     assert main(["new", str(tmp_path / "none.obj"), "-o", str(tmp_path / "c.toml")]) == 2
     assert not (tmp_path / "a.toml").exists() and not (tmp_path / "c.toml").exists()
+
+
+def test_new_on_a_net_far_from_conjugate_says_to_remesh(tmp_path):
+    """The pillow (a geodesic net, conjugacy defect 0.58): the starter says the build will refuse it and why."""
+    design = _new(tmp_path, SHARED_DATA / "DOS__pillow_1.obj")
+    text = design.read_text(encoding="utf-8")
+    assert "conjugacy defect 0.58" in text and "remesh along conjugate curves" in text
+
+
+def test_new_on_a_flat_mesh_does_not_call_it_a_pp_gridshell(tmp_path):
+    """A flat mesh whose polylines curve in its plane: every polyline plane is 90° from the normal."""
+    from ppfab.io import write_obj
+    from ppfab.mesh import QuadGrid
+
+    i, j = np.meshgrid(np.arange(7.0), np.arange(6.0), indexing="ij")
+    write_obj(QuadGrid(np.stack([i + 0.04 * j ** 2, j + 0.04 * i ** 2, 0.0 * i], axis=-1)).to_quadmesh(),
+              tmp_path / "flat.obj")
+    design = _new(tmp_path, tmp_path / "flat.obj")
+    text = design.read_text(encoding="utf-8")
+    assert "a PP mesh already" not in text and "this is not a PP gridshell" in text and "up to 90°" in text
+    assert tomllib.loads(text)["beams"]["fallback"] == "segmented"
