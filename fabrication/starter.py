@@ -175,6 +175,12 @@ def propose(s: MeshSurvey) -> Proposal:
                        f"from the surface normal (up to {s.tilt_max[usable.index(False)]:.0f}°): no planar beam can "
                        f"stand in them, so only the {keep} are made planar beams (a P mesh)")
         families, chosen = keep, (names.index(keep),)
+    elif families != "both" and not usable[chosen[0]] and usable[1 - chosen[0]]:
+        other = names[1 - chosen[0]]
+        reasons.append(f"but the {families} all lie in planes more than {MAX_NORMAL_ANGLE_DEG:g}° from the surface "
+                       f"normal (up to {s.tilt_max[chosen[0]]:.0f}°) and cannot carry planar beams: the {other} are "
+                       "made planar instead")
+        families, chosen = other, (1 - chosen[0],)
     if s.conjugacy > CONJUGACY_LIMIT and not planar_now:
         reasons.append(f"conjugacy defect {s.conjugacy:.2f} (twist over normal curvature; a conjugate net has about "
                        f"0): the net is far from conjugate, so planar quads lie only far from this surface and "
