@@ -573,3 +573,20 @@ def test_extra_dxf_not_in_the_manifest(copy, capsys):
     err = findings(copy, capsys)
     rel = src.with_name("glass_99.dxf").relative_to(copy).as_posix()
     assert f"{rel}: is in the folder but not listed in manifest.json (sha256)" in err
+
+
+@pytest.mark.parametrize("which", ["strip", "gasket"])
+def test_glazing_strip_or_gasket_moved_3_mm(copy, capsys, which):
+    """One glazing strip (or the gasket on it) moved 3 mm in glazing.step: verify recomputes each strip's box from
+    its mesh edge, the node axes, the beam plane and the panes, and names the solid that left it."""
+    from build123d import Pos
+
+    rows = read_rows(copy / "parts.csv")
+    strip = [r for r in rows if r["kind"] == "strip"][5]
+    name = strip["part_id"] if which == "strip" else "GK" + strip["part_id"][2:]
+    _rewrite_named(copy, "glazing.step", name, lambda s: s.moved(Pos(3.0, 0.0, 0.0)))
+    err = findings(copy, capsys)
+    hit = re.search(rf"glazing\.step: {name}: {which} is (\d+\.?\d*) mm from the box its span, node axes and beam "
+                    rf"plane put it in \(mesh edge {strip['edge_nodes'].replace(';', '-')}\)", err)
+    assert hit, err[:2000]
+    assert float(hit.group(1)) == pytest.approx(3.0, abs=0.01)

@@ -82,14 +82,15 @@ def load_checks() -> list[Check]:
     return sorted(_TABLE.load().values(), key=lambda c: (c.order, c.name))
 
 
-SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "ifc")
+SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "glazing_step", "ifc")
 """Checks that read only what the checks up to :data:`FORK_AFTER` put into :attr:`Verification.data` (the
 manifest, the mesh, the parts list, the nodes, the cutting-sheet outlines and the per-type DXFs as read) and put
 nothing there that another check reads: on two cores they run in a forked process beside the others.  Chosen
 by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30 faces
 the fork gets bite 21, ifc 11, splices 6 and glass order 1 (it no longer reads the per-type DXFs: the types
 check did) against step 16, panels_step 6, step_geometry 4, rhino and glb 2 each after it here; at 88 × 60
-the bite check alone (glazing.step, 21,416 solids) is about a quarter of the whole."""
+the bite check alone (glazing.step, 21,416 solids) is about a quarter of the whole.  The glazing_step check
+reads glazing.step too, and runs beside the bite check so that the file is read once."""
 
 FORK_AFTER = "types"
 """The second process starts once this check (and every check before it) has run in this one: after the

@@ -14,6 +14,7 @@ Not a check (the leading underscore keeps it out of the registry).
 from __future__ import annotations
 
 import os
+import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -37,7 +38,11 @@ class StepReadError(ValueError):
 
 
 def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[StepSolid]:
-    """Every solid of the STEP file ``path`` in file order (depth first); ``colours`` also reads the colours."""
+    """Every solid of the STEP file ``path`` in file order (depth first); ``colours`` also reads the colours.
+
+    Raises the audit event ``fabrication.verify.read`` with the path first (the kernel opens the file outside
+    Python, where the ``open`` event does not see it), so a hook can tell which files a check read."""
+    sys.audit("fabrication.verify.read", os.fspath(path))
     from build123d import Solid
     from OCP.IFSelect import IFSelect_RetDone
     from OCP.OCP.collections import Sequence_TDF_Label
@@ -121,9 +126,18 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[Ste
 
 def read_or_report(v: "Verification", rel: str, colours: bool = False) -> list[StepSolid] | None:
     """The solids of the build's file ``rel`` (:func:`read_step_solids`), or ``None`` after a finding on ``v``
-    when the kernel cannot read it."""
-    try:
-        return read_step_solids(v.folder / rel, colours)
-    except Exception as exc:  # noqa: BLE001 - reported as a finding
-        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
-        return None
+    when the kernel cannot read it.
+
+    What was read is kept in ``data["step_read"]`` (per process: the forked checks keep their own), so two checks
+    of one process read a file once (glazing.step: the bite and the glazing_step checks); a file that cannot be
+    read is reported by the first check only."""
+    memo = v.data.setdefault("step_read", {})
+    key = (rel, colours)
+    if key not in memo:
+        try:
+            memo[key] = read_step_solids(v.folder / rel, colours)
+        except Exception as exc:  # noqa: BLE001 - reported as a finding
+            v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+            memo[key] = None
+    got: list[StepSolid] | None = memo[key]
+    return got

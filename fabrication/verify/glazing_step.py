@@ -1,0 +1,194 @@
+"""glazing.step against the structure: every glazing strip and its gasket is the box the mesh, the node axes and
+the beam planes put on its span (:mod:`fabrication.glazing.strips`), recomputed from the other files.
+
+For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``beam``:
+
+* the frame: origin ``a`` brought into the beam's plane (``plane`` of a plate of that beam holding the nodes),
+  ``ex`` towards ``b`` so brought, ``up`` the sum of the outside normals of the panes on the edge (the faces of
+  ``mesh.obj``, least-squares planes, outside as the build chooses it: the side the gaskets are on) made square
+  to ``ex`` — or, on an edge without panes, against the node axes in the plane — and ``ey = up × ex``;
+* its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns),
+  set back by ``t_s · tan(κ/2)``; where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
+  against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
+* the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
+  ``t_s ≤ z ≤ t_s + t_g``: every vertex of each solid within :data:`GLAZING_TOL` of that box's corners.
+
+Reads glazing.step through :func:`._step_read.read_or_report`, which keeps what it read for the bite check in
+the same process (the file is read once).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..contract import gasket_id
+from . import Verification, check
+from ._shapes import literal, number, set_distance, solid_points
+
+GLAZING_TOL = 0.05
+"""How far (mm) a strip's or gasket's vertex may be from the recomputed box (pane normals are least-squares
+normals here and in the build, which may differ in the last digits)."""
+
+_FAMILY = {"rows": 0, "cols": 1}
+
+
+def _face_normals(mesh) -> np.ndarray:
+    """``(F, 3)`` unit least-squares normals of the faces, oriented by corner order (Newell), then all turned to
+    the outside the build takes by default (away from the centre of the faces)."""
+    out = []
+    for f in mesh.faces:
+        c = mesh.vertices[np.asarray(f)]
+        n = np.linalg.svd(c - c.mean(axis=0))[2][2]
+        newell = np.cross(c, np.roll(c, -1, axis=0)).sum(axis=0)
+        out.append(n if n @ newell >= 0 else -n)
+    return np.array(out).reshape(-1, 3)
+
+
+def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Part id → (strip corners ``(8, 3)``, gasket corners ``(8, 3)``) recomputed (module docstring); ``sign``
+    turns the face normals to the outside."""
+    mesh = v.data["mesh"]
+    fab = v.data.get("manifest", {}).get("fabrication", {})
+    gl = fab.get("glazing", {})
+    c_clear, tg = float(gl.get("clearance", 0.0)), float(gl.get("gasket_thickness", 0.0))
+    verts = np.asarray(mesh.vertices, dtype=float)
+    axes = {int(number(r.get("vertex"), -1)): np.array([number(r.get(k)) for k in ("axis_x", "axis_y", "axis_z")])
+            for r in v.data.get("nodes", []) or []}
+    plates: dict[str, list[tuple[set[int], np.ndarray]]] = {}
+    for r in v.data.get("parts", []):
+        pl, nodes = literal(r.get("plane", "")), literal(r.get("nodes", ""))
+        if r["kind"] == "beam" and isinstance(pl, list) and len(pl) == 4 and isinstance(nodes, list):
+            p = np.asarray(pl, dtype=float)
+            plates.setdefault(r.get("beam_id", ""), []).append(({int(k) for k in nodes}, p / np.linalg.norm(p[:3])))
+    normals = sign * _face_normals(mesh)
+    on_edge: dict[tuple[int, int], np.ndarray] = {}
+    for fi, f in enumerate(mesh.faces):
+        f = [int(x) for x in f]
+        for k in range(len(f)):
+            key = (min(f[k], f[(k + 1) % len(f)]), max(f[k], f[(k + 1) % len(f)]))
+            on_edge[key] = on_edge.get(key, np.zeros(3)) + normals[fi]
+    spans: list[tuple[dict[str, str], int, int]] = []
+    for r in rows:
+        first, _, second = r.get("edge_nodes", "").partition(";")
+        spans.append((r, int(first), int(second)))
+    at: dict[int, list[int]] = {}
+    for e, (_, i, j) in enumerate(spans):
+        at.setdefault(i, []).append(e)
+        at.setdefault(j, []).append(e)
+    line = [r.get("beam", "") for r, _, _ in spans]
+    fam = [_FAMILY.get(r.get("family", ""), 9) for r, _, _ in spans]
+    direction = np.array([verts[j] - verts[i] for _, i, j in spans]).reshape(-1, 3)
+    direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
+    running: dict[int, str] = {}
+    for node, es in at.items():
+        count: dict[str, int] = {}
+        for e in es:
+            count[line[e]] = count.get(line[e], 0) + 1
+        pool = [e for e in es if count[line[e]] >= 2] or es
+        running[node] = line[min(pool, key=lambda e: (fam[e], line[e]))]
+    out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for e, (r, i, j) in enumerate(spans):
+        plane = next((p for nodes, p in plates.get(r.get("beam", ""), []) if i in nodes and j in nodes),
+                     next((p for nodes, p in plates.get(r.get("beam", ""), []) if i in nodes or j in nodes), None))
+        if plane is None:
+            continue
+        n, d = plane[:3], plane[3]
+        pa, pb = verts[[i, j]] - np.outer(verts[[i, j]] @ n + d, n)
+        ex = pb - pa
+        span = float(np.linalg.norm(ex))
+        ex /= span
+        up = on_edge.get((min(i, j), max(i, j)), np.zeros(3))
+        if np.linalg.norm(up) <= 1e-9 and i in axes and j in axes:
+            down = axes[i] + axes[j]
+            up = -(down - (down @ n) * n)
+        up = up - (up @ ex) * ex
+        up /= max(float(np.linalg.norm(up)), 1e-300)
+        ey = np.cross(up, ex)
+        w = number(r.get("width_mm"), 0.0)
+        ts = number(r.get("thickness_mm"), 0.0)
+        b = 0.5 * w
+        ends = []
+        for node, sgn in ((i, 1.0), (j, -1.0)):
+            own = sgn * direction[e]
+            x = 0.0
+            if running[node] == line[e]:
+                for f in at[node]:
+                    if f != e and line[f] == line[e]:
+                        of = direction[f] if spans[f][1] == node else -direction[f]
+                        kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
+                        x = max(x, ts * float(np.tan(0.5 * kink)))
+            else:
+                for f in at[node]:
+                    if line[f] == running[node]:
+                        of = direction[f] if spans[f][1] == node else -direction[f]
+                        cos = float(np.clip(own @ of, -1.0, 1.0))
+                        sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)
+                        x = max(x, (b + c_clear + b * abs(cos)) / sin)
+            ends.append(x)
+        x0, x1 = ends[0], span - ends[1]
+        rect = np.array([[x0, -b], [x1, -b], [x1, b], [x0, b]])
+        flat = pa + rect[:, :1] * ex + rect[:, 1:] * ey
+
+        def box(z0: float, z1: float) -> np.ndarray:
+            return np.concatenate([flat + z0 * up, flat + z1 * up])
+
+        out[r["part_id"]] = (box(0.0, ts), box(ts, ts + tg))
+    return out
+
+
+@check("glazing_step", 66)
+def check_glazing_step(v: Verification) -> None:
+    m = v.data.get("manifest", {})
+    rel = m.get("files", {}).get("glazing_step")
+    if rel is None or v.data.get("mesh") is None:
+        return
+    from ._step_read import read_or_report
+
+    read = read_or_report(v, rel)
+    if read is None:
+        return
+    solids = {s.name: s.solid for s in read}
+    rows = [r for r in v.data.get("parts", []) if r["kind"] == "strip"]
+    try:
+        spans = [tuple(int(x) for x in r.get("edge_nodes", "").split(";")) for r in rows]
+    except ValueError:
+        spans = []
+    bad = [r["part_id"] for r, s in zip(rows, spans) if len(s) != 2 or not all(0 <= k < len(v.data["mesh"].vertices)
+                                                                             for k in s)]
+    if len(spans) != len(rows) or bad:
+        v.error("parts.csv", bad[0] if bad else rows[0]["part_id"], "edge_nodes is not two mesh vertices 'a;b'")
+        return
+    names = set(solids)
+    for r in rows:
+        names.discard(r["part_id"])
+        names.discard(gasket_id(r["part_id"]))
+    for name in sorted(names):
+        v.error(rel, name or "(unnamed)", "solid is neither a strip of parts.csv nor its gasket")
+    points = {name: solid_points(s) for name, s in solids.items()}
+    best: tuple[float, dict[str, tuple[np.ndarray, np.ndarray]]] | None = None
+    for sign in (1.0, -1.0):                       # the outside: the side the gaskets are on
+        boxes = _strip_boxes(v, rows, sign)
+        score = sum(float(((points[gasket_id(p)].mean(axis=0) - points[p].mean(axis=0)) @
+                           (g.mean(axis=0) - s.mean(axis=0)))) for p, (s, g) in boxes.items()
+                    if p in points and gasket_id(p) in points)
+        if best is None or score > best[0]:
+            best = (score, boxes)
+    assert best is not None
+    for r in rows:
+        pid = r["part_id"]
+        box = best[1].get(pid)
+        if box is None:
+            v.error("parts.csv", pid, f"no beam plate of {r.get('beam')} holds the strip's nodes {r.get('edge_nodes')}")
+            continue
+        for name, want in ((pid, box[0]), (gasket_id(pid), box[1])):
+            got = points.get(name)
+            if got is None:
+                v.error(rel, name, "strip or gasket has no solid")
+                continue
+            gap = set_distance(got, want)
+            if not gap <= GLAZING_TOL:
+                what = "strip" if name == pid else "gasket"
+                off = f"{gap:.3g} mm" if np.isfinite(gap) else f"({len(got)} vertices for 8)"
+                v.error(rel, name, f"{what} is {off} from the box its span, node axes and beam plane put it in "
+                                   f"(mesh edge {r.get('edge_nodes', '').replace(';', '-')})")
+    v.checked.append("glazing_step")
