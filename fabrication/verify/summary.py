@@ -6,7 +6,7 @@ off by half a unit of its last digit per row), the extent of ``mesh.obj``, the s
 utilisation as part area over the sheets' area (``fabrication.nesting.sheet``, ``beam_nesting.sheet``), the
 largest ``torsion_deg`` of ``nodes.csv``; the glazing figures from ``parts.csv`` (strips, cover plates),
 ``bites.csv`` and ``welds.csv``; the ``fabrication`` values the rows of ``parts.csv`` repeat (beam depth and
-thickness, glass thickness and make-up, strip section, materials) and the densities their masses give.  The
+thickness, glass thickness, strip section, materials) and the densities their masses give.  The
 sheet sizes and spacing are the DXF check's, the panel gap its congruence check's.  A nesting's lower bound is not recomputed (that is the nesting's own search);
 it must be a whole number between the sheets' area bound and the sheets used.
 """
@@ -103,13 +103,12 @@ def recompute_glazing(v: Verification) -> dict[str, Figure]:
 
 FROM_ROWS = (("beams.depth", "beam", "depth_mm"), ("beams.thickness", "beam", "thickness_mm"),
              ("beams.material", "beam", "material"), ("panels.thickness", "panel", "thickness_mm"),
-             ("panels.makeup", "panel", "material"), ("glazing.thickness", "strip", "thickness_mm"),
+             ("glazing.thickness", "strip", "thickness_mm"),
              ("glazing.width", "strip", "width_mm"), ("glazing.material", "strip", "material"))
 """``fabrication`` keys that every ``parts.csv`` row of a kind repeats: key, kind, column."""
-DENSITY = (("beams.density", "beam", "mass_kg"), ("panels.density", "panel", "weight_kg"),
-           ("glazing.density", "strip", "mass_kg"))
+DENSITY = (("beams.density", "beam", "mass_kg"), ("glazing.density", "strip", "mass_kg"))
 """Densities (kg/m³) that every row of a kind gives as its mass over area × thickness (``area_mm2``,
-``thickness_mm``)."""
+``thickness_mm``; not the glass, whose weight follows its make-up's plies)."""
 
 
 def recompute_fabrication(v: Verification) -> dict[str, Figure]:
@@ -123,7 +122,7 @@ def recompute_fabrication(v: Verification) -> dict[str, Figure]:
             continue
         common = max(sorted(set(values)), key=values.count)
         number = _num(common)
-        out[key] = Figure(common) if key.endswith("material") or key.endswith("makeup") or math.isnan(number) \
+        out[key] = Figure(common) if key.endswith("material") or math.isnan(number) \
             else Figure(number, 1e-6 * max(1.0, abs(number)))
     for key, kind, column in DENSITY:
         rho = [_num(r.get(column)) / (_num(r.get("area_mm2")) * _num(r.get("thickness_mm")) * 1e-9)
