@@ -17,6 +17,10 @@ is the edge the two share (top point ``c``, down the cut ``s``), the top edge ``
 into ``c``; the plate lies flat on a face of the beam plate (``t/2 ≤ |z| ≤ t/2 + t_c``, one plate on each
 face), centred on the cut (its corners' mean on the cut line) and ``splices.top_clear`` under the top edge.
 The check runs after the dxf check (order 56), whose outlines it reads.
+
+Every per-type cover plate DXF (``splices/<type>.dxf``) holds one CUT outline whose XDATA names its type (the
+file's name) and the number of cover plates of that type in parts.csv, with the sides of that type's plates in
+splices.step, and one CUT circle of ``hole_mm`` per bolt hole (:func:`check_splice_dxfs`).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ import ast
 import numpy as np
 
 from . import Verification, check, read_csv
-from ._shapes import boundary_distance, face_outline, frame_of, solid_points, to_frame
+from ._shapes import boundary_distance, face_outline, frame_of, number, solid_points, to_frame
 
 PLACE_TOL = 0.01
 """How far (mm) a cover plate may be from where the pieces put it (the build measures its clearances from the
@@ -124,6 +128,7 @@ def check_splices(v: Verification) -> None:
             if sorted(names) != ["+", "-"]:
                 v.error(rel, joins.replace(";", "/"), f"cover plates lie on faces {names} of the beam plate, expected "
                                                       "one on each face")
+        check_splice_dxfs(v, files.get("splice_dxfs", []), splice_rows, solids)
         if len(solids) != len(splice_rows):
             v.error(rel, "", f"{len(solids)} solids for {len(splice_rows)} cover plates in parts.csv")
     v.checked.append("splices")
@@ -200,3 +205,61 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     if abs(clear - want) > PLACE_TOL:
         v.error(rel, pid, f"cover plate is {clear:.4g} mm under the top edge of {first}, splices.top_clear is "
                           f"{want:g} mm")
+
+
+def _sides(ring: np.ndarray) -> np.ndarray:
+    """Side lengths of a closed polygon, sorted."""
+    return np.sort(np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1))
+
+
+def check_splice_dxfs(v: Verification, rels: list[str], rows: list[dict[str, str]], solids: dict) -> None:
+    """The per-type cover plate DXFs against parts.csv and splices.step (module docstring)."""
+    import ezdxf
+
+    by_type: dict[str, list[dict[str, str]]] = {}
+    for r in rows:
+        by_type.setdefault(r.get("type_id", ""), []).append(r)
+    seen = set()
+    for rel in rels:
+        tid = rel.rsplit("/", 1)[-1].removesuffix(".dxf")
+        seen.add(tid)
+        try:
+            doc = ezdxf.readfile(v.folder / rel)
+        except Exception as exc:  # noqa: BLE001 - reported as a finding
+            v.error(rel, "", f"cannot be read as DXF ({exc})")
+            continue
+        cut = [e for e in doc.modelspace() if e.dxf.layer == "CUT"]
+        outlines = [e for e in cut if e.dxftype() == "LWPOLYLINE"]
+        circles = [e for e in cut if e.dxftype() == "CIRCLE"]
+        members = by_type.get(tid, [])
+        if len(outlines) != 1 or not members:
+            v.error(rel, tid, f"{len(outlines)} CUT outlines for {len(members)} cover plate(s) of this type in "
+                              "parts.csv, expected one outline")
+            continue
+        xdata = {}
+        if outlines[0].has_xdata("PPFAB"):
+            xdata = dict(str(x).split("=", 1) for c, x in outlines[0].get_xdata("PPFAB") if "=" in str(x))
+        if xdata.get("part_id") != tid or xdata.get("quantity") != str(len(members)):
+            v.error(rel, tid, f"XDATA names type {xdata.get('part_id')!r} x {xdata.get('quantity')}, parts.csv has "
+                              f"{len(members)} cover plate(s) of type {tid}")
+        holes = int(number(members[0].get("holes"), -1))
+        diameter = number(members[0].get("hole_mm"))
+        if len(circles) != holes or any(abs(2.0 * float(c.dxf.radius) - diameter) > 1e-6 for c in circles):
+            v.error(rel, tid, f"{len(circles)} CUT circles of diameter(s) "
+                              f"{sorted({round(2.0 * float(c.dxf.radius), 3) for c in circles})} mm, parts.csv says "
+                              f"{holes} holes of {diameter:g} mm")
+        ring = np.array([(p[0], p[1]) for p in getattr(outlines[0], "get_points")("xy")], dtype=float)
+        solid = solids.get(members[0]["part_id"])
+        piece = next((r for r in v.data.get("parts", []) if r["part_id"] == members[0].get("joins", "").split(";")[0]),
+                     None)
+        frame = frame_of(piece) if piece is not None else None
+        face = face_outline(solid, frame["normal"]) if solid is not None and frame is not None else None
+        if face is not None and frame is not None:
+            want = _sides(to_frame(face, frame)[:, :2])
+            got = _sides(ring)
+            if got.shape != want.shape or np.abs(got - want).max() > PLACE_TOL:
+                v.error(rel, tid, f"outline sides {np.round(got, 2).tolist()} mm differ from the cover plate "
+                                  f"{members[0]['part_id']} in splices.step ({np.round(want, 2).tolist()} mm)")
+    for tid in sorted(set(by_type) - seen):
+        if rels:
+            v.error("manifest.json", tid, "cover plate type has no DXF in files.splice_dxfs")
