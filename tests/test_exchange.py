@@ -123,7 +123,13 @@ def test_ifc_reopens_with_one_element_per_part_and_the_parts_data(built, parts):
             else:
                 assert row["kind"] == "splice" and "Length" not in qto
         assert qto["NetArea"] == pytest.approx(float(row["area_mm2"]) * 1e-6, rel=1e-12)    # m²
-        assert ue.get_material(e).Name == row["material"]
+        if row["kind"] == "panel":                     # the make-up's layers, outside ply first
+            layers = ue.get_material(e, should_skip_usage=True)
+            assert layers.LayerSetName == row["material"]
+            assert [x.LayerThickness for x in layers.MaterialLayers] == [8.0, 1.52, 8.0]
+            assert ue.get_type(e).Name == row["type_id"]
+        else:
+            assert ue.get_material(e).Name == row["material"]
 
 
 def test_ifc_spatial_structure_and_beam_assemblies(built, parts):
@@ -515,3 +521,31 @@ def test_a_coated_pane_cannot_be_mirrored(tmp_path, capsys):
     p.write_text(small_design(2, 2, extra="[panels]\ncoated_side = \"top\"\n"))
     assert main(["build", str(p), "-o", str(tmp_path / "o")]) == 2
     assert "'none', 'outside', 'inside'" in capsys.readouterr().err
+
+
+def test_ifc_shares_its_materials_types_panes_and_passes_the_express_rules(built, parts):
+    """One IfcMaterial per material name and none orphaned; every panel type an IfcPlateType, every repeated plate
+    type an IfcMemberType; the common property sets; ifcopenshell's validator with the EXPRESS rules finds nothing."""
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+    import ifcopenshell.validate
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    names = [m.Name for m in f.by_type("IfcMaterial")]
+    others = {r["material"] for r in parts.values() if r["kind"] != "panel"}
+    assert sorted(names) == sorted(others | {"heat-strengthened glass (EN 1863-1)", "PVB interlayer"})
+    assert all(m.AssociatedTo or m.ToMaterialLayer for m in f.by_type("IfcMaterial"))
+    panel_types = {r["type_id"] for r in parts.values() if r["kind"] == "panel"}
+    assert sorted(t.Name for t in f.by_type("IfcPlateType")) == sorted(panel_types)
+    for t in f.by_type("IfcMemberType"):
+        (rel,) = t.Types
+        assert len(rel.RelatedObjects) >= 2
+        assert {parts[o.Name]["type_id"] for o in rel.RelatedObjects} == {t.Name}
+    for plate in f.by_type("IfcPlate"):
+        common = ue.get_psets(plate)["Pset_PlateCommon"]
+        assert common["Reference"] == parts[plate.Name]["type_id"] and common["LoadBearing"] is False
+    for member in f.by_type("IfcMember"):
+        assert ue.get_psets(member)["Pset_MemberCommon"]["LoadBearing"] is True
+    log = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(f, log, express_rules=True)
+    assert log.statements == []

@@ -97,9 +97,40 @@ def check_ifc(v: Verification) -> None:
                     v.error(rel, p.Name, f"{IFC_PSET}.{key} is {pset.get(key)!r}, parts.csv has {cell!r}")
         if ue.get_container(p) is None:
             v.error(rel, p.Name, "is not in the spatial structure (site, building, storey)")
+        _check_material_and_type(v, rel, p, row)
         prism = extruded_prism(p)
         if prism is None:
             v.error(rel, p.Name, "has no single extruded solid of a polyline profile")
             continue
         check_part_solid(v, rel, row, prism[0], prism[1], ring=prism[0][:len(prism[0]) // 2])
+    names = [m.Name for m in f.by_type("IfcMaterial")]
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        v.error(rel, f"IfcMaterial {name}", f"defined {names.count(name)} times (one shared material per name)")
+    for m in f.by_type("IfcMaterial"):
+        if not m.AssociatedTo and not getattr(m, "ToMaterialLayer", None):
+            v.error(rel, f"IfcMaterial {m.Name}", "is associated with no element and no layer (orphaned)")
     v.checked.append("ifc")
+
+
+def _check_material_and_type(v: Verification, rel: str, product: Any, row: dict[str, str]) -> None:
+    """A pane's material is the layer set of its make-up (named as parts.csv's material, its layers as thick as
+    the pane) and its type the ``IfcPlateType`` of its type id; any other part's material is its ``IfcMaterial``."""
+    import ifcopenshell.util.element as ue
+
+    material = csv_value(row.get("material", ""))
+    if row["kind"] == "panel":
+        layers = ue.get_material(product, should_skip_usage=True)
+        if layers is None or not layers.is_a("IfcMaterialLayerSet") or layers.LayerSetName != material:
+            v.error(rel, product.Name, f"material is not the layer set {material!r} of parts.csv")
+        else:
+            total = sum(float(x.LayerThickness) for x in layers.MaterialLayers)
+            if abs(total - float(row.get("thickness_mm") or "nan")) > 1e-6:
+                v.error(rel, product.Name, f"layers add up to {total:g} mm, parts.csv thickness_mm is "
+                                           f"{row.get('thickness_mm')}")
+        t = ue.get_type(product)
+        if t is None or not t.is_a("IfcPlateType") or t.Name != csv_value(row.get("type_id", "")):
+            v.error(rel, product.Name, f"is not an occurrence of the IfcPlateType {row.get('type_id')}")
+        return
+    m = ue.get_material(product)
+    if m is None or not m.is_a("IfcMaterial") or m.Name != material:
+        v.error(rel, product.Name, f"material {getattr(m, 'Name', None)!r}, parts.csv has {material!r}")

@@ -15,8 +15,11 @@ along the local z from ``z0`` by its height, in millimetres — the same prism a
 It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.csv`` values of
 :data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
 ``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
-the project units), its material (``[panels] makeup``, ``[beams] material``) and a surface style of its family's
-colour (:data:`~fabrication.contract.COLOURS`).
+the project units), the standard property set ``Pset_PlateCommon`` / ``Pset_MemberCommon`` (Reference = type id,
+IsExternal, LoadBearing), its type (an ``IfcPlateType`` per panel type, an ``IfcMemberType`` per beam-plate type,
+``IfcRelDefinesByType``), its material — one ``IfcMaterial`` per material name, shared; a pane's make-up as an
+``IfcMaterialLayerSet`` of its plies and interlayers (``IfcMaterialLayerSetUsage`` along the pane's local z from
+its underside) — and a surface style of its family's colour (:data:`~fabrication.contract.COLOURS`).
 
 Reproducible: every ``GlobalId`` is derived from the design's name and the element's key (its part id;
 ``beam/B-U03`` for a beam's assembly, which may share its id with its only plate) by a name-based UUID
@@ -101,7 +104,9 @@ class IfcModel:
                         RelatedElements=[self.roof], RelatingStructure=storey)
         self._roof_parts: list[Any] = []
         self._assemblies: dict[str, tuple[Any, list[Any]]] = {}
-        self._materials: dict[str, tuple[Any, list[Any]]] = {}
+        self._materials: dict[str, Any] = {}
+        self._associations: dict[str, tuple[Any, list[Any]]] = {}
+        self._types: dict[tuple[str, str], tuple[str, list[Any]]] = {}
         self._styles: dict[str, Any] = {}
 
     # -- small entities ------------------------------------------------------------------------------
@@ -187,14 +192,80 @@ class IfcModel:
         f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/pset/rel"),
                         RelatedObjects=[product], RelatingPropertyDefinition=pset)
         self._quantities(el, product)
-        mat = self._materials.setdefault(material, (f.create_entity("IfcMaterial", Name=material,
-                                                                    Category=category), []))
-        mat[1].append(product)
+        self._associate(material, category, el, product)
+        self._common_pset(el, product)
+        type_id = str(el.props.get("type_id", "") or "")
+        if type_id and el.kind in ("panel", "beam"):
+            self._type_of(el.kind, type_id, cls, predefined)[1].append(product)
         if el.kind == "beam" and el.group:
             self._assemblies[el.group][1].append(product)
         else:
             self._roof_parts.append(product)
         return product
+
+    def material(self, name: str, category: str | None) -> Any:
+        """The one ``IfcMaterial`` of this name (shared by every element made of it)."""
+        if name not in self._materials:
+            self._materials[name] = self.f.create_entity("IfcMaterial", Name=name, Category=category)
+        return self._materials[name]
+
+    def _associate(self, material: str, category: str | None, el: Element, product) -> None:
+        """Associate ``product`` with its material: a pane with the layer set of its make-up (one layer per ply,
+        outside first, along the pane's local z from its underside), every other part with its ``IfcMaterial``."""
+        f = self.f
+        key = material if el.kind != "panel" else f"{material}@{el.z0!r}"
+        if key not in self._associations:
+            if el.kind == "panel":
+                relating: Any = f.create_entity("IfcMaterialLayerSetUsage", ForLayerSet=self._layer_set(material),
+                                                LayerSetDirection="AXIS3", DirectionSense="POSITIVE",
+                                                OffsetFromReferenceLine=float(el.z0))
+            else:
+                relating = self.material(material, category)
+            self._associations[key] = (relating, [])
+        self._associations[key][1].append(product)
+
+    def _layer_set(self, makeup: str) -> Any:
+        """The ``IfcMaterialLayerSet`` of a glass make-up (:mod:`fabrication.panels.makeup`); a make-up ppfab
+        cannot parse (an old build's words) is one layer of the pane's material."""
+        from ppfab.errors import DesignError
+
+        from ..panels.makeup import GLASS_KINDS, parse_makeup
+
+        if f"layers/{makeup}" in self._materials:
+            return self._materials[f"layers/{makeup}"]
+        try:
+            plies = [(p.text(), GLASS_KINDS.get(p.kind, f"{p.kind} interlayer"), p.thickness_mm,
+                      "glass" if p.is_glass else "interlayer") for p in parse_makeup(makeup).plies]
+        except DesignError:
+            plies = [(makeup, makeup, 0.0, "glass")]
+        layers = [self.f.create_entity("IfcMaterialLayer", Material=self.material(name, category),
+                                       LayerThickness=float(t), Name=text, Category=category)
+                  for text, name, t, category in plies]
+        out = self._materials[f"layers/{makeup}"] = self.f.create_entity(
+            "IfcMaterialLayerSet", MaterialLayers=layers, LayerSetName=makeup)
+        return out
+
+    def _common_pset(self, el: Element, product) -> None:
+        """``Pset_PlateCommon`` (panes) or ``Pset_MemberCommon`` (plates, strips, cover plates) with the standard
+        properties BIM tools read: Reference (the type id, else the part id), IsExternal, LoadBearing."""
+        f = self.f
+        name = "Pset_PlateCommon" if el.kind == "panel" else "Pset_MemberCommon"
+        reference = str(el.props.get("type_id", "") or el.part_id)
+        props = [f.create_entity("IfcPropertySingleValue", Name="Reference",
+                                 NominalValue=f.create_entity("IfcIdentifier", reference)),
+                 f.create_entity("IfcPropertySingleValue", Name="IsExternal",
+                                 NominalValue=f.create_entity("IfcBoolean", True)),
+                 f.create_entity("IfcPropertySingleValue", Name="LoadBearing",
+                                 NominalValue=f.create_entity("IfcBoolean", el.kind != "panel"))]
+        pset = f.create_entity("IfcPropertySet", GlobalId=self.guid(f"{el.part_id}/common"), Name=name,
+                               HasProperties=props)
+        f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/common/rel"),
+                        RelatedObjects=[product], RelatingPropertyDefinition=pset)
+
+    def _type_of(self, kind: str, type_id: str, cls: str, predefined: str) -> tuple[str, list[Any]]:
+        """The members of a panel or plate type (one ``IfcPlateType`` / ``IfcMemberType`` per ``type_id``, made by
+        :meth:`write`: every panel type, the beam-plate types that repeat)."""
+        return self._types.setdefault((kind, type_id), (f"{cls}Type/{predefined}", []))
 
     def _quantities(self, el: Element, product) -> None:
         f = self.f
@@ -231,9 +302,17 @@ class IfcModel:
         self._aggregate("roof", self.roof, self._roof_parts)
         for beam, (assembly, members) in self._assemblies.items():
             self._aggregate(f"beam/{beam}", assembly, members)
-        for name, (material, products) in self._materials.items():
+        for name, (material, products) in self._associations.items():
             f.create_entity("IfcRelAssociatesMaterial", GlobalId=self.guid(f"material/{name}"),
                             RelatedObjects=products, RelatingMaterial=material)
+        for (kind, type_id), (spec, products) in self._types.items():
+            if kind != "panel" and len(products) < 2:
+                continue                                   # a plate of its own: no type to share
+            cls, predefined = spec.split("/")
+            t = f.create_entity(cls, GlobalId=self.guid(f"type/{kind}/{type_id}"), Name=type_id,
+                                PredefinedType=predefined)
+            f.create_entity("IfcRelDefinesByType", GlobalId=self.guid(f"type/{kind}/{type_id}/rel"),
+                            RelatedObjects=products, RelatingType=t)
         f.write(str(path))
         return path
 
