@@ -111,6 +111,11 @@ def _name(hint: Any) -> str:
     return words.get(hint, str(hint))
 
 
+def _kind(value: Any) -> str:
+    """``number``, ``bool``, ``None`` or the JSON type's name, to compare like with like."""
+    return "number" if is_number(value) else type(value).__name__
+
+
 def _equal(a: Any, b: Any) -> bool:
     if is_number(a) and is_number(b):
         return abs(float(a) - float(b)) <= 1e-9 * max(1.0, abs(float(b)))
@@ -152,7 +157,12 @@ def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
     for flat, path in aliases.items():
         name, key = path.split(".")
         part = out.get(name)
-        if flat in out and isinstance(part, dict) and key in part and not _equal(out[flat], part[key]):
+        if flat not in out or not isinstance(part, dict) or key not in part:
+            continue
+        if _kind(part[key]) != _kind(out[flat]):
+            continue                            # a value resolved from a word or a default (clearance 'auto' ->
+            #                                     1.7 mm, glass thickness None -> the make-up's)
+        if not _equal(out[flat], part[key]):
             v.error("manifest.json", f"fabrication.{flat}", f"{out[flat]!r} differs from fabrication.{path} "
                                                             f"{part[key]!r} (the build writes one value twice)")
             out[flat] = part[key]
