@@ -86,46 +86,54 @@ def _parse_obj(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[
     return np.array(verts, dtype=float).reshape(-1, 3), faces, lines
 
 
-def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[int]]:
-    """OFF as a stream of tokens (records may span lines, as in libigl's files)."""
-    tokens: list[str] = []
-    token_line: list[int] = []
+def _off_tokens(text: str) -> Iterator[tuple[str, int]]:
+    """The tokens of an OFF file with their line numbers, comments dropped, one at a time (never all in memory)."""
     for lineno, raw in _numbered_lines(text):
-        for t in raw.split("#", 1)[0].split():
-            tokens.append(t)
-            token_line.append(lineno)
-    if not tokens or not tokens[0].endswith("OFF"):
+        cut = raw.find("#")
+        for m in _TOKEN.finditer(raw if cut < 0 else raw[:cut]):
+            yield m.group(), lineno
+
+
+_TOKEN = re.compile(r"\S+")
+
+
+def _parse_off(text: str, path: str) -> tuple[np.ndarray, list[list[int]], list[int]]:
+    """OFF as a stream of tokens (records may span lines, as in libigl's files), read only as far as the header
+    announces, so a file of a few records and millions of extra tokens costs no memory."""
+    stream = _off_tokens(text)
+    first = next(stream, None)
+    if first is None or not first[0].endswith("OFF"):
         raise MeshFileError(path, "not an OFF file (no OFF header)")
-    pos = 1
+    line = first[1]
+
+    def take() -> str:
+        nonlocal line
+        try:
+            token, line = next(stream)
+        except StopIteration:
+            raise MeshFileError(path, "OFF file is shorter than its header announces") from None
+        return token
+
     try:
-        nv, nf = int(tokens[1]), int(tokens[2])
+        nv, nf = int(take()), int(take())
         if nv < 0 or nf < 0:
             raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces")
-        pos = 4
-        verts = np.array([float(t) for t in tokens[pos:pos + 3 * nv]], dtype=float)
-        if len(verts) != 3 * nv:
-            raise IndexError
-        pos += 3 * nv
+        take()                                          # the edge count, unused
+        coords = [float(take()) for _ in range(3 * nv)]
         faces, lines = [], []
         for _ in range(nf):
-            cnt = int(tokens[pos])
-            lines.append(token_line[pos])
-            rec = [int(t) for t in tokens[pos + 1:pos + 1 + cnt]]
-            if len(rec) != cnt:
-                raise IndexError
-            faces.append(rec)
-            pos += 1 + cnt
-    except IndexError:
-        raise MeshFileError(path, "OFF file is shorter than its header announces") from None
-    except MeshFileError:
-        raise
+            cnt = int(take())
+            lines.append(line)
+            if cnt < 0:
+                raise ValueError
+            faces.append([int(take()) for _ in range(cnt)])
     except ValueError:
-        raise MeshFileError(path, f"OFF record near line {token_line[min(pos, len(tokens) - 1)]} "
-                                  "is not a list of numbers") from None
-    if pos < len(tokens):
+        raise MeshFileError(path, f"OFF record near line {line} is not a list of numbers") from None
+    extra = next(stream, None)
+    if extra is not None:
         raise MeshFileError(path, f"OFF header announces {nv} vertices and {nf} faces, but the file goes on "
-                                  f"after face {nf - 1} (line {token_line[pos]}): fix the counts in the header")
-    return verts.reshape(-1, 3), faces, lines
+                                  f"after face {nf - 1} (line {extra[1]}): fix the counts in the header")
+    return np.array(coords, dtype=float).reshape(-1, 3), faces, lines
 
 
 def _validate(path: str, v: np.ndarray, faces: list[list[int]], lines: list[int]) -> np.ndarray:
