@@ -69,3 +69,26 @@ def test_signal_during_a_slow_import_stops_the_build_at_once(tmp_path, signum):
     assert proc.returncode == 128 + signum, err
     assert err == f"ppfab: interrupted ({name})\n", err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.toml", "importing"]    # no output, lock or temp
+
+
+def test_an_import_error_or_a_swallowed_signal_during_the_imports_is_the_interruption():
+    """A C extension interrupted in its initialisation may raise ImportError instead, and a library may catch the
+    KeyboardInterrupt and go on: either way the run stops as interrupted by that signal (then 143, not a
+    traceback or a build that goes on); an ImportError without a signal stays an ImportError."""
+    from fabrication.cli import Interrupted, _SIGNALS, interruptible_imports
+
+    try:
+        with pytest.raises(Interrupted) as info:
+            with interruptible_imports():
+                _SIGNALS["last"] = signal.SIGTERM          # what the handler records before it raises
+                raise ImportError("initialisation of _OCP failed")
+        assert info.value.signum == signal.SIGTERM and info.value.__cause__ is None
+        with pytest.raises(Interrupted) as info:
+            with interruptible_imports():
+                _SIGNALS["last"] = signal.SIGINT           # recorded, then swallowed by the library
+        assert info.value.signum == signal.SIGINT
+        with pytest.raises(ImportError):
+            with interruptible_imports():
+                raise ImportError("no module named build123d")
+    finally:
+        _SIGNALS["last"] = None
