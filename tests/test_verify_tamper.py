@@ -590,3 +590,55 @@ def test_glazing_strip_or_gasket_moved_3_mm(copy, capsys, which):
                     rf"plane put it in \(mesh edge {strip['edge_nodes'].replace(';', '-')}\)", err)
     assert hit, err[:2000]
     assert float(hit.group(1)) == pytest.approx(3.0, abs=0.01)
+
+
+def test_every_file_of_a_build_is_read_by_a_check(built, monkeypatch):
+    """Every file a real build writes is opened by at least one verify check other than the two that only hash
+    or list files (manifest, files): the checks run one by one under an audit hook that records, per check, the
+    files of the folder it opened (Python's ``open`` event; the STEP reader raises ``fabrication.verify.read``
+    itself, and the IFC and Rhino readers, which open files in C++, are wrapped here to raise it)."""
+    import os
+    import sys
+
+    import ifcopenshell
+    import rhino3dm
+
+    from fabrication.verify import Verification, load_checks
+
+    folder = built.resolve()
+    current: list[str | None] = [None]
+    opened: dict[str, set[str]] = {}
+
+    def hook(event, args):
+        if current[0] is None or event not in ("open", "fabrication.verify.read") or not args:
+            return
+        if isinstance(args[0], (str, bytes, os.PathLike)):
+            path = os.path.realpath(os.fsdecode(args[0]))
+            if path.startswith(str(folder) + os.sep):
+                opened.setdefault(current[0], set()).add(os.path.relpath(path, folder).replace(os.sep, "/"))
+
+    def audited(fn):
+        def wrapper(path, *a, **k):
+            sys.audit("fabrication.verify.read", str(path))
+            return fn(path, *a, **k)
+        return wrapper
+
+    monkeypatch.setattr(ifcopenshell, "open", audited(ifcopenshell.open))
+    monkeypatch.setattr(rhino3dm.File3dm, "Read", staticmethod(audited(rhino3dm.File3dm.Read)))
+    sys.addaudithook(hook)            # hooks cannot be removed: this one records nothing once current is None
+    v = Verification(folder)
+    try:
+        for c in load_checks():
+            current[0] = c.name
+            c.run(v)
+    finally:
+        current[0] = None
+    assert v.ok, [str(f) for f in v.findings[:5]]
+    files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+    assert len(files) > 60 and "glazing.step" in files and "drawings/key_plan.svg" in files
+    assert set(files) <= opened["manifest"] | {"manifest.json"}          # the manifest check hashes them all
+    assert "model.ifc" in opened["ifc"] and "model.3dm" in opened["rhino"] and "splices.step" in opened["splices"]
+    content = set().union(*(fs for name, fs in opened.items() if name not in ("manifest", "files")))
+    content.add("manifest.json")                    # its keys, units and digests are what the manifest check reads
+    unread = [f for f in files if f not in content]
+    assert unread == [], f"files no check reads: {unread}"
