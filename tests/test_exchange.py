@@ -496,6 +496,7 @@ def test_exchange_files_of_a_real_mesh(tmp_path):
     grid = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj").to_grid()
     write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 0:8])), tmp_path / "patch.obj")
     doc = {"design": {"name": "rot4 patch"}, "geometry": {"mesh": str(tmp_path / "patch.obj"), "scale": 3000.0},
+           "beams": {"fallback": "segmented"},          # its boundary polylines become beams of one plate each
            "nesting": {"time_budget": 0.5}, "beam_nesting": {"time_budget": 0.5}}
     b = fabrication.build(parse_design(doc))
     out = b.write(tmp_path / "out")
