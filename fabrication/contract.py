@@ -113,6 +113,38 @@ XDATA_KEYS = ("part_id", "nest_tag", "kind", "type_id")
 """The ``key=value`` strings on a CUT outline, in this order (``part_id`` and ``nest_tag`` are the contract)."""
 
 
+STOCK_XDATA_KEYS = ("material", "thickness_mm")
+"""The ``key=value`` strings after :data:`XDATA_KEYS` on every CUT outline: the part's material and thickness as
+``parts.csv`` gives them (a splice DXF's outline carries them after ``part_id`` and ``quantity``)."""
+
+STOCK_HEADER_VARS = ("PPFAB_MATERIAL", "PPFAB_THICKNESS_MM")
+"""The ``$CUSTOMPROPERTY`` header entries (R2004 and later) of every DXF ppfab writes: the material and thickness
+of the parts on it (distinct values joined by ``"; "``); the title text on ``LABEL`` ends with
+``material <material>, thickness <t> mm``."""
+
+
+def stock_xdata(material: str, thickness_mm: float | str) -> list[tuple[int, str]]:
+    """``[(1000, "material=…"), (1000, "thickness_mm=…")]`` (thickness as ``%g``).
+
+    >>> stock_xdata("S355 plate", 10.0)
+    [(1000, 'material=S355 plate'), (1000, 'thickness_mm=10')]
+    """
+    return [(1000, f"material={material}"), (1000, f"thickness_mm={thickness_text(thickness_mm)}")]
+
+
+def thickness_text(value: float | str) -> str:
+    """A thickness as written to DXF XDATA, headers and titles: ``%g`` of the number (``"12"``, ``"10.76"``)."""
+    try:
+        return f"{float(value):g}"
+    except (TypeError, ValueError):
+        return str(value)
+
+
+def stock_title(material: str, thickness: str) -> str:
+    """The end of a DXF title: ``material S355 plate, thickness 10 mm``."""
+    return f"material {material}, thickness {thickness} mm"
+
+
 DIM_LAYER, DIM_COLOUR = "DIM", 2
 """The layer of the dimensions (edges and diagonals) in the per-type DXFs: annotation, never machined."""
 
@@ -207,6 +239,9 @@ the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``)
 ending against one running through ``node``, ``joint = "halflap"`` the two plates crossing at a half-lap
 ``node`` welded in its four corners, ``joint = "corner"`` two plates ending at a ``node`` where none runs
 through, ``joint = "splice"`` a welded splice across the cut between two pieces of a beam (no node)."""
+BOLTS_CSV = "bolts.csv"
+"""The bolt sets of the bolted splices, one row per splice: ``splice, beam, pieces, bolt, size, grade, length_mm,
+grip_mm, washers, nut, projection_mm, category, preload, quantity`` (:mod:`fabrication.glazing.bolts`)."""
 PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
 

@@ -133,9 +133,9 @@ class BeamParams:
     def manifest(self) -> dict:
         """The entries this record contributes to ``manifest.json['fabrication']``."""
         return {"beam_depth": self.depth, "beam_thickness": self.thickness, "beam_material": self.material,
-                "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance_mm,
-                "beam_slot_fit": self.fit, "beam_thickness_deviation": self.thickness_deviation,
-                "beam_slot_play": self.slot_play, "beam_slot_depth": self.slot_length,
+                "beam_density": self.density, "beam_joint": self.joint, "beam_clearance": self.clearance,
+                "beam_thickness_deviation": self.thickness_deviation, "beam_slot_fit_mm": self.fit,
+                "beam_slot_depth": self.slot_length,
                 "beam_min_angle_deg": self.min_angle_deg, "beam_min_segment": self.min_segment,
                 "beam_max_length": self.max_length, "beam_plane_tolerance": self.plane_tolerance,
                 "beam_tool_radius": self.tool_radius,

@@ -57,6 +57,13 @@ class SpliceParams:
                                        "glazing strip's fillet weld), mm", min=0)
     bottom_clear: float = param(10.0, doc="gap between the cover plates and the beam's bottom edge, mm", min=0)
     material: str = param("S355 plate", doc="material of the cover plates")
+    category: str = param("A", doc="bolt category, EN 1993-1-8 §3.4.1: 'A' bearing type, non-preloaded (ISO 4014 "
+                                   "bolt, ISO 4032 nut, ISO 7089 washers); 'B' or 'C' slip-resistant, preloaded "
+                                   "(EN 14399-3 HR sets, EN 14399-6 washers; grade 8.8 or 10.9); bolts.csv",
+                          choices=("A", "B", "C"))
+    thread_projection: float = param(5.0, doc="thread standing out of the nut, mm, added to the grip, washers "
+                                              "and nut before the bolt length is rounded up to a standard length "
+                                              "(EN 1090-2 §8.2.2: at least one full thread)", min=0)
     kind: str = param("auto", doc="'bolted' (cover plates), 'welded' (full-penetration butt weld across the cut) "
                                   "or 'auto': bolted where a beam's edges leave room for a cover plate clear of "
                                   "the joints, welded elsewhere", choices=("auto", "bolted", "welded"))
@@ -65,6 +72,12 @@ class SpliceParams:
                               min=0)
 
     def __post_init__(self):
+        from .bolts import PRELOADED_GRADES, BoltSpec
+
+        spec = BoltSpec.parse(self.bolt)
+        if self.category in ("B", "C") and spec.grade not in PRELOADED_GRADES:
+            raise DesignError("category", f"category {self.category} needs preloaded bolts of grade 8.8 or 10.9, "
+                                          f"bolt is {self.bolt!r}")
         d0 = self.hole
         for key, value, factor in (("e1", self.e1, 1.2), ("e2", self.e2, 1.2), ("p1", self.p1, 2.2),
                                    ("p2_min", self.p2_min, 2.4)):

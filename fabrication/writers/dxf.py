@@ -13,7 +13,10 @@ origin at the sheet's lower-left corner; layers
 
 Labels are upright in the sheet frame (rotation in (−90°, 90°]) and placed inside the part, clear of its
 edges, slots and node-axis lines (:mod:`fabrication.marking`).  The header carries kerf notes per cutting
-process (``$CUSTOMPROPERTY`` ``PPFAB_KERF_*``); outlines are nominal.
+process (``$CUSTOMPROPERTY`` ``PPFAB_KERF_*``); outlines are nominal.  Material and thickness are on every file
+three times: the title text ends with ``material …, thickness … mm``, the header has ``PPFAB_MATERIAL`` and
+``PPFAB_THICKNESS_MM`` (R2004 and later; an R12 or R2000 file has no custom properties) and each CUT outline's
+XDATA ends with ``material=…``, ``thickness_mm=…`` (:data:`~fabrication.contract.STOCK_XDATA_KEYS`).
 
 No blocks, no splines: flat geometry a CAM program reads as it is.  Files are byte-for-byte
 reproducible: handles are assigned in a fixed order and ezdxf's time stamps and GUIDs are
@@ -39,8 +42,8 @@ from . import Files, writer
 
 from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
                         GLASS_SHEET_PREFIX, KERF_NOTES, LAYERS, MARK_LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
-                        REQUIRED_LAYERS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text, sheet_file, type_file,
-                        xdata_strings)
+                        REQUIRED_LAYERS, STOCK_HEADER_VARS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text,
+                        sheet_file, stock_title, stock_xdata, thickness_text, type_file, xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
 from ..marking import TextLine, face_marks, face_sign, place_label
 
@@ -89,6 +92,24 @@ def _new_doc(version: str = DXF_VERSION):
         doc.layers.add(name, color=colour)
     doc.appids.add(XDATA_APPID)
     return doc
+
+
+def stock_of(parts: list[FlatPart]) -> tuple[str, str]:
+    """``(material, thickness)`` of ``parts`` as text: their distinct values joined by ``"; "`` (one value on a
+    sheet of one stock)."""
+    materials = sorted({str(p.meta.get("material", "")) for p in parts})
+    thicknesses = sorted({thickness_text(p.meta.get("thickness_mm", "")) for p in parts})
+    return "; ".join(materials), "; ".join(thicknesses)
+
+
+def add_stock(doc, msp, stock: tuple[str, str], title: str, height: float = 40.0,
+              insert: tuple[float, float] = (0.0, -80.0)) -> None:
+    """The title (ending with the material and thickness) on LABEL and the header custom properties."""
+    text = f"{title} - {stock_title(*stock)}" if title else stock_title(*stock)
+    msp.add_text(dxf_text(text), height=height, dxfattribs={"layer": "LABEL", "insert": insert})
+    if doc.dxfversion >= "AC1018":
+        for name, value in zip(STOCK_HEADER_VARS, stock):
+            doc.header.custom_vars.append(name, dxf_text(value))
 
 
 PLATE_TEXT_MAX, PANEL_TEXT_MAX = 25.0, 60.0
@@ -141,7 +162,7 @@ class CuttingSheet:
 
     def __init__(self, sheet_size: tuple[float, float] | None = None,
                  usable: tuple[float, float, float, float] | None = None, title: str = "",
-                 version: str = DXF_VERSION):
+                 version: str = DXF_VERSION, stock: tuple[str, str] | None = None):
         self.version = version
         self._ctx = _fixed_metadata()
         self._ctx.__enter__()
@@ -157,7 +178,9 @@ class CuttingSheet:
             x0, y0, x1, y1 = (float(v) for v in usable)
             self.msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
                                     dxfattribs={"layer": "TRIM"})
-        if title:
+        if stock is not None:
+            add_stock(self.doc, self.msp, stock, title)
+        elif title:
             self.msp.add_text(dxf_text(title), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
         if self.doc.dxfversion >= "AC1018":          # $CUSTOMPROPERTY exists from R2004 on
             self.doc.header.custom_vars.append("PPFAB_OUTLINES", "nominal: no kerf offset, the CAM compensates")
@@ -180,7 +203,8 @@ class CuttingSheet:
         cut = self.msp.add_lwpolyline([tuple(map(float, p)) for p in outline], close=True,
                                       dxfattribs={"layer": "CUT"})
         tag = placement.nest_tag if placement is not None else ""
-        cut.set_xdata(XDATA_APPID, xdata_strings(part.part_id, tag, part.kind, part.type_id))
+        cut.set_xdata(XDATA_APPID, xdata_strings(part.part_id, tag, part.kind, part.type_id)
+                      + stock_xdata(str(part.meta.get("material", "")), part.meta.get("thickness_mm", "")))
         marks = [to_sheet(m) for m in part.marks]
         for pts in marks:
             if len(pts) >= 2:
@@ -236,7 +260,8 @@ def write_sheet_dxfs(parts: list[FlatPart], nesting, folder: str | os.PathLike, 
     out = []
     for k, group in enumerate(nesting.by_sheet()):
         head = f"{title} sheet {k + 1}/{nesting.sheets}".strip()
-        builder = CuttingSheet(nesting.sheet_size, nesting.usable, head, version)
+        builder = CuttingSheet(nesting.sheet_size, nesting.usable, head, version,
+                               stock_of([by_id[pl.part_id] for pl in group]))
         for pl in group:
             builder.add_part(by_id[pl.part_id], pl)
         out.append(builder.write(folder / sheet_file(prefix, k + 1, nesting.sheets)))
@@ -247,7 +272,7 @@ def write_part_dxf(part: FlatPart, path: str | os.PathLike, title: str = "", ver
                    dimensions: bool = False) -> Path:
     """One part flat in its own coordinates (for processors whose optimiser re-nests); with ``dimensions`` its
     edges and diagonals dimensioned on layer DIM (:mod:`fabrication.writers._dxf_dimensions`)."""
-    builder = CuttingSheet(None, None, title, version)
+    builder = CuttingSheet(None, None, title, version, stock_of([part]))
     builder.add_part(part, None)
     if dimensions:
         from ._dxf_dimensions import add_pane_dimensions
@@ -432,8 +457,7 @@ def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: st
         if tid in out:
             continue
         name = type_file(tid, prefix)
-        material = p.meta.get("material", "")
-        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id}) {material}".strip(), version=version,
+        write_part_dxf(p, folder / name, title=f"{tid} ({p.part_id})", version=version,
                        dimensions=dimensions)
         out[tid] = name
     return out

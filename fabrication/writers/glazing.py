@@ -70,10 +70,12 @@ def splice_solids(glazing) -> list:
 
 
 def write_splice_dxfs(glazing, folder: Path) -> list[str]:
-    """One flat DXF per cover plate type: outline and bolt holes on ``CUT``, the type id on ``LABEL``."""
-    from ..contract import XDATA_APPID
+    """One flat DXF per cover plate type: outline and bolt holes on ``CUT`` (XDATA ``part_id`` = type,
+    ``quantity``, ``material``, ``thickness_mm``), the type id on ``LABEL`` and a title under the plate naming
+    the material and thickness (also the header custom properties ``PPFAB_MATERIAL``, ``PPFAB_THICKNESS_MM``)."""
+    from ..contract import XDATA_APPID, stock_xdata, thickness_text
     from ..glazing.rows import splice_types
-    from .dxf import _fixed_metadata, _new_doc, save_doc
+    from .dxf import _fixed_metadata, _new_doc, add_stock, save_doc
 
     types = splice_types(glazing.splices)
     first: dict[str, object] = {}
@@ -90,12 +92,16 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
         msp = doc.modelspace()
         outline = s.flat_outline                                   # type: ignore[attr-defined]
         pl = msp.add_lwpolyline([tuple(map(float, p)) for p in outline], close=True, dxfattribs={"layer": "CUT"})
-        pl.set_xdata(XDATA_APPID, [(1000, f"part_id={t}"), (1000, f"quantity={count[t]}")])
+        material = glazing.splice_params.material
+        pl.set_xdata(XDATA_APPID, [(1000, f"part_id={t}"), (1000, f"quantity={count[t]}")]
+                     + stock_xdata(material, s.thickness))                    # type: ignore[attr-defined]
         for x, y in s.flat_holes:                                  # type: ignore[attr-defined]
             msp.add_circle((float(x), float(y)), 0.5 * s.hole, dxfattribs={"layer": "CUT"})  # type: ignore[attr-defined]
         w, h = np.ptp(outline, axis=0)
         msp.add_text(f"{t} x{count[t]}", height=min(20.0, 0.1 * float(h)),
                      dxfattribs={"layer": "LABEL", "insert": (0.5 * float(w) - 40.0, 0.5 * float(h))})
+        add_stock(doc, msp, (material, thickness_text(s.thickness)), f"{t} x{count[t]}",  # type: ignore[attr-defined]
+                  height=min(10.0, 0.05 * float(h)), insert=(0.0, -15.0))
         name = f"{SPLICE_DIR}/{t}.dxf"
         save_doc(doc, folder.parent / name)
         names.append(name)

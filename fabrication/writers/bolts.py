@@ -1,0 +1,27 @@
+"""``bolts.csv``: the bolt sets of every bolted splice (:mod:`fabrication.glazing.bolts`), listed in the
+manifest as ``files.bolts_csv``; nothing is written when the build has no bolted splice."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..contract import BOLTS_CSV
+from ..glazing.bolts import BOLT_COLUMNS, splice_bolts, total_bolts
+from ..parts import csv_text
+from . import Files, writer
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..pipeline.records import Build
+
+
+@writer("bolts", order=26)
+def write_bolts(build: "Build", out: Path, files: Files) -> str:
+    """One row per bolted splice: its bolt sets (size, grade, length from the grip, washers, nut, category)."""
+    g = build.glazing
+    if g is None or not g.splices:
+        return "no bolted splices"
+    sets = splice_bolts(g.splices, g.splice_params)
+    (out / BOLTS_CSV).write_text(csv_text([s.row() for s in sets], list(BOLT_COLUMNS)), encoding="utf-8")
+    files["bolts_csv"] = BOLTS_CSV
+    return f"{total_bolts(sets)} bolt sets in {len(sets)} splices"
