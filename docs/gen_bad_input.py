@@ -1,5 +1,7 @@
 """Write docs/bad-input.md: every class of bad input tried, and what ppfab says or does for it.
 
+The table is generated; the sections after it (from the first ``## `` heading on) are written by hand and kept.
+
     python docs/gen_bad_input.py
 
 The cases are those of ``tests/bad_inputs.py``; each row is also a test in ``tests/test_bad_input.py``,
@@ -43,7 +45,10 @@ def main() -> None:
         shown = f"`{msg.replace('|', '/')}`" if msg else f"*{case.note}*"
         mark = " ⚙" if case.process else ""
         lines.append(f"| {case.kind} | {case.what}{mark} | {code} | {shown} |")
-    (HERE / "bad-input.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    target = HERE / "bad-input.md"
+    old = target.read_text(encoding="utf-8").splitlines() if target.is_file() else []
+    kept = next((old[k:] for k, line in enumerate(old) if line.startswith("## ")), [])   # hand-written sections
+    target.write_text("\n".join(lines + ([""] + kept if kept else [])) + "\n", encoding="utf-8")
     print(HERE / "bad-input.md")
 
 
