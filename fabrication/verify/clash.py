@@ -8,8 +8,8 @@ Broad phase: the axis-aligned boxes of every strip and gasket in a k-d tree of t
 only the solids whose box overlaps its own grown by :data:`SEARCH` (its own edges' strips and gaskets, and the
 strips running through its corners).  For every such pair:
 
-* **clash**: the intersection of pane and solid; its depth is the largest distance of the intersection's
-  vertices below the pane's underside, along the pane's normal.  Deeper than
+* **clash**: the intersection of pane and solid; its depth is its extent along the pane's normal (a part
+  entering the pane from below meets it in a slab from the underside up to the part's top).  Deeper than
   :data:`~fabrication.glazing.seat.SEAT_TOLERANCE` is a finding naming pane, part and depth;
 * **contact**: the gap between pane and gasket (manifold3d's ``min_gap``, 0 where they touch).  A pane whose
   nearest gasket is farther than the tolerance bears on nothing: a finding naming pane, gasket and gap.
@@ -34,8 +34,8 @@ SEARCH = 5.0
 
 @dataclass(frozen=True)
 class PairMeasure:
-    """One pane against one strip or gasket: the part ids, the depth (mm) of their intersection below the
-    pane's underside (0 when they do not intersect) and their gap (mm; 0 where they touch or intersect,
+    """One pane against one strip or gasket: the part ids, the depth (mm) of their intersection along the
+    pane's normal (0 when they do not intersect) and their gap (mm; 0 where they touch or intersect,
     :data:`SEARCH` or more when farther)."""
 
     pane: str
@@ -50,9 +50,8 @@ def _normal(points: np.ndarray) -> np.ndarray:
     return np.linalg.svd(points - c)[2][2]
 
 
-def pane_manifold(solid: Any) -> tuple[Any, np.ndarray, float]:
-    """A pane solid as a manifold3d ``Manifold``, its outside-agnostic unit normal ``n`` and the height of its
-    underside along ``n`` (the lower of its two large faces)."""
+def pane_manifold(solid: Any) -> tuple[Any, np.ndarray]:
+    """A pane solid as a manifold3d ``Manifold`` and the unit normal ``n`` of its large faces (either sense)."""
     import manifold3d as m3  # type: ignore[import-not-found]
     import shapely
     from shapely.geometry import Polygon
@@ -73,25 +72,22 @@ def pane_manifold(solid: Any) -> tuple[Any, np.ndarray, float]:
     thick = float(z.max() - z.min())
     base = ring - np.outer(ring @ n - under, n)
     if abs(poly.area - poly.convex_hull.area) <= 1e-6 * max(poly.area, 1.0):
-        return m3.Manifold.hull_points(np.vstack([base, base + thick * n])), n, under
+        return m3.Manifold.hull_points(np.vstack([base, base + thick * n])), n
     parts = []
     for tri in shapely.constrained_delaunay_triangles(poly).geoms:
         q = np.asarray(tri.exterior.coords)[:3]
         p3 = base[0] + np.outer(q[:, 0] - flat[0, 0], ex) + np.outer(q[:, 1] - flat[0, 1], ey)
         p3 = p3 - np.outer(p3 @ n - under, n)
         parts.append(m3.Manifold.hull_points(np.vstack([p3, p3 + thick * n])))
-    return m3.Manifold.batch_boolean(parts, m3.OpType.Add), n, under
+    return m3.Manifold.batch_boolean(parts, m3.OpType.Add), n
 
 
-def measure_pair(pane: Any, n: np.ndarray, under: float, other: Any, pane_id: str, part_id: str) -> PairMeasure:
-    """Depth and gap of one pane (a manifold with normal ``n`` and underside height ``under``) against one
-    convex part (a manifold)."""
+def measure_pair(pane: Any, n: np.ndarray, other: Any, pane_id: str, part_id: str) -> PairMeasure:
+    """Depth and gap of one pane (a manifold with unit normal ``n``) against one part (a manifold)."""
     common = pane ^ other
-    depth = 0.0
     if not common.is_empty() and common.volume() > 1e-9:
-        verts = np.asarray(common.to_mesh().vert_properties)[:, :3]
-        depth = max(0.0, float((under - verts @ n).max()))
-        return PairMeasure(pane_id, part_id, depth, 0.0)
+        z = np.asarray(common.to_mesh().vert_properties)[:, :3] @ n
+        return PairMeasure(pane_id, part_id, float(z.max() - z.min()), 0.0)
     return PairMeasure(pane_id, part_id, 0.0, float(pane.min_gap(other, SEARCH)))
 
 
@@ -113,13 +109,13 @@ def measure_clashes(panes: dict[str, Any], supports: dict[str, Any]) -> list[Pai
     tree = cKDTree(centre)
     out = []
     for pane_id, solid in panes.items():
-        shape, n, under = pane_manifold(solid)
+        shape, n = pane_manifold(solid)
         p = solid_points(solid)
         plo, phi = p.min(axis=0) - SEARCH, p.max(axis=0) + SEARCH
         reach = float(np.linalg.norm(0.5 * (phi - plo))) + half
         for k in sorted(tree.query_ball_point(0.5 * (plo + phi), reach)):
             if np.all(lo[k] <= phi) and np.all(hi[k] >= plo):
-                out.append(measure_pair(shape, n, under, hulls[k], pane_id, names[k]))
+                out.append(measure_pair(shape, n, hulls[k], pane_id, names[k]))
     return out
 
 
