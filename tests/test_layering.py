@@ -28,7 +28,7 @@ CORE_THIRD_PARTY = {"numpy", "scipy"}
 FAB_LAYERS = [
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
      "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter", "glazing", "repetition",
-     "report_glazing"},
+     "report_glazing", "erection"},
     {"writers", "verify"},
     {"pipeline"},
     {"cli", "studio"},

@@ -1,0 +1,210 @@
+"""The erection sequence: in which order the parts of a build go up, and along which direction each goes in.
+
+With half-lap joints the row plates (family 0) carry their slots from above and the column plates (family 1)
+from below (:mod:`fabrication.beams.joint_types.halflap`): the rows stand first, the columns are lowered onto
+them through their slots.  Once the glazing strips are on the row plates a column can no longer be lowered
+(its slots would pass through the strips), so the order matters.  The plan here is
+
+====  ============  =====================================================================================
+step  kind          insertion direction (the part moves along it from far away into its place)
+====  ============  =====================================================================================
+1     ``row``       the row plates, lowered along their common slot direction (top edge → bottom edge)
+2     ``column``    the column plates, lowered along their common slot direction through the rows' slots
+3     ``weld``      the welds of ``welds.csv`` (half-lap crossings, corner and T-joints, welded splices); no
+                    solid, no direction
+4     ``splice``    the splice cover plates, lowered beside the beam plate's faces along its first piece's
+                    direction (pushed on along the normal from far away they would pass through the next beam)
+5     ``strip``     the glazing strips, lowered onto the plates' top edges along the strip's down (−up)
+6     ``gasket``    the gaskets, lowered onto their strips along the same direction
+7     ``panel``     the panes, lowered onto their gaskets along their inside normal (−N)
+====  ============  =====================================================================================
+
+Empty steps are left out and the rest numbered 1, 2, …; setting blocks are not modelled as solids and have no
+step.  A plate's common slot direction is the bisector of its extreme slot directions (as
+:func:`fabrication.beams.joints.assembly_check`); where the slots' directions spread so far that sliding through
+them moves the mating plate sideways by more than the joint clearance, the plate cannot be put in along any
+single direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming
+the part, the angle spread and the sideways travel (``ppfab verify``'s erection check then measures the sweep).
+A plate without slots goes in along the mean of its node axes (top edge → bottom edge).
+
+Nothing here measures a collision: ``fabrication/verify/erection.py`` proves the order on the written solids.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .contract import gasket_id, node_id
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .beams import BeamSet
+    from .beams.plates import BeamPlate
+    from .glazing import Glazing
+    from .panels import Panel
+
+ERECTION_CSV = "erection.csv"
+"""The erection sequence, one row per part (and per weld): :data:`ERECTION_COLUMNS`."""
+
+ERECTION_SVG = "drawings/erection.svg"
+"""The plan view of the parts coloured by erection step, with a legend."""
+
+ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "direction_z", "after", "blocked_spread_deg"]
+"""``blocked_spread_deg``: for a plate that no single direction puts through its slots (:class:`Blocked`), the angle
+spread of its slot directions; empty otherwise."""
+
+STEP_KINDS: tuple[str, ...] = ("row", "column", "weld", "splice", "strip", "gasket", "panel")
+"""The kinds in erection order (one step each when present)."""
+
+STEP_TITLES = {"row": "row plates (family 0)", "column": "column plates (family 1), lowered through the slots",
+               "weld": "welds at the crossings and joints", "splice": "splice cover plates",
+               "strip": "glazing strips, welded on", "gasket": "gaskets", "panel": "panes on their gaskets"}
+
+NEEDS = {"row": (), "column": ("row",), "weld": ("column",), "splice": ("column",), "strip": ("weld",),
+         "gasket": ("strip",), "panel": ("gasket",)}
+"""The kinds a step needs done before it (``after`` is the latest step among them, 0 for none)."""
+
+
+@dataclass(frozen=True)
+class Insertion:
+    """One part of the sequence: its id, kind (:data:`STEP_KINDS`), step (1-based), the unit direction ``(3,)`` it
+    moves along into its place (zeros for a weld) and ``after``, the step it needs done (0 for none)."""
+
+    part_id: str
+    kind: str
+    step: int
+    direction: tuple[float, float, float]
+    after: int
+
+
+@dataclass(frozen=True)
+class Blocked:
+    """A plate that cannot slide along one direction through all its slots: the angle spread of its slot
+    directions (degrees), the largest sideways travel of a mating plate in its slot (mm) and the clearance (mm)."""
+
+    part_id: str
+    spread_deg: float
+    play_mm: float
+    clearance_mm: float
+
+    def __str__(self) -> str:
+        return (f"{self.part_id}: the directions of its slots and end cuts spread {self.spread_deg:.2f}°, sliding it in moves a mating "
+                f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm): no "
+                f"single insertion direction")
+
+
+@dataclass(frozen=True)
+class ErectionPlan:
+    """The sequence: ``insertions`` in step order, ``steps`` the kind of each step (index 0 is step 1) and the
+    plates that no single direction puts in (``blocked``)."""
+
+    insertions: tuple[Insertion, ...]
+    steps: tuple[str, ...]
+    blocked: tuple[Blocked, ...]
+
+    def rows(self) -> list[dict[str, str]]:
+        """The rows of ``erection.csv`` (:data:`ERECTION_COLUMNS`), directions to 6 decimals."""
+        out = []
+        spread = {b.part_id: f"{b.spread_deg:.2f}" for b in self.blocked}
+        for p in self.insertions:
+            d = ["" if p.kind == "weld" else f"{round(x, 6) + 0.0:.6f}" for x in p.direction]
+            out.append({"step": str(p.step), "part_id": p.part_id, "kind": p.kind, "direction_x": d[0],
+                        "direction_y": d[1], "direction_z": d[2], "after": str(p.after),
+                        "blocked_spread_deg": spread.get(p.part_id, "")})
+        return out
+
+
+def _unit(v: np.ndarray) -> tuple[float, float, float]:
+    n = float(np.linalg.norm(v))
+    if n < 1e-12:
+        raise ValueError("zero insertion direction")
+    u = np.asarray(v, dtype=float) / n
+    return float(u[0]), float(u[1]), float(u[2])
+
+
+def _constraints(plate: "BeamPlate") -> tuple[np.ndarray, np.ndarray]:
+    """The in-plane directions (2D, top edge down, as angles unwrapped) a plate must slide along, and the length
+    over which each guides it: its slots (the slot length) and the node axes where it ends (an end cut parallel
+    to the axis slides past the plate it butts against only along that axis; the plate's depth)."""
+    dirs = [np.asarray(s.direction, dtype=float) for s in plate.slots]
+    lengths = [float(s.length) for s in plate.slots]
+    for v, _ in plate.trims:
+        dirs.append(plate.node_axis(int(v)))
+        lengths.append(float(plate.depth))
+    ang = np.unwrap(np.array([np.arctan2(d[1], d[0]) for d in dirs])) if dirs else np.zeros(0)
+    return ang, np.array(lengths)
+
+
+def plate_direction(plate: "BeamPlate") -> np.ndarray:
+    """``(3,)`` unit direction a beam plate is lowered along, in its plane: the bisector of the extreme directions
+    of :func:`_constraints` (slots and end axes); without either, the mean of its node axes top → bottom."""
+    ang, _ = _constraints(plate)
+    if len(ang):
+        mid = 0.5 * (ang.max() + ang.min())
+        return np.asarray(_unit(plate.frame.vec3d(np.array([np.cos(mid), np.sin(mid)]))))
+    down = (np.asarray(plate.bottom, dtype=float) - np.asarray(plate.top, dtype=float)).mean(axis=0)
+    return np.asarray(_unit(plate.frame.vec3d(down)))
+
+
+def blocked_plate(plate: "BeamPlate", clearance: float) -> Blocked | None:
+    """The :class:`Blocked` record of a plate whose slots and end cuts, slid along their bisector, move a mating
+    plate sideways by more than ``clearance`` (``L·|sin Δ|`` for a guide of length ``L`` at angle ``Δ``), else
+    ``None``."""
+    ang, length = _constraints(plate)
+    if len(ang) < 2:
+        return None
+    mid = 0.5 * (ang.max() + ang.min())
+    play = float((length * np.abs(np.sin(ang - mid))).max())
+    if play <= clearance + 1e-9:
+        return None
+    return Blocked(plate.part_id, float(np.degrees(ang.max() - ang.min())), play, clearance)
+
+
+def weld_id(part: str, to: str, vertex: int) -> str:
+    """The erection row of a weld: ``weld:B-W03/B-U02@N0042`` (node), ``weld:B-U03-S01/B-U03-S02`` (a splice)."""
+    return f"weld:{part}/{to}" + (f"@{node_id(vertex)}" if vertex >= 0 else "")
+
+
+def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Panel, ...] | list[Panel]") -> \
+        ErectionPlan:
+    """The erection sequence of a build's beam plates, glazing and panes (see the module doc)."""
+    by_kind: dict[str, list[tuple[str, tuple[float, float, float]]]] = {k: [] for k in STEP_KINDS}
+    plates = {p.part_id: p for p in beams.plates}
+    clearance = float(beams.params.clearance_mm)   # a square slot's width beyond the nominal plate thickness
+    blocked = []
+    for plate in beams.plates:
+        kind = "row" if plate.family == 0 else "column"
+        by_kind[kind].append((plate.part_id, _unit(plate_direction(plate))))
+        if kind == "column":                       # the rows go in first, into nothing
+            b = blocked_plate(plate, clearance)
+            if b is not None:
+                blocked.append(b)
+    if glazing is not None:
+        for w in glazing.welds:
+            by_kind["weld"].append((weld_id(w.part, w.to, w.vertex), (0.0, 0.0, 0.0)))
+        for sp in glazing.splices:
+            lower = plate_direction(plates[sp.pieces[0]])  # lowered beside the beam's face, as its first piece
+            n = sp.frame.normal
+            for pid in sp.part_ids:
+                by_kind["splice"].append((pid, _unit(lower - (lower @ n) * n)))
+        for st in glazing.strips:
+            down = _unit(-st.frame.normal)
+            by_kind["strip"].append((st.part_id, down))
+            by_kind["gasket"].append((gasket_id(st.part_id), down))
+    for pane in panels:
+        by_kind["panel"].append((pane.part_id, _unit(-pane.frame.normal)))
+    steps = tuple(k for k in STEP_KINDS if by_kind[k])
+    number = {k: i + 1 for i, k in enumerate(steps)}
+
+    def after(kind: str) -> int:
+        need = [number[k] for k in NEEDS[kind] if k in number]
+        if need:
+            return max(need)
+        earlier = [number[k] for k in steps if number[k] < number[kind]]   # a needed kind absent: the one before
+        return max(earlier, default=0)
+
+    insertions = tuple(Insertion(pid, kind, number[kind], d, after(kind))
+                       for kind in steps for pid, d in by_kind[kind])
+    return ErectionPlan(insertions, steps, tuple(blocked))

@@ -1,0 +1,352 @@
+"""erection.csv: every part once, in an order in which each goes into its place along its direction from far away
+without passing through a part of an earlier step, measured on the written solids with manifold3d.
+
+The rows are read as written: a step (1, 2, …), a kind, a unit insertion direction (none for a weld) and
+``after`` below the step.  Every part of ``parts.csv`` and every gasket of a strip appears exactly once.
+
+The solids come from the STEP files (``beams.step`` as the step check read it, ``glazing.step``,
+``splices.step``, ``panels.step``) and are rebuilt in manifold3d from the kernel's own triangulation of their
+large face, so nothing is shared with the code that made the order: a convex solid is the hull of its vertices,
+any other (a slotted plate, a cover plate with holes, a non-convex pane) the union of the prisms over the
+triangles of that face.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment
+``[−L·d, 0]``: for each convex piece the hull of the piece and the piece moved back by ``L``, with ``L`` far
+enough that it starts beyond every part of the earlier steps.  The sweep is intersected with every part of an
+earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours); the *depth* of an
+intersection is the thinnest extent of its thickest connected piece (the smallest width over the piece's face
+normals), how far the two would have to move apart.  Deeper than :data:`TOLERANCE` is a finding naming the part,
+the part it passes through and the depth.
+
+A plate whose slot directions spread too far for one direction (``blocked_spread_deg`` set by the build) is
+expected to pass through the plates it is slotted with: its passes through beam plates are not findings, but a
+plate so marked that slides in cleanly is (the mark is wrong).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from . import Verification, check, read_csv
+
+TOLERANCE = 0.25
+"""mm: the depth up to which a sweep may overlap an earlier part: a pane may sit 0.1 mm into its gasket
+(:data:`fabrication.glazing.seat.SEAT_TOLERANCE`), parts touch along faces, and the STEP decimals and the
+triangulation add their numerics."""
+
+KINDS = {"row", "column", "weld", "splice", "strip", "gasket", "panel"}
+
+
+@dataclass(frozen=True)
+class Pass:
+    """A part whose sweep passes through a part of an earlier step: the two ids, the depth (mm) and volume (mm³)
+    of their intersection, and the depth (mm) by which the two overlap where they stand (``static``, 0 when
+    they do not: a clash of the finished assembly, not of the order)."""
+
+    part: str
+    through: str
+    depth: float
+    volume: float
+    static: float
+
+    @property
+    def excess(self) -> float:
+        """How much deeper (mm) the way in passes than the two overlap in place."""
+        return self.depth - self.static
+
+
+@dataclass
+class Body:
+    """A solid rebuilt for the sweep, with its box: either ``convex`` (the hull of ``points``) or a flat prism,
+    the polygon ``flat`` (shapely, holes included) in the plane ``origin + x·ex + y·ey`` extruded by ``thick``
+    along ``n``."""
+
+    points: np.ndarray
+    convex: bool
+    origin: np.ndarray
+    ex: np.ndarray
+    ey: np.ndarray
+    n: np.ndarray
+    thick: float
+    flat: Any
+    _shape: Any = None
+
+    @property
+    def lo(self) -> np.ndarray:
+        return self.points.min(axis=0)
+
+    @property
+    def hi(self) -> np.ndarray:
+        return self.points.max(axis=0)
+
+    def prism(self, polygon: Any) -> Any:
+        """A shapely polygon of this body's plane extruded like the body (a manifold3d ``Manifold``)."""
+        import manifold3d as m3  # type: ignore[import-not-found]
+        from shapely.geometry import MultiPolygon
+
+        polys = polygon.geoms if isinstance(polygon, MultiPolygon) else [polygon]
+        rings = []
+        for poly in polys:
+            rings.append(np.asarray(poly.exterior.coords)[:-1])
+            rings += [np.asarray(r.coords)[:-1] for r in poly.interiors]
+        m = m3.Manifold.extrude(m3.CrossSection(rings, m3.FillRule.EvenOdd), self.thick)
+        return m.transform(np.column_stack([self.ex, self.ey, self.n, self.origin]))
+
+    def shape(self) -> Any:
+        """The solid itself."""
+        if self._shape is None:
+            self._shape = hull(self.points) if self.convex else self.prism(self.flat)
+        return self._shape
+
+    def swept(self, d: np.ndarray, far: float) -> Any:
+        """The Minkowski sum of the solid and the segment ``[−far·d, 0]``: the hull of the solid and its copy moved
+        back when convex; a prism moving in its own plane sweeps its polygon's 2D Minkowski sum with the segment
+        (the polygon, its copy and a parallelogram over every edge); moving out of its plane, the union of the
+        swept prisms over the triangles of its polygon."""
+        import shapely
+        from shapely.geometry import Polygon
+        from shapely.ops import unary_union
+
+        if self.convex:
+            return hull(np.vstack([self.points, self.points - far * d]))
+        s2 = -far * np.array([d @ self.ex, d @ self.ey])
+        if abs(float(d @ self.n)) < 1e-6:
+            pieces = [self.flat, shapely.affinity.translate(self.flat, float(s2[0]), float(s2[1]))]
+            polys = [self.flat] if not hasattr(self.flat, "geoms") else list(self.flat.geoms)
+            for poly in polys:
+                for ring in [poly.exterior, *poly.interiors]:
+                    c = np.asarray(ring.coords)
+                    for a, b in zip(c[:-1], c[1:]):
+                        quad = Polygon([a, b, b + s2, a + s2])
+                        if quad.area > 1e-9:
+                            pieces.append(quad)
+            return self.prism(unary_union(pieces).buffer(0))
+        out = []
+        for tri in shapely.constrained_delaunay_triangles(self.flat).geoms:
+            q = np.asarray(tri.exterior.coords)[:3]
+            p3 = self.origin + np.outer(q[:, 0], self.ex) + np.outer(q[:, 1], self.ey)
+            p3 = np.vstack([p3, p3 + self.thick * self.n])
+            out.append(hull(np.vstack([p3, p3 - far * d])))
+        return union(out)
+
+
+def hull(points: np.ndarray) -> Any:
+    import manifold3d as m3
+
+    return m3.Manifold.hull_points(np.ascontiguousarray(points, dtype=float))
+
+
+def union(shapes: list[Any]) -> Any:
+    import manifold3d as m3
+
+    return shapes[0] if len(shapes) == 1 else m3.Manifold.batch_boolean(shapes, m3.OpType.Add)
+
+
+def body_of(solid: Any) -> Body:
+    """A thin prism read from STEP as a :class:`Body`: its largest face gives the plane and the polygon (straight
+    edges chained; a face with curved edges or holes from the kernel's triangulation), convex when the polygon
+    fills its hull."""
+    from shapely.geometry import MultiPoint, Polygon
+    from shapely.ops import unary_union
+
+    pts = np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
+    face = max(solid.faces(), key=lambda f: f.area)
+    c = pts.mean(axis=0)
+    axes = np.linalg.svd(pts - c)[2]
+    n = axes[2]
+    fo = np.array(tuple(face.outer_wire().edges()[0].start_point()), dtype=float)
+    off = (pts - fo) @ n
+    if abs(off.min()) > abs(off.max()):                 # n from the face into the solid
+        n, off = -n, -off
+    ex = axes[0] - (axes[0] @ n) * n
+    ex /= np.linalg.norm(ex)
+    ey = np.cross(n, ex)
+    thick = float(off.max())
+
+    def to2(q: np.ndarray) -> np.ndarray:
+        return np.stack([(q - fo) @ ex, (q - fo) @ ey], axis=1)
+
+    edges = face.outer_wire().edges()
+    straight = all(e.geom_type.name == "LINE" for e in edges) and not face.inner_wires()
+    if straight:
+        ring = [np.array(tuple(e.start_point()), dtype=float) for e in edges]
+        ends = [np.array(tuple(e.end_point()), dtype=float) for e in edges]
+        chain = [0]
+        for _ in range(len(edges) - 1):                  # walk the edges end to start
+            last = ends[chain[-1]]
+            chain.append(min((k for k in range(len(edges)) if k not in chain),
+                             key=lambda k: float(np.linalg.norm(ring[k] - last))))
+        flat = Polygon(to2(np.array([ring[k] for k in chain]))).buffer(0)
+    else:
+        verts, tris = face.tessellate(0.05)
+        fv = to2(np.array([tuple(p) for p in verts], dtype=float))
+        flat = unary_union([Polygon(fv[list(t)]) for t in tris]).buffer(0)
+    convex = abs(flat.area - MultiPoint(to2(pts)).convex_hull.area) <= 1e-4 * max(flat.area, 1.0)
+    return Body(pts, convex, fo, ex, ey, n, thick, flat)
+
+
+def depth_of(shape: Any) -> tuple[float, float]:
+    """``(depth, volume)`` of an intersection: the smallest width over face normals of its thickest connected
+    piece, and its volume (0, 0 when empty)."""
+    if shape.is_empty():
+        return 0.0, 0.0
+    vol = float(shape.volume())
+    if vol <= 1e-9:
+        return 0.0, vol
+    best = 0.0
+    for comp in shape.decompose():
+        mesh = comp.to_mesh()
+        v = np.asarray(mesh.vert_properties, dtype=float)[:, :3]
+        t = np.asarray(mesh.tri_verts, dtype=int)
+        if len(t) == 0:
+            continue
+        nn = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+        ln = np.linalg.norm(nn, axis=1)
+        dirs = nn[ln > 1e-12] / ln[ln > 1e-12, None]
+        dirs = np.unique(np.round(dirs, 6), axis=0) if len(dirs) else np.eye(3)
+        proj = v @ dirs.T
+        best = max(best, float((proj.max(axis=0) - proj.min(axis=0)).min()))
+    return best, vol
+
+
+def _perp(d: np.ndarray) -> np.ndarray:
+    a = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(d, a)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([e1, np.cross(d, e1)])
+
+
+def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Body]) -> list[Pass]:
+    """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
+    part of an earlier step, against those whose boxes (3D and seen along the direction) overlap its sweep: one
+    :class:`Pass` per pair that intersects (depth 0 for a touch)."""
+    out = []
+    placed = [(pid, step) for pid, step, _ in order if pid in bodies]
+    for pid, step, d in order:
+        body = bodies.get(pid)
+        if body is None:
+            continue
+        earlier = [q for q, s in placed if s < step]
+        if not earlier:
+            continue
+        corners = np.array([[b.lo, b.hi] for b in (bodies[q] for q in earlier)]).reshape(-1, 3)
+        far = max(float((corners @ -d).max()) - float((body.points @ -d).min()) + 1.0, 1.0)
+        allp = np.vstack([body.points, body.points - far * d])
+        lo, hi = allp.min(axis=0), allp.max(axis=0)
+        e = _perp(d)
+        f2 = allp @ e.T
+        flo, fhi = f2.min(axis=0), f2.max(axis=0)
+        shape = None
+        for q in earlier:
+            b = bodies[q]
+            if np.any(b.lo > hi + TOLERANCE) or np.any(b.hi < lo - TOLERANCE):
+                continue
+            g = np.array([[b.lo[0], b.lo[1], b.lo[2]], [b.hi[0], b.hi[1], b.hi[2]]])
+            box = np.array([[g[i, 0], g[j, 1], g[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]) @ e.T
+            if np.any(box.min(axis=0) > fhi + TOLERANCE) or np.any(box.max(axis=0) < flo - TOLERANCE):
+                continue
+            if shape is None:
+                shape = body.swept(d, far)
+            depth, vol = depth_of(shape ^ b.shape())
+            if vol > 0:
+                static = depth_of(body.shape() ^ b.shape())[0] if depth > TOLERANCE else 0.0
+                out.append(Pass(pid, q, depth, vol, static))
+    return out
+
+
+def _read_rows(v: Verification, rel: str) -> list[tuple[str, str, int, np.ndarray, str]] | None:
+    """``(part_id, kind, step, direction, blocked spread)`` of the well-formed rows; findings for the others."""
+    try:
+        rows = read_csv(v.folder / rel)
+    except (OSError, ValueError) as exc:
+        v.error(rel, "", f"cannot be read ({exc})")
+        return None
+    out = []
+    for k, r in enumerate(rows, start=2):
+        pid, kind = r.get("part_id") or "", r.get("kind") or ""
+        where = pid or f"row {k}"
+        try:
+            step, after = int(r.get("step") or ""), int(r.get("after") or "")
+        except ValueError:
+            v.error(rel, where, f"step {r.get('step')!r} or after {r.get('after')!r} is not a whole number")
+            continue
+        if kind not in KINDS:
+            v.error(rel, where, f"kind {kind!r} is none of {', '.join(sorted(KINDS))}")
+            continue
+        if step < 1 or not 0 <= after < step:
+            v.error(rel, where, f"step {step} must be ≥ 1 and after {after} below it")
+        d = np.zeros(3)
+        if kind != "weld":
+            try:
+                d = np.array([float(r.get(f"direction_{c}") or "") for c in "xyz"])
+            except ValueError:
+                v.error(rel, where, "insertion direction is not three numbers")
+                continue
+            if not np.all(np.isfinite(d)) or abs(float(np.linalg.norm(d)) - 1.0) > 1e-4:
+                v.error(rel, where, f"insertion direction {d.tolist()} is not a unit vector")
+                continue
+        out.append((pid, kind, step, d, r.get("blocked_spread_deg") or ""))
+    return out
+
+
+def _bodies(v: Verification, files: dict[str, Any], wanted: set[str]) -> dict[str, Body]:
+    from ._step_read import read_or_report
+
+    solids: dict[str, Any] = dict(v.data.get("beam_solids") or {})
+    keys = ["glazing_step", "splices_step", "panels_step"] + ([] if solids else ["beams_step"])
+    for key in keys:
+        rel = files.get(key)
+        if rel:
+            for s in read_or_report(v, rel) or []:
+                if s.name in wanted:
+                    solids.setdefault(s.name, s.solid)
+    return {name: body_of(solid) for name, solid in solids.items() if name in wanted}
+
+
+@check("erection", 68)
+def check_erection(v: Verification) -> None:
+    files = v.data.get("manifest", {}).get("files", {})
+    rel = files.get("erection_csv")
+    if rel is None:
+        return
+    rows = _read_rows(v, rel)
+    if rows is None:
+        return
+    parts = v.data.get("parts")
+    if parts is None:
+        parts = read_csv(v.folder / files.get("parts_csv", "parts.csv"))
+    wanted = [r["part_id"] for r in parts] + ["GK" + r["part_id"][2:] for r in parts if r.get("kind") == "strip"]
+    seen: dict[str, int] = {}
+    for pid, *_ in rows:
+        seen[pid] = seen.get(pid, 0) + 1
+    for pid in wanted:
+        if seen.get(pid, 0) != 1:
+            v.error(rel, pid, f"appears {seen.get(pid, 0)} times, expected once")
+    known = set(wanted)
+    for pid, kind, *_ in rows:
+        if pid not in known and kind != "weld":
+            v.error(rel, pid, "is not a part of parts.csv nor the gasket of a strip")
+    order = [(pid, step, d) for pid, kind, step, d, _ in rows if kind != "weld" and pid in known]
+    bodies = _bodies(v, files, {pid for pid, _, _ in order})
+    blocked = {pid: spread for pid, _, _, _, spread in rows if spread}
+    beams = {r["part_id"] for r in parts if r.get("kind") == "beam"}
+    passes = sweep_passes(order, bodies)
+    deep = [p for p in passes if p.excess > TOLERANCE]
+    v.data["erection_passes"] = passes
+    shown = 0
+    for p in sorted(deep, key=lambda p: -p.depth):
+        if p.part in blocked and p.through in beams:
+            continue
+        if shown < 20:
+            v.error(rel, p.part, f"passes through {p.through} by {p.depth:.2f} mm ({p.volume:.0f} mm³) on its way in "
+                                 f"(more than {TOLERANCE:g} mm"
+                                 + (f" beyond their overlap in place, {p.static:.2f} mm)" if p.static > 0 else ")"))
+        shown += 1
+    if shown > 20:
+        v.error(rel, "", f"{shown - 20} more parts pass through parts of earlier steps")
+    for pid, spread in blocked.items():
+        if not any(p.part == pid for p in deep):
+            v.error(rel, pid, f"is marked as having no single insertion direction (spread {spread}°) but slides in "
+                              f"clear of every earlier part")
+    v.checked.append("erection")
