@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..sweep.spec import SweepSpec
 
 NAME = "sweep"
 HELP = "compute many variants of a design (a sweep file) on a Dask cluster into a results table with plots"
@@ -19,6 +23,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="a running Dask scheduler (`dask scheduler`); default: a local cluster on this machine")
     p.add_argument("--workers", type=int, metavar="N",
                    help="workers of the local cluster (default: one per core; not with --scheduler)")
+    p.add_argument("--stage", choices=["geometry", "nesting", "files"],
+                   help="run this stage instead of the sweep file's (e.g. geometry for a quick look)")
     p.add_argument("--retry-failed", action="store_true", help="compute the variants that failed before again")
     p.add_argument("--best", metavar="FIGURE",
                    help="then write the design of the best variant by FIGURE (e.g. cost, glass_sheets)")
@@ -43,6 +49,8 @@ def run(args: argparse.Namespace) -> int:
     if args.scheduler is not None and not args.scheduler.strip():
         raise DesignError("--scheduler", "give the scheduler's address, e.g. tcp://10.0.0.5:8786")
     spec = load_sweep(args.sweep)
+    if args.stage is not None:
+        spec = with_stage(spec, args.stage)
     from ..sweep.engine import run_sweep
 
     report = run_sweep(spec, args.out, scheduler=args.scheduler, workers=args.workers,
@@ -56,3 +64,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"ppfab: best by {args.best}: variant {best.row['variant']} ({args.best} = {best.row[args.best]:.6g})"
               f", design in {best.path}", file=sys.stderr)
     return 1 if report.variants and report.failed == report.variants else 0
+
+
+def with_stage(spec: "SweepSpec", stage: str) -> "SweepSpec":
+    """``spec`` run to ``stage``; Pareto figures that stage does not measure give way to its defaults."""
+    import dataclasses
+
+    from ..sweep.figures import FIGURES, STAGES
+    from ..sweep.spec import DEFAULT_PARETO
+
+    pareto = spec.pareto
+    if any(STAGES.index(FIGURES[f].stage) > STAGES.index(stage) for f in pareto):
+        pareto = DEFAULT_PARETO[stage]
+    return dataclasses.replace(spec, stage=stage, pareto=pareto)

@@ -74,6 +74,9 @@ def _client(scheduler: str | None, workers: int | None, processes: bool) -> tupl
     ``workers`` single-threaded workers (``cluster`` is ``None`` for an existing scheduler)."""
     from distributed import Client, LocalCluster
 
+    if logging.getLogger().getEffectiveLevel() > logging.INFO:      # the cluster's own log only with --verbose
+        for name in ("distributed", "bokeh", "tornado"):
+            logging.getLogger(name).setLevel(logging.ERROR)
     if scheduler:
         try:
             return Client(scheduler, timeout="20s"), None
@@ -181,4 +184,4 @@ def _compute(spec: SweepSpec, todo: list[Variant], folder: ResultsFolder, rows: 
 def _comment(spec: SweepSpec, v: Variant) -> str:
     values = ", ".join(f"{k} = {val!r}" for k, val in v.values.items())
     return (f"variant {v.key} (#{v.index}) of the sweep {spec.source.name} on {spec.base.name}: {values}\n"
-            f"build it with: ppfab build designs/{v.key}.toml -o OUT")
+            "build it with: ppfab build THIS_FILE -o OUT")

@@ -30,6 +30,10 @@ def best_row(rows: list[dict[str, Any]], figure: str) -> dict[str, Any]:
     if figure not in FIGURES:
         raise DesignError("--best", f"unknown figure {figure!r}; give one of {', '.join(FIGURES)}")
     ok = [r for r in rows if r.get("status") == "ok" and r.get(figure) is not None]
+    if not ok and figure == "cost":
+        raise DesignError("--best", "no successful variant has a cost: the sweep file has no [cost] prices, or a "
+                                    "priced quantity is not measured at this sweep's stage (sheets, steel, welds "
+                                    "and node types need stage 'nesting')")
     if not ok:
         raise DesignError("--best", f"no successful variant has a value of {figure} (was it measured at this "
                                     f"sweep's stage? {figure} needs stage {FIGURES[figure].stage!r})")

@@ -12,6 +12,7 @@ import hashlib
 import itertools
 import json
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,6 +130,11 @@ def make_variants(spec: SweepSpec, base: dict | None = None) -> list[Variant]:
     return out
 
 
+def _key(k: str) -> str:
+    """A TOML key: bare when it can be, else quoted."""
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
+
+
 def design_text(doc: dict, comment: str = "") -> str:
     """A design document as TOML text (one table per section, nested tables inline), readable by
     :func:`fabrication.design.load_design`."""
@@ -136,12 +142,12 @@ def design_text(doc: dict, comment: str = "") -> str:
 
     lines = [f"# {ln}" for ln in comment.splitlines()]
     top = {k: v for k, v in doc.items() if not isinstance(v, dict)}
-    lines += [f"{json.dumps(k)} = {toml_value(v)}" for k, v in top.items()]
+    lines += [f"{_key(k)} = {toml_value(v)}" for k, v in top.items()]
     for section, table in doc.items():
         if not isinstance(table, dict):
             continue
-        lines += ["", f"[{section}]"]
-        lines += [f"{json.dumps(k)} = {toml_value(v)}" for k, v in table.items()]
+        lines += ["", f"[{_key(section)}]"]
+        lines += [f"{_key(k)} = {toml_value(v)}" for k, v in table.items()]
     text = "\n".join(lines) + "\n"
     tomllib.loads(text)                 # what is written is read back the same
     return text
