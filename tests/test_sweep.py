@@ -9,7 +9,6 @@ import socket
 import subprocess
 import sys
 import time
-import tomllib
 from pathlib import Path
 
 import pytest
@@ -22,7 +21,7 @@ pytest.importorskip("pyarrow")
 from fabrication.cli import main  # noqa: E402
 from fabrication.sweep.engine import run_sweep  # noqa: E402
 from fabrication.sweep.spec import load_sweep  # noqa: E402
-from fabrication.sweep.store import LEDGER, held_signals  # noqa: E402
+from fabrication.sweep.store import held_signals  # noqa: E402
 from fabrication.sweep.variants import make_variants  # noqa: E402
 from fabrication.sweep.worker import VariantTask, compute  # noqa: E402
 
