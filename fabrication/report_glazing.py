@@ -29,6 +29,13 @@ def glazing_sections(rep: "HtmlReport", build: "Build", repetition: dict[str, An
         worst = sorted(g.bites, key=lambda b: b.bite)[:5]
         rep.table(["pane", "edge", "strip", "bite [mm]", "supported [mm]", "edge [mm]"],
                   [(b.panel, b.edge, b.strip, b.bite, b.supported, b.length) for b in worst], left=(0, 2))
+        from .glazing.slope import DRAINAGE_NOTE, flat_panes
+
+        flat = flat_panes(build.panels.panels, p.min_slope_deg)
+        if flat:
+            rep.paragraph(f"Drainage: {len(flat)} pane(s) slope less than glazing.min_slope_deg = "
+                          f"{p.min_slope_deg:g}°: " + ", ".join(f"{f.part_id} ({f.slope_deg:.2f}°)" for f in flat[:20])
+                          + (f" and {len(flat) - 20} more" if len(flat) > 20 else "") + f"; {DRAINAGE_NOTE}.")
     if g is not None and (g.splices or g.welds):
         rep.heading("Splices and welds")
         sp = g.splice_params

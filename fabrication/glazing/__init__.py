@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
 from .params import GlazingParams
+from .slope import warn_flat_panes
 from .splices import Splice, SpliceParams, make_splices, welded_splices
 from .strips import Strip, make_strips
 from .welds import Weld, butt_welds, corner_welds, halflap_welds
@@ -76,5 +77,6 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
     bites = measure_bites(panels, strips, support.vertices, support.edges, params.gasket_thickness)
     if strict:
         check_bites(bites, min_bite, params.max_tilt_deg)
+        warn_flat_panes(panels, params.min_slope_deg)
     return Glazing(params, splice_params, tuple(strips), tuple(bites), tuple(splices), tuple(welds),
                    params.thickness + params.gasket_thickness)

@@ -34,6 +34,9 @@ class GlazingParams:
     bar_length: float = param(6000.0, doc="stock length of the flat bar the strips are cut from, mm",
                               exclusive_min=0)
     saw_kerf: float = param(3.0, doc="width of one saw cut between strips on a bar, mm", min=0)
+    bar_end_allowance: float = param(10.0, doc="length squared off each end of a stock bar before strips are "
+                                               "cut from it, mm (ends as delivered are neither square nor clean); "
+                                               "strips lie on [allowance, bar_length - allowance]", min=0)
     gasket_thickness: float = param(3.0, doc="thickness of the gasket (EPDM pad) on the strip, mm; the panes "
                                              "rest on it", exclusive_min=0)
     gasket_material: str = param("EPDM 70 Shore A", doc="gasket material, written to the parts list")
@@ -41,6 +44,10 @@ class GlazingParams:
                                       "through it, mm (fillet-welded closed)", min=0)
     setting_block_length: float = param(100.0, doc="length of a setting block (two per pane, under its "
                                                    "lowest edge), mm", exclusive_min=0)
+    min_slope_deg: float = param(2.0, doc="smallest slope of a pane from the horizontal, degrees: flatter panes "
+                                          "are named in a warning and in the report with a drainage note (water "
+                                          "stands on flush-jointed glass below about 2-5°); 0 = no warning",
+                                 min=0, max=90)
     max_tilt_deg: float = param(6.0, doc="largest angle between a pane and the strip it rests on, degrees; "
                                          "the gasket takes up the wedge (width × tan of the angle); steeper edges are warned "
                                          "about (they need tapered gaskets)",
@@ -49,3 +56,6 @@ class GlazingParams:
     def __post_init__(self):
         if self.saw_kerf >= self.bar_length:
             raise DesignError("saw_kerf", f"{self.saw_kerf:g} mm is not below bar_length {self.bar_length:g} mm")
+        if 2.0 * self.bar_end_allowance >= self.bar_length:
+            raise DesignError("bar_end_allowance", f"twice {self.bar_end_allowance:g} mm leaves nothing of the "
+                                                   f"{self.bar_length:g} mm bar; lower it")

@@ -42,7 +42,7 @@ def strip_rows(glazing, beams) -> list[dict]:
     """One row per glazing strip (with its bar, gasket and weld)."""
     p = glazing.params
     lengths = {s.part_id: s.length for s in glazing.strips}
-    cuts, _ = cut_bars(lengths, p.bar_length, p.saw_kerf) if lengths else ([], 0)
+    cuts, _ = cut_bars(lengths, p.bar_length, p.saw_kerf, p.bar_end_allowance) if lengths else ([], 0)
     family = {pl.beam_id: FAMILY_NAMES[pl.family] for pl in beams.plates}
     rows = []
     for s, c in zip(glazing.strips, cuts):

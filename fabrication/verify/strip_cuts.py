@@ -3,11 +3,12 @@
 The strips' lengths are ``length_mm`` of the ``strip`` rows of ``parts.csv`` (which the bite check holds to the
 solids of ``glazing.step``).  Every strip must have exactly one row, with that length and its beam, and the bar,
 start and nest tag ``parts.csv`` gives it; the nest tag ``F<bar>-<k>`` names the row's bar.  On each bar the
-strips lie end to end from 0 with one ``glazing.saw_kerf`` after each (first-fit decreasing,
+strips lie end to end from ``glazing.bar_end_allowance`` with one ``glazing.saw_kerf`` after each (first-fit decreasing,
 :func:`fabrication.glazing.cutlist.cut_bars`), so every start is recomputed as the sum of the lengths and kerfs
-before it; no strip may run past ``glazing.bar_length``, and the bars used must be as many as the build's own
-first-fit decreasing needs for those lengths.  (Which of two strips of equal length lies on which bar is not
-compared: equal lengths are ordered by their rounding.)
+before it (the allowance is squared off each end of a bar as delivered); no strip may end within the allowance
+of ``glazing.bar_length``, and the bars used must be as many as the build's own first-fit decreasing needs for
+those lengths.  (Which of two strips of equal length lies on which bar is not compared: equal lengths are
+ordered by their rounding.)
 """
 
 from __future__ import annotations
@@ -37,9 +38,10 @@ def check_strip_cuts(v: Verification) -> None:
         return
     gl = m.get("fabrication", {}).get("glazing", {})
     bar_length, kerf = float(gl.get("bar_length", 0.0)), float(gl.get("saw_kerf", 0.0))
+    allowance = float(gl.get("bar_end_allowance", 0.0))
     lengths = {pid: float(r["length_mm"]) for pid, r in strips.items()}
     try:
-        cuts, _ = cut_bars(lengths, bar_length, kerf) if lengths else ([], 0)
+        cuts, _ = cut_bars(lengths, bar_length, kerf, allowance) if lengths else ([], 0)
     except ValueError as exc:
         v.error(rel, "", f"the strips cannot be cut from glazing.bar_length {bar_length:g} mm bars: {exc}")
         return
@@ -82,18 +84,20 @@ def check_strip_cuts(v: Verification) -> None:
     for pid in [p for p in strips if p not in seen]:
         v.error(rel, pid, f"strip of parts.csv ({lengths[pid]:.3f} mm) is cut from no bar")
     for bar, pieces in sorted(on_bar.items()):
-        at = 0.0
+        at = allowance
         for start, n, pid in sorted(pieces):
             if abs(start - at) > TOLERANCE_MM:
                 v.error(rel, f"row {n} column start_mm", f"{pid} on bar {bar}: {start:.3f} written, the strips "
                                                          f"before it and their kerfs end at {at:.3f} mm")
             at += lengths[pid] + kerf
-        if at - kerf > bar_length + TOLERANCE_MM:
-            v.error(rel, f"bar {bar}", f"its strips end at {at - kerf:.3f} mm, past the {bar_length:g} mm bar")
+        if at - kerf > bar_length - allowance + TOLERANCE_MM:
+            v.error(rel, f"bar {bar}", f"its strips end at {at - kerf:.3f} mm, within glazing.bar_end_allowance "
+                                       f"{allowance:g} mm of the end of the {bar_length:g} mm bar")
     bars = len({c.bar for c in cuts})
     if seen == set(strips) and len(on_bar) != bars:
         v.error(rel, "bar", f"{len(on_bar)} bars used, first-fit decreasing cuts these strips from {bars} "
-                            f"(glazing.bar_length {bar_length:g} mm, saw_kerf {kerf:g} mm)")
+                            f"(glazing.bar_length {bar_length:g} mm, saw_kerf {kerf:g} mm, bar_end_allowance "
+                            f"{allowance:g} mm)")
     v.checked.append("strip_cuts")
 
 
