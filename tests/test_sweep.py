@@ -316,3 +316,18 @@ def test_scheduler_and_workers_survive_a_killed_worker(tmp_path):
         row = next(r for r in rows if r["variant"] == v.key)
         for name, value in alone.items():
             assert row[name] == pytest.approx(value, rel=1e-12, abs=1e-9), (v.values, name)
+
+
+@pytest.mark.slow
+def test_files_stage_writes_a_verified_build_per_variant(tmp_path):
+    from fabrication.verify import verify
+
+    spec = write_sweep(tmp_path, 'stage = "files"\n[vary]\n"panels.gap" = [12.0]\n')
+    out = tmp_path / "res"
+    report = local(spec, out)
+    (row,) = read_rows(out)
+    assert report.computed == 1 and row["status"] == "ok", row["reason"]
+    build = out / "builds" / row["variant"]
+    assert row["report"] == f"builds/{row['variant']}/report.html" and (out / row["report"]).is_file()
+    assert verify(build).ok
+    assert row["report"] in (out / "index.html").read_text()

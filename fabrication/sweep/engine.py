@@ -106,12 +106,22 @@ def run_sweep(spec: SweepSpec, out: str | os.PathLike, scheduler: str | None = N
               processes: bool = True, retry_failed: bool = False, quiet: bool = False,
               on_row: Callable[[dict[str, Any]], None] | None = None) -> SweepReport:
     """Run every variant of ``spec`` not yet in ``out``'s table and write the results (see the module
-    docstring); returns a :class:`SweepReport`.  ``on_row`` is called with each new row once it is written."""
-    from .htmlpage import index_html
+    docstring); returns a :class:`SweepReport`.  ``on_row`` is called with each new row once it is written.
+    A second sweep into the same folder at the same time is refused (:class:`~fabrication.pipeline.lock.OutputLock`)."""
+    from ..pipeline.lock import OutputLock
 
     require()
     t0 = time.perf_counter()
     variants = make_variants(spec)
+    with OutputLock(out):                      # one sweep at a time per results folder
+        return _run_locked(spec, out, variants, t0, scheduler, workers, processes, retry_failed, quiet, on_row)
+
+
+def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant], t0: float,
+                scheduler: str | None, workers: int | None, processes: bool, retry_failed: bool, quiet: bool,
+                on_row: Callable[[dict[str, Any]], None] | None) -> SweepReport:
+    from .htmlpage import index_html
+
     folder = ResultsFolder.open(out, inputs=[spec.source, spec.base])
     rows = {r["variant"]: r for r in folder.read_table()}
     todo = [v for v in variants if v.key not in rows
