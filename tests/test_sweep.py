@@ -68,9 +68,11 @@ def local(spec_path: Path, out: Path, **kw):
 
 # -- the local cluster, reruns, failures ----------------------------------------------------------------------
 def test_local_cluster_sweep_writes_every_variant(tmp_path):
+    import fabrication.sweep
+
     spec = write_sweep(tmp_path, GEOMETRY_SWEEP)
     out = tmp_path / "res"
-    report = local(spec, out)
+    report = fabrication.sweep(spec, out, workers=1, processes=False)       # the module is the function
     rows = read_rows(out)
     assert (report.variants, report.computed, report.failed) == (4, 4, 0)
     assert sorted(r["index"] for r in rows) == [0, 1, 2, 3]
@@ -331,3 +333,42 @@ def test_files_stage_writes_a_verified_build_per_variant(tmp_path):
     assert row["report"] == f"builds/{row['variant']}/report.html" and (out / row["report"]).is_file()
     assert verify(build).ok
     assert row["report"] in (out / "index.html").read_text()
+
+
+@pytest.mark.slow
+def test_ctrl_c_on_the_command_line_leaves_a_consistent_table(tmp_path):
+    spec = write_sweep(tmp_path, 'stage = "nesting"\n[vary]\n"panels.gap" = [10.0, 12.0, 14.0, 16.0, 18.0, 20.0]\n'
+                                 '"beams.depth" = [150.0, 170.0]\n')
+    out = tmp_path / "res"
+    sweep = subprocess.Popen([sys.executable, "-m", "fabrication.cli", "sweep", str(spec), "-o", str(out),
+                              "--workers", "1", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             start_new_session=True)
+    try:
+        deadline = time.monotonic() + 300
+        while sweep.poll() is None and time.monotonic() < deadline and not (out / "results.csv").exists():
+            time.sleep(0.05)
+        sweep.send_signal(signal.SIGINT)
+        _, err = sweep.communicate(timeout=120)
+    finally:
+        if sweep.poll() is None:
+            os.killpg(sweep.pid, signal.SIGKILL)
+            sweep.wait()
+    assert sweep.returncode == 130, err.decode()
+    assert "interrupted" in err.decode() and "Traceback" not in err.decode()
+    rows = read_rows(out)
+    assert 1 <= len(rows) < 12
+    assert [c["variant"] for c in csv_rows(out)] == [r["variant"] for r in rows]
+    assert not [p for p in out.iterdir() if ".tmp-" in p.name]
+    again = run_sweep(load_sweep(spec), out, workers=1, processes=False, quiet=True)
+    assert again.computed == 12 - len(rows) and len(read_rows(out)) == 12
+
+
+@pytest.mark.slow
+def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
+    spec = write_sweep(tmp_path, GEOMETRY_SWEEP)
+    address = f"tcp://127.0.0.1:{free_port()}"
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "res"), "--scheduler", address, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppfab: error: cannot reach the Dask scheduler at " + address)
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "res" / "results.parquet").exists()
