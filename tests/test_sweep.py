@@ -106,6 +106,10 @@ def test_rerun_computes_nothing_new(tmp_path):
     assert (again.computed, again.skipped) == (0, 4)
     after = {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in out.iterdir() if p.is_file()}
     assert after == before                                   # not one file rewritten
+    # another Pareto plot: the page alone is written again
+    assert main(["sweep", str(spec), "-o", str(out), "--quiet", "--pareto", "glass_area_m2", "cost"]) == 0
+    assert (out / "results.parquet").read_bytes() == before["results.parquet"][0]
+    assert "glass_area_m2 against cost" in (out / "index.html").read_text()
     # one more value: only the two new variants are computed
     spec.write_text(spec.read_text().replace("[2, 3]", "[2, 3, 4]"))
     more = local(spec, out)

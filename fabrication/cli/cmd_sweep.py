@@ -25,6 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="workers of the local cluster (default: one per core; not with --scheduler)")
     p.add_argument("--stage", choices=["geometry", "nesting", "files"],
                    help="run this stage instead of the sweep file's (e.g. geometry for a quick look)")
+    p.add_argument("--pareto", nargs=2, metavar=("X", "Y"),
+                   help="the two figures of the Pareto plot in index.html (instead of the sweep file's)")
     p.add_argument("--retry-failed", action="store_true", help="compute the variants that failed before again")
     p.add_argument("--best", metavar="FIGURE",
                    help="then write the design of the best variant by FIGURE (e.g. cost, glass_sheets)")
@@ -51,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
     spec = load_sweep(args.sweep)
     if args.stage is not None:
         spec = with_stage(spec, args.stage)
+    if args.pareto is not None:
+        spec = with_pareto(spec, args.pareto)
     from ..sweep.engine import run_sweep
 
     report = run_sweep(spec, args.out, scheduler=args.scheduler, workers=args.workers,
@@ -77,3 +81,20 @@ def with_stage(spec: "SweepSpec", stage: str) -> "SweepSpec":
     if any(STAGES.index(FIGURES[f].stage) > STAGES.index(stage) for f in pareto):
         pareto = DEFAULT_PARETO[stage]
     return dataclasses.replace(spec, stage=stage, pareto=pareto)
+
+
+def with_pareto(spec: "SweepSpec", figures: list[str]) -> "SweepSpec":
+    """``spec`` with the Pareto plot of ``figures`` (two figures the sweep's stage measures)."""
+    import dataclasses
+
+    from ppfab.errors import DesignError
+
+    from ..sweep.figures import FIGURES, STAGES
+
+    for f in figures:
+        if f not in FIGURES:
+            raise DesignError("--pareto", f"unknown figure {f!r}; give two of {', '.join(FIGURES)}")
+        if STAGES.index(FIGURES[f].stage) > STAGES.index(spec.stage):
+            raise DesignError("--pareto", f"{f} is measured from stage {FIGURES[f].stage!r} on; this sweep runs "
+                                          f"stage {spec.stage!r}")
+    return dataclasses.replace(spec, pareto=(figures[0], figures[1]))

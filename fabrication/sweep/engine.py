@@ -136,9 +136,11 @@ def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant]
                             build_root, on_row)
     keys = {v.key for v in variants}
     mine = [r for r in rows.values() if r["variant"] in keys]
-    if not (folder.root / "index.html").exists() or computed:
-        title = f"Sweep {spec.source.name}: {len(variants)} variants of {spec.base.name}"
-        folder.commit({"index.html": index_html(list(rows.values()), title, spec.pareto).encode("utf-8")})
+    title = f"Sweep {spec.source.name}: {len(variants)} variants of {spec.base.name}"
+    page = index_html(list(rows.values()), title, spec.pareto).encode("utf-8")
+    old = folder.root / "index.html"
+    if not old.is_file() or old.read_bytes() != page:        # a rerun that changes nothing writes nothing
+        folder.commit({"index.html": page})
     return SweepReport(variants=len(variants), computed=computed, skipped=len(variants) - len(todo),
                        failed=sum(1 for r in mine if r["status"] != "ok"), seconds=time.perf_counter() - t0,
                        out=folder.root, rows=list(rows.values()))

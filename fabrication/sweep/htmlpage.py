@@ -61,7 +61,7 @@ def pareto_plot(rows: list[dict[str, Any]], x: str, y: str) -> str:
     fig.update_layout(xaxis_title=_label(x), yaxis_title=_label(y), height=520,
                       title=f"{x} against {y} ({FIGURES[x].better}imise, {FIGURES[y].better}imise): "
                             "click a point to open its design")
-    return str(fig.to_html(full_html=False, include_plotlyjs=True, post_script=CLICK_JS))
+    return str(fig.to_html(full_html=False, include_plotlyjs=True, post_script=CLICK_JS, div_id="pareto"))
 
 
 def results_table(rows: list[dict[str, Any]]) -> str:
