@@ -234,7 +234,8 @@ def test_bolts_csv_lists_every_bolted_splice(built, tmp_path):
         grip = 2 * float(cover["thickness_mm"]) + float(beam["thickness_mm"])
         assert float(r["grip_mm"]) == pytest.approx(grip) == 32.0
         assert int(r["length_mm"]) == 65 and float(r["projection_mm"]) == pytest.approx(65 - grip - 2 * 3 - 18)
-        assert int(r["quantity"]) == int(cover["holes"]) and (r["size"], r["grade"], r["category"]) == ("M20", "8.8", "A")
+        assert int(r["quantity"]) == int(cover["holes"])
+        assert (r["size"], r["grade"], r["category"]) == ("M20", "8.8", "A")
     v = _verify(out, "bolts")
     assert v.findings == [] and "bolts" in v.checked
     bad = tmp_path / "bad"
@@ -350,3 +351,53 @@ def test_the_default_has_two_near_flat_panes():
     want = sorted(q.part_id for q in panels if _slope_of(q.corners_3d) < 2.0)
     assert [f.part_id for f in got] == want == ["P-U10-V07", "P-U11-V07"]
     assert all(0.5 < f.slope_deg < 2.0 for f in got)
+
+
+# -- splice holes in the beam pieces -------------------------------------------------------------------------
+
+
+def test_every_splice_bolt_hole_is_cut_in_the_beam_piece_under_it(built, tmp_path):
+    import ezdxf
+    from shapely.geometry import Point
+
+    b, out, _ = built
+    by_id = b.beams.by_id
+    splices = b.glazing.splices
+    assert len(splices) > 0
+    matched: dict[str, set[int]] = {}
+    for s in splices:
+        for q in s.frame.to3d(s.holes):
+            found = []
+            for pid in s.pieces:
+                piece = by_id[pid]
+                xy = piece.frame.to2d(q[None])[0]
+                d = np.linalg.norm(piece.holes[:, :2] - xy, axis=1) if len(piece.holes) else np.zeros(0)
+                inside = Polygon(piece.outline).contains(Point(xy))
+                hit = [int(k) for k in np.flatnonzero(d <= 0.01)]
+                assert bool(hit) == inside, (pid, xy)   # cut where (and only where) the piece's material is
+                for k in hit:
+                    assert piece.holes[k, 2] == s.hole
+                    matched.setdefault(pid, set()).add(k)
+                found += hit
+            assert len(found) == 1                      # in exactly one of the two pieces
+    holed = {p.part_id: len(p.holes) for p in b.beams.plates if len(p.holes)}
+    assert holed == {pid: len(ks) for pid, ks in matched.items()}       # and no other hole
+    assert sum(holed.values()) == sum(len(s.holes) for s in splices)
+    # the plate sheets carry them as CUT circles; verify maps them back and finds every one
+    circles = sum(len(ezdxf.readfile(p).modelspace().query('CIRCLE[layer=="CUT"]')) for p in _dxfs(out)
+                  if p.parent.name == "beams")
+    assert circles == sum(holed.values())
+    v = _verify(out, "splice_holes")
+    assert v.findings == [] and "splice_holes" in v.checked
+    bad = tmp_path / "bad"
+    shutil.copytree(out, bad)
+    sheet = next(p for p in _dxfs(bad) if p.parent.name == "beams" and
+                 len(ezdxf.readfile(p).modelspace().query('CIRCLE[layer=="CUT"]')))
+    doc = ezdxf.readfile(sheet)
+    circle = doc.modelspace().query('CIRCLE[layer=="CUT"]')[0]
+    circle.dxf.center = (circle.dxf.center[0] + 0.05, circle.dxf.center[1])
+    doc.saveas(sheet)
+    found = [str(f) for f in _verify(bad, "splice_holes").findings if f.element]
+    # the bolt hole of both cover plates (A and B) has no hole under it, and the moved hole is stray
+    assert len(found) == 3, found
+    assert sum("0.050 mm away" in f for f in found) == 2 and sum("no splice cover plate" in f for f in found) == 1

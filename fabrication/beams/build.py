@@ -45,8 +45,34 @@ class BeamSet:
 
 
 
+def with_splice_holes(plates: list[BeamPlate], splice_params) -> list[BeamPlate]:
+    """The plates with the bolt holes of every bolted splice (:func:`fabrication.glazing.splices.make_splices`) cut
+    in the pieces it joins: each cover plate hole, mapped from the first piece's frame through 3D into each
+    piece's own frame, in the piece whose outline holds it (the holes on its side of the cut), with the cover
+    plate's hole diameter."""
+    from dataclasses import replace
+
+    from shapely.geometry import Point, Polygon
+
+    from ..glazing.splices import make_splices
+
+    extra: dict[str, list[np.ndarray]] = {}
+    by_id = {p.part_id: p for p in plates}
+    for s in make_splices(plates, splice_params):
+        at3 = s.frame.to3d(s.holes)
+        for pid in s.pieces:
+            piece = by_id[pid]
+            body = Polygon(piece.outline)
+            xy = piece.frame.to2d(at3)
+            inside = np.array([body.contains(Point(q).buffer(0.5 * s.hole)) for q in xy], dtype=bool)
+            extra.setdefault(pid, []).append(np.c_[xy[inside], np.full(int(inside.sum()), s.hole)])
+    return [replace(p, holes=np.concatenate([p.holes, *extra[p.part_id]])) if p.part_id in extra else p
+            for p in plates]
+
+
 def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
-                max_height: float = 0.0, splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> BeamSet:
+                max_height: float = 0.0, splice_clearances: SpliceClearances = (("bolted", 0.0),),
+                splice_params=None) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
@@ -61,6 +87,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     splice_clearances : the splice kinds a split beam may get, in order, each with how much further (mm) than
         the joints need its cuts stay from a node (:mod:`fabrication.glazing.splices`); a beam takes the first
         kind its cuts fit with (``meta["splice"]`` of its pieces)
+    splice_params : the ``[splices]`` table; given, the bolt holes of the bolted splices are cut in the pieces
+        they join (:func:`with_splice_holes`)
 
     Returns
     -------
@@ -78,6 +106,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     joints, trims, slots, jdef = analyse_nodes(plates, support, params)
     defects += jdef
     final = [apply_joints(p, trims.get(p.part_id, []), slots.get(p.part_id, []), params, defects) for p in plates]
+    if splice_params is not None:
+        final = with_splice_holes(final, splice_params)
     for p in final:
         defects += plate_checks(p, params)
     types = type_ids(final)

@@ -4,7 +4,8 @@ The flat outline of a plate is its outline in its own 2D frame (slots and end
 cuts included), so placing the part on a sheet and mapping it back into the
 structure use the same coordinates; the frame (origin, x and y directions) is
 recorded in ``meta['frame']``.  Node axes are drawn as marking lines (layer
-``MARK``), clipped to the material (a half-lap slot removes half of its axis).
+``MARK``), clipped to the material (a half-lap slot removes half of its axis).  The bolt holes of the splices
+at a piece's ends are :attr:`HoledPart.holes` (cut as circles).
 """
 
 from __future__ import annotations
@@ -12,10 +13,20 @@ from __future__ import annotations
 import numpy as np
 from shapely.geometry import LineString, Polygon
 
+from dataclasses import dataclass, field
+
 from fabrication.flatpart import FlatPart
 from ppfab.metrics import polygon_area
 
 from .plates import BeamPlate
+
+
+@dataclass(frozen=True, eq=False)
+class HoledPart(FlatPart):
+    """A flat part with round holes cut inside its outline: ``holes`` ``(h, 3)`` centre ``x, y`` (part frame) and
+    diameter, mm; the DXF writers cut them as circles on ``CUT``."""
+
+    holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 def axis_marks(plate: BeamPlate, min_length: float = 1.0) -> tuple[np.ndarray, ...]:
@@ -65,7 +76,7 @@ def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
     keys: dict[tuple, str] = {}
     out = {}
     for p in plates:
-        k = congruence_key(p.outline, mirror)
+        k = (congruence_key(p.outline, mirror), len(p.holes))      # a piece with splice holes is its own type
         if k not in keys:
             keys[k] = f"BT{len(keys) + 1:03d}"
         out[p.part_id] = keys[k]
@@ -83,8 +94,11 @@ def flat_part(plate: BeamPlate, material: str = "", density: float = 0.0, type_i
         "pieces": plate.n_pieces, "nodes": plate.nodes.tolist(), "slots": len(plate.slots),
         "frame": plate.frame.as_dict(), "plane": plate.plane.tolist(),
     }
-    return FlatPart(plate.part_id, "beam", plate.outline.copy(), marks=axis_marks(plate), label=plate.part_id,
-                    type_id=type_id, rotations=None, mirror_allowed=True, meta=meta)
+    if len(plate.holes):
+        meta["holes"] = len(plate.holes)
+        meta["hole_mm"] = float(plate.holes[0, 2])
+    return HoledPart(plate.part_id, "beam", plate.outline.copy(), marks=axis_marks(plate), label=plate.part_id,
+                     type_id=type_id, rotations=None, mirror_allowed=True, meta=meta, holes=plate.holes.copy())
 
 
 def flat_parts(plates: list[BeamPlate], material: str = "", density: float = 0.0,

@@ -16,8 +16,8 @@ line.  For plate thickness ``t`` and the angle ``θ`` between the two planes:
   from it so it clears every other plate there — ``(t/2)(1 + |cos θ|)/sin θ`` from a
   plate running through (same geometry as the slot), ``(t/2)·cot(φ/2)`` from
   another ending plate at angle ``φ`` between the two (the bisector then separates
-  them) — plus half the clearance (``t`` and clearance as for the slots).  Segmented joints (P meshes) are butt joints of
-  the segments against the continuous beam.
+  them) — plus half the clearance (``t`` and clearance as for the slots).  Segmented
+  joints (P meshes) are butt joints of the segments against the continuous beam.
 * **none**: plain intersecting plates, nothing cut.
 
 Outlines are built in each plate's 2D frame with 2D polygon booleans (shapely) and

@@ -123,6 +123,8 @@ class BeamPlate:
     outline : (q, 2) CCW outline with end cuts and slots; ``body``: before the slots
     slots : half-lap slots; ``trims``: ``(vertex, distance mm)`` end cuts set back from the node axis
     plane_deviation : largest distance of the plate's mesh vertices from ``plane``, mm
+    holes : (h, 3) bolt holes cut in the plate: centre ``x, y`` in the frame and diameter, mm (the holes of the
+        bolted splices at its ends, :func:`fabrication.beams.build.with_splice_holes`)
     """
 
     part_id: str
@@ -146,6 +148,7 @@ class BeamPlate:
     slots: tuple[Slot, ...] = ()
     trims: tuple[tuple[int, float], ...] = ()
     meta: dict = field(default_factory=dict)
+    holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def raw_outline(self) -> np.ndarray:

@@ -94,7 +94,8 @@ class BoltSet:
         """The ``bolts.csv`` row (columns :data:`BOLT_COLUMNS`)."""
         std = "EN 14399-3 HR" if self.preloaded else "ISO 4014"
         nut = f"{'EN 14399-3' if self.preloaded else 'ISO 4032'} {self.size} m={self.nut_mm:g}"
-        washer = f"{self.washers} x {'EN 14399-6' if self.preloaded else 'ISO 7089'} {self.size[1:]} h={self.washer_mm:g}"
+        kind = "EN 14399-6" if self.preloaded else "ISO 7089"
+        washer = f"{self.washers} x {kind} {self.size[1:]} h={self.washer_mm:g}"
         return {"splice": self.splice, "beam": self.beam, "pieces": f"{self.pieces[0]};{self.pieces[1]}",
                 "bolt": f"{std} {self.size}x{self.length_mm} {self.grade}", "size": self.size, "grade": self.grade,
                 "length_mm": self.length_mm, "grip_mm": round(self.grip_mm, 3), "washers": washer, "nut": nut,

@@ -196,7 +196,7 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
                                               "set beams.max_length to at most the usable length")
     usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
     beams = build_beams(support, params, strict=True, max_height=usable_width,
-                        splice_clearances=design.splices.clearances(params.depth))
+                        splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices)
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams

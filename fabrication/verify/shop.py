@@ -11,15 +11,21 @@ every DXF ppfab writes.
   (a splice DXF names the cover plate type: the rows of that ``type_id``); the header custom properties
   ``PPFAB_MATERIAL``/``PPFAB_THICKNESS_MM`` (R2004 and later) and the title on ``LABEL`` name the distinct values
   of the parts on the file.
+* ``splice_holes``: every bolt hole of a cover plate in ``splices.step`` is cut in one of the two beam pieces it
+  joins (a CUT circle of their plate sheet, mapped back through the placement and frame of ``parts.csv``) within
+  0.01 mm and with ``hole_mm``; no piece has a hole of no splice.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ..contract import BOLTS_CSV, STOCK_HEADER_VARS, stock_title, thickness_text
 from ..glazing.bolts import BOLT_COLUMNS, BoltSpec, bolt_set
 from . import Verification, check, read_csv
+from ._shapes import frame_of, to_frame
 
 DXF_FILE_KEYS = ("glass_sheets", "beam_sheets", "panel_type_dxfs", "splice_dxfs", "dxf_r12", "dxf_r2000")
 """The ``files`` entries of the manifest that list DXF files."""
@@ -161,3 +167,103 @@ def check_dxf_stock(v: Verification) -> None:
                 if have != value:
                     v.error(rel, f"header {name}", f"{have!r}, the parts on it are {value!r} (parts.csv)")
     v.checked.append("dxf_stock")
+
+
+HOLE_TOL = 0.01
+"""How far (mm) a beam piece's hole may be from the cover plate's hole it takes the bolt of."""
+
+
+def _unplace(points: np.ndarray, row: dict) -> np.ndarray:
+    """Sheet points back into the part's own frame: the inverse of ``R(rotation)·M·p + (x, y)`` of parts.csv."""
+    a = np.radians(float(row["rotation_deg"]))
+    c, s = np.cos(a), np.sin(a)
+    rot = np.array([[c, -s], [s, c]])
+    p = (np.asarray(points, dtype=float) - np.array([float(row["x"]), float(row["y"])])) @ rot
+    if str(row.get("mirrored", "")) in ("1", "True", "true"):
+        p[:, 0] = -p[:, 0]
+    return p
+
+
+def _cover_holes(solid, frame: dict) -> np.ndarray:
+    """Centres ``(h, 2)`` of the round holes of a cover plate solid, in a beam plate's frame (both rims of a
+    hole project onto one centre)."""
+    centres = [e.arc_center for e in solid.edges() if str(e.geom_type).endswith("CIRCLE")]
+    if not centres:
+        return np.zeros((0, 2))
+    xy = to_frame(np.array([[c.X, c.Y, c.Z] for c in centres]), frame)[:, :2]
+    out: list[np.ndarray] = []
+    for q in xy:
+        if all(np.linalg.norm(q - o) > 1e-6 for o in out):
+            out.append(q)
+    return np.array(out)
+
+
+@check("splice_holes", 61)
+def check_splice_holes(v: Verification) -> None:
+    """Every bolt hole of a cover plate (splices.step) is cut in one of the two beam pieces it joins (CUT circles
+    of the plate sheets, mapped back through placement and frame into 3D) within :data:`HOLE_TOL`, with
+    ``hole_mm``; a piece has no hole that no cover plate of its splices has."""
+    import ezdxf
+
+    m = v.data.get("manifest", {})
+    files = m.get("files", {})
+    parts = v.data.get("parts")
+    rel = files.get("splices_step")
+    if parts is None or rel is None:
+        return
+    from ._step_read import read_or_report
+
+    read = read_or_report(v, rel)
+    if read is None:
+        return
+    solids = {s.name: s.solid for s in read}
+    by_id = {r["part_id"]: r for r in parts}
+    sheets = {r.get("sheet_file") for r in parts if r.get("kind") == "beam" and r.get("sheet_file")}
+    cut: dict[str, list[tuple[np.ndarray, float]]] = {}          # piece → (centre in 3D, diameter)
+    for sheet in sorted(sheets):
+        try:
+            doc = ezdxf.readfile(v.folder / sheet)
+        except (OSError, ezdxf.DXFError) as exc:
+            v.error(sheet, "", f"cannot be read ({exc})")
+            continue
+        for e in doc.modelspace().query('CIRCLE[layer=="CUT"]'):
+            x = dict(str(t.value).split("=", 1) for t in e.get_xdata("PPFAB")) if e.has_xdata("PPFAB") else {}
+            pid = x.get("part_id", "")
+            frame = frame_of(by_id[pid]) if pid in by_id else None
+            if frame is None:
+                continue                          # the dxf check names CUT entities of no part
+            c = e.dxf.center
+            q = _unplace(np.array([[c[0], c[1]]]), by_id[pid])[0]
+            cut.setdefault(pid, []).append((frame["origin"] + q[0] * frame["x_dir"] + q[1] * frame["y_dir"],
+                                            2.0 * float(e.dxf.radius)))
+    used: dict[str, set[int]] = {}
+    for r in parts:
+        if r.get("kind") != "splice":
+            continue
+        solid = solids.get(r["part_id"])
+        pieces = (r.get("joins") or "").split(";")
+        frame = frame_of(by_id[pieces[0]]) if pieces[0] in by_id else None
+        if solid is None or len(pieces) != 2 or frame is None:
+            continue                               # the splices check names a missing solid or join
+        d0 = float(r.get("hole_mm") or 0.0)
+        mine = [(pid, k, to_frame(c[None], frame)[0, :2], d)
+                for pid in pieces for k, (c, d) in enumerate(cut.get(pid, []))]
+        for q in _cover_holes(solid, frame):
+            dist = [float(np.linalg.norm(q - c)) for _, _, c, _ in mine]
+            k = int(np.argmin(dist)) if dist else -1
+            if k < 0 or dist[k] > HOLE_TOL:
+                far = f"the nearest is {dist[k]:.3f} mm away" if dist else "they have no holes"
+                v.error(by_id[pieces[0]].get("sheet_file") or "parts.csv", f"{pieces[0]}/{pieces[1]}",
+                        f"no hole at the bolt hole ({q[0]:.2f}, {q[1]:.2f}) of {r['part_id']} ({far})")
+                continue
+            pid, j, _, d = mine[k]
+            used.setdefault(pid, set()).add(j)
+            if abs(d - d0) > 1e-6:
+                v.error(by_id[pid].get("sheet_file") or "parts.csv", pid,
+                        f"hole at ({q[0]:.2f}, {q[1]:.2f}) is {d:g} mm, {r['part_id']} has {d0:g} mm")
+    for pid, holes in sorted(cut.items()):
+        stray = len(holes) - len(used.get(pid, set()))
+        if stray:
+            v.error(by_id[pid].get("sheet_file") or "parts.csv", pid,
+                    f"{stray} hole(s) that no splice cover plate of the piece has")
+    v.checked.append("splice_holes")

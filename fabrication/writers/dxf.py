@@ -5,7 +5,8 @@ origin at the sheet's lower-left corner; layers
 
 * ``SHEET`` — the stock outline, ``TRIM`` — the usable area after edge trim,
 * ``CUT`` — one closed ``LWPOLYLINE`` per part in sheet coordinates, carrying XDATA under
-  the application id ``PPFAB``: ``part_id=…``, ``nest_tag=…``, ``kind=…``, ``type_id=…``,
+  the application id ``PPFAB``: ``part_id=…``, ``nest_tag=…``, ``kind=…``, ``type_id=…``; a beam piece's splice
+  bolt holes as ``CIRCLE`` entities (XDATA ``part_id=…``, ``hole_mm=…``),
 * ``LABEL`` — part id and nest tag as TEXT (never machined),
 * ``MARK`` — marking on the face that looks up from the sheet: lines (reference corner of a panel, node axes of
   a beam) and, on a beam plate, its id and face mark as TEXT (XDATA ``part_id=…``, ``mark=id|face``),
@@ -205,6 +206,14 @@ class CuttingSheet:
         tag = placement.nest_tag if placement is not None else ""
         cut.set_xdata(XDATA_APPID, xdata_strings(part.part_id, tag, part.kind, part.type_id)
                       + stock_xdata(str(part.meta.get("material", "")), part.meta.get("thickness_mm", "")))
+        holes = np.asarray(getattr(part, "holes", np.zeros((0, 3))), dtype=float).reshape(-1, 3)
+        circles = []
+        for x, y, d in holes.tolist():
+            c = to_sheet(np.array([[x, y]]))[0]
+            hole = self.msp.add_circle((float(c[0]), float(c[1])), 0.5 * d, dxfattribs={"layer": "CUT"})
+            hole.set_xdata(XDATA_APPID, [(1000, f"part_id={part.part_id}"), (1000, f"hole_mm={d:g}")])
+            t = np.linspace(0.0, 2.0 * np.pi, 17)
+            circles.append(c + (0.5 * d + 1.0) * np.c_[np.cos(t), np.sin(t)])
         marks = [to_sheet(m) for m in part.marks]
         for pts in marks:
             if len(pts) >= 2:
@@ -215,7 +224,7 @@ class CuttingSheet:
         cap = PLATE_TEXT_MAX if part.kind == "beam" else PANEL_TEXT_MAX
         where = place_label(outline, lines, margin=float(np.clip(0.05 * short, 2.0, 40.0)),
                             max_height=float(np.clip(0.15 * short, 2.0, cap)), min_height=2.0,
-                            keep_out=tuple(marks) if part.kind == "beam" else ())
+                            keep_out=tuple(marks) + tuple(circles) if part.kind == "beam" else ())
         from ezdxf.enums import TextEntityAlignment
 
         for pl in where.lines:
@@ -293,6 +302,15 @@ class DXFPart:
     xdata: dict
 
 
+@dataclass(frozen=True)
+class DXFHole:
+    """A CIRCLE on CUT inside a part: the part id of its XDATA, its centre ``(2,)`` and diameter."""
+
+    part_id: str
+    centre: np.ndarray
+    diameter: float
+
+
 @dataclass
 class DXFText:
     """A TEXT entity: its layer, text, middle-centre point ``(2,)`` (the insert for left-aligned text), height,
@@ -338,6 +356,7 @@ class DXFContent:
     back_marks: int = 0
     mark_lines: list[tuple[str, np.ndarray]] = field(default_factory=list)
     dimension_texts: list[DXFDimension] = field(default_factory=list)
+    holes: list[DXFHole] = field(default_factory=list)
 
 
 def _xdata(entity) -> dict:
@@ -363,6 +382,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     texts: list[DXFText] = []
     mark_lines: list[tuple[str, np.ndarray]] = []
     dim_texts: list[DXFDimension] = []
+    holes: list[DXFHole] = []
     back = 0
     sheet = trim = None
     e: Any
@@ -400,6 +420,9 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             texts.append(DXFText(layer, e.dxf.text, np.array([where[0], where[1]], dtype=float), float(e.dxf.height),
                                  float(e.dxf.get("rotation", 0.0)), bool(int(e.dxf.get("text_generation_flag", 0)) & 2),
                                  _xdata(e)))
+        elif kind == "CIRCLE" and layer == "CUT" and _xdata(e).get("part_id"):
+            c = e.dxf.center
+            holes.append(DXFHole(_xdata(e)["part_id"], np.array([c[0], c[1]], dtype=float), 2.0 * float(e.dxf.radius)))
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
             block = doc.blocks.get(e.dxf.get("geometry", "")) if e.dxf.get("geometry") else None
@@ -408,7 +431,8 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
         else:
             other.append(f"{kind} on {layer}")
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
-                      parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts)
+                      parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts,
+                      holes)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
