@@ -130,6 +130,8 @@ def test_bad_value_fails_alone_with_its_message(tmp_path):
     # the command line exits 0 when some variants were built; a rerun does not try the failed one again
     assert main(["sweep", str(spec), "-o", str(out), "--quiet"]) == 0
     assert len(read_rows(out)) == 3
+    again = local(spec, out, retry_failed=True)              # only the failed one is tried again
+    assert (again.computed, again.failed) == (1, 1)
     # only failures: exit 1
     spec.write_text(spec.read_text().replace("[10.0, -5.0, 20.0]", "[-5.0, -6.0]"))
     assert main(["sweep", str(spec), "-o", str(tmp_path / "res2"), "--quiet"]) == 1
