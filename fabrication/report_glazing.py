@@ -42,7 +42,8 @@ def glazing_sections(rep: "HtmlReport", build: "Build", repetition: dict[str, An
         if g.splices:
             rep.paragraph(f"{len(g.splices)} splices: at every cut of a split beam two {sp.plate_thickness:g} mm "
                           f"cover plates with {len(g.splices[0].holes)} × {sp.bolt} bolts in {sp.hole:g} mm holes "
-                          "(splices.step, splices/*.dxf; the beam pieces are drilled through the cover plates).")
+                          "(splices.step, splices/*.dxf; the same holes are cut in the beam pieces, bolts.csv lists the bolt "
+                          "sets).")
             rep.table(["cover plates", "beam", "joins"],
                       [(" / ".join(s.part_ids), s.beam_id, " + ".join(s.pieces)) for s in g.splices[:12]],
                       left=(0, 1, 2))

@@ -20,8 +20,8 @@ and squared to the beam's top edge there: in the beam plate's 2D frame, with ``c
 through the joined pieces' outlines at nine stations).  Bolt holes lie in ``rows × 2·cols`` positions:
 ``cols`` columns each side of the cut at ``e1 + k·p1`` from it, rows evenly between ``e2`` from the cover
 plate's edges.  Spacing and edge distances follow EN 1993-1-8 Table 3.3 (``e1, e2 ≥ 1.2 d0``,
-``p1 ≥ 2.2 d0``, ``p2 ≥ 2.4 d0``, ``d0`` the hole diameter); the beam pieces are drilled through the cover
-plates at trial assembly (match drilling), so their holes are marked, not cut.  Two cover plates of
+``p1 ≥ 2.2 d0``, ``p2 ≥ 2.4 d0``, ``d0`` the hole diameter); the same holes are cut in the beam pieces,
+each in the piece on its side of the cut (:func:`fabrication.beams.build.with_splice_holes`).  Two cover plates of
 thickness ``t_c`` with ``2 t_c ≥ t`` carry at least the beam plate's section.
 """
 
