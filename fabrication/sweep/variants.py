@@ -70,10 +70,23 @@ def _combinations(spec: SweepSpec) -> list[tuple[Any, ...]]:
             raise DesignError("vary", f"the grid has {n} variants, more than {MAX_VARIANTS}; use sample = \"lhs\" "
                                       f"with samples = N (in {spec.source})")
         return list(itertools.product(*(a.values for a in axes)))
-    from scipy.stats import qmc
-
-    u = qmc.LatinHypercube(d=len(axes), seed=spec.seed).random(spec.samples)
+    u = latin_hypercube(spec.samples, len(axes), spec.seed)
     return [tuple(_pick(a, float(x)) for a, x in zip(axes, row)) for row in u]
+
+
+def latin_hypercube(n: int, d: int, seed: int) -> Any:
+    """``(n, d)`` points in [0, 1): in every dimension, each of the ``n`` strata ``[k/n, (k+1)/n)`` holds
+    exactly one point (a random permutation of the strata, a uniform position inside each); seeded.
+
+    >>> u = latin_hypercube(5, 2, seed=0)
+    >>> sorted((u[:, 0] * 5).astype(int).tolist()), sorted((u[:, 1] * 5).astype(int).tolist())
+    ([0, 1, 2, 3, 4], [0, 1, 2, 3, 4])
+    """
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    strata = np.stack([rng.permutation(n) for _ in range(d)], axis=1)
+    return (strata + rng.random((n, d))) / n
 
 
 def _pick(axis: Axis, u: float) -> Any:
