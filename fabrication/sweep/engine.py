@@ -10,6 +10,8 @@ cancels what is left; every row written before it stays, and a rerun computes on
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import logging
 import os
 import sys
@@ -69,7 +71,12 @@ def cores() -> int:
         return os.cpu_count() or 1
 
 
-def _client(scheduler: str | None, workers: int | None, processes: bool) -> tuple[Any, Any]:
+CONNECT_TIMEOUT_S = 20.0
+"""How long a client tries to reach a scheduler given by ``--scheduler`` before giving up."""
+
+
+def _client(scheduler: str | None, workers: int | None, processes: bool,
+            timeout: float = CONNECT_TIMEOUT_S) -> tuple[Any, Any]:
     """``(client, cluster)``: a client of the scheduler at ``scheduler``, or of a new LocalCluster of
     ``workers`` single-threaded workers (``cluster`` is ``None`` for an existing scheduler)."""
     from distributed import Client, LocalCluster
@@ -79,7 +86,7 @@ def _client(scheduler: str | None, workers: int | None, processes: bool) -> tupl
             logging.getLogger(name).setLevel(logging.ERROR)
     if scheduler:
         try:
-            return Client(scheduler, timeout="20s"), None
+            return Client(scheduler, timeout=f"{timeout}s"), None
         except (OSError, TimeoutError) as exc:
             raise SchedulerError(f"cannot reach the Dask scheduler at {scheduler} ({' '.join(str(exc).split())}); "
                                  "start one with `dask scheduler` and workers with `dask worker ADDRESS`") from None
@@ -104,7 +111,8 @@ def _lost(exc: BaseException, key: str) -> VariantResult:
 
 def run_sweep(spec: SweepSpec, out: str | os.PathLike, scheduler: str | None = None, workers: int | None = None,
               processes: bool = True, retry_failed: bool = False, quiet: bool = False,
-              on_row: Callable[[dict[str, Any]], None] | None = None) -> SweepReport:
+              on_row: Callable[[dict[str, Any]], None] | None = None,
+              connect_timeout: float = CONNECT_TIMEOUT_S) -> SweepReport:
     """Run every variant of ``spec`` not yet in ``out``'s table and write the results (see the module
     docstring); returns a :class:`SweepReport`.  ``on_row`` is called with each new row once it is written.
     A second sweep into the same folder at the same time is refused (:class:`~fabrication.pipeline.lock.OutputLock`)."""
@@ -114,12 +122,13 @@ def run_sweep(spec: SweepSpec, out: str | os.PathLike, scheduler: str | None = N
     t0 = time.perf_counter()
     variants = make_variants(spec)
     with OutputLock(out):                      # one sweep at a time per results folder
-        return _run_locked(spec, out, variants, t0, scheduler, workers, processes, retry_failed, quiet, on_row)
+        return _run_locked(spec, out, variants, t0, scheduler, workers, processes, retry_failed, quiet, on_row,
+                           connect_timeout)
 
 
 def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant], t0: float,
                 scheduler: str | None, workers: int | None, processes: bool, retry_failed: bool, quiet: bool,
-                on_row: Callable[[dict[str, Any]], None] | None) -> SweepReport:
+                on_row: Callable[[dict[str, Any]], None] | None, connect_timeout: float) -> SweepReport:
     from .htmlpage import index_html
 
     folder = ResultsFolder.open(out, inputs=[spec.source, spec.base])
@@ -132,8 +141,8 @@ def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant]
     base_dir = str(spec.base.resolve().parent)
     computed = 0
     if todo:
-        computed = _compute(spec, todo, folder, rows, scheduler, workers, processes, quiet, base_dir,
-                            build_root, on_row)
+        computed = _compute(spec, todo, folder, rows, (scheduler, workers, processes, connect_timeout), quiet,
+                            base_dir, build_root, on_row)
     keys = {v.key for v in variants}
     mine = [r for r in rows.values() if r["variant"] in keys]
     title = f"Sweep {spec.source.name}: {len(variants)} variants of {spec.base.name}"
@@ -147,13 +156,14 @@ def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant]
 
 
 def _compute(spec: SweepSpec, todo: list[Variant], folder: ResultsFolder, rows: dict[str, dict[str, Any]],
-             scheduler: str | None, workers: int | None, processes: bool, quiet: bool, base_dir: str,
+             cluster_args: tuple[str | None, int | None, bool, float], quiet: bool, base_dir: str,
              build_root: Path, on_row: Callable[[dict[str, Any]], None] | None) -> int:
-    """Submit ``todo`` to the cluster and write each row as its task finishes; returns how many finished."""
+    """Submit ``todo`` to the cluster (``cluster_args``: scheduler, workers, processes, connect timeout) and
+    write each row as its task finishes; returns how many finished."""
     from distributed import as_completed
     from tqdm import tqdm
 
-    client, cluster = _client(scheduler, workers, processes)
+    client, cluster = _client(*cluster_args)
     bar = tqdm(total=len(todo), desc="sweep", unit="variant", disable=quiet, file=sys.stderr,
                dynamic_ncols=True)
     failed = done = 0
@@ -169,8 +179,8 @@ def _compute(spec: SweepSpec, todo: list[Variant], folder: ResultsFolder, rows: 
             key = str(fut.key).removeprefix("ppfab-variant-")
             try:
                 result = fut.result()
-            except Exception as exc:         # the task itself never raises; this is the cluster's doing
-                result = _lost(exc, key)
+            except (Exception, asyncio.CancelledError, concurrent.futures.CancelledError) as exc:
+                result = _lost(exc, key)     # the task itself never raises: this is the cluster's doing
             variant = by_key[result.key]
             folder.write_design(variant.key, design_text(variant.doc, _comment(spec, variant)))
             row = make_row(variant, result, spec.stage)
