@@ -57,8 +57,11 @@ def test_slots_of_crossing_beams_share_the_node_axis_in_the_step_file(pp_step):
             n = p.plane[:3]
             across = np.cross(n, a)
             across /= np.linalg.norm(across)
-            # the closed end of the slot: four corners predicted from the node axis alone
-            pred = np.array([v + 0.5 * d * a + sw * 0.5 * j.slot_width * across + sn * 0.5 * t * n
+            # the closed end of the slot (slot_play past half the depth from its edge): four corners predicted
+            # from the node axis alone
+            sl = next(x for x in p.slots if x.node == j.vertex)
+            at = 0.5 * d + (bs.params.slot_play if sl.from_top else -bs.params.slot_play)
+            pred = np.array([v + at * a + sw * 0.5 * j.slot_width * across + sn * 0.5 * t * n
                              for sw in (-1, 1) for sn in (-1, 1)])
             x = verts[pid]
             gap = np.linalg.norm(x[None, :, :] - pred[:, None, :], axis=2).min(axis=1)

@@ -401,3 +401,25 @@ def test_every_splice_bolt_hole_is_cut_in_the_beam_piece_under_it(built, tmp_pat
     # the bolt hole of both cover plates (A and B) has no hole under it, and the moved hole is stray
     assert len(found) == 3, found
     assert sum("0.050 mm away" in f for f in found) == 2 and sum("no splice cover plate" in f for f in found) == 1
+
+
+def test_beams_step_carries_the_splice_holes(built):
+    from fabrication.verify._step_read import read_step_solids
+
+    b, out, _ = built
+    holed = [p for p in b.beams.plates if len(p.holes)]
+    assert holed
+    solids = {s.name: s.solid for s in read_step_solids(out / "beams.step")}
+    for p in holed:
+        s = solids[p.part_id]
+        cylinders = [f for f in s.faces() if str(f.geom_type).endswith("CYLINDER")]
+        assert len(cylinders) == len(p.holes)
+        # the rims of the holes: circles centred on the holes, on both faces
+        rims = [e for e in s.edges() if str(e.geom_type).endswith("CIRCLE")]
+        assert len(rims) >= 2 * len(p.holes)
+        for e in rims:
+            c = np.array(tuple(e.arc_center))
+            xy = p.frame.to2d(c[None])[0]
+            assert float(np.linalg.norm(p.holes[:, :2] - xy, axis=1).min()) < 1e-6
+        net = p.area - len(p.holes) * np.pi / 4 * 22.0 ** 2
+        assert s.volume == pytest.approx(net * p.thickness, rel=1e-6)

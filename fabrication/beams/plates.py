@@ -165,6 +165,11 @@ class BeamPlate:
         """Area of the final outline, mm²."""
         return float(polygon_area(self.outline))
 
+    @property
+    def net_area(self) -> float:
+        """Area of the plate less its bolt holes, mm² (its solid's volume is this × thickness)."""
+        return self.area - float(np.pi / 4.0 * np.sum(self.holes[:, 2] ** 2))
+
     def node_top(self, vertex: int) -> np.ndarray:
         """Top point (2D) of a node of this plate."""
         k = int(np.flatnonzero(self.nodes == vertex)[0])

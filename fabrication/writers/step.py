@@ -93,12 +93,34 @@ def _colour(layer: str):
 
 
 def plate_solid(plate: BeamPlate):
-    """The solid of one plate: its outline extruded once, thickness centred on the support plane, in the colour
-    of its family."""
+    """The solid of one plate: its outline extruded once, thickness centred on the support plane, less its bolt
+    holes (:attr:`~fabrication.beams.plates.BeamPlate.holes`, cylinders cut through it), in the colour of its
+    family."""
     t = plate.thickness
     solid = _placed_prism(plate.outline, plate.frame, -0.5 * t, t, plate.part_id)
+    if len(plate.holes):
+        solid = _drilled(solid, plate, t)
     solid.color = _colour(FAMILY_NAMES[plate.family])
     return solid
+
+
+def _drilled(solid, plate: BeamPlate, t: float):
+    """``solid`` with a cylinder of each hole's diameter cut through its thickness (true circles)."""
+    from build123d import Solid
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    shape = solid.wrapped
+    f = plate.frame
+    n = gp_Dir(*map(float, f.normal))
+    for x, y, d in plate.holes.tolist():
+        p = f.origin + x * f.ex + y * f.ey - (0.5 * t + 1.0) * f.normal
+        tool = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(*map(float, p)), n), 0.5 * d, t + 2.0).Shape()
+        shape = BRepAlgoAPI_Cut(shape, tool).Shape()
+    out = Solid(shape)
+    out.label = plate.part_id
+    return out
 
 
 def build_solids(plates: Sequence[BeamPlate], check: bool = True) -> list:
@@ -243,7 +265,7 @@ def check_step(path: str | os.PathLike, plates: Sequence[BeamPlate], tol: float 
     Checks: one solid per plate, names equal to the part ids, every solid valid,
     every vertex of a solid at distance ``t/2 ± tol`` from its support plane on
     both sides (a plate of the given thickness centred on the plane), and volume
-    ``= outline area × t`` (relative 1e-6).
+    ``= (outline area − bolt holes) × t`` (relative 1e-6).
 
     Parameters
     ----------
@@ -272,7 +294,7 @@ def check_step(path: str | os.PathLike, plates: Sequence[BeamPlate], tol: float 
         if err > tol or not (np.any(dist > 0) and np.any(dist < 0)):
             res.thickness_error[name] = err
         res.max_thickness_error = max(res.max_thickness_error, err)
-        vol_err = abs(s.volume - p.area * t) / max(p.area * t, 1e-300)
+        vol_err = abs(s.volume - p.net_area * t) / max(p.net_area * t, 1e-300)
         if vol_err > 1e-6:
             res.volume_error[name] = vol_err
     return res
