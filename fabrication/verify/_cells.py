@@ -127,6 +127,13 @@ def numbers_shape(n: int) -> Callable[[Any], str | None]:
     return test
 
 
+def plane_shape(value: Any) -> str | None:
+    """A :meth:`CellReader.json` shape: a plane ``[a, b, c, d]`` (``a x + b y + c z + d = 0``) whose normal is
+    not zero."""
+    ok = is_vector(value, 4) and any(float(x) != 0.0 for x in value[:3])
+    return None if ok else "a plane [a, b, c, d] with a normal (a, b, c) that is not zero"
+
+
 def ints_shape(value: Any) -> str | None:
     """A :meth:`CellReader.json` shape: a list of integers."""
     ok = isinstance(value, list) and all(isinstance(x, int) and not isinstance(x, bool) for x in value)

@@ -61,6 +61,24 @@ FLAT_ALIASES = {"panel_gap": "panels.gap", "planarity_tolerance": "panels.planar
 (:func:`fabrication.writers.manifest.fabrication_params`); every ``beam_<key>`` is ``beams.<key>``."""
 
 
+def _defaults() -> dict[str, Any]:
+    """Section → its parameters at their defaults (plain values), and the flat keys as the writer derives them
+    from those."""
+    from ppfab.schema import as_plain, parse_params
+
+    from ..design import SECTION_DEFAULTS, Design, DesignInfo, _section_types
+    from ..writers.manifest import fabrication_params
+
+    types = _section_types()
+    records: dict[str, Any] = {name: parse_params(types[name](), dict(SECTION_DEFAULTS.get(name, {})), name)
+                               for name in FABRICATION_SECTIONS}
+    design = Design(source="", sha256="", base_dir=Path("."), info=DesignInfo(), geometry=None,  # type: ignore[arg-type]
+                    sections=records)
+    out = fabrication_params(design)
+    out.update({name: as_plain(records[name]) for name in FABRICATION_SECTIONS})
+    return out
+
+
 def _hints() -> dict[str, dict[str, Any]]:
     """Section → key → the type hint of its parameter (the dataclass fields of the section's record)."""
     import typing
@@ -123,14 +141,14 @@ def _equal(a: Any, b: Any) -> bool:
 
 
 def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
-    """``fab`` without the values of the wrong type (a finding naming each key: a later check reads the
-    parameter's default); every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
+    """``fab`` with every value of the wrong type (a finding naming its key) replaced by the parameter's
+    default, for the later checks; every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
     Types are judged by the parameter records' type hints, not by parsing: a build of an older version keeps
     verifying when a newer one tightens a parameter's limits."""
     if not isinstance(fab, dict):
         v.error("manifest.json", "fabrication", f"must be an object, got {type(fab).__name__}")
         return {}
-    hints = _hints()
+    hints, defaults = _hints(), _defaults()
     aliases = dict(FLAT_ALIASES)
     aliases.update({k: f"beams.{k[5:]}" for k in fab if k.startswith("beam_") and k[5:] in hints["beams"]})
     out: dict[str, Any] = {}
@@ -138,22 +156,24 @@ def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
         if key in hints:
             if not isinstance(value, dict):
                 v.error("manifest.json", f"fabrication.{key}", f"must be an object, got {value!r}"[:200])
-                out[key] = {}
+                out[key] = dict(defaults[key])
                 continue
             section = {}
             for k, x in value.items():
                 if k in hints[key] and not _accepts(x, hints[key][k]):
                     v.error("manifest.json", f"fabrication.{key}.{k}",
                             f"{x!r} is not {_name(hints[key][k])}"[:200])
-                    continue                                 # the later checks read the default
-                section[k] = x
+                    x = defaults[key].get(k)                 # the later checks read the default
+                if x is not None:
+                    section[k] = x
             out[key] = section
             continue
         name, _, sub = aliases.get(key, "").partition(".")
         if name and sub in hints[name] and not _accepts(value, hints[name][sub]):
             v.error("manifest.json", f"fabrication.{key}", f"{value!r} is not {_name(hints[name][sub])}"[:200])
-            continue
-        out[key] = value
+            value = defaults.get(key)
+        if value is not None:
+            out[key] = value
     for flat, path in aliases.items():
         name, key = path.split(".")
         part = out.get(name)

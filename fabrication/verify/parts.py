@@ -13,7 +13,7 @@ from typing import Any
 
 from ..contract import PART_KINDS, PARTS_CONTRACT_COLUMNS as PARTS_COLUMNS
 from . import Verification, check, read_csv
-from ._cells import CellReader, frame_shape, ints_shape, numbers_shape
+from ._cells import CellReader, frame_shape, ints_shape, plane_shape
 
 NUMBER_COLUMNS = ("x", "y", "rotation_deg", "area_mm2", "thickness_mm", "width_mm", "height_mm", "perimeter_mm",
                   "weight_kg", "length_mm", "mass_kg", "depth_mm", "bar_start_mm", "bite_min_mm")
@@ -43,7 +43,7 @@ def clean_rows(v: Verification, rel: str, rows: list[dict[str, Any]], faces: int
         if "mirrored" in row and row["mirrored"] not in ("", "0", "1", "True", "False", "true", "false"):
             v.error(rel, f"row {n} column mirrored", f"{row['mirrored']!r} is not 0 or 1")
             row["mirrored"] = "0"
-        for c, shape in (("frame", frame_shape), ("plane", numbers_shape(4)), ("nodes", ints_shape)):
+        for c, shape in (("frame", frame_shape), ("plane", plane_shape), ("nodes", ints_shape)):
             if c in row and cells.json(n, row, c, empty_ok=True, shape=shape) is None and row[c] not in ("", None):
                 row[c] = ""
         if "edge_nodes" in row and cells.id_list(n, row, "edge_nodes", count=2) is None \

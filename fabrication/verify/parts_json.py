@@ -50,6 +50,7 @@ def check_parts_json(v: Verification) -> None:
         for col, cell in row.items():
             if not isinstance(col, str):
                 continue                            # cells past the header: the parts check names the row
+            cell = "" if cell is None else cell     # a short row: the parts check names the cell
             value = part.get(col)
             if not _same(cell, value):
                 v.error(rel, row["part_id"], f"{col} is {value!r}, parts.csv has {cell!r}")

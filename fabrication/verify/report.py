@@ -294,6 +294,13 @@ def check_report(v: Verification) -> None:
     c = _Compare(v)
     parts = v.data.get("parts", [])
     figures = recompute_summary(v)
+    expected = {"Summary": True, "Panels": any(r["kind"] == "panel" for r in parts),
+                "Beam plates": any(r["kind"] == "beam" for r in parts), "Nodes": bool(v.data.get("nodes")),
+                "Files": True}
+    present = {t.heading for t in tables}
+    for heading, wanted in expected.items():
+        if wanted and heading not in present:
+            v.error(rel, heading, "table missing (the build writes it)")
     for t in tables:
         if t.kv and t.heading == "Summary":
             _summary(c, t, figures, m)
@@ -311,7 +318,7 @@ def check_report(v: Verification) -> None:
             _nodes_table(c, t, v.data["nodes"])
         elif t.header[:1] == ["weld preparation"] and files.get("welds_csv"):
             _welds_table(c, t, _read(v, files["welds_csv"]))
-        elif t.header[:1] == ["file"]:
+        elif t.header[:1] == ["file"] and t.heading == "Files":
             _files_table(c, t, files, rel)
     if files.get("bites_csv"):
         min_bite = _num(m.get("fabrication", {}).get("panels", {}).get("min_bite"))
