@@ -220,7 +220,7 @@ def _perp(d: np.ndarray) -> np.ndarray:
 def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Body]) -> list[Pass]:
     """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
     part of an earlier step, against those whose boxes (3D and seen along the direction) overlap its sweep: one
-    :class:`Pass` per pair that intersects (depth 0 for a touch)."""
+    :class:`Pass` per pair measured (depth and volume 0 when they do not intersect)."""
     out = []
     placed = [(pid, step) for pid, step, _ in order if pid in bodies]
     for pid, step, d in order:
@@ -249,9 +249,8 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             if shape is None:
                 shape = body.swept(d, far)
             depth, vol = depth_of(shape ^ b.shape())
-            if vol > 0:
-                static = depth_of(body.shape() ^ b.shape())[0] if depth > TOLERANCE else 0.0
-                out.append(Pass(pid, q, depth, vol, static))
+            static = depth_of(body.shape() ^ b.shape())[0] if depth > TOLERANCE else 0.0
+            out.append(Pass(pid, q, depth, vol, static))
     return out
 
 
@@ -344,7 +343,7 @@ def check_erection(v: Verification) -> None:
                                  + (f" beyond their overlap in place, {p.static:.2f} mm)" if p.static > 0 else ")"))
         shown += 1
     if shown > 20:
-        v.error(rel, "", f"{shown - 20} more parts pass through parts of earlier steps")
+        v.error(rel, "", f"{shown - 20} more passes of parts through parts of earlier steps")
     for pid, spread in blocked.items():
         if not any(p.part == pid for p in deep):
             v.error(rel, pid, f"is marked as having no single insertion direction (spread {spread}°) but slides in "

@@ -1,0 +1,156 @@
+"""The erection sequence (erection.csv, drawings/erection.svg) and its proof by ``ppfab verify``'s erection check:
+every part swept along its insertion direction from far away (manifold3d, from the STEP solids) passes through
+no part of an earlier step; a reordered sequence is named with the part, the part it passes through and the
+depth."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from conftest import small_vault
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _write(folder: Path, design_text: str | None = None, design_path: Path | None = None) -> Path:
+    from fabrication import build, load_design
+    from fabrication.pipeline.progress import Progress
+    from fabrication.writers import write_all
+
+    if design_path is None:
+        design_path = folder.parent / "d.toml"
+        design_path.write_text(design_text or "")
+    b = build(load_design(design_path))
+    folder.mkdir()
+    write_all(b, folder, Progress(quiet=True), parallel=False)
+    return folder
+
+
+@pytest.fixture(scope="module", params=["small_vault", "smallest_roof"])
+def built(request, tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp(request.param)
+    if request.param == "small_vault":
+        return _write(root / "out", small_vault("erection vault"))
+    return _write(root / "out", design_path=ROOT / "examples" / "smallest_roof.toml")
+
+
+def _rows(folder: Path) -> list[dict[str, str]]:
+    with open(folder / "erection.csv", newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _check(folder: Path):
+    from fabrication.verify import Verification, read_csv
+    from fabrication.verify.erection import check_erection
+
+    v = Verification(folder)
+    v.data["manifest"] = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    v.data["parts"] = read_csv(folder / "parts.csv")
+    check_erection(v)
+    return v
+
+
+def _tampered(folder: Path, tmp_path: Path, rows: list[dict[str, str]]) -> Path:
+    copy = tmp_path / "copy"
+    shutil.copytree(folder, copy)
+    with open(copy / "erection.csv", "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    return copy
+
+
+def test_sequence_is_verified_by_an_independent_sweep(built):
+    from fabrication.verify.erection import TOLERANCE
+
+    v = _check(built)
+    assert "erection" in v.checked
+    assert v.findings == []
+    passes = v.data["erection_passes"]
+    blocked = {r["part_id"] for r in _rows(built) if r["blocked_spread_deg"]}
+    # the sweeps met their neighbours: every pane its four gaskets at least, the strips the plates they sit on ...
+    panes = {p.part for p in passes if p.part.startswith("P-")}
+    assert panes and all(sum(1 for p in passes if p.part == pane and p.through.startswith("GK-")) >= 4
+                         for pane in panes)
+    assert any(p.part.startswith("GS-") and p.through.startswith("B-") and p.volume > 0 for p in passes)
+    # ... and only a plate named as having no single direction passes deeper than it overlaps in place
+    assert [p for p in passes if p.excess > TOLERANCE and p.part not in blocked] == []
+
+
+def test_every_part_once_and_listed_in_the_manifest(built):
+    m = json.loads((built / "manifest.json").read_text(encoding="utf-8"))
+    assert m["files"]["erection_csv"] == "erection.csv"
+    assert m["files"]["erection_drawing"] == "drawings/erection.svg"
+    assert "erection.csv" in m["sha256"] and "drawings/erection.svg" in m["sha256"]
+    rows = _rows(built)
+    with open(built / "parts.csv", newline="", encoding="utf-8") as fh:
+        parts = list(csv.DictReader(fh))
+    ids = [r["part_id"] for r in rows if r["kind"] != "weld"]
+    want = [p["part_id"] for p in parts] + ["GK" + p["part_id"][2:] for p in parts if p["kind"] == "strip"]
+    assert sorted(ids) == sorted(want)
+    steps = {r["kind"]: int(r["step"]) for r in rows}
+    assert steps["row"] < steps["column"] < steps["strip"] < steps["gasket"] < steps["panel"]
+    assert all(int(r["after"]) < int(r["step"]) for r in rows)
+    svg = (built / "drawings" / "erection.svg").read_text(encoding="utf-8")
+    assert svg.count("data-part=") == len(ids)
+    assert "step 1: row plates" in svg
+
+
+def test_columns_before_rows_are_named_with_the_row_and_the_depth(built, tmp_path):
+    rows = _rows(built)
+    with open(built / "parts.csv", newline="", encoding="utf-8") as fh:
+        slotted = {p["part_id"] for p in csv.DictReader(fh) if p["kind"] == "beam" and int(p["slots"] or 0) >= 1}
+    column = next(r for r in rows if r["kind"] == "column" and r["part_id"] in slotted)
+    for r in rows:
+        r["step"] = "1" if r is column else str(int(r["step"]) + 1)
+        r["after"] = "0" if r is column else str(int(r["after"]) + 1)
+    v = _check(_tampered(built, tmp_path, rows))
+    hits = [f for f in v.findings if f"passes through {column['part_id']} by" in f.message]
+    assert hits, [str(f) for f in v.findings]
+    assert all(f.element.startswith("B-U") for f in hits)          # a row, lowered onto the column set first
+    depth = float(re.search(r"by ([0-9.]+) mm", hits[0].message).group(1))
+    assert depth > 5.0                                              # through the plate, not a touch
+
+
+def test_reversed_order_is_named(built, tmp_path):
+    rows = _rows(built)
+    last = max(int(r["step"]) for r in rows)
+    for r in rows:
+        r["step"] = str(last + 1 - int(r["step"]))
+        r["after"] = "0"
+    v = _check(_tampered(built, tmp_path, rows))
+    # the strips, lowered onto panes already set, pass through the glass: the deepest named, the rest counted
+    assert any(f.element.startswith("GS-") and "passes through P-" in f.message for f in v.findings)
+    more = [f for f in v.findings if "more passes" in f.message]
+    assert len(more) == 1 and int(more[0].message.split()[0]) > 20
+
+
+def test_a_wrong_blocked_mark_and_a_missing_part_are_named(built, tmp_path):
+    rows = _rows(built)
+    row = next(r for r in rows if r["kind"] == "row")
+    row["blocked_spread_deg"] = "12.00"
+    dropped = next(r for r in rows if r["kind"] == "panel")
+    v = _check(_tampered(built, tmp_path, [r for r in rows if r is not dropped]))
+    assert any(f.element == row["part_id"] and "slides in clear" in f.message for f in v.findings)
+    assert any(f.element == dropped["part_id"] and "appears 0 times" in f.message for f in v.findings)
+
+
+def test_plates_with_no_single_direction_are_named_with_their_spread():
+    """smallest_roof's middle column crosses three rows whose node axes fan out by tens of degrees: no single
+    direction puts it through its slots, and the plan says so."""
+    from fabrication import build, load_design
+    from fabrication.erection import erection_plan
+
+    b = build(load_design(ROOT / "examples" / "smallest_roof.toml"))
+    plan = erection_plan(b.beams, b.glazing, b.panels.panels)
+    blocked = {x.part_id: x for x in plan.blocked}
+    assert "B-W02" in blocked and blocked["B-W02"].spread_deg > 30.0
+    assert blocked["B-W02"].play_mm > blocked["B-W02"].clearance_mm
+    assert "B-W02" in str(blocked["B-W02"]) and "spread" in str(blocked["B-W02"])
+    assert all(x.part_id.startswith("B-W") for x in plan.blocked)   # rows go in first, into nothing
