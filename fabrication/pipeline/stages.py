@@ -131,20 +131,11 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
     from ppfab.support.quality import check_axis_angles
     from ppfab.support.select import support_structure
 
-    from ..beams.plates import beam_ids
-    from .structure_gate import honour_structure, structure_change
-
     progress.start("support")
     beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
     support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
                                 beams=beams)
     check_axis_angles(support, design.support.max_axis_angle_deg)
-    change = structure_change(support, beam_ids(support))
-    honour_structure(change, design.beams.fallback)
-    if change.changed:
-        logging.getLogger("ppfab").warning(
-            "[beams] fallback = \"segmented\": %d polyline(s) of the requested planar families are not planar beams "
-            "and become %d one-edge plates (the report lists them and why)", len(change.left_out), change.edges)
     s = support.summary()
     progress.done(f"{s.get('kind', '?')}, torsion max {s.get('torsion_max_deg', 0.0):.2g}°")
     return support
@@ -185,8 +176,16 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
     :meth:`~fabrication.glazing.splices.SpliceParams.clearances`): half a cover plate plus half the depth for a
     bolted splice, ``weld_clear`` for a welded one."""
     from ..beams import build_beams
+    from ..beams.plates import beam_ids
+    from .structure_gate import honour_structure, structure_change
 
     progress.start("beams")
+    change = structure_change(support, beam_ids(support))     # after the panels: their refusal comes first
+    honour_structure(change, design.beams.fallback)
+    if change.changed:
+        logging.getLogger("ppfab").warning(
+            "[beams] fallback = \"segmented\": %d polyline(s) of the requested planar families are not planar beams "
+            "and become %d one-edge plates (the report lists them and why)", len(change.left_out), change.edges)
     params = design.beams
     sheet_len = design.beam_nesting.usable()
     usable_len = max(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
