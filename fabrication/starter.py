@@ -157,9 +157,16 @@ def propose(s: MeshSurvey) -> Proposal:
                        "[optimize] families = \"both\" (a PP mesh)")
         families = "both"
     else:
-        families = "rows" if rows <= cols else "cols"
-        reasons.append(f"δ_P rows {rows:.1e}, cols {cols:.1e}: the {families} are closer to planar; [optimize] "
-                       f"makes them planar (a P mesh), the other family is not made planar")
+        if s.across[0] != s.across[1]:           # fewer polylines standing across the surface first
+            families = "rows" if s.across[0] < s.across[1] else "cols"
+            reasons.append(f"δ_P rows {rows:.1e}, cols {cols:.1e}; polylines whose plane lies more than "
+                           f"{MAX_NORMAL_ANGLE_DEG:g}° from the normal: rows {s.across[0]}, cols {s.across[1]}: the "
+                           f"{families} can carry more planar beams; [optimize] makes them planar (a P mesh), the "
+                           "other family is not made planar")
+        else:
+            families = "rows" if rows <= cols else "cols"
+            reasons.append(f"δ_P rows {rows:.1e}, cols {cols:.1e}: the {families} are closer to planar; [optimize] "
+                           f"makes them planar (a P mesh), the other family is not made planar")
     planar_now = max(s.delta_f_max, rows, cols) <= PLANAR
     names = ("rows", "cols")
     usable = [s.across[f] < s.polylines[f] for f in (0, 1)]

@@ -90,3 +90,19 @@ def test_a_conjugate_net_passes_the_gate():
 
     geometry = stage_geometry(design, Progress(quiet=True), False)
     assert geometry.optimize_result is not None and geometry.optimize_result.targets_met
+
+
+def test_check_reports_the_defect_and_whether_a_build_would_optimise_it(capsys):
+    import json
+
+    from fabrication.cli import main
+
+    for path, optimisable in ((needs(PILLOW), False), (CONICAL1, True)):
+        assert main(["check", str(path), "--json"]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        assert doc["conjugacy_defect"] == pytest.approx(twist_ratio(load_mesh(path)), rel=0.05, abs=1e-3)
+        assert doc["optimisable"] is optimisable
+        by_family = doc["polylines_tangent_by_family"]
+        assert by_family["rows"] + by_family["cols"] == len(doc["polylines_tangent"])
+    assert main(["check", str(PILLOW)]) == 0
+    assert "far from a conjugate net (> 0.4): ppfab build refuses to optimise it" in capsys.readouterr().out

@@ -121,7 +121,9 @@ def test_new_measures_a_mesh_and_proposes_its_sections(tmp_path, name, capsys):
     if max(rows, cols) <= 1e-2:
         assert fam == "both" and doc["support"]["method"] == "pp"
     else:
-        assert fam == ("rows" if rows <= cols else "cols")
+        across = q["polylines_tangent_by_family"]                 # fewer polylines across the surface, then δ_P
+        assert fam == (("rows" if across["rows"] < across["cols"] else "cols") if across["rows"] != across["cols"]
+                       else ("rows" if rows <= cols else "cols"))
         assert doc["support"] == {**doc["support"], "method": "p", "family": fam}
         assert doc["beams"]["joint"] == "segmented" and doc["beams"]["continuous"] == fam
     assert f"max δ_P rows {rows:.1e} / cols {cols:.1e}" in text

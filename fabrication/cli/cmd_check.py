@@ -40,9 +40,19 @@ def run(args: argparse.Namespace) -> int:
     q = quality(mesh)
     tangent = tangent_polylines(mesh)
     records = polyline_report(mesh) if args.polylines else None
+    from ppfab.metrics import conjugacy_defect
+    from ppfab.optimize.params import OptimizeParams
+
+    defect = conjugacy_defect(mesh)
+    limit_defect = OptimizeParams().max_conjugacy_defect
+    fams = [p.family for p in (mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh).polylines]
+    across = {"rows": sum(1 for k in tangent if fams[k] == 0), "cols": sum(1 for k in tangent if fams[k] == 1)}
     if args.json:
         doc = q.as_dict()
         doc["polylines_tangent"] = tangent
+        doc["polylines_tangent_by_family"] = across
+        doc["conjugacy_defect"] = defect
+        doc["optimisable"] = bool(defect <= limit_defect)
         if records is not None:
             doc["polylines"] = [r.as_dict() for r in records]
             doc["polylines_left_out"] = [r.id for r in records if not r.planar_beam and r.vertices >= 3]
@@ -53,6 +63,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"polylines that cannot be planar beams (plane > 30° from the normal): {len(tangent)}"
               + (f" — ids {_ids(tangent)}" if tangent else "")
               + ("" if records is not None else " (--polylines: every polyline, the full rule and the reasons)"))
+        print(f"  of them rows {across['rows']}, cols {across['cols']}")
+        print(f"conjugacy defect {defect:.2f} (twist over normal curvature; a conjugate net has about 0): "
+              + (f"close enough to conjugate (≤ {limit_defect:g}) for planar quads near the surface"
+                 if defect <= limit_defect else
+                 f"far from a conjugate net (> {limit_defect:g}): ppfab build refuses to optimise it; remesh along "
+                 "conjugate curves (e.g. principal curvature lines) or raise [optimize] max_conjugacy_defect"))
         if records is not None:
             _print_polylines(records)
     if args.tol is None:
