@@ -101,6 +101,38 @@ def down_of(pane: np.ndarray, gaskets: np.ndarray) -> np.ndarray:
     return n if float(((gaskets - c) @ n).mean()) > 0 else -n
 
 
+# -- the seat against a formula ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("alpha", [0.0, 1.4, 10.0])
+def test_the_seat_is_the_highest_gasket_point_under_the_pane(alpha):
+    """A pane in z = 0 (normal +z) over y ≥ 10 mm; under its edge y = 0 a strip whose gasket top is tilted by α
+    about the edge so that it rises into the pane (a ridge), under its far edge y = 1010 a level one.  The
+    highest point of the tilted gasket under the pane is its far long edge, y = 30 cos α − 11 sin α, at
+    z = 30 sin α + 11 cos α: the seat; the pane stands off the level gasket (top at 11 mm) by the rest."""
+    from types import SimpleNamespace
+
+    from fabrication.glazing.seat import seat_pane
+    from fabrication.glazing.strips import Strip
+    from ppfab.frame import Frame
+
+    a = np.radians(alpha)
+    pane = SimpleNamespace(part_id="P-0000", frame=Frame(np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
+                           outline=np.array([[0.0, 10.0], [1000.0, 10.0], [1000.0, 1000.0], [0.0, 1000.0]]))
+    tilted = Strip("GS-U00-00", 0, (0, 1), "B-U00", Frame(np.zeros(3), np.array([1.0, 0, 0]),
+                                                          np.array([0, np.cos(a), np.sin(a)])),
+                   0.0, 1000.0, 60.0, 8.0, (True, True))
+    level = Strip("GS-U01-00", 1, (2, 3), "B-U01", Frame(np.array([0.0, 1010.0, 0.0]), np.array([1.0, 0, 0]),
+                                                         np.array([0, 1.0, 0])),
+                  0.0, 1000.0, 60.0, 8.0, (True, True))
+    seat = seat_pane(pane, [tilted, level], 3.0, 11.0)           # type: ignore[arg-type]
+    want = 30.0 * np.sin(a) + 11.0 * np.cos(a)
+    assert seat.offset == pytest.approx(want, abs=1e-9)
+    gaps = {c.strip: c.gap for c in seat.contacts}
+    assert gaps["GS-U00-00"] == pytest.approx(0.0, abs=1e-12)
+    assert gaps["GS-U01-00"] == pytest.approx(want - 11.0, abs=1e-9)
+    assert seat.largest_gap == pytest.approx(want - 11.0, abs=1e-9)
+
+
 # -- interpenetration: the kernel's boolean common ------------------------------------------------------------
 
 @pytest.mark.parametrize("name", BUILDS)
