@@ -124,7 +124,7 @@ def test_the_seat_is_the_highest_gasket_point_under_the_pane(alpha):
     level = Strip("GS-U01-00", 1, (2, 3), "B-U01", Frame(np.array([0.0, 1010.0, 0.0]), np.array([1.0, 0, 0]),
                                                          np.array([0, 1.0, 0])),
                   0.0, 1000.0, 60.0, 8.0, (True, True))
-    seat = seat_pane(pane, [tilted, level], 3.0, 11.0)           # type: ignore[arg-type]
+    seat = seat_pane(pane, [tilted, level], 3.0, 11.0)
     want = 30.0 * np.sin(a) + 11.0 * np.cos(a)
     assert seat.offset == pytest.approx(want, abs=1e-9)
     gaps = {c.strip: c.gap for c in seat.contacts}
