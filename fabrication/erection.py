@@ -51,7 +51,8 @@ ERECTION_CSV = "erection.csv"
 ERECTION_SVG = "drawings/erection.svg"
 """The plan view of the parts coloured by erection step, with a legend."""
 
-ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "direction_z", "after", "blocked_spread_deg"]
+ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "direction_z", "after",
+                    "blocked_spread_deg"]
 """``blocked_spread_deg``: for a plate that no single direction puts through its slots (:class:`Blocked`), the angle
 spread of its slot directions; empty otherwise."""
 
@@ -90,7 +91,8 @@ class Blocked:
     clearance_mm: float
 
     def __str__(self) -> str:
-        return (f"{self.part_id}: the directions of its slots and end cuts spread {self.spread_deg:.2f}°, sliding it in moves a mating "
+        return (f"{self.part_id}: the directions of its slots and end cuts spread {self.spread_deg:.2f}°, "
+                f"sliding it in moves a mating "
                 f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm): no "
                 f"single insertion direction")
 

@@ -5,12 +5,13 @@ The rows are read as written: a step (1, 2, …), a kind, a unit insertion direc
 ``after`` below the step.  Every part of ``parts.csv`` and every gasket of a strip appears exactly once.
 
 The solids come from the STEP files (``beams.step`` as the step check read it, ``glazing.step``,
-``splices.step``, ``panels.step``) and are rebuilt in manifold3d from the kernel's own triangulation of their
-large face, so nothing is shared with the code that made the order: a convex solid is the hull of its vertices,
-any other (a slotted plate, a cover plate with holes, a non-convex pane) the union of the prisms over the
-triangles of that face.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment
-``[−L·d, 0]``: for each convex piece the hull of the piece and the piece moved back by ``L``, with ``L`` far
-enough that it starts beyond every part of the earlier steps.  The sweep is intersected with every part of an
+``splices.step``, ``panels.step``) and are rebuilt in manifold3d from the boundary of their largest face, so
+nothing is shared with the code that made the order: a convex solid is the hull of its vertices, any other (a
+slotted plate, a cover plate with holes, a non-convex pane) that face's polygon extruded by the solid's
+thickness.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment ``[−L·d, 0]``, with
+``L`` far enough that it starts beyond every part of the earlier steps: for a convex solid the hull of the solid and the solid moved back by ``L``; for a plate moving in its own plane the extrusion of its
+polygon's 2D Minkowski sum with the segment; otherwise the union of the hulls of the prisms over the polygon's
+triangles and their moved copies.  The sweep is intersected with every part of an
 earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours); the *depth* of an
 intersection is the thinnest extent of its thickest connected piece (the smallest width over the piece's face
 normals), how far the two would have to move apart.  Deeper than :data:`TOLERANCE` is a finding naming the part,
@@ -33,7 +34,7 @@ from . import Verification, check, read_csv
 TOLERANCE = 0.25
 """mm: the depth up to which a sweep may overlap an earlier part: a pane may sit 0.1 mm into its gasket
 (:data:`fabrication.glazing.seat.SEAT_TOLERANCE`), parts touch along faces, and the STEP decimals and the
-triangulation add their numerics."""
+sampled arcs add their numerics."""
 
 KINDS = {"row", "column", "weld", "splice", "strip", "gasket", "panel"}
 
@@ -143,12 +144,30 @@ def union(shapes: list[Any]) -> Any:
     return shapes[0] if len(shapes) == 1 else m3.Manifold.batch_boolean(shapes, m3.OpType.Add)
 
 
+def _ring(wire: Any, arc_points: int = 16) -> np.ndarray:
+    """``(k, 3)`` the closed boundary ``wire`` of a face as a ring of points: each straight edge by its ends, a
+    curved one (a bolt hole, a slot's relief) by ``arc_points`` points along it, the edges chained end to start."""
+    runs = []
+    for e in wire.edges():
+        if e.geom_type.name == "LINE":
+            runs.append(np.array([tuple(e.start_point()), tuple(e.end_point())], dtype=float))
+        else:
+            runs.append(np.array([tuple(e.position_at(t)) for t in np.linspace(0.0, 1.0, arc_points + 1)],
+                                 dtype=float))
+    ring = [runs.pop(0)]
+    while runs:
+        end = ring[-1][-1]
+        k = min(range(len(runs)), key=lambda i: min(float(np.linalg.norm(runs[i][0] - end)),
+                                                   float(np.linalg.norm(runs[i][-1] - end))))
+        r = runs.pop(k)
+        ring.append(r if np.linalg.norm(r[0] - end) <= np.linalg.norm(r[-1] - end) else r[::-1])
+    return np.vstack([r[:-1] for r in ring])
+
+
 def body_of(solid: Any) -> Body:
-    """A thin prism read from STEP as a :class:`Body`: its largest face gives the plane and the polygon (straight
-    edges chained; a face with curved edges or holes from the kernel's triangulation), convex when the polygon
-    fills its hull."""
+    """A thin prism read from STEP as a :class:`Body`: its largest face gives the plane and the polygon (its outer
+    and inner boundaries, :func:`_ring`), convex when the polygon fills its hull."""
     from shapely.geometry import MultiPoint, Polygon
-    from shapely.ops import unary_union
 
     pts = np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
     face = max(solid.faces(), key=lambda f: f.area)
@@ -167,21 +186,8 @@ def body_of(solid: Any) -> Body:
     def to2(q: np.ndarray) -> np.ndarray:
         return np.stack([(q - fo) @ ex, (q - fo) @ ey], axis=1)
 
-    edges = face.outer_wire().edges()
-    straight = all(e.geom_type.name == "LINE" for e in edges) and not face.inner_wires()
-    if straight:
-        ring = [np.array(tuple(e.start_point()), dtype=float) for e in edges]
-        ends = [np.array(tuple(e.end_point()), dtype=float) for e in edges]
-        chain = [0]
-        for _ in range(len(edges) - 1):                  # walk the edges end to start
-            last = ends[chain[-1]]
-            chain.append(min((k for k in range(len(edges)) if k not in chain),
-                             key=lambda k: float(np.linalg.norm(ring[k] - last))))
-        flat = Polygon(to2(np.array([ring[k] for k in chain]))).buffer(0)
-    else:
-        verts, tris = face.tessellate(0.05)
-        fv = to2(np.array([tuple(p) for p in verts], dtype=float))
-        flat = unary_union([Polygon(fv[list(t)]) for t in tris]).buffer(0)
+    outer = _ring(face.outer_wire())
+    flat = Polygon(to2(outer), [to2(_ring(w)) for w in face.inner_wires()]).buffer(0)
     convex = abs(flat.area - MultiPoint(to2(pts)).convex_hull.area) <= 1e-4 * max(flat.area, 1.0)
     return Body(pts, convex, fo, ex, ey, n, thick, flat)
 
@@ -221,36 +227,37 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
     """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
     part of an earlier step, against those whose boxes (3D and seen along the direction) overlap its sweep: one
     :class:`Pass` per pair measured (depth and volume 0 when they do not intersect)."""
-    out = []
-    placed = [(pid, step) for pid, step, _ in order if pid in bodies]
+    out: list[Pass] = []
+    names = [pid for pid, _, _ in order if pid in bodies]
+    if not names:
+        return out
+    steps = np.array([step for pid, step, _ in order if pid in bodies])
+    lo_all = np.array([bodies[q].lo for q in names])
+    hi_all = np.array([bodies[q].hi for q in names])
+    centre, half = 0.5 * (lo_all + hi_all), 0.5 * (hi_all - lo_all)
     for pid, step, d in order:
         body = bodies.get(pid)
-        if body is None:
+        if body is None or not np.any(steps < step):
             continue
-        earlier = [q for q, s in placed if s < step]
-        if not earlier:
-            continue
-        corners = np.array([[b.lo, b.hi] for b in (bodies[q] for q in earlier)]).reshape(-1, 3)
-        far = max(float((corners @ -d).max()) - float((body.points @ -d).min()) + 1.0, 1.0)
+        earlier = steps < step
+        reach = float((centre[earlier] @ -d + half[earlier] @ np.abs(d)).max())   # farthest earlier box along −d
+        far = max(reach - float((body.points @ -d).min()) + 1.0, 1.0)
         allp = np.vstack([body.points, body.points - far * d])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
         e = _perp(d)
         f2 = allp @ e.T
         flo, fhi = f2.min(axis=0), f2.max(axis=0)
+        c2, h2 = centre @ e.T, half @ np.abs(e.T)                                  # the boxes seen along d
+        near = earlier & np.all(lo_all <= hi + TOLERANCE, axis=1) & np.all(hi_all >= lo - TOLERANCE, axis=1) \
+            & np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE, axis=1)
         shape = None
-        for q in earlier:
-            b = bodies[q]
-            if np.any(b.lo > hi + TOLERANCE) or np.any(b.hi < lo - TOLERANCE):
-                continue
-            g = np.array([[b.lo[0], b.lo[1], b.lo[2]], [b.hi[0], b.hi[1], b.hi[2]]])
-            box = np.array([[g[i, 0], g[j, 1], g[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]) @ e.T
-            if np.any(box.min(axis=0) > fhi + TOLERANCE) or np.any(box.max(axis=0) < flo - TOLERANCE):
-                continue
+        for k in np.flatnonzero(near):
+            b = bodies[names[k]]
             if shape is None:
                 shape = body.swept(d, far)
             depth, vol = depth_of(shape ^ b.shape())
             static = depth_of(body.shape() ^ b.shape())[0] if depth > TOLERANCE else 0.0
-            out.append(Pass(pid, q, depth, vol, static))
+            out.append(Pass(pid, names[k], depth, vol, static))
     return out
 
 
