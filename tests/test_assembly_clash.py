@@ -318,3 +318,42 @@ def test_the_written_panes_pass_verify(name, request):
     assert {"clash", "panels_step", "ifc", "rhino", "glb"} <= set(v.checked)
     mine = [str(f) for f in v.findings if f.file == "panels.step" or "face" in f.message and "plane" in f.message]
     assert mine == []
+
+
+def test_every_model_places_the_panes_alike(vault):
+    """The corners of every pane in model.glb (trimesh, glTF metres back to mm) and model.3dm (rhino3dm, the
+    extrusion's bottom and top profiles) are those of its solid in panels.step (the kernel), within the
+    glTF's float32 rounding."""
+    import rhino3dm
+    import trimesh
+    from scipy.spatial import cKDTree
+
+    from fabrication.writers.glb import MM_TO_GLTF
+
+    step = {s.name: points(s.solid) for s in read_step_solids(vault / "panels.step")}
+
+    def far(a: np.ndarray, b: np.ndarray) -> float:
+        return float(max(cKDTree(b).query(a)[0].max(), cKDTree(a).query(b)[0].max()))
+
+    scene = trimesh.load(str(vault / "model.glb"), force="scene", process=False)
+    back = np.linalg.inv(MM_TO_GLTF)
+    seen = 0
+    for name in scene.graph.nodes_geometry:
+        if name in step:
+            transform, geometry = scene.graph[name]
+            pts = trimesh.transform_points(scene.geometry[geometry].vertices, transform) @ back.T
+            assert far(pts[:, :3], step[name]) < 5e-3, name
+            seen += 1
+    assert seen == len(step)
+    model = rhino3dm.File3dm.Read(str(vault / "model.3dm"))
+    seen = 0
+    for obj in model.Objects:
+        name = obj.Attributes.Name
+        if name in step:
+            rings = []
+            for t in (0.0, 1.0):                                 # the bottom and the top profile, as polylines
+                c = obj.Geometry.Profile3d(0, t)
+                rings += [[c.Point(i).X, c.Point(i).Y, c.Point(i).Z] for i in range(c.PointCount - 1)]
+            assert far(np.array(rings), step[name]) < 1e-6, name
+            seen += 1
+    assert seen == len(step)
