@@ -28,7 +28,7 @@ CORE_THIRD_PARTY = {"numpy", "scipy"}
 FAB_LAYERS = [
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
      "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter", "glazing", "repetition",
-     "report_glazing", "erection"},
+     "report_glazing", "erection", "erection_drawing"},
     {"writers", "verify"},
     {"pipeline"},
     {"cli", "studio"},
