@@ -70,7 +70,7 @@ def check_drawings(v: Verification) -> None:
 
     files = v.data.get("manifest", {}).get("files", {})
     views, sheets = files.get("drawings"), files.get("node_sheets")
-    if views is None and sheets is None:
+    if views is None and sheets is None and not files.get("erection_drawing"):
         return
     # the key plan names the panels and the beam plates (glazing strips and splice plates are on their beams)
     parts = {r["part_id"] for r in v.data.get("parts", []) if r.get("kind") in ("panel", "beam")}
@@ -102,6 +102,8 @@ def check_drawings(v: Verification) -> None:
         view = next((name for name in ("plan", "front", "side") if rel.endswith(view_file(name))), None)
         if view is not None and rel in texts:
             _check_view_polygons(v, rel, view)
+    if files.get("erection_drawing"):
+        _check_erection_drawing(v, files["erection_drawing"], files.get("erection_csv"))
     wanted = {r["node_id"] for r in v.data.get("nodes", []) if r.get("beams")}
     count: dict[str, int] = {}
     for rel in sheets or []:
@@ -173,3 +175,35 @@ def _check_view_polygons(v: Verification, rel: str, view: str) -> None:
             v.error(rel, pid, "pane is drawn nowhere its outline projects")
     if count != len(want):
         v.error(rel, "polygons", f"{count} polygons for {len(want)} panes")
+
+
+def _check_erection_drawing(v: Verification, rel: str, table: str | None) -> None:
+    """The erection drawing parses as SVG and each of its part polygons (``data-part``, ``data-step``) is a part
+    of the erection sequence (``erection.csv``) drawn once, at its step there."""
+    from . import read_csv
+
+    try:
+        root = ET.parse(v.folder / rel).getroot()
+    except (OSError, ET.ParseError) as exc:
+        v.error(rel, "", f"cannot be read as SVG: {exc}")
+        return
+    if root.tag != f"{_SVG}svg":
+        v.error(rel, "", f"root element is {root.tag}, not svg")
+        return
+    try:
+        steps = {r.get("part_id", ""): r.get("step", "") for r in read_csv(v.folder / table)} if table else {}
+    except (OSError, ValueError) as exc:
+        v.error(table or rel, "", f"cannot be read ({exc})")
+        return
+    seen: set[str] = set()
+    for n, el in enumerate(root.iter(f"{_SVG}polygon"), start=1):
+        pid, step = el.get("data-part"), el.get("data-step")
+        if pid is None:
+            continue
+        if pid in seen:
+            v.error(rel, pid, f"part is drawn twice (polygon {n})")
+        seen.add(pid)
+        if table and pid not in steps:
+            v.error(rel, pid, f"polygon {n} names a part that is not in {table}")
+        elif table and step != steps[pid]:
+            v.error(rel, pid, f"polygon {n} is drawn at step {step!r}, {table} erects the part at step {steps[pid]!r}")

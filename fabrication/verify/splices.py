@@ -92,7 +92,7 @@ def check_splices(v: Verification) -> None:
                 v.error("parts.csv", where, f"the cut between these pieces of {beam} has both {len(plates)} cover "
                                             "plate(s) and a splice weld in welds.csv")
             elif weld is not None:
-                if not (float(weld.get("weld_length_mm") or 0) > 0 and "full penetration" in weld.get("preparation", "")):
+                if not (number(weld.get("weld_length_mm"), 0.0) > 0 and "full penetration" in weld.get("preparation", "")):
                     v.error("welds.csv", where, f"the splice weld of {beam} is not a full-penetration weld of positive "
                                                 f"length ({weld.get('preparation')!r}, {weld.get('weld_length_mm')} mm)")
             elif len(plates) != 2:
@@ -119,7 +119,11 @@ def check_splices(v: Verification) -> None:
             if s is None:
                 v.error(rel, r["part_id"], "cover plate has no solid")
                 continue
-            holes = int(r.get("holes") or 0)
+            holes_cell = number(r.get("holes") or 0)
+            if not float(holes_cell).is_integer():
+                v.error("parts.csv", r["part_id"], f"holes {r.get('holes')!r} is not a whole number")
+                continue
+            holes = int(holes_cell)
             inner = len(s.faces()) - 6                       # a plate with h holes: 6 faces + one per hole
             if inner != holes:
                 v.error(rel, r["part_id"], f"solid has {inner} hole faces, parts.csv says {holes} holes")
@@ -178,7 +182,7 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     c, s, u = cut
     fab = v.data.get("manifest", {}).get("fabrication", {})
     t = float(fab.get("beam_thickness", 0.0))
-    tc = float(row.get("thickness_mm") or 0.0)
+    tc = number(row.get("thickness_mm"), 0.0)
     z = to_frame(solid_points(solid), frame)[:, 2]
     side = "+" if z.mean() > 0 else "-"
     sides.setdefault(row.get("joins", ""), []).append(side)
