@@ -379,3 +379,16 @@ def test_unreachable_scheduler_is_one_line(tmp_path):
     assert str(err.value).startswith(f"cannot reach the Dask scheduler at {address}") and "\n" not in str(err.value)
     assert err.value.exit_code == 2
     assert not (tmp_path / "res" / "results.parquet").exists()
+
+
+def test_a_second_sweep_into_the_same_folder_is_refused(tmp_path):
+    from fabrication.pipeline.lock import OutputLock
+
+    spec = write_sweep(tmp_path, GEOMETRY_SWEEP)
+    out = tmp_path / "res"
+    with OutputLock(out):                                    # what a running sweep holds
+        other = subprocess.run([sys.executable, "-m", "fabrication.cli", "sweep", str(spec), "-o", str(out),
+                                "--quiet"], capture_output=True, text=True, timeout=300)
+    assert other.returncode != 0 and str(os.getpid()) in other.stderr, other.stderr
+    assert len(other.stderr.strip().splitlines()) == 1
+    assert not (out / "results.parquet").exists()
