@@ -423,3 +423,25 @@ def test_beams_step_carries_the_splice_holes(built):
             assert float(np.linalg.norm(p.holes[:, :2] - xy, axis=1).min()) < 1e-6
         net = p.area - len(p.holes) * np.pi / 4 * 22.0 ** 2
         assert s.volume == pytest.approx(net * p.thickness, rel=1e-6)
+
+
+@pytest.mark.parametrize("version", ["R12", "R2000", "R2010"])
+def test_older_dxf_versions_keep_the_stock_and_the_holes(version, tmp_path):
+    """The R12/R2000 copies carry the material and thickness in XDATA and title (custom properties exist
+    from R2004 on only) and the bolt holes as CUT circles."""
+    import ezdxf
+
+    from fabrication.beams.flat import HoledPart
+    from fabrication.writers.dxf import read_sheet_dxf, write_part_dxf
+
+    part = HoledPart("B-U00-S00", "beam", np.array([[0.0, 0.0], [300.0, 0.0], [300.0, 150.0], [0.0, 150.0]]),
+                     meta={"material": "S355", "thickness_mm": 12.0}, holes=np.array([[50.0, 75.0, 22.0]]))
+    path = write_part_dxf(part, tmp_path / "p.dxf", "B-U00-S00", version=version)
+    content = read_sheet_dxf(path)
+    assert content.audit_errors == [] and content.other_entities == []
+    x = content.parts[0].xdata
+    assert (x["material"], x["thickness_mm"]) == ("S355", "12")
+    assert [(h.part_id, h.diameter, tuple(h.centre)) for h in content.holes] == [("B-U00-S00", 22.0, (50.0, 75.0))]
+    assert any(t.endswith("material S355, thickness 12 mm") for t in content.labels)
+    custom = dict(ezdxf.readfile(path).header.custom_vars) if version == "R2010" else {}
+    assert custom.get("PPFAB_MATERIAL", "S355") == "S355" and (version != "R2010" or "PPFAB_MATERIAL" in custom)
