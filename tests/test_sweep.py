@@ -286,19 +286,24 @@ def test_scheduler_and_workers_survive_a_killed_worker(tmp_path):
                                   "--scheduler", address, "--quiet"], stdout=subprocess.PIPE,
                                  stderr=subprocess.PIPE, env=env)
         procs.append(sweep)
-        killed = None
+        killed, in_flight = None, []
         deadline = time.monotonic() + 300
-        while killed is None and sweep.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.05)
-            if (out / "results.parquet").exists():
-                try:
-                    first = read_rows(out)[0]
-                except Exception:                           # read between two renames: try again
+        from distributed import Client
+
+        with Client(address, timeout="30s") as watcher:
+            while killed is None and sweep.poll() is None and time.monotonic() < deadline:
+                time.sleep(0.05)
+                if not (out / "results.parquet").exists():
                     continue
-                pid = int(first["worker"].rsplit(":", 1)[1])
+                # once the first row is written: kill a worker that holds a variant at this moment
+                busy = {w: keys for w, keys in watcher.processing().items() if keys}
+                if not busy:
+                    continue
+                addr, keys = next(iter(busy.items()))
+                pid = watcher.run(os.getpid, workers=[addr])[addr]
                 victim = next(p for p in procs[1:3] if p.pid == pid)
                 victim.send_signal(signal.SIGKILL)
-                killed = pid
+                killed, in_flight = pid, [str(k).removeprefix("ppfab-variant-") for k in keys]
         _, err = sweep.communicate(timeout=600)
         assert sweep.returncode == 0, err.decode()
         assert killed is not None, "the sweep finished before a worker could be killed"
@@ -318,6 +323,9 @@ def test_scheduler_and_workers_survive_a_killed_worker(tmp_path):
     assert all(r["status"] == "ok" for r in rows), [r["reason"] for r in rows]
     survivors = {r["worker"] for r in rows if not r["worker"].endswith(f":{killed}")}
     assert len(survivors) == 1                                # the rest ran on the worker left
+    assert in_flight                                          # the variants the killed worker held …
+    for key in in_flight:                                     # … were run again by the scheduler, elsewhere
+        assert next(r for r in rows if r["variant"] == key)["worker"] in survivors
     base_dir = str(tmp_path)
     for v in variants:
         alone = compute(VariantTask(v.key, v.index, v.doc, "nesting", base_dir))
