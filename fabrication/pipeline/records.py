@@ -65,7 +65,9 @@ class NodeTable:
 
 @dataclass(frozen=True)
 class Summary:
-    """Totals for the manifest, the report and ``ppfab build --json`` (mm, m, m², kg)."""
+    """Totals for the manifest, the report and ``ppfab build --json`` (mm, m, m², kg).  ``beam_mass_kg`` is the
+    beam plates alone; ``steel_mass_kg`` the whole steel take-off (beam plates, glazing strips, splice cover
+    plates); ``weld_length_m`` every weld of ``welds.csv``."""
 
     extent_mm: list[float]
     panels: int
@@ -86,6 +88,8 @@ class Summary:
     plate_utilisation: float
     plate_lower_bound: int
     torsion_max_deg: float
+    steel_mass_kg: float = 0.0
+    weld_length_m: float = 0.0
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values in field order (the manifest's ``summary``)."""

@@ -59,7 +59,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         glazing = stage_glazing(design, support, panels, beams, p)
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)
-        summary = stage_summary(geometry, panels, beams, nesting, support)
+        summary = stage_summary(geometry, panels, beams, nesting, support, glazing)
     except BaseException:
         p.fail()
         raise
@@ -246,8 +246,9 @@ def stage_nodes(beams: BeamSet, progress: Progress) -> NodeTable:
 
 
 def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting: NestingSet,
-                  support: SupportStructure) -> Summary:
-    """Totals for the manifest, the report and ``--json``."""
+                  support: SupportStructure, glazing: "Glazing | None" = None) -> Summary:
+    """Totals for the manifest, the report and ``--json``; the steel take-off adds the glazing strips and
+    splice cover plates (their ``parts.csv`` masses) to the beam plates, and the weld length sums ``welds.csv``."""
     mesh = geometry.mesh
     qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
     assert isinstance(qm, QuadMesh)
@@ -266,4 +267,14 @@ def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting:
         glass_sheets=gn.sheets, glass_utilisation=gn.utilisation, glass_lower_bound=gn.lower_bound,
         plate_sheets=bn.sheets, plate_utilisation=bn.utilisation, plate_lower_bound=bn.lower_bound,
         torsion_max_deg=float(np.degrees(support.torsion.max())) if len(support.edges) else 0.0,
+        steel_mass_kg=float(bt["mass_kg"]) + (_glazing_steel_kg(glazing, beams) if glazing is not None else 0.0),
+        weld_length_m=float(sum(w.length_mm for w in glazing.welds) / 1e3) if glazing is not None else 0.0,
     )
+
+
+def _glazing_steel_kg(glazing: "Glazing", beams: BeamSet) -> float:
+    """Mass of the glazing strips and splice cover plates, kg, as their ``parts.csv`` rows give it."""
+    from ..glazing.rows import splice_rows, strip_rows
+
+    rows = (strip_rows(glazing, beams) if glazing.strips else []) + splice_rows(glazing, beams)
+    return float(sum(float(r["mass_kg"]) for r in rows))

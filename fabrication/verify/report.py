@@ -155,6 +155,9 @@ SUMMARY_ROWS: dict[str, Callable[[dict[str, Figure]], tuple[list[float], list[fl
     "total beam length": lambda s: ([s["beam_length_m"].value], [s["beam_length_m"].tolerance]),
     "plate area / weight": lambda s: ([s["plate_area_m2"].value, s["beam_mass_kg"].value / 1000],
                                       [s["plate_area_m2"].tolerance, s["beam_mass_kg"].tolerance / 1000]),
+    "steel take-off (plates, strips, cover plates)": lambda s: ([s["steel_mass_kg"].value / 1000],
+                                                                [s["steel_mass_kg"].tolerance / 1000]),
+    "weld length": lambda s: ([s["weld_length_m"].value], [s["weld_length_m"].tolerance]),
 }
 """Summary rows of the report: label → (the figures it shows, each one's rounding in the files)."""
 

@@ -60,6 +60,12 @@ def recompute_summary(v: Verification) -> dict[str, Figure]:
                    beam_length_m=Figure(sum(_num(r["length_mm"]) for r in plates) / 1e3, 5e-7 * k + 1e-9),
                    beam_mass_kg=Figure(sum(_num(r["mass_kg"]) for r in plates), 5e-5 * k + 1e-9),
                    plate_area_m2=Figure(steel / 1e6, 5e-10 * k + 1e-12))
+        metal = [r for r in parts if r["kind"] in ("beam", "strip", "splice")]
+        out["steel_mass_kg"] = Figure(sum(_num(r["mass_kg"]) for r in metal), 5e-4 * len(metal) + 1e-9)
+    if files.get("welds_csv") or parts:
+        welds = _rows(v, files["welds_csv"]) if files.get("welds_csv") else []
+        out["weld_length_m"] = Figure(sum(_num(r.get("weld_length_mm", "")) for r in welds) / 1e3,
+                                      5e-7 * len(welds) + 1e-9)
         for prefix, key, section, area, rows in (("glass", "glass_sheets", "nesting", glass, n),
                                                  ("plate", "beam_sheets", "beam_nesting", steel, k)):
             sheets = len(file_list(files, key))
