@@ -321,7 +321,11 @@ def check_erection(v: Verification) -> None:
         return
     parts = v.data.get("parts")
     if parts is None:
-        parts = read_csv(v.folder / files.get("parts_csv", "parts.csv"))
+        try:
+            parts = read_csv(v.folder / files.get("parts_csv", "parts.csv"))
+        except (OSError, ValueError) as exc:
+            v.error(rel, "", f"cannot be checked: parts.csv cannot be read ({exc})")
+            return
     wanted = [r["part_id"] for r in parts] + ["GK" + r["part_id"][2:] for r in parts if r.get("kind") == "strip"]
     seen: dict[str, int] = {}
     for pid, *_ in rows:
