@@ -44,6 +44,20 @@ class Verification:
     def ok(self) -> bool:
         return not self.findings
 
+    def read_table(self, rel: str, columns: list[str] | tuple[str, ...] = ()) -> list[dict[str, str]] | None:
+        """The rows of the CSV table ``rel``, or ``None`` after a finding that it cannot be read or lacks one of
+        ``columns`` (the contract's)."""
+        try:
+            rows = read_csv(self.folder / rel)
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
+            self.error(rel, "", f"cannot be read ({exc})")
+            return None
+        missing = [c for c in columns if rows and c not in rows[0]]
+        if missing:
+            self.error(rel, "columns", f"missing contract columns {missing}")
+            return None
+        return rows
+
     def read_json(self, rel: str) -> Any:
         """The JSON document ``rel`` of the folder, or ``None`` after a finding that it cannot be read."""
         try:

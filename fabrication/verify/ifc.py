@@ -106,7 +106,8 @@ def check_ifc(v: Verification) -> None:
     names = [m.Name for m in f.by_type("IfcMaterial")]
     for name in sorted({n for n in names if names.count(n) > 1}):
         v.error(rel, f"IfcMaterial {name}", f"defined {names.count(name)} times (one shared material per name)")
-    for m in f.by_type("IfcMaterial"):
+    materials: list[Any] = list(f.by_type("IfcMaterial"))
+    for m in materials:
         if not f.get_inverse(m):
             v.error(rel, f"IfcMaterial {m.Name}", "is associated with no element and no layer (orphaned)")
     v.checked.append("ifc")

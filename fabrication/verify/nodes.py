@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import NODES_CONTRACT_COLUMNS as NODES_COLUMNS
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._cells import CellReader
 
 NUMBER_COLUMNS = ("x", "y", "z", "axis_x", "axis_y", "axis_z")
@@ -22,16 +22,9 @@ def check_nodes(v: Verification) -> None:
     mesh = v.data.get("mesh")
     if rel is None or mesh is None:
         return
-    try:
-        raw = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    raw = v.read_table(rel, NODES_COLUMNS)
+    if raw is None:
         return
-    if raw:
-        missing = [c for c in NODES_COLUMNS if c not in raw[0]]
-        if missing:
-            v.error(rel, "columns", f"missing contract columns {missing}")
-            return
     cells = CellReader(v, rel)
     rows: list[dict[str, str]] = []
     points: list[tuple[int, np.ndarray, np.ndarray]] = []

@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..contract import PART_KINDS, PARTS_CONTRACT_COLUMNS as PARTS_COLUMNS
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._cells import CellReader, frame_shape, ints_shape, plane_shape
 
 NUMBER_COLUMNS = ("x", "y", "rotation_deg", "area_mm2", "thickness_mm", "width_mm", "height_mm", "perimeter_mm",
@@ -62,16 +62,9 @@ def check_parts(v: Verification) -> None:
     rel = files.get("parts_csv")
     if rel is None:
         return
-    try:
-        raw = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    raw = v.read_table(rel, PARTS_COLUMNS)
+    if raw is None:
         return
-    if raw:
-        missing = [c for c in PARTS_COLUMNS if c not in raw[0]]
-        if missing:
-            v.error(rel, "columns", f"missing contract columns {missing}")
-            return
     mesh = v.data.get("mesh")
     rows = clean_rows(v, rel, raw, None if mesh is None else len(mesh.faces))
     v.data["parts_csv_rows"] = raw

@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 
 from ..glazing.cutlist import cut_bars
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._cells import CellReader
 
 TOLERANCE_MM = 0.01
@@ -45,10 +45,8 @@ def check_strip_cuts(v: Verification) -> None:
     except ValueError as exc:
         v.error(rel, "", f"the strips cannot be cut from glazing.bar_length {bar_length:g} mm bars: {exc}")
         return
-    try:
-        rows = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    rows = v.read_table(rel)
+    if rows is None:
         return
     cells = CellReader(v, rel)
     seen: set[str] = set()

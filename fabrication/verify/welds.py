@@ -17,7 +17,7 @@ import numpy as np
 from ppfab.planes import angle_between
 
 from ..glazing.welds import preparation
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._cells import CellReader
 
 LENGTH_TOLERANCE_MM = 0.01
@@ -82,10 +82,8 @@ def check_welds(v: Verification) -> None:
         if want:
             v.error("manifest.json", "files.welds_csv", f"missing: the nodes and plates make {len(want)} T-joint welds")
         return
-    try:
-        rows = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    rows = v.read_table(rel)
+    if rows is None:
         return
     cells = CellReader(v, rel)
     seen: set[tuple[int, str, str]] = set()
