@@ -94,6 +94,8 @@ def test_local_cluster_sweep_writes_every_variant(tmp_path):
     page = (out / "index.html").read_text()
     assert "plotly" in page and all(r["design"] in page for r in rows)
     assert len(page) > 1_000_000                             # plotly's JavaScript is in the page
+    assert page.count("<select") == 2 and '<option value="panel_types"' in page      # the axes can be chosen
+    assert '<option value="glass_sheets"' not in page                                # not measured here
     assert "<script src" not in page                         # the JavaScript is inlined: works offline
 
 
@@ -115,6 +117,11 @@ def test_rerun_computes_nothing_new(tmp_path):
     more = local(spec, out)
     assert (more.computed, more.skipped) == (2, 4)
     assert len(read_rows(out)) == 6
+    # another base design: new keys, every variant computed; the old rows stay in the table, not on the page
+    (tmp_path / "base.toml").write_text(tiny_base().replace('name = "tiny"', 'name = "tiny 2"'))
+    other = local(spec, out)
+    assert (other.computed, len(other.rows), len(read_rows(out))) == (6, 6, 12)
+    assert "also holds 6 variant(s) of earlier sweeps" in (out / "index.html").read_text()
 
 
 def test_bad_value_fails_alone_with_its_message(tmp_path):

@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if args.best is not None:
         from ..sweep.best import write_best
 
-        best = write_best(args.out, args.best, args.best_out)
+        best = write_best(args.out, args.best, args.best_out, among={r["variant"] for r in report.rows})
         print(f"ppfab: best by {args.best}: variant {best.row['variant']} ({args.best} = {best.row[args.best]:.6g})"
               f", design in {best.path}", file=sys.stderr)
     return 1 if report.variants and report.failed == report.variants else 0

@@ -21,14 +21,16 @@ class Best:
     path: Path
 
 
-def write_best(out: str | os.PathLike, figure: str, target: str | os.PathLike | None = None) -> Best:
+def write_best(out: str | os.PathLike, figure: str, target: str | os.PathLike | None = None,
+               among: "set[str] | None" = None) -> Best:
     """Write the design of the successful variant of the results folder ``out`` with the best ``figure``
     (smallest or largest, :data:`~fabrication.sweep.figures.FIGURES`) to ``target`` (default
-    ``out/best-<figure>.toml``); an existing target is replaced only when ppfab wrote it."""
+    ``out/best-<figure>.toml``); ``among``: only these variant keys (the current sweep's; default every row).
+    An existing target is replaced only when ppfab wrote it."""
     if not (Path(out) / "results.parquet").is_file():
         raise OutputFileError(f"{out} holds no sweep results (results.parquet); run the sweep first")
     folder = ResultsFolder.open(out)
-    row = best_row(folder.read_table(), figure)
+    row = best_row([r for r in folder.read_table() if among is None or r["variant"] in among], figure)
     source = folder.root / row["design"]
     if not written_by_ppfab(source):
         raise OutputFileError(f"{source} was not written by ppfab or was changed since; run the sweep again to "

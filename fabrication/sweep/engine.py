@@ -42,7 +42,8 @@ class SweepSetupError(PpfabError):
 @dataclass(frozen=True)
 class SweepReport:
     """What a sweep did: variants in the sweep, computed now, skipped (already in the table), failed (of the
-    whole table's variants of this sweep), seconds, where the results are, and every row of the table."""
+    sweep's variants), seconds, where the results are, and the rows of the sweep's variants (the table may
+    hold more: variants of earlier sweeps into the same folder)."""
 
     variants: int
     computed: int
@@ -146,13 +147,13 @@ def _run_locked(spec: SweepSpec, out: str | os.PathLike, variants: list[Variant]
     keys = {v.key for v in variants}
     mine = [r for r in rows.values() if r["variant"] in keys]
     title = f"Sweep {spec.source.name}: {len(variants)} variants of {spec.base.name}"
-    page = index_html(list(rows.values()), title, spec.pareto).encode("utf-8")
+    page = index_html(mine, title, spec.pareto, earlier=len(rows) - len(mine)).encode("utf-8")
     old = folder.root / "index.html"
     if not old.is_file() or old.read_bytes() != page:        # a rerun that changes nothing writes nothing
         folder.commit({"index.html": page})
     return SweepReport(variants=len(variants), computed=computed, skipped=len(variants) - len(todo),
                        failed=sum(1 for r in mine if r["status"] != "ok"), seconds=time.perf_counter() - t0,
-                       out=folder.root, rows=list(rows.values()))
+                       out=folder.root, rows=mine)
 
 
 def _compute(spec: SweepSpec, todo: list[Variant], folder: ResultsFolder, rows: dict[str, dict[str, Any]],
