@@ -407,3 +407,46 @@ def test_a_second_sweep_into_the_same_folder_is_refused(tmp_path):
     assert other.returncode != 0 and str(os.getpid()) in other.stderr, other.stderr
     assert len(other.stderr.strip().splitlines()) == 1
     assert not (out / "results.parquet").exists()
+
+
+def test_index_html_plot_in_a_browser(tmp_path):
+    """In a real headless Chromium (skipped without it): the page draws the front offline, a menu redraws it
+    for another pair of figures, and a point carries its design file's link."""
+    import shutil
+
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver = shutil.which("chromedriver")
+    if not (chromium and driver):
+        pytest.skip("needs Debian's chromium and chromium-driver (.ci/run installs them)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.service import Service
+
+    spec = write_sweep(tmp_path, GEOMETRY_SWEEP)
+    out = tmp_path / "res"
+    local(spec, out)
+    rows = read_rows(out)
+    o = webdriver.ChromeOptions()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"):
+        o.add_argument(a)
+    o.binary_location = chromium
+    d = webdriver.Chrome(service=Service(driver), options=o)
+    try:
+        d.get((out / "index.html").as_uri())
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not d.execute_script(
+                "var g = document.getElementById('pareto'); return !!(g && g.data);"):
+            time.sleep(0.1)
+        shown = d.execute_script("var g = document.getElementById('pareto');"
+                                 "return g.data[0].x.length + g.data[1].x.length;")
+        assert shown == len(rows)
+        d.execute_script("var s = document.getElementById('pareto-x'); s.value = 'glass_area_m2';"
+                         "s.dispatchEvent(new Event('change'));")
+        x, title, links = d.execute_script("var g = document.getElementById('pareto');"
+                                           "return [g.data[0].x.concat(g.data[1].x), g.layout.xaxis.title.text,"
+                                           " g.data[0].customdata.concat(g.data[1].customdata)];")
+        assert title == "glass_area_m2"
+        assert sorted(x) == pytest.approx(sorted(r["glass_area_m2"] for r in rows))
+        assert sorted(links) == sorted(r["design"] for r in rows)
+        assert d.get_log("browser") == []
+    finally:
+        d.quit()
