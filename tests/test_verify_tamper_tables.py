@@ -226,9 +226,17 @@ def _gap_text(folder):
     return "manifest.json: fabrication.panels.gap: 'wide' is not "
 
 
-@pytest.mark.parametrize("tamper", [_frame, _face, _vertex, _axis, _glass_sheets, _gap_text],
+def _json_node(folder):
+    doc = json.loads((folder / "nodes.json").read_text())
+    doc["nodes"][3] = 7
+    (folder / "nodes.json").write_text(json.dumps(doc))
+    reseal(folder, "nodes.json")
+    return "nodes.json: nodes[3]: is not a node record"
+
+
+@pytest.mark.parametrize("tamper", [_frame, _face, _vertex, _axis, _glass_sheets, _gap_text, _json_node],
                          ids=["parts-frame", "parts-face", "nodes-vertex", "nodes-axis", "files-glass_sheets",
-                              "fabrication-gap"])
+                              "fabrication-gap", "nodes-json-node"])
 def test_malformed_value_is_one_finding_not_a_traceback(copy, tamper):
     expected = tamper(copy)
     run = subprocess.run([sys.executable, "-m", "fabrication.cli", "verify", str(copy), "--quiet"],

@@ -40,10 +40,14 @@ def _node_plates(v: Verification) -> dict[int, dict[str, dict]]:
         return {}
     v.data["nodes_json"] = doc
     out: dict[int, dict[str, dict]] = {}
-    for node in doc.get("nodes", []):
-        out[int(node["vertex"])] = {b["part_id"]: {**b, "joint": node.get("joint"),
-                                                   "slot_width_mm": node.get("slot_width_mm")}
-                                    for b in node.get("beams", [])}
+    nodes = doc.get("nodes", []) if isinstance(doc, dict) else []
+    for k, node in enumerate(nodes if isinstance(nodes, list) else []):
+        try:
+            out[int(node["vertex"])] = {b["part_id"]: {**b, "joint": node.get("joint"),
+                                                       "slot_width_mm": node.get("slot_width_mm")}
+                                        for b in node.get("beams", [])}
+        except (AttributeError, KeyError, TypeError, ValueError):
+            v.error(rel, f"nodes[{k}]", "is not a node record (vertex, joint, beams of part_id and role)")
     return out
 
 
