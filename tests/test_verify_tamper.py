@@ -4,9 +4,6 @@ file and element."""
 
 from __future__ import annotations
 
-import csv
-import hashlib
-import io
 import json
 import re
 import shutil
@@ -16,44 +13,12 @@ import pytest
 
 from fabrication.cli import main
 
+from tamper import copy, findings, read_rows, reseal, write_rows  # noqa: F401
+
 from conftest import REPO, built_folder, small_vault
 
 DESIGN = small_vault("tamper", max_length=5000.0, joint="halflap")
 built = built_folder("tamper", DESIGN)
-
-
-@pytest.fixture
-def copy(built, tmp_path):
-    out = tmp_path / "copy"
-    shutil.copytree(built, out)
-    return out
-
-
-def reseal(folder, *names):
-    """Update the manifest's sha256 of the tampered files, as someone covering their tracks would."""
-    m = json.loads((folder / "manifest.json").read_text())
-    for name in names:
-        m["sha256"][name] = hashlib.sha256((folder / name).read_bytes()).hexdigest()
-    (folder / "manifest.json").write_text(json.dumps(m, indent=2))
-
-
-def findings(folder, capsys) -> str:
-    capsys.readouterr()
-    assert main(["verify", str(folder), "--quiet"]) == 1
-    return capsys.readouterr().err
-
-
-def read_rows(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
-
-
-def write_rows(path, rows):
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-    w.writeheader()
-    w.writerows(rows)
-    path.write_text(buf.getvalue())
 
 
 def set_node(folder, rows, row, columns, key, value):
