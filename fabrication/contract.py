@@ -380,3 +380,8 @@ def json_safe(obj: object) -> object:
     if isinstance(obj, (list, tuple)):
         return [json_safe(v) for v in obj]
     return obj
+
+
+PARTIAL_MARKER = ".ppfab-partial"
+"""The file a build keeps in its temporary folder while it writes (removed before the folder is committed);
+:mod:`fabrication.pipeline.lock` writes it, ``ppfab verify`` does not count it as a stray file."""

@@ -246,7 +246,8 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
     rep.heading("Panels")
     rep.table(["panel", "type", "face", "area [m²]", "weight [kg]", "min/max corner [°]", "deviation [mm]",
                "sheet", "nest tag", "flags"],
-              [(p.part_id, p.type_id, p.face, p.area_mm2 / 1e6, p.weight_kg,
+              [(p.part_id, p.type_id, p.face, float(place.get(p.part_id, {}).get("area_mm2", p.area_mm2)) / 1e6,
+                float(place.get(p.part_id, {}).get("weight_kg", p.weight_kg)),
                 f"{min(p.corner_angles_deg):.1f} / {max(p.corner_angles_deg):.1f}", p.deviation_mm,
                 place.get(p.part_id, {}).get("sheet", ""), place.get(p.part_id, {}).get("nest_tag", ""),
                 ", ".join(p.flags)) for p in panels], left=(0, 1, 9))

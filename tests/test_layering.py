@@ -31,7 +31,7 @@ FAB_LAYERS = [
      "report_glazing", "erection", "erection_drawing"},
     {"writers", "verify"},
     {"pipeline"},
-    {"cli", "studio"},
+    {"cli", "studio", "sweep"},
 ]
 
 

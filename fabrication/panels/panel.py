@@ -114,6 +114,8 @@ class Panel:
             meta["face_i"], meta["face_j"] = self.face_ij
         meta.update(self.meta)
         cut = shape or self
+        if cut is not self and self.area_mm2 > 0:        # the glass as cut (its type's outline) is what weighs
+            meta["weight_kg"] = round(self.weight_kg * cut.area_mm2 / self.area_mm2, 3)
         rotations = ROTATIONS[self.rotation]
         meta["rotation"] = self.rotation
         return FlatPart(part_id=self.part_id, kind="panel", outline=cut.outline, marks=cut.marks,

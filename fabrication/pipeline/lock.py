@@ -45,11 +45,12 @@ except ImportError:  # pragma: no cover
 
 from ppfab.errors import PpfabError
 
+from ..contract import PARTIAL_MARKER
 from .overwrite import rename_noreplace
 
 log = logging.getLogger("ppfab")
 
-MARKER = ".ppfab-partial"
+MARKER = PARTIAL_MARKER
 """File inside a temporary output folder naming the process that writes it (removed before the rename)."""
 
 

@@ -255,11 +255,14 @@ def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting:
     v = qm.vertices
     bt = beams.report.totals()
     gn, bn = nesting.glass, nesting.plates
+    from ..panels import type_flat_parts
+
+    cut = type_flat_parts(list(panels.panels))        # the glass as cut: each pane to its type's outline
     return Summary(
         extent_mm=[float(x) for x in np.ptp(v, axis=0)],
         panels=len(panels.panels), panel_types=len(panels.types),
-        glass_area_m2=float(sum(p.area_mm2 for p in panels.panels) / 1e6),
-        glass_weight_kg=float(sum(p.weight_kg for p in panels.panels)),
+        glass_area_m2=float(sum(p.area for p in cut) / 1e6),
+        glass_weight_kg=float(sum(float(p.meta["weight_kg"]) for p in cut)),
         beams=bt["beams"], beam_plates=bt["plates"], beam_types=bt["types"],
         beam_length_m=bt["length_m"], beam_mass_kg=bt["mass_kg"],
         plate_area_m2=float(sum(p.area for p in nesting.beam_parts) / 1e6),

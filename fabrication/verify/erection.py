@@ -216,6 +216,21 @@ def depth_of(shape: Any) -> tuple[float, float]:
     return best, vol
 
 
+def welded_on(part: str, other: str) -> bool:
+    """A glazing strip (``GS-U03-07``) or its gasket (``GK-U03-07``) against a plate of its own beam (``B-U03``,
+    ``B-U03-S01``): parts in designed contact — the strip is lowered onto and welded to that plate's top edge.
+    Their fit in place (the plate's lean under a flat strip) is the clash check's and glazing's business, not the
+    order's, so the sweep does not measure the pair.
+
+    >>> welded_on("GS-U03-07", "B-U03-S01"), welded_on("GK-U03-07", "B-U03"), welded_on("GS-U03-07", "B-W02")
+    (True, True, False)
+    """
+    if not part.startswith(("GS-", "GK-")):
+        return False
+    beam = "B-" + part[3:].rsplit("-", 1)[0]
+    return other == beam or other.startswith(beam + "-")
+
+
 def _perp(d: np.ndarray) -> np.ndarray:
     a = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(d, a)
@@ -252,6 +267,8 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             & np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE, axis=1)
         shape = None
         for k in np.flatnonzero(near):
+            if welded_on(pid, names[k]):
+                continue
             b = bodies[names[k]]
             if shape is None:
                 shape = body.swept(d, far)

@@ -1,6 +1,6 @@
 """Every file in the folder is listed in the manifest: a file ppfab did not write and list (``sha256``), such as
 an extra cutting sheet copied in after the build, is a finding naming it; ``manifest.json`` itself lists none, and
-the marker a build keeps in its folder while it writes (:data:`fabrication.pipeline.lock.MARKER`, removed before
+the marker a build keeps in its folder while it writes (:data:`fabrication.contract.PARTIAL_MARKER`, removed before
 the folder is delivered) is not a file of the build."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from . import Verification, check
 
 @check("files", 11)
 def check_files(v: Verification) -> None:
-    from ..pipeline.lock import MARKER
+    from ..contract import PARTIAL_MARKER as MARKER
 
     m = v.data.get("manifest", {})
     listed = set(m.get("sha256", {})) | {"manifest.json", MARKER}

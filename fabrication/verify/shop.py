@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import BOLTS_CSV, STOCK_HEADER_VARS, stock_title, thickness_text
+from ..contract import BOLTS_CSV, STOCK_HEADER_VARS, csv_value, stock_title, thickness_text
 from ..glazing.bolts import BOLT_COLUMNS, BoltSpec, bolt_set
 from . import Verification, check, read_csv
 from ._shapes import frame_of, to_frame
@@ -149,7 +149,7 @@ def check_dxf_stock(v: Verification) -> None:
             row = by_id.get(pid) or by_type.get(pid)
             if row is None:
                 continue                         # the dxf check names outlines of no part
-            want = (str(row.get("material", "")), thickness_text(row.get("thickness_mm", "")))
+            want = (csv_value(str(row.get("material", ""))), thickness_text(row.get("thickness_mm", "")))
             got = (x.get("material"), x.get("thickness_mm"))
             if got != want:
                 v.error(rel, pid, f"XDATA material/thickness_mm {got[0]!r}, {got[1]!r}; parts.csv has "

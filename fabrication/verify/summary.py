@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..contract import csv_value
 from . import Verification, check, read_csv
 from ._cells import file_list, is_number
 
@@ -53,13 +54,13 @@ def recompute_summary(v: Verification) -> dict[str, Figure]:
         glass = sum(_num(r["area_mm2"]) for r in panels)
         steel = sum(_num(r["area_mm2"]) for r in plates)
         out.update(panels=_count(n), panel_types=_count(len({r["type_id"] for r in panels if r["type_id"]})),
-                   glass_area_m2=Figure(glass / 1e6, 5e-10 * n + 1e-12),
+                   glass_area_m2=Figure(glass / 1e6, 5e-8 * n + 1e-9),     # area_mm2 to 0.1 mm²
                    glass_weight_kg=Figure(sum(_num(r["weight_kg"]) for r in panels), 5e-4 * n + 1e-9),
                    beams=_count(len({r.get("beam_id", "") for r in plates})), beam_plates=_count(k),
                    beam_types=_count(len({r["type_id"] for r in plates if r["type_id"]})),
                    beam_length_m=Figure(sum(_num(r["length_mm"]) for r in plates) / 1e3, 5e-7 * k + 1e-9),
                    beam_mass_kg=Figure(sum(_num(r["mass_kg"]) for r in plates), 5e-5 * k + 1e-9),
-                   plate_area_m2=Figure(steel / 1e6, 5e-10 * k + 1e-12))
+                   plate_area_m2=Figure(steel / 1e6, 5e-8 * k + 1e-9))
         metal = [r for r in parts if r["kind"] in ("beam", "strip", "splice")]
         out["steel_mass_kg"] = Figure(sum(_num(r["mass_kg"]) for r in metal), 5e-4 * len(metal) + 1e-9)
     if files.get("welds_csv") or parts:
@@ -123,7 +124,7 @@ def recompute_fabrication(v: Verification) -> dict[str, Figure]:
     parts = v.data.get("parts", [])
     out: dict[str, Figure] = {}
     for key, kind, column in FROM_ROWS:
-        values = [r.get(column, "") for r in parts if r["kind"] == kind and r.get(column, "") != ""]
+        values = [csv_value(r.get(column, "")) for r in parts if r["kind"] == kind and r.get(column, "") != ""]
         if not values:
             continue
         common = max(sorted(set(values)), key=values.count)
