@@ -238,6 +238,7 @@ def test_verify_fails_a_build_beyond_its_crease_limit(dome_build, tmp_path, caps
     (i, j), worst = max(angles.items(), key=lambda kv: kv[1])
     m = json.loads((out / "manifest.json").read_text())
     m["fabrication"]["max_crease_deg"] = worst - 1.0                # as if built with a tighter limit
+    m["fabrication"]["panels"]["max_crease_deg"] = worst - 1.0      # (the section key the flat one repeats)
     (out / "manifest.json").write_text(json.dumps(m, indent=1))
     capsys.readouterr()
     assert main(["verify", str(out)]) != 0

@@ -39,7 +39,8 @@ def seat_range(v: Verification) -> tuple[float, float]:
     """Where a pane's underside may lie above its face's plane, mm: the glazing offset (``manifest.json``
     ``glazing.offset_mm``, strip + gasket; 0 without strips) ± half the strip width × the tangent of the larger
     of ``glazing.max_tilt_deg`` and the largest ``tilt_deg`` of ``bites.csv`` (a gasket tilted by that angle
-    raises or lowers the pane by at most that much over its width), ± 0.1 mm for the faces' planarity."""
+    raises or lowers the pane by at most that much over its width), ± ``panels.planarity_tolerance`` for the
+    faces' corners off their least-squares plane."""
     from . import read_csv
     from ._shapes import number
 
@@ -53,7 +54,8 @@ def seat_range(v: Verification) -> tuple[float, float]:
     if rel and (v.folder / rel).is_file():
         tilt = max([tilt] + [number(r.get("tilt_deg"), 0.0) for r in read_csv(v.folder / rel)])
     spread = 0.5 * float(gl.get("width", 0.0)) * float(np.tan(np.radians(min(tilt, 45.0))))
-    return nominal - spread - 0.1, nominal + spread + 0.1
+    flat = float(m.get("fabrication", {}).get("planarity_tolerance", 0.1) or 0.1)     # a face's corners off its plane
+    return nominal - spread - flat, nominal + spread + flat
 
 
 def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None:
