@@ -379,17 +379,19 @@ def check_erection(v: Verification) -> None:
             "erection: %d pair(s) of parts overlap in their final places by up to %.2f mm (%s in %s): a fit of the "
             "finished model (plate lean under the glazing, docs/glazing.md), not of the order",
             len(overlapping), worst.static, worst.part, worst.through)
-    # the plan's way in for cover plates, strips and gaskets past the beam plates (lowered in the beam's plane or
-    # along the strip's down) is not proven on leaning beams of real meshes: said, not failed
-    onto_steel = sorted({p.part for p in deep if kinds.get(p.part) in ("splice", "strip", "gasket")
-                         and p.through in beams})
+    # the plan's way in for cover plates, strips, gaskets and panes past the steel (lowered in the beam's plane,
+    # along the strip's down or the pane's inside normal) is not proven on leaning beams: said, not failed; the
+    # order of the beam plates and of the glazing and glass among themselves stays a finding
+    steel = beams | {pid for pid, kind, *_ in rows if kind == "splice"}
+    onto_steel = sorted({p.part for p in deep if kinds.get(p.part) in ("splice", "strip", "gasket", "panel")
+                         and p.through in steel})
     if onto_steel:
         logging.getLogger("ppfab").warning(
-            "erection: %d cover plate(s), strip(s) or gasket(s) pass a beam plate on their way in (%s): fit them "
-            "before that plate or from the side", len(onto_steel), ", ".join(onto_steel[:6]))
+            "erection: %d cover plate(s), strip(s), gasket(s) or pane(s) pass a beam or cover plate on their way in "
+            "(%s): fit them before that plate or from the side", len(onto_steel), ", ".join(onto_steel[:6]))
     shown = 0
     for p in sorted(deep, key=lambda p: -p.depth):
-        if (p.part in blocked and p.through in beams) or p.part in onto_steel and p.through in beams:
+        if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel):
             continue
         if shown < 20:
             v.error(rel, p.part, f"passes through {p.through} by {p.depth:.2f} mm ({p.volume:.0f} mm³) on its way in "
