@@ -381,14 +381,15 @@ def check_erection(v: Verification) -> None:
             len(overlapping), worst.static, worst.part, worst.through)
     # the plan's way in for cover plates, strips, gaskets and panes past the steel (lowered in the beam's plane,
     # along the strip's down or the pane's inside normal) is not proven on leaning beams: said, not failed; the
-    # order of the beam plates and of the glazing and glass among themselves stays a finding
+    # rows (they go in first, into nothing) and the glazing and glass among themselves stay findings
     steel = beams | {pid for pid, kind, *_ in rows if kind == "splice"}
-    onto_steel = sorted({p.part for p in deep if kinds.get(p.part) in ("splice", "strip", "gasket", "panel")
+    onto_steel = sorted({p.part for p in deep if kinds.get(p.part) in ("column", "splice", "strip", "gasket", "panel")
                          and p.through in steel})
     if onto_steel:
         logging.getLogger("ppfab").warning(
-            "erection: %d cover plate(s), strip(s), gasket(s) or pane(s) pass a beam or cover plate on their way in "
-            "(%s): fit them before that plate or from the side", len(onto_steel), ", ".join(onto_steel[:6]))
+            "erection: %d column plate(s), cover plate(s), strip(s), gasket(s) or pane(s) pass a beam or cover plate "
+            "on their way in (%s): no single straight way in past leaning steel; fit them before that plate, from the "
+            "side, or split them", len(onto_steel), ", ".join(onto_steel[:6]))
     shown = 0
     for p in sorted(deep, key=lambda p: -p.depth):
         if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel):
