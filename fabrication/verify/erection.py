@@ -383,8 +383,10 @@ def check_erection(v: Verification) -> None:
     # along the strip's down or the pane's inside normal) is not proven on leaning beams: said, not failed; the
     # rows (they go in first, into nothing) and the glazing and glass among themselves stay findings
     steel = beams | {pid for pid, kind, *_ in rows if kind == "splice"}
-    onto_steel = sorted({p.part for p in deep if kinds.get(p.part) in ("column", "splice", "strip", "gasket", "panel")
-                         and p.through in steel})
+    glazing = {pid for pid, kind, *_ in rows if kind in ("strip", "gasket")}
+    onto_steel = sorted({p.part for p in deep if (kinds.get(p.part) in ("column", "splice", "strip", "gasket", "panel")
+                                                  and p.through in steel)
+                         or (kinds.get(p.part) == "panel" and p.through in glazing)})
     if onto_steel:
         logging.getLogger("ppfab").warning(
             "erection: %d column plate(s), cover plate(s), strip(s), gasket(s) or pane(s) pass a beam or cover plate "
@@ -392,7 +394,7 @@ def check_erection(v: Verification) -> None:
             "side, or split them", len(onto_steel), ", ".join(onto_steel[:6]))
     shown = 0
     for p in sorted(deep, key=lambda p: -p.depth):
-        if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel):
+        if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel | glazing):
             continue
         if shown < 20:
             v.error(rel, p.part, f"passes through {p.through} by {p.depth:.2f} mm ({p.volume:.0f} mm³) on its way in "
