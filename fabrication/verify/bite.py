@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..contract import gasket_id
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._cells import CellReader
 from ._shapes import solid_points
 from ._step_read import read_or_report
@@ -136,10 +136,8 @@ def _check_rows(v: Verification, rel: str, measured: dict[str, dict[tuple[int, i
     """Every row of ``bites.csv`` against the measure of its pane edge (found by its strip's mesh edge), and a
     row for every pane edge measured."""
     cells = CellReader(v, rel)
-    try:
-        rows = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    rows = v.read_table(rel)
+    if rows is None:
         return
     seen: set[tuple[str, tuple[int, int]]] = set()
     for n, r in enumerate(rows, start=1):

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..contract import BOLTS_CSV, STOCK_HEADER_VARS, csv_value, stock_title, thickness_text
 from ..glazing.bolts import BOLT_COLUMNS, BoltSpec, bolt_set
-from . import Verification, check, read_csv
+from . import Verification, check
 from ._shapes import frame_of, to_frame
 
 DXF_FILE_KEYS = ("glass_sheets", "beam_sheets", "panel_type_dxfs", "splice_dxfs", "dxf_r12", "dxf_r2000")
@@ -57,10 +57,8 @@ def check_bolts(v: Verification) -> None:
         v.error("manifest.json", "fabrication.splices", f"the bolt cannot be recomputed ({exc})")
         return
     by_id = {r["part_id"]: r for r in parts}
-    try:
-        rows = read_csv(v.folder / rel)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        v.error(rel, "", f"cannot be read ({exc})")
+    rows = v.read_table(rel)
+    if rows is None:
         return
     if rows and list(rows[0]) != list(BOLT_COLUMNS):
         v.error(rel, "header", f"columns {list(rows[0])} are not {list(BOLT_COLUMNS)}")
