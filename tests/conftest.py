@@ -9,7 +9,17 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+SHARED_DATA = Path(os.environ.get("PPFAB_SHARED_DATA", REPO.parent / "shared" / "data"))
+
+
+def shared_file(name: str) -> Path:
+    """The path of a real mesh or data file of the shared data folder (``../shared/data`` beside the clone, or
+    ``$PPFAB_SHARED_DATA``); the calling test is skipped, with the path it looked for, when the file is absent."""
+    path = SHARED_DATA / name
+    if not path.is_file():
+        pytest.skip(f"shared data file {name} not found in {SHARED_DATA} (place the shared data folder beside the "
+                    f"clone or set PPFAB_SHARED_DATA)")
+    return path
 FULL = bool(os.environ.get("PPFAB_FULL"))
 
 
