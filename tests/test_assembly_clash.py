@@ -28,7 +28,7 @@ from fabrication.cli import main
 from fabrication.glazing.seat import SEAT_TOLERANCE
 from fabrication.verify._step_read import read_step_solids
 
-from conftest import REPO, SHARED_DATA, small_vault
+from conftest import REPO, shared_file, small_vault
 
 TOL = SEAT_TOLERANCE
 
@@ -66,7 +66,7 @@ def real(tmp_path_factory) -> Path:
     from ppfab.mesh import QuadGrid
 
     root = tmp_path_factory.mktemp("clash_real")
-    grid = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj").to_grid()
+    grid = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).to_grid()
     write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 0:8])), root / "patch.obj")
     (root / "d.toml").write_text(f'[design]\nname = "rot4 patch"\n[geometry]\nmesh = "{(root / "patch.obj").as_posix()}"\n'
                                  "scale = 3000.0\n[beams]\nfallback = \"segmented\"\n[nesting]\ntime_budget = 0.5\n"

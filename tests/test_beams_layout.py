@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import shared_file
 from shapely.geometry import LineString, Point, Polygon
 
 from fabrication.beams import BeamParams, build_beams, slot_width
@@ -248,7 +248,7 @@ def test_closed_rows_are_cut_into_pieces():
 
 
 def test_general_mesh_plates_stop_at_singular_vertices():
-    mesh = transform(load_mesh(SHARED_DATA / "DOS__botanic-garden-bubble-0.obj"), scale=1000.0)
+    mesh = transform(load_mesh(shared_file("DOS__botanic-garden-bubble-0.obj")), scale=1000.0)
     s = support_structure(mesh)
     bs = build_beams(s, BeamParams(joint="none", max_length=0), strict=False)
     topo = mesh.topology

@@ -7,7 +7,7 @@ import pytest
 from fabrication.cli import main
 from ppfab.io import load_mesh
 
-from conftest import SHARED_DATA, small_design
+from conftest import shared_file, small_design
 
 
 def run(capsys, *argv):
@@ -17,14 +17,14 @@ def run(capsys, *argv):
 
 
 def test_check_on_shared_meshes_reports_metrics(capsys):
-    code, out, _ = run(capsys, "check", SHARED_DATA / "DOS__enneper2.obj", "--json")
+    code, out, _ = run(capsys, "check", shared_file("DOS__enneper2.obj"), "--json")
     assert code == 0
     q = json.loads(out)
     assert q["grid_shape"] == [31, 31]
     assert q["delta_f_max"] == pytest.approx(3.8e-4, rel=0.05)
-    code, out, _ = run(capsys, "check", SHARED_DATA / "DOS__enneper2.obj", "--tol", "1e-5")
+    code, out, _ = run(capsys, "check", shared_file("DOS__enneper2.obj"), "--tol", "1e-5")
     assert code == 1 and "delta_f" in out
-    code, _, _ = run(capsys, "check", SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj", "--tol", "2e-6")
+    code, _, _ = run(capsys, "check", shared_file("DOI__rot4_def1_sparse_rot.obj"), "--tol", "2e-6")
     assert code == 0
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +13,7 @@ from ppfab.errors import GeometryError
 from ppfab.folds import folded_faces, largest_valid_block
 from ppfab.io import load_mesh
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+from conftest import shared_file  # noqa: E402
 
 
 def test_axis_of_concyclic_normals():
@@ -41,8 +40,8 @@ def test_axis_of_degenerate_normal_sets_is_the_bisector():
 
 
 def test_concyclic_residual_tells_conical_from_non_conical_data():
-    conical = load_mesh(DATA / "DOS__conical1.obj").to_grid()                 # a published conical mesh
-    deformed = load_mesh(DATA / "DOI__rot4_def1_sparse.obj").to_grid()        # planar-quad? no: deformed
+    conical = load_mesh(shared_file("DOS__conical1.obj")).to_grid()                 # a published conical mesh
+    deformed = load_mesh(shared_file("DOI__rot4_def1_sparse.obj")).to_grid()        # planar-quad? no: deformed
     assert concyclic_residual(conical)[1:-1, 1:-1].max() < 1e-5
     assert concyclic_residual(deformed)[1:-1, 1:-1].max() > 1e-2
     assert conical_quality(conical).angle_max < 1e-3 < conical_quality(deformed).angle_max

@@ -4,7 +4,6 @@ planar boundary polylines kept by Laguerre maps, offsets, isotropic Möbius maps
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,7 +22,7 @@ from ppfab.metrics import polyline_planarity, quality
 
 from conftest import conical_zoo
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+from conftest import shared_file  # noqa: E402
 TOL = 1e-9
 WAVY = np.array([[0, 0, 2, 5.0], [8, 3, 3, 6], [16, -2, 2.5, 5.5], [24, 0, 2, 4.5], [30, 2, 3, 5]])
 
@@ -188,7 +187,7 @@ def test_conical_edit_of_a_reloaded_grid(name):
 # -- real meshes: conical but not P, closed ----------------------------------------------------------------
 
 def test_ghosts_of_a_published_conical_mesh_and_of_a_closed_non_planar_boundary():
-    grid = load_mesh(DATA / "DOS__conical1.obj").to_grid()          # no planar boundary: propagated ghosts
+    grid = load_mesh(shared_file("DOS__conical1.obj")).to_grid()          # no planar boundary: propagated ghosts
     E = ghost_planes(grid)
     P = vertex_planes(grid, E)
     a, c, res = axis_of_normals(P[..., :3])
@@ -197,7 +196,7 @@ def test_ghosts_of_a_published_conical_mesh_and_of_a_closed_non_planar_boundary(
     assert (s[..., 2] / s[..., 0]).min() > 1e-4 and c.min() > 0.9
     out = offset_faces(grid, 0.01 * np.linalg.norm(np.ptp(grid.vertices.reshape(-1, 3), axis=0)))
     assert quality(out).flipped_edges == 0 and quality(out).nonconvex_faces == 0
-    closed = load_mesh(DATA / "DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj").to_grid()
+    closed = load_mesh(shared_file("DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj")).to_grid()
     assert closed.closed and polyline_planarity(closed.vertices[[0, -1]]).max() > 1e-6
     with pytest.raises(GeometryError, match="do not meet in a single point"):
         isotropic.isotropic_transform(closed, IsotropicMobius(), max_residual=1e-3)

@@ -16,16 +16,10 @@ from ppfab.errors import DesignError
 from ppfab.io import load_mesh
 from ppfab.metrics import conjugacy_defect
 
-from conftest import REPO, SHARED_DATA
+from conftest import REPO, shared_file
 
-PILLOW = SHARED_DATA / "DOS__pillow_1.obj"
+PILLOW = "DOS__pillow_1.obj"
 CONICAL1 = REPO / "examples" / "meshes" / "DOS__conical1.obj"
-
-
-def needs(path):
-    if not path.is_file():
-        pytest.skip(f"{path.name} is not here: the shared real-mesh set lies beside the repository")
-    return path
 
 
 def twist_ratio(mesh) -> float:
@@ -57,13 +51,13 @@ def twist_ratio(mesh) -> float:
 
 
 def test_the_defect_agrees_with_an_independent_estimate():
-    for path in (needs(PILLOW), CONICAL1):
+    for path in (shared_file(PILLOW), CONICAL1):
         mesh = load_mesh(path)
         assert conjugacy_defect(mesh) == pytest.approx(twist_ratio(mesh), rel=0.05, abs=1e-3)
 
 
 def pillow_design(extra: str = "") -> str:
-    return (f'[design]\nname = "pillow"\n[geometry]\nmesh = "{needs(PILLOW).as_posix()}"\nscale = 1500.0\n'
+    return (f'[design]\nname = "pillow"\n[geometry]\nmesh = "{shared_file(PILLOW).as_posix()}"\nscale = 1500.0\n'
             f'[optimize]\nfamilies = "both"\n{extra}[support]\nmethod = "pp"\n[beams]\njoint = "halflap"\n')
 
 
@@ -97,12 +91,12 @@ def test_check_reports_the_defect_and_whether_a_build_would_optimise_it(capsys):
 
     from fabrication.cli import main
 
-    for path, optimisable in ((needs(PILLOW), False), (CONICAL1, True)):
+    for path, optimisable in ((shared_file(PILLOW), False), (CONICAL1, True)):
         assert main(["check", str(path), "--json"]) == 0
         doc = json.loads(capsys.readouterr().out)
         assert doc["conjugacy_defect"] == pytest.approx(twist_ratio(load_mesh(path)), rel=0.05, abs=1e-3)
         assert doc["optimisable"] is optimisable
         by_family = doc["polylines_tangent_by_family"]
         assert by_family["rows"] + by_family["cols"] == len(doc["polylines_tangent"])
-    assert main(["check", str(PILLOW)]) == 0
+    assert main(["check", str(shared_file(PILLOW))]) == 0
     assert "far from a conjugate net (> 0.4): ppfab build refuses to optimise it" in capsys.readouterr().out

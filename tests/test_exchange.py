@@ -493,9 +493,9 @@ def test_exchange_files_of_a_real_mesh(tmp_path):
     from ppfab.io import write_obj
     from ppfab.mesh import QuadGrid
 
-    from conftest import SHARED_DATA
+    from conftest import shared_file
 
-    grid = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj").to_grid()
+    grid = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).to_grid()
     write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 0:8])), tmp_path / "patch.obj")
     doc = {"design": {"name": "rot4 patch"}, "geometry": {"mesh": str(tmp_path / "patch.obj"), "scale": 3000.0},
            "beams": {"fallback": "segmented"},          # its boundary polylines become beams of one plate each

@@ -8,7 +8,7 @@ from ppfab.io import grid_from_json, grid_to_json, load_mesh, read_mesh, write_o
 from ppfab.mesh import QuadGrid
 from ppfab.metrics import quality
 
-from conftest import SHARED_DATA, smooth_face_image
+from conftest import shared_file, smooth_face_image
 
 # file: (grid shape as a sorted pair or None, closed, δ_f max, δ_P max) from shared/data/README.md
 README = {
@@ -31,7 +31,7 @@ COUNTS = {
 
 @pytest.mark.parametrize("name", sorted(README))
 def test_shared_meshes_load_and_agree_with_readme(name):
-    mesh = load_mesh(SHARED_DATA / name)
+    mesh = load_mesh(shared_file(name))
     assert (len(mesh.vertices), len(mesh.faces)) == COUNTS[name]
     shape, closed, df, dp = README[name]
     q = quality(mesh)
@@ -46,7 +46,7 @@ def test_shared_meshes_load_and_agree_with_readme(name):
 
 
 def test_conjugate_polylines_stop_at_jagged_boundary():
-    mesh = load_mesh(SHARED_DATA / "compas_libigl__inspired_mesh_quads_Conjugate.off")
+    mesh = load_mesh(shared_file("compas_libigl__inspired_mesh_quads_Conjugate.off"))
     lengths = [len(p) for p in mesh.polylines]
     assert min(lengths) == 2 and max(lengths) == 51
     # every edge lies on exactly one polyline
@@ -54,7 +54,7 @@ def test_conjugate_polylines_stop_at_jagged_boundary():
 
 
 def test_singular_vertices_stop_polylines():
-    mesh = load_mesh(SHARED_DATA / "DOS__botanic-garden-bubble-0.obj")
+    mesh = load_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"))
     topo = mesh.topology
     singular = set(np.flatnonzero(~topo.boundary_vertices & (topo.valence != 4)).tolist())
     assert len(singular) == 4
@@ -65,7 +65,7 @@ def test_singular_vertices_stop_polylines():
 
 
 def test_annulus_rows_close():
-    mesh = load_mesh(SHARED_DATA / "DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj")
+    mesh = load_mesh(shared_file("DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj"))
     g = mesh.grid
     assert g.closed and g.shape == (12, 48)
     # recovered grid faces are exactly the file's faces with orientation kept
@@ -169,7 +169,7 @@ def test_missing_file_and_unknown_format(tmp_path):
 
 
 def test_general_mesh_is_not_a_grid():
-    mesh = load_mesh(SHARED_DATA / "DOS__botanic-garden-bubble-0.obj")
+    mesh = load_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"))
     with pytest.raises(GeometryError, match="not a regular grid"):
         mesh.to_grid()
 

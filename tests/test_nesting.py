@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import SHARED_DATA
+from conftest import shared_file
 from fabrication.flatpart import FlatPart, Placement, place_points
 from fabrication.nesting import NestingParams, lower_bound, nest, verify_nesting
 from ppfab.errors import DesignError, NestingError
@@ -16,7 +16,7 @@ from ppfab.schema import parse_params
 
 
 def bench_parts(n: int, start: int = 0) -> list[FlatPart]:
-    data = json.loads((SHARED_DATA / "bench_panels_500.json").read_text())
+    data = json.loads((shared_file("bench_panels_500.json")).read_text())
     return [FlatPart(f"P{i:03d}", "panel", np.array(p, dtype=float)) for i, p in enumerate(data[start:start + n])]
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, shared_file
 from fabrication.flatpart import FlatPart, place_points
 from fabrication.nesting import STRATEGIES, NestingParams, get_strategy, nest, strategy, verify_nesting
 from fabrication.nesting.rows import SheetFiller
@@ -71,7 +71,7 @@ def test_freeform_panels_need_fewer_sheets_as_true_shapes_than_as_rectangles():
 def test_rotation_policy_of_the_glass_is_respected(rotation):
     """Coated or patterned glass (grain) stays at 0/180°, quarter turns at multiples of 90°; free glass
     may take any angle, and does take others on a real mesh."""
-    mesh = load_mesh(REPO.parent / "shared" / "data" / "DOS__conical1.obj")
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
     panels = make_panels(mesh, PanelParams(gap=20.0, planarity_tolerance=50.0, rotation=rotation), scale=1500.0)
     parts = [p.flat_part() for p in panels[:80]]
     params = NestingParams(time_budget=1.0, mode="irregular")
@@ -92,7 +92,7 @@ def test_rotation_policy_of_the_glass_is_respected(rotation):
 def test_free_panel_outline_maps_back_to_the_face():
     """The minimum-area frame is still an isometry of the face plane: the outline maps back to 3D onto
     the inset face, and the nested placement of that outline is what the sheet shows."""
-    mesh = load_mesh(REPO.parent / "shared" / "data" / "DOS__conical1.obj")
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
     panels = make_panels(mesh, PanelParams(gap=20.0, planarity_tolerance=50.0), scale=1500.0)[:20]
     ref = make_panels(mesh, PanelParams(gap=20.0, planarity_tolerance=50.0, rotation="quarter"), scale=1500.0)[:20]
     for p, r in zip(panels, ref):

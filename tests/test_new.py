@@ -15,7 +15,7 @@ from fabrication.cli import main
 from fabrication.design import SECTION_DEFAULTS, _section_types, load_design
 from ppfab.constructions import get_construction, load_all
 
-from conftest import FULL, SHARED_DATA
+from conftest import FULL, shared_file
 from test_examples import check_stages, small_form
 
 METHODS = sorted(load_all())
@@ -104,17 +104,17 @@ def test_new_for_each_method_builds(tmp_path, method):
 def test_new_measures_a_mesh_and_proposes_its_sections(tmp_path, name, capsys):
     from ppfab.io import load_mesh
 
-    design = _new(tmp_path, SHARED_DATA / name)
+    design = _new(tmp_path, shared_file(name))
     text = design.read_text(encoding="utf-8")
     _check_every_key(text, None)
     doc = tomllib.loads(text)
     d = load_design(design)
-    assert d.mesh_path().resolve() == (SHARED_DATA / name).resolve()      # relative to the design file
-    mesh = load_mesh(SHARED_DATA / name)
+    assert d.mesh_path().resolve() == (shared_file(name)).resolve()      # relative to the design file
+    mesh = load_mesh(shared_file(name))
     e = np.linalg.norm(mesh.vertices[mesh.topology.edges[:, 0]] - mesh.vertices[mesh.topology.edges[:, 1]], axis=1)
     scale = doc["geometry"]["scale"]
     assert 1000 <= e.mean() * scale <= 1500 and e.max() * scale <= 2800
-    assert main(["check", str(SHARED_DATA / name), "--json"]) == 0
+    assert main(["check", str(shared_file(name)), "--json"]) == 0
     q = json.loads(capsys.readouterr().out)
     rows, cols = q["delta_p_rows_max"], q["delta_p_cols_max"]
     fam = doc["optimize"]["families"]
@@ -139,7 +139,7 @@ def test_new_measures_a_mesh_and_proposes_its_sections(tmp_path, name, capsys):
     *(["DOS__conical1.obj", "DOS__enneper2.obj"] if FULL else []),
 ])
 def test_new_for_a_mesh_builds_or_gives_the_mesh_refusal(tmp_path, name, capsys):
-    design = _new(tmp_path, SHARED_DATA / name)
+    design = _new(tmp_path, shared_file(name))
     small = tmp_path / "small.toml"
     small.write_text(small_form(design.read_text(encoding="utf-8"), tmp_path), encoding="utf-8")
     capsys.readouterr()
@@ -167,7 +167,7 @@ def test_new_refuses_what_it_cannot_start_from(tmp_path, capsys):
 
 def test_new_on_a_net_far_from_conjugate_says_to_remesh(tmp_path):
     """The pillow (a geodesic net, conjugacy defect 0.58): the starter says the build will refuse it and why."""
-    design = _new(tmp_path, SHARED_DATA / "DOS__pillow_1.obj")
+    design = _new(tmp_path, shared_file("DOS__pillow_1.obj"))
     text = design.read_text(encoding="utf-8")
     assert "conjugacy defect 0.58" in text and "remesh along conjugate curves" in text
 

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import shared_file
 
 from fabrication.beams import BeamParams, build_beams
 from fabrication.beams.samples import sample_pp_grid
@@ -70,7 +70,7 @@ def test_nodes_of_a_pp_patch(tmp_path):
 
 
 def test_nodes_of_a_general_mesh_report_torsion(tmp_path):
-    mesh = transform(load_mesh(SHARED_DATA / "compas_libigl__tubemesh.off"), scale=1000.0)
+    mesh = transform(load_mesh(shared_file("compas_libigl__tubemesh.off")), scale=1000.0)
     mesh = type(mesh)(mesh.vertices, mesh.faces)            # forget the grid: a general quad mesh
     s = support_structure(mesh)
     assert not s.meta["exact"]

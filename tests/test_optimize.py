@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import doctest
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,7 +19,7 @@ from ppfab.optimize.selection import select_polylines
 from ppfab.optimize.solver import LevenbergMarquardt, SolverControl
 from ppfab.schema import parse_params
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+from conftest import shared_file  # noqa: E402
 
 
 def noisy_translational_grid(m: int = 12, n: int = 12, noise: float = 0.03, seed: int = 0) -> QuadGrid:
@@ -219,7 +218,7 @@ def test_explicit_polylines_only(noisy):
 
 
 def test_inconsistent_families_leave_out_self_crossing_polylines():
-    mesh = load_mesh(DATA / "DOS__botanic-garden-bubble-0.obj")
+    mesh = load_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"))
     assert not mesh.topology.families_consistent
     sel = select_polylines(mesh, "rows")
     crossing = sel.crossing.tolist()
@@ -234,7 +233,7 @@ def test_inconsistent_families_leave_out_self_crossing_polylines():
 
 # -- real meshes ---------------------------------------------------------------------------
 def test_conical_pp_mesh_stays_where_it_is():
-    mesh = load_mesh(DATA / "DOI__rot4_def1_sparse_rot.obj")
+    mesh = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj"))
     res = optimize(mesh, families="both")
     assert res.targets_met
     assert res.displacement_rel < 1e-6
@@ -242,7 +241,7 @@ def test_conical_pp_mesh_stays_where_it_is():
 
 
 def test_real_shell_far_from_planar_becomes_pp():
-    mesh = load_mesh(DATA / "compas_libigl__tubemesh.off")
+    mesh = load_mesh(shared_file("compas_libigl__tubemesh.off"))
     q0 = quality(mesh)
     res = optimize(mesh, families="both")
     q = quality(res.mesh)
@@ -254,7 +253,7 @@ def test_real_shell_far_from_planar_becomes_pp():
 
 
 def test_closed_polylines_annulus():
-    mesh = load_mesh(DATA / "DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj")
+    mesh = load_mesh(shared_file("DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj"))
     assert mesh.grid is not None and mesh.grid.closed
     res = optimize(mesh, families="both")
     q = quality(res.mesh)
@@ -412,7 +411,7 @@ def test_hard_case_deformed_mesh_stays_fold_free_and_improves():
     """
     import os
 
-    mesh = load_mesh(DATA / "DOI__rot4_def1_sparse.obj")
+    mesh = load_mesh(shared_file("DOI__rot4_def1_sparse.obj"))
     q0 = quality(mesh)
     full = bool(os.environ.get("PPFAB_FULL"))
     res = optimize(mesh, families="both", max_iterations=500 if full else 25)

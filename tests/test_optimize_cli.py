@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +11,15 @@ from fabrication.cli import main
 from ppfab.io import read_mesh
 from ppfab.metrics import quality
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-TUBE = DATA / "compas_libigl__tubemesh.off"
+from conftest import SHARED_DATA, shared_file  # noqa: E402
+
+TUBE = SHARED_DATA / "compas_libigl__tubemesh.off"
+
+
+@pytest.fixture(autouse=True)
+def _needs_tube() -> None:
+    """Every case here optimises the tube mesh of the shared data (skipped with a message when absent)."""
+    shared_file(TUBE.name)
 
 
 def test_optimize_writes_pp_mesh_in_input_order(tmp_path, capsys):

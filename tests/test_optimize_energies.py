@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import FULL, SHARED_DATA, conical_zoo
+from conftest import FULL, conical_zoo, shared_file
 
 from ppfab.io import load_mesh
 from ppfab.mesh import QuadGrid
@@ -98,7 +98,7 @@ def test_angle_balance_equals_the_metric_and_is_zero_on_a_conical_mesh():
 
 def test_conical_stars_on_a_general_mesh_match_the_metric():
     """Cyclic neighbour order on a real mesh with a jagged boundary (vertex order not row-major)."""
-    mesh = load_mesh(SHARED_DATA / "compas_libigl__inspired_mesh_quads_Conjugate.off")
+    mesh = load_mesh(shared_file("compas_libigl__inspired_mesh_quads_Conjugate.off"))
     stars = conical_stars(mesh.faces, len(mesh.vertices), ~mesh.topology.boundary_vertices)
     ref = mesh_conical_residual(mesh)
     assert len(stars) == np.count_nonzero(np.isfinite(ref)) > 1000
@@ -139,7 +139,7 @@ def test_keep_conical_on_a_conical_mesh_stays_conical(name):
 @pytest.mark.slow
 def test_keep_conical_on_dos_conical1_p():
     """The real conical mesh of the issue: P optimisation used to raise its conical residual to 0.69 rad."""
-    mesh = load_mesh(SHARED_DATA / "DOS__conical1.obj")
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
     res = optimize(mesh, families="rows", keep_conical=True, max_iterations=300 if FULL else 120)
     q = quality(res.mesh)
     assert q.delta_p_rows_max <= 1e-6 and q.delta_f_max <= 1e-6, res.message
@@ -265,7 +265,7 @@ def test_crease_barrier_angle_is_the_dihedral_angle():
     from ppfab.metrics import mesh_dihedral_angles
     from ppfab.optimize.terms import crease_stars, dihedral_and_grad
 
-    mesh = load_mesh(SHARED_DATA / "DOS__heart.obj")
+    mesh = load_mesh(shared_file("DOS__heart.obj"))
     verts, slot = crease_stars(mesh.faces, mesh.topology.edge_faces)
     theta, _ = dihedral_and_grad(np.asarray(mesh.vertices), verts, slot)
     ref = mesh_dihedral_angles(mesh)

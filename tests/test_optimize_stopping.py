@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import FULL, SHARED_DATA
+from conftest import FULL, shared_file
 
 from fabrication.cli import main
 from ppfab.io import load_mesh, read_mesh
@@ -49,7 +49,7 @@ def score(res_or_q, target: float = 1e-6) -> float:
 
 @pytest.fixture(scope="module")
 def evolute_both():
-    mesh = load_mesh(SHARED_DATA / "DOI__evolute_ex8.obj")
+    mesh = load_mesh(shared_file("DOI__evolute_ex8.obj"))
     return mesh, optimize(mesh, families="both", max_iterations=500 if FULL else 80)
 
 
@@ -105,7 +105,7 @@ def test_guard_refuses_a_step_that_creases_an_edge_beyond_the_limit():
 def test_not_a_conjugate_net_returns_no_worse_result_and_says_to_remesh(name, families):
     """A geodesic net and an S-net: planar quads need other polylines.  The run returns nothing worse than
     the input (scored by the worst target ratio, measured here) and says what would help."""
-    mesh = load_mesh(SHARED_DATA / name)
+    mesh = load_mesh(shared_file(name))
     assert conjugacy_defect(mesh) > 0.3
     res = optimize(mesh, families=families, max_iterations=200 if FULL else 60)
     assert not res.targets_met
@@ -126,9 +126,9 @@ def test_not_a_conjugate_net_returns_no_worse_result_and_says_to_remesh(name, fa
 
 
 def test_conjugacy_defect_separates_conjugate_nets():
-    conj = [load_mesh(SHARED_DATA / n) for n in ("DOS__conical1.obj", "DOS__enneper2.obj",
+    conj = [load_mesh(shared_file(n)) for n in ("DOS__conical1.obj", "DOS__enneper2.obj",
                                                  "DOI__rot4_def1_sparse_rot.obj")]
-    other = [load_mesh(SHARED_DATA / n) for n in ("DOS__pillow_1.obj", "DOS__wein99.obj")]
+    other = [load_mesh(shared_file(n)) for n in ("DOS__pillow_1.obj", "DOS__wein99.obj")]
     assert max(conjugacy_defect(m) for m in conj) < 0.01
     assert min(conjugacy_defect(m) for m in other) > 0.3
 
@@ -138,7 +138,7 @@ def test_best_iterate_is_returned_when_the_last_is_worse(monkeypatch):
     message and ``returned`` say so."""
     import ppfab.optimize as opt
 
-    mesh = load_mesh(SHARED_DATA / "compas_libigl__tubemesh.off")
+    mesh = load_mesh(shared_file("compas_libigl__tubemesh.off"))
     real_run = opt.LevenbergMarquardt.run
 
     def run_then_spoil(self):
@@ -157,7 +157,7 @@ def test_best_iterate_is_returned_when_the_last_is_worse(monkeypatch):
 
 
 def test_check_reports_creases_in_text_and_json(capsys):
-    path = SHARED_DATA / "DOI__evolute_ex8.obj"
+    path = shared_file("DOI__evolute_ex8.obj")
     assert main(["check", str(path)]) == 0
     text = capsys.readouterr().out
     assert "crease max" in text and "23.85" in text

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import SHARED_DATA, smooth_face_image
+from conftest import shared_file, smooth_face_image
 from fabrication.panels import PanelParams, congruence_distance, make_panels, panel_types
 from ppfab.errors import DesignError, FabricationError, NonPlanarPanelError
 from ppfab.faceimage import pp_from_face_image
@@ -104,7 +104,7 @@ def test_ids_faces_and_parts_list_fields():
 def test_real_mesh_grid_ids_and_revolution_types():
     from ppfab.io import load_mesh
 
-    mesh = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj")
+    mesh = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj"))
     panels = make_panels(mesh, PanelParams(gap=4.0, congruence_tolerance=0.5), scale=1000.0)
     assert len(panels) == len(mesh.faces)
     assert sorted(p.face for p in panels) == list(range(len(mesh.faces)))
@@ -127,7 +127,7 @@ def test_real_mesh_grid_ids_and_revolution_types():
 def test_nonplanar_panels_stop_before_anything_is_written():
     from ppfab.io import load_mesh
 
-    mesh = load_mesh(SHARED_DATA / "compas_libigl__tubemesh.off")
+    mesh = load_mesh(shared_file("compas_libigl__tubemesh.off"))
     with pytest.raises(NonPlanarPanelError) as err:
         make_panels(mesh, PanelParams(planarity_tolerance=1.0), scale=1000.0)
     e = err.value

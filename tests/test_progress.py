@@ -97,12 +97,12 @@ def test_optimisation_reports_iterations_and_delta():
     from ppfab.io import load_mesh
     from ppfab.optimize import optimize
 
-    from conftest import SHARED_DATA
+    from conftest import shared_file
 
     stream = io.StringIO()
     p = Progress(stream=stream, interval=0.0)
     p.start("geometry")
-    optimize(load_mesh(SHARED_DATA / "compas_libigl__tubemesh.off"), {"families": "rows"}, callback=p.iteration)
+    optimize(load_mesh(shared_file("compas_libigl__tubemesh.off")), {"families": "rows"}, callback=p.iteration)
     p.done("ok")
     its = [e for e in p.events if e.kind == "update"]
     assert len(its) >= 3 and [e.done for e in its] == sorted(e.done for e in its)

@@ -33,7 +33,7 @@ from ppfab.support.structure import vertex_normals
 from ppfab.errors import GeometryError
 from ppfab.transforms.similarity import transform
 
-from conftest import REPO, SHARED_DATA
+from conftest import REPO, SHARED_DATA, shared_file
 
 LOCAL = REPO / "tests" / "data" / "meshes"
 DEPTH = 200.0
@@ -252,7 +252,7 @@ def test_mesh_with_holes_whose_solved_axes_lie_in_the_surface_is_refused():
     75° of the normal the support is torsion-free; where they lie in the surface the solve cannot close the
     torsion of every edge (0.9 mm at 200 mm measured), and the axis check refuses the structure, naming the
     vertices and the reason."""
-    mesh = roof(SHARED_DATA / "libhedra__gitter.off")
+    mesh = roof(shared_file("libhedra__gitter.off"))
     s = support_pp(mesh, beams=CONTEXT)
     angle = axis_normal_angle(mesh, s.axes)
     both_near_normal = (angle[edges_of(mesh)] <= 75.0).all(axis=1)

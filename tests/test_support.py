@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SHARED_DATA
+from conftest import shared_file
 
 from fabrication.beams.samples import sample_conical_grid, sample_p_grid, sample_pp_grid
 from ppfab import planes as pl
@@ -69,7 +69,7 @@ def test_pp_axes_are_intersections_of_the_support_planes(pp_grid):
 
 
 def test_pp_from_fitted_planes_of_a_real_mesh():
-    mesh = load_mesh(SHARED_DATA / "DOI__rot4_def1_sparse_rot.obj")
+    mesh = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj"))
     s = support_pp(mesh)
     _check_basic(s)
     assert s.meta["planes"] == "least squares"
@@ -124,7 +124,7 @@ def test_conical_axes_make_equal_angles_with_the_faces():
 
 
 def test_conical_real_mesh():
-    mesh = load_mesh(SHARED_DATA / "DOS__conical1.obj")
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
     s = support_conical(mesh)
     _check_basic(s)
     assert np.nanmax(conical_axis_residual(mesh, s.axes)) < 2e-4      # the file is conical to ~1e-4
@@ -135,7 +135,7 @@ def test_conical_real_mesh():
 @pytest.mark.parametrize("name", ["DOS__conical1.obj", "DOI__undoloid2_cut2_remesh_SIR-diagCNC.obj",
                                   "DOS__enneper2.obj"])
 def test_parallel_mesh_of_planar_quad_meshes_is_torsion_free(name):
-    mesh = load_mesh(SHARED_DATA / name)
+    mesh = load_mesh(shared_file(name))
     s = support_parallel(mesh)
     _check_basic(s)
     assert s.meta["exact"]
@@ -146,7 +146,7 @@ def test_parallel_mesh_of_planar_quad_meshes_is_torsion_free(name):
 @pytest.mark.parametrize("name", ["DOS__botanic-garden-bubble-0.obj",
                                   "compas_libigl__inspired_mesh_quads_Conjugate.off", "compas_libigl__tubemesh.off"])
 def test_non_planar_meshes_get_a_reported_compromise(name):
-    mesh = load_mesh(SHARED_DATA / name)
+    mesh = load_mesh(shared_file(name))
     s = support_parallel(mesh)
     _check_basic(s)
     assert not s.meta["exact"]       # no parallel mesh near the normal offset exists
@@ -157,7 +157,7 @@ def test_non_planar_meshes_get_a_reported_compromise(name):
 
 
 def test_singular_vertices_keep_axes():
-    mesh = load_mesh(SHARED_DATA / "DOS__botanic-garden-bubble-0.obj")
+    mesh = load_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"))
     topo = mesh.topology
     sing = np.flatnonzero(~topo.boundary_vertices & (topo.valence != 4))
     assert len(sing) == 4
@@ -167,7 +167,7 @@ def test_singular_vertices_keep_axes():
 
 
 def test_rigid_motion_invariance():
-    mesh = load_mesh(SHARED_DATA / "DOS__conical1.obj")
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
     rng = np.random.default_rng(5)
     q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     if np.linalg.det(q) < 0:
