@@ -3,13 +3,18 @@ output folder; the cases that must work despite hostile input (signals, killed r
 file) exit as documented and leave a verified folder or nothing.  The table in docs/bad-input.md is generated
 from the same cases (``tests/bad_inputs.py``); cases that need one run in a separate process."""
 
+import re
+
 import pytest
 
 from bad_inputs import CASES, prepare_case, run_case
+from conftest import SHARED_DATA, shared_file
 
 
 @pytest.mark.parametrize("case", CASES, ids=[f"{c.kind}:{c.what}" for c in CASES])
 def test_bad_input(tmp_path, case):
+    for name in re.findall(re.escape(str(SHARED_DATA)) + r"/([\w.\-]+)", repr(case.files)):
+        shared_file(name)                          # a case built on a real mesh of the shared data: skip without it
     prepare_case(case, tmp_path)
     before = sorted(p.name for p in tmp_path.iterdir())
     code, out, err = run_case(case, tmp_path, prepared=True)
