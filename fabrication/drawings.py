@@ -5,8 +5,8 @@ Views are parallel projections of the structure in mm.  A view is given by its v
 ``u = +y``; front elevation: ``d = +y``; side elevation: ``d = +x``; both ``u = +z``).  Panels are drawn back to
 front (painter's order by ``X·d``).
 
-Labels.  Every label is placed with :func:`fabrication.marking.place_label`: upright (rotation in
-(−90°, 90°]), its box (``LABEL_CHAR_WIDTH`` text heights per character, 1.5 heights deep, larger than the
+Labels.  Every label is placed with :func:`fabrication.marking.place_label`: reading from the bottom
+or the right edge (rotation in (−45°, 135°]), its box (``LABEL_CHAR_WIDTH`` text heights per character, 1.5 heights deep, larger than the
 monospace glyphs drawn) inside the projected panel shrunk by a margin, clear of the beam labels placed before
 it.  On the key plan beam part ids sit on the middle edge of each piece, along it; a beam label that would overlap
 another is moved to the next edge out from the middle.  Text height scales with the panel (a fraction of the

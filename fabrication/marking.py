@@ -1,8 +1,9 @@
 """Marking of flat parts on a cutting sheet: upright labels placed inside the part, and the face mark of a plate.
 
 Label placement.  A label is a block of text lines (part id, face mark, nest tag) written with one rotation
-``θ`` in the *sheet* frame, normalised into ``(−90°, 90°]`` (:func:`upright_deg`) so that it never reads
-upside down.  ``θ`` follows the part's long side (the minimum rotated rectangle of the outline).  The block's
+``θ`` in the *sheet* frame, normalised into ``(−45°, 135°]`` (:func:`upright_deg`) so that it reads from the
+bottom or the right edge of the sheet, as drafting convention (ISO 128) has it: one reading direction per sheet
+— a label along a nearly vertical side reads upwards, never downwards beside a neighbour that reads upwards.  ``θ`` follows the part's long side (the minimum rotated rectangle of the outline).  The block's
 box (:func:`block_size`: ``LABEL_CHAR_WIDTH`` text heights per character, ``LABEL_LINE_PITCH`` heights per
 line) is placed inside the outline shrunk by a margin, and clear of keep-out shapes (the node-axis marks);
 slots are notches of the outline, so the shrunk outline already keeps the text clear of them.  Of the grid of
@@ -34,14 +35,33 @@ FAMILY_LETTERS = "UW"
 """The face-mark letter of a plate of family 0 (rows, planes ``U_i``) and 1 (columns, planes ``W_j``)."""
 
 
-def upright_deg(angle_deg: float) -> float:
-    """The text direction ``angle_deg`` turned by a multiple of 180° into ``(−90°, 90°]``.
+READING_RANGE_DEG = (-45.0, 135.0)
+"""Text directions (degrees, counter-clockwise from the sheet's x axis) that read from the bottom or the right
+edge of a sheet: the half-open range ``(−45°, 135°]``.  Every direction has exactly one representative in it up to
+a half turn, so the labels of one sheet never read in opposite directions."""
 
-    >>> upright_deg(180.0), upright_deg(-90.0), upright_deg(271.0), upright_deg(90.0)
-    (0.0, 90.0, -89.0, 90.0)
+
+def reads_from_bottom_or_right(angle_deg: float) -> bool:
+    """Whether text turned ``angle_deg`` reads from the bottom or the right edge (:data:`READING_RANGE_DEG`).
+
+    >>> reads_from_bottom_or_right(90.0), reads_from_bottom_or_right(-87.0), reads_from_bottom_or_right(180.0)
+    (True, False, False)
     """
-    a = (float(angle_deg) + 90.0) % 180.0 - 90.0
-    return 90.0 if a <= -90.0 + 1e-12 else a + 0.0
+    a = (float(angle_deg) + 180.0) % 360.0 - 180.0
+    lo, hi = READING_RANGE_DEG
+    return lo + 1e-9 < a <= hi + 1e-9
+
+
+def upright_deg(angle_deg: float) -> float:
+    """The text direction ``angle_deg`` turned by a multiple of 180° into ``(−45°, 135°]`` (it reads from the bottom
+    or the right edge, :data:`READING_RANGE_DEG`).
+
+    >>> upright_deg(180.0), upright_deg(-90.0), upright_deg(271.0), upright_deg(90.0), upright_deg(-87.0)
+    (0.0, 90.0, 91.0, 90.0, 93.0)
+    """
+    lo, _ = READING_RANGE_DEG
+    a = (float(angle_deg) - lo) % 180.0 + lo
+    return 135.0 if a <= lo + 1e-12 else a + 0.0
 
 
 def face_sign(frame_normal: np.ndarray, plane_normal: np.ndarray, mirrored: bool) -> int:

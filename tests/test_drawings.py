@@ -86,7 +86,7 @@ def test_labels_do_not_overlap(built, view):
         assert not hits, (view, labels[i].text, [labels[j].text for j in hits])
     for t in labels:
         rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
-        assert -90.0 < -float(rot[0] if rot else 0.0) <= 90.0          # upright
+        assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0         # reads from the bottom or the right edge
 
 
 def test_node_sheets_hold_every_node_once_with_angles_within_the_type(built):

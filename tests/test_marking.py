@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fabrication.marking import TextLine, face_marks, place_label, upright_deg
+from fabrication.marking import TextLine, face_marks, place_label, reads_from_bottom_or_right, upright_deg
 
 from conftest import built_folder, small_vault
 
@@ -56,7 +56,8 @@ def _cut_polygons(doc) -> dict[str, "object"]:
 def test_upright_angle():
     for a in np.linspace(-720, 720, 97):
         u = upright_deg(a)
-        assert -90 < u <= 90 and abs(np.sin(np.radians(u - a))) < 1e-9
+        assert -45 < u <= 135 and abs(np.sin(np.radians(u - a))) < 1e-9
+        assert reads_from_bottom_or_right(u) and not reads_from_bottom_or_right(u + 180.0)
 
 
 def test_labels_are_upright_inside_their_part_and_clear_of_slots(built):
@@ -76,7 +77,8 @@ def test_labels_are_upright_inside_their_part_and_clear_of_slots(built):
             hit = tree.query(Point(p[0], p[1]), predicate="within")
             assert len(hit) == 1, (path.name, e.dxf.text)
             poly = cuts[ids[int(hit[0])]]
-            assert -90.0 < e.dxf.rotation <= 90.0, (path.name, e.dxf.text, e.dxf.rotation)
+            # one reading direction per sheet: from the bottom or the right edge (ISO 128), never opposite ways
+            assert -45.0 < (e.dxf.rotation + 180.0) % 360.0 - 180.0 <= 135.0, (path.name, e.dxf.text, e.dxf.rotation)
             box = Polygon(_text_box(e))
             # inside the part, and clear of its outline (edges and slot notches alike) by 1 mm
             assert poly.buffer(-1.0).contains(box), (path.name, e.dxf.text, poly.exterior.distance(box))
@@ -156,7 +158,7 @@ def test_a_label_avoids_slots_and_axis_lines():
     assert box.distance(LineString(axis)) >= 5.0 - 1e-9
     slot = Polygon([(290, 75), (310, 75), (310, 160), (290, 160)])
     assert box.distance(slot) >= 5.0 - 1e-9
-    assert all(-90 < pl.rotation_deg <= 90 for pl in where.lines)
+    assert all(-45 < pl.rotation_deg <= 135 for pl in where.lines)
 
 
 def test_verify_names_a_wrong_face_mark_and_an_upside_down_label(built, tmp_path):
@@ -174,9 +176,11 @@ def test_verify_names_a_wrong_face_mark_and_an_upside_down_label(built, tmp_path
     face = [t for t in texts if t.dxf.text[-1] in "+-" and len(t.dxf.text) == 2][0]
     pid = [v for _, v in face.get_xdata("PPFAB") if v.startswith("part_id=")][0].split("=", 1)[1]
     face.dxf.text = face.dxf.text[0] + ("-" if face.dxf.text[1] == "+" else "+")
-    label = [t for t in doc.modelspace().query("TEXT[layer=='LABEL']") if t.dxf.get("align_point")][0]
-    label.dxf.rotation = 180.0
+    labels = [t for t in doc.modelspace().query("TEXT[layer=='LABEL']") if t.dxf.get("align_point")]
+    labels[0].dxf.rotation = 180.0
+    labels[1].dxf.rotation = -87.0                    # reads downwards: from the left edge, against the others
     doc.saveas(path)
     found = [str(f) for f in verify(bad).findings]
     assert any(pid in f and "face marks" in f for f in found), found
-    assert any("upside down" in f for f in found), found
+    assert any("turned 180.0°" in f and "upside down" in f for f in found), found
+    assert any("turned -87.0°" in f and "reads from the top or the left edge" in f for f in found), found

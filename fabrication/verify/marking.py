@@ -1,5 +1,5 @@
-"""Marking on the cutting sheets: every label and engraved text upright (rotation in (−90°, 90°]); every beam
-plate carries one face mark on MARK and the opposite one on MARK_BACK, and the mark on MARK names the side of
+"""Marking on the cutting sheets: every label and engraved text reads from the bottom or the right edge
+(rotation in (−45°, 135°]: one reading direction per sheet); every beam plate carries one face mark on MARK and the opposite one on MARK_BACK, and the mark on MARK names the side of
 the plate's plane ``n`` (``parts.csv`` ``plane``) that the face looking up from the sheet faces, from the
 placement (``rotation_deg``, ``mirrored``) and the flat frame (``frame``) of ``parts.csv``
 (:mod:`fabrication.marking`).
@@ -22,7 +22,7 @@ import ast
 
 import numpy as np
 
-from ..marking import face_marks
+from ..marking import face_marks, reads_from_bottom_or_right
 from ..contract import csv_value
 from . import Verification, check
 from ._shapes import frame_of, literal, number, to_frame
@@ -54,9 +54,11 @@ def check_marking(v: Verification) -> None:
     for rel, texts in v.data.get("dxf_texts", {}).items():
         faces: dict[tuple[str, str], list[str]] = {}
         for t in texts:
-            if not -90.0 < t.rotation_deg <= 90.0:
-                v.error(rel, t.xdata.get("part_id", t.text), f"text {t.text!r} on {t.layer} is turned "
-                                                             f"{t.rotation_deg:.1f}° (upside down)")
+            if not reads_from_bottom_or_right(t.rotation_deg):
+                v.error(rel, t.xdata.get("part_id", t.text),
+                        f"text {t.text!r} on {t.layer} is turned {t.rotation_deg:.1f}°: it reads from the top or the "
+                        f"left edge (upside down against the sheet's other labels, which read from the bottom or the "
+                        f"right edge, turned within (−45°, 135°])")
             if t.xdata.get("mark") == "face":
                 faces.setdefault((t.xdata.get("part_id", ""), t.layer), []).append(t.text)
         for pid, (_, pts) in v.data.get("cut", {}).items():

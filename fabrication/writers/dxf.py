@@ -12,7 +12,7 @@ origin at the sheet's lower-left corner; layers
   a beam) and, on a beam plate, its id and face mark as TEXT (XDATA ``part_id=…``, ``mark=id|face``),
 * ``MARK_BACK`` — a beam plate's underside: its node axes and its face mark (backward text).
 
-Labels are upright in the sheet frame (rotation in (−90°, 90°]) and placed inside the part, clear of its
+Labels read from the bottom or the right edge of the sheet (rotation in (−45°, 135°]) and are placed inside the part, clear of its
 edges, slots and node-axis lines (:mod:`fabrication.marking`).  The header carries kerf notes per cutting
 process (``$CUSTOMPROPERTY`` ``PPFAB_KERF_*``); outlines are nominal.  Material and thickness are on every file
 three times: the title text ends with ``material …, thickness … mm``, the header has ``PPFAB_MATERIAL`` and
