@@ -26,14 +26,19 @@ near the normals, and the third keeps consecutive axes from crossing within the 
 ``h_e = 1 + (D / |e|) (a_j − a_i)·ê`` is the length of the bottom edge ``(v_j + D a_j) − (v_i + D a_i)``
 along ``ê`` over the top edge's; the axes of the edge cross less than ``D`` below it when ``h_e < 0``
 (``h_min = 0.25`` keeps the crossing beyond ``D / 0.75``).  ``w_n`` is lowered stage by stage
-(``1, 10⁻¹, …, 10⁻⁸``) until the largest ``|det|`` is below ``torsion_target`` (in a build a quarter of
-``beams.max_torsion_mm`` over the depth, :mod:`ppfab.support.planar`): the result is the torsion-free
+(``1, 10⁻¹, …, 10⁻⁸``; with ``strips`` then ``10⁻¹⁰, 10⁻¹², 0``) until the largest ``|det|`` is below
+``torsion_target`` (in a build a quarter of ``beams.max_torsion_mm`` over the depth, with ``strips`` 10⁻¹³,
+:mod:`ppfab.support.planar`): the result is the torsion-free
 structure, within that share of the tolerance, that the continuation reaches from the normals.  Whatever torsion remains (a system with no
 exact solution) is reported by the structure's torsion and stops a build beyond ``beams.max_torsion_mm``.
 
 For a P mesh (one family planar) every vertex has ``c_v = 1`` and the transverse polylines decouple: each
-has one free parameter, the axes propagating along it (§3.1); for a PP mesh every vertex has ``c_v ≥ 2``
-and nothing is solved.
+has one free parameter, the axes propagating along it (§3.1).  Such strips — every connected set of free
+edges that is a tree or a single cycle of ``c_v = 1`` vertices, or a tree through one fixed axis — are solved
+exactly first when asked (the P method; :mod:`ppfab.support.strips`: propagation, the free angle chosen to keep the axes near the
+normals) and held; the energy above is minimised only over the vertices the combinatorics leave (a vertex
+with no plane, a strip with two fixed axes or more than one cycle).  For a PP mesh every vertex has
+``c_v ≥ 2`` and nothing is solved.
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ from scipy.sparse.linalg import spsolve
 
 from ppfab.mesh import QuadMesh
 
+from .strips import StripAxes, strip_axes
 from .structure import edge_polyline_index
 
 H_MIN = 0.25
@@ -64,7 +70,9 @@ class AxisSolution:
     ``misfit (N,)`` ``σ_min`` of the stacked plane normals where more than two planes meet (0 elsewhere);
     ``free_edges (E,)`` bool, edges whose support plane is spanned by their axes; ``torsion_det (E,)``
     ``det(ê, a_i, a_j)`` of every edge; ``iterations`` Levenberg–Marquardt steps, ``stages`` continuation
-    stages, ``normal_weight`` the last ``w_n``.
+    stages, ``normal_weight`` the last ``w_n``; ``exact (N,)`` bool, axes found by exact propagation along
+    their strip (:mod:`ppfab.support.strips`), ``strips`` how many strips were propagated, ``forced`` how many
+    were left to the penalty solve.
     """
 
     axes: np.ndarray
@@ -75,6 +83,9 @@ class AxisSolution:
     iterations: int
     stages: int
     normal_weight: float
+    exact: np.ndarray | None = None
+    strips: int = 0
+    forced: int = 0
 
 
 def _vertex_planes(mesh: QuadMesh, planes: np.ndarray, planar: np.ndarray) -> list[np.ndarray]:
@@ -298,7 +309,7 @@ def _levenberg_marquardt(prob: _Problem, x: np.ndarray, wn: float, wc: float, ma
 
 
 def solve_axes(mesh: QuadMesh, normals: np.ndarray, planes: np.ndarray, planar: np.ndarray, flip: bool = False,
-               depth: float | None = None, torsion_target: float = 1e-10) -> AxisSolution:
+               depth: float | None = None, torsion_target: float = 1e-10, strips: bool = False) -> AxisSolution:
     """Node axes of a support structure whose planar beams are the polylines ``planar`` (module docstring).
 
     Parameters
@@ -309,18 +320,27 @@ def solve_axes(mesh: QuadMesh, normals: np.ndarray, planes: np.ndarray, planar: 
     planar : (L,) bool, polylines whose plane is a support plane
     depth : beam depth in mesh units for the crossing term (none without it)
     torsion_target : stop lowering the normal weight once every ``|det(ê, a_i, a_j)|`` is below this
+    strips : solve the strips that allow it exactly first (:mod:`ppfab.support.strips`; the P method)
     """
     target = -np.asarray(normals, dtype=float) * (-1.0 if flip else 1.0)
     normals_at = _vertex_planes(mesh, planes, planar)
     fixed, count, misfit, plane = fixed_axes(normals_at, target)
     epl = edge_polyline_index(mesh)
     free_edges = ~np.asarray(planar, dtype=bool)[epl]
-    prob = _Problem(mesh, target, count, plane, np.nan_to_num(fixed), free_edges, depth)
+    nv = len(mesh.vertices)
+    exact = (strip_axes(mesh.vertices, mesh.topology.edges, free_edges, target, count, plane,
+                        np.nan_to_num(fixed), depth, H_MIN) if strips else
+             StripAxes(np.full((nv, 3), np.nan), np.zeros(nv, dtype=bool), 0, 0, 0, 0))
+    held = count.copy()
+    held[exact.solved] = 2                        # solved exactly: no parameters left
+    fixed[exact.solved] = exact.axes[exact.solved]
+    prob = _Problem(mesh, target, held, plane, np.nan_to_num(fixed), free_edges, depth)
     x = np.zeros(prob.n_var)
     iterations = stages = 0
     wn = 1.0
     if prob.n_var:
-        for stage, wn in enumerate(10.0 ** -np.arange(0, 9), start=1):
+        weights = list(10.0 ** -np.arange(0, 9)) + ([1e-10, 1e-12, 0.0] if strips else [])
+        for stage, wn in enumerate(weights, start=1):
             x, it = _levenberg_marquardt(prob, x, float(wn), 1.0)
             iterations += it
             stages = stage
@@ -332,4 +352,5 @@ def solve_axes(mesh: QuadMesh, normals: np.ndarray, planes: np.ndarray, planar: 
     a = prob.axes(x)
     e = mesh.topology.edges
     det_all = np.einsum("ij,ij->i", prob.eh, np.cross(a[e[:, 0]], a[e[:, 1]]))
-    return AxisSolution(a, count, misfit, free_edges, det_all, iterations, stages, float(wn))
+    return AxisSolution(a, count, misfit, free_edges, det_all, iterations, stages, float(wn), exact.solved,
+                        exact.strips, exact.forced)

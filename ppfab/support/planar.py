@@ -42,6 +42,11 @@ ESCALATION: tuple[tuple[str, ...], ...] = ((), ("singular",), ("boundary",), ("s
 TORSION_SHARE = 0.25
 """The axes that are solved for stop at this share of ``max_torsion`` (keeping them nearer the normals)."""
 
+EXACT = 1e-13
+"""With exact strips (the P method) the penalty solve of what the combinatorics leave goes on until every
+``|det(ê, a_i, a_j)|`` is below this (torsion-free to rounding where a solution exists), not only to the
+share of the tolerance above."""
+
 CONFLICT_ROUNDS = 3
 """How often ``"auto"`` leaves out the polylines ending at the vertices whose planes do not share a line (and,
 as often again, the beams whose axes cross within the depth)."""
@@ -129,13 +134,15 @@ def _max_offset(mesh: QuadMesh, sol: AxisSolution, depth: float) -> float:
 def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, exclude: Sequence[int | str],
                    kind: str, families: tuple[int, ...], flip: bool = False, max_normal_angle_deg: float = 30.0,
                    planar_tolerance: float = 1e-6, beams: BeamContext | None = None,
-                   planes: np.ndarray | None = None, key: str = "support.exclude") -> SupportStructure:
+                   planes: np.ndarray | None = None, key: str = "support.exclude",
+                   strips: bool = False) -> SupportStructure:
     """The support structure whose planar beams are the ``candidates`` (``(L,)`` bool over
     ``mesh.polylines``) minus the polylines ``exclude`` selects (module docstring).
 
     ``planes``: the planes of the polylines, ``(L, 4)`` (finite rows override the least-squares planes);
     ``beams``: beam depth and torsion tolerance (mesh units) for the crossing term and for ``"auto"``;
-    ``families``: the families reported as planar when all their candidate polylines stay planar beams.
+    ``families``: the families reported as planar when all their candidate polylines stay planar beams;
+    ``strips``: solve the transverse strips exactly by propagation (:mod:`ppfab.support.strips`, the P method).
     """
     pp = polyline_planes(mesh, normals, straight_tolerance=planar_tolerance)
     if planes is not None:
@@ -164,7 +171,8 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
         for _ in range(2 * CONFLICT_ROUNDS + 1):
             planar = cand & ~out
             sol = solve_axes(mesh, normals, pp.planes, planar, flip, depth,
-                             TORSION_SHARE * limit / depth if depth and limit > 0 else 1e-10)
+                             EXACT if strips else TORSION_SHARE * limit / depth if depth and limit > 0 else 1e-10,
+                             strips)
             worst = _max_offset(mesh, sol, depth) if depth else float(np.abs(sol.torsion_det).max(initial=0.0))
             crossing = _crossing(mesh, sol.axes, pp.planes, planar, depth) if auto and depth else none
             score = (worst > limit, int(crossing.sum()), worst)
@@ -190,6 +198,8 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
     kept = tuple(f for f in families if np.any(cand & (fam == f)) and not np.any(cand & ~planar & (fam == f)))
     meta = {"planes": "least squares", "iterations": sol.iterations, "stages": sol.stages,
             "normal_weight": sol.normal_weight, "misfit_max": float(sol.misfit.max(initial=0.0)), "left_out": len(reasons),
-            "straight_polylines": int(pp.straight.sum())}
+            "straight_polylines": int(pp.straight.sum()), "exact_strips": sol.strips,
+            "penalty_strips": sol.forced,
+            "exact_vertices": int(sol.exact.sum()) if sol.exact is not None else 0}
     return _assemble(mesh, sol.axes, pp.planes, planar, kept, kind, meta,
                      left_out=tuple(sorted(reasons.items())), planes_at=sol.planes_at, misfit=sol.misfit)
