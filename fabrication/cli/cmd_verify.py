@@ -13,12 +13,15 @@ ORDER = 30
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("out", help="an output folder written by ppfab build")
     p.add_argument("--quiet", action="store_true", help="print only problems")
+    p.add_argument("--kernel", action="store_true",
+                   help="read every STEP solid with the CAD kernel (default: a text-level reader, with the kernel "
+                        "loading each file's product tree and one solid of each kind)")
 
 
 def run(args: argparse.Namespace) -> int:
     from fabrication.verify import verify
 
-    result = verify(args.out)
+    result = verify(args.out, kernel=args.kernel)
     for f in result.findings[:50]:
         print(f"ppfab: verify: {f}", file=sys.stderr)
     if len(result.findings) > 50:

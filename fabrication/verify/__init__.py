@@ -4,7 +4,8 @@ Each check is one module of this package registered with :func:`check` (an ``ord
 first: later checks use what earlier ones read into :attr:`Verification.data`); each appends
 :class:`Finding` records (file, element, message); a folder passes when there is none.  The checks
 re-read files with the real readers: JSON, CSV, the OBJ reader of :mod:`ppfab.io`, ezdxf (with its auditor)
-for DXF and the CAD kernel for STEP.  Adding a check is one new module.
+for DXF; STEP with a text-level reader of its own and the CAD kernel on the product tree and one solid of each
+kind (every solid with ``kernel``, :mod:`._step_read`).  Adding a check is one new module.
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ class Finding:
 
 @dataclass
 class Verification:
-    """The findings of a verification, what was checked, and the files read so far (``data``)."""
+    """The findings of a verification, what was checked, and the files read so far (``data``); ``kernel``: the
+    CAD kernel reads every STEP solid (else a text-level reader, :mod:`._step_read`)."""
 
     folder: Path
+    kernel: bool = False
     findings: list[Finding] = field(default_factory=list)
     checked: list[str] = field(default_factory=list)
     data: dict[str, Any] = field(default_factory=dict)
@@ -111,15 +114,15 @@ FORK_AFTER = "types"
 per-type DXFs are read, so the glass order check finds them in ``data["type_dxf"]``."""
 
 
-def verify(folder: str | Path, parallel: bool | None = None) -> Verification:
+def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = False) -> Verification:
     """Run every check on an output folder (stopping after the manifest if it cannot be read).
 
     ``parallel`` (default: on with two cores and fork, :func:`fabrication.writers._parallel.parallel_enabled`)
     runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`FORK_AFTER` has run; the
     findings and the list of checks are assembled in check order, so the result equals a serial run.  When the
     second process fails (a check raising, the process dying), its checks run again here, so an error is the
-    check's own."""
-    v = Verification(Path(folder))
+    check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files (:attr:`Verification.kernel`)."""
+    v = Verification(Path(folder), kernel=kernel)
     if not v.folder.is_dir():
         v.error(str(folder), "", "is not a folder")
         return v

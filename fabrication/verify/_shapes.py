@@ -64,13 +64,19 @@ def torsion_tolerance(manifest: dict[str, Any]) -> tuple[float, str]:
 
 
 def solid_points(solid: Any) -> np.ndarray:
-    """``(k, 3)`` vertices of a CAD solid."""
+    """``(k, 3)`` vertices of a solid: a CAD solid's, or the ``points`` of the text-level reader's record."""
+    pts = getattr(solid, "points", None)
+    if isinstance(pts, np.ndarray):
+        return pts
     return np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
 
 
 def face_outline(solid: Any, normal: np.ndarray) -> np.ndarray | None:
     """The ordered outer boundary ``(k, 3)`` of the planar face of ``solid`` facing ``normal`` (a plate's top or
-    bottom face), from the chain of its edges; ``None`` when the solid has no such face."""
+    bottom face), from the chain of its edges; ``None`` when the solid has no such face.  A record of the
+    text-level reader gives its own (:meth:`~._step_text_read.TextSolid.face_outline`)."""
+    if hasattr(solid, "face_outline"):
+        return solid.face_outline(normal)
     n = np.asarray(normal, dtype=float)
     for face in solid.faces():
         try:

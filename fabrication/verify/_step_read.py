@@ -14,9 +14,14 @@ Not a check (the leading underscore keeps it out of the registry).
 from __future__ import annotations
 
 import os
+import re
 import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ._step_text_read import TextSolid, read_entities, read_text_solids
 
 if TYPE_CHECKING:  # pragma: no cover
     from . import Verification
@@ -31,14 +36,17 @@ class StepSolid:
     path: tuple[str, ...]
     solid: Any
     colour: tuple[float, float, float, float] | None
+    placement: Any = None
+    """With ``leaves``: the ``(4, 4)`` placement of the product in model space."""
 
 
 class StepReadError(ValueError):
     """The CAD kernel could not read a STEP file."""
 
 
-def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[StepSolid]:
-    """Every solid of the STEP file ``path`` in file order (depth first); ``colours`` also reads the colours.
+def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: bool = False) -> list[StepSolid]:
+    """Every solid of the STEP file ``path`` in file order (depth first); ``colours`` also reads the colours;
+    ``leaves``: one record per product that is no assembly, with its placement, its solid or ``None``.
 
     Raises the audit event ``fabrication.verify.read`` with the path first (the kernel opens the file outside
     Python, where the ``open`` event does not see it), so a hook can tell which files a check read."""
@@ -116,6 +124,15 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[Ste
             own = shapes.GetShape_s(ref)
             colour = colour_of(sub, ref, own) if colours else None
             found = TopExp_Explorer(own.Moved(here), TopAbs_SOLID)
+            if leaves:
+                t = here.Transformation()
+                m = np.eye(4)
+                for i in range(3):
+                    for j in range(4):
+                        m[i, j] = t.Value(i + 1, j + 1)
+                solid = Solid(TopoDS.Solid(found.Current())) if found.More() else None
+                out.append(StepSolid(name, above, solid, colour, m))
+                continue
             while found.More():
                 out.append(StepSolid(name, above, Solid(TopoDS.Solid(found.Current())), colour))
                 found.Next()
@@ -124,20 +141,147 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False) -> list[Ste
     return out
 
 
+def _refs(text: str) -> list[int]:
+    """The entity ids a parameter text refers to (outside its strings)."""
+    return [int(m.group(1)) for m in _REF.finditer(text) if m.group(1)]
+
+
+_REF = re.compile(r"'(?:[^']|'')*'|#(\d+)")
+
+
+def sample_file(data: bytes, solids: list[TextSolid]) -> tuple[bytes, list[bool]]:
+    """A STEP file with the whole product tree of ``data`` (every product, occurrence and placement) but the
+    B-rep and colour of one solid per kind (:meth:`TextSolid.shape_key`) only: the representation of every other
+    solid is left empty.  Also, per solid, whether it is its kind's first (kept)."""
+    entities = read_entities(data)
+    seen: set[tuple] = set()
+    kept = []
+    for s in solids:
+        key = s.shape_key()
+        kept.append(key not in seen)
+        seen.add(key)
+    dropped = {s.brep for s, k in zip(solids, kept) if not k}
+    styles = {i for i, (kind, params) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
+              and any(r in dropped for r in _refs(params))}
+    gone = dropped | styles
+
+    def text(i: int) -> str:
+        kind, params = entities[i]
+        if kind in ("ADVANCED_BREP_SHAPE_REPRESENTATION", "MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"):
+            params = re.sub(r"#(\d+),?", lambda m: "" if int(m.group(1)) in gone else m.group(0), params)
+            params = params.replace(",)", ")")
+        return params
+
+    keep: set[int] = set()
+    todo = [i for i, (kind, _) in entities.items() if kind not in ("MANIFOLD_SOLID_BREP", "STYLED_ITEM",
+                                                                    "OVER_RIDING_STYLED_ITEM")]
+    todo += [s.brep for s, k in zip(solids, kept) if k]
+    todo += [i for i, (kind, _) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
+             and i not in styles]
+    while todo:
+        i = todo.pop()
+        if i not in keep and i in entities:
+            keep.add(i)
+            todo.extend(_refs(text(i)))
+    head = data[:data.find(b"DATA;")]
+    body = "\n".join(f"#{i} = {entities[i][0]}{text(i)};" for i in sorted(keep)).encode("latin-1")
+    return head + b"DATA;\n" + body + b"\nENDSEC;\nEND-ISO-10303-21;\n", kept
+
+
+def kernel_sample(path: str | os.PathLike, solids: list[TextSolid]) -> list[str]:
+    """Load through the CAD kernel the complete product tree of the STEP file ``path`` and one solid of each kind
+    (:func:`sample_file`, written to a temporary file), and compare it with what the text-level reader read:
+    the same products in the same order with the same names, assembly paths and placements; each solid loaded
+    valid (BRepCheck), with the text reader's vertices, volume and colour.  What disagrees, one line each
+    (empty when all agree)."""
+    import tempfile
+
+    from ._shapes import set_distance
+
+    with open(path, "rb") as fh:
+        data = fh.read()
+    sample, kept = sample_file(data, solids)
+    fd, tmp = tempfile.mkstemp(suffix=".step")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(sample)
+        read = read_step_solids(tmp, colours=True, leaves=True)
+    finally:
+        os.unlink(tmp)
+    out: list[str] = []
+    if len(read) != len(solids):
+        return [f"the CAD kernel reads {len(read)} parts in the product tree, the text-level reader {len(solids)} "
+                "solids"]
+    for k, (t, s) in enumerate(zip(solids, read)):
+        if (s.name, s.path) != (t.name, t.path):
+            out.append(f"solid {k + 1}: the CAD kernel reads {'/'.join(s.path + (s.name,))}, the text-level reader "
+                       f"{'/'.join(t.path + (t.name,))}")
+            continue
+        scale = max(1.0, float(np.abs(t.transform[:3, 3]).max()))
+        if float(np.abs(s.placement[:3, :3] - t.transform[:3, :3]).max()) > 1e-9 or \
+                float(np.abs(s.placement[:3, 3] - t.transform[:3, 3]).max()) > 1e-9 * scale:
+            out.append(f"{t.name}: placed by the CAD kernel elsewhere than by the text-level reader")
+        if not kept[k]:
+            continue
+        if s.solid is None:
+            out.append(f"{t.name}: the CAD kernel reads no solid")
+            continue
+        if (s.colour is None) != (t.colour is None) or (s.colour is not None and t.colour is not None and max(
+                abs(a - b) for a, b in zip(s.colour[:3], t.colour[:3])) > 1e-6):
+            out.append(f"{t.name}: colour {s.colour} by the CAD kernel, {t.colour} by the text-level reader")
+        got = np.array([tuple(p) for p in s.solid.vertices()], dtype=float).reshape(-1, 3)
+        want = t.points
+        if not set_distance(got, want) <= 1e-9 * scale:
+            out.append(f"{t.name}: the CAD kernel reads other vertices than the text-level reader")
+        if not s.solid.is_valid:
+            out.append(f"{t.name}: solid is not valid (BRepCheck)")
+        elif abs(s.solid.volume - t.volume) > 1e-6 * max(1.0, abs(t.volume)):
+            out.append(f"{t.name}: volume {s.solid.volume:.9g} mm³ by the CAD kernel, {t.volume:.9g} mm³ by "
+                       "the text-level reader")
+    return out
+
+
 def read_or_report(v: "Verification", rel: str, colours: bool = False) -> list[StepSolid] | None:
-    """The solids of the build's file ``rel`` (:func:`read_step_solids`), or ``None`` after a finding on ``v``
-    when the kernel cannot read it.
+    """The solids of the build's file ``rel``, or ``None`` after a finding on ``v`` when it cannot be read.
+
+    By default the text-level reader (:func:`~._step_text_read.read_text_solids`) reads every solid (each
+    :attr:`StepSolid.solid` a :class:`~._step_text_read.TextSolid`, its problems findings), and the CAD kernel
+    loads the file's product tree with one solid of each kind (:func:`kernel_sample`), what it disagrees on
+    findings too; with ``v.kernel`` (``ppfab verify --kernel``) the kernel reads every solid
+    (:func:`read_step_solids`, build123d solids).
 
     What was read is kept in ``data["step_read"]`` (per process: the forked checks keep their own), so two checks
     of one process read a file once (glazing.step: the bite and the glazing_step checks); a file that cannot be
-    read is reported by the first check only."""
+    read is reported by the first check only.  The text-level reader always reads colours."""
     memo = v.data.setdefault("step_read", {})
-    key = (rel, colours)
+    key = (rel, colours or not v.kernel)
     if key not in memo:
-        try:
-            memo[key] = read_step_solids(v.folder / rel, colours)
-        except Exception as exc:  # noqa: BLE001 - reported as a finding
-            v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
-            memo[key] = None
+        memo[key] = _read_kernel(v, rel, colours) if v.kernel else _read_text(v, rel)
     got: list[StepSolid] | None = memo[key]
     return got
+
+
+def _read_kernel(v: "Verification", rel: str, colours: bool) -> list[StepSolid] | None:
+    try:
+        return read_step_solids(v.folder / rel, colours)
+    except Exception as exc:  # noqa: BLE001 - reported as a finding
+        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+        return None
+
+
+def _read_text(v: "Verification", rel: str) -> list[StepSolid] | None:
+    try:
+        solids = read_text_solids(v.folder / rel)
+    except (OSError, ValueError, IndexError, KeyError, TypeError, AttributeError) as exc:
+        v.error(rel, "", f"cannot be read at the text level ({exc})")
+        return None
+    for s in solids:
+        for problem in s.problems():
+            v.error(rel, s.name or "(unnamed)", f"solid is not valid: {problem}")
+    try:
+        for problem in kernel_sample(v.folder / rel, solids):
+            v.error(rel, "", f"the CAD kernel check of the file: {problem}")
+    except Exception as exc:  # noqa: BLE001 - reported as a finding
+        v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
+        return None
+    return [StepSolid(s.name, s.path, s, s.colour) for s in solids]

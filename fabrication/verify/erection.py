@@ -179,12 +179,23 @@ def body_of(solid: Any) -> Body:
     and inner boundaries, :func:`_ring`), convex when the polygon fills its hull."""
     from shapely.geometry import MultiPoint, Polygon
 
-    pts = np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
-    face = max(solid.faces(), key=lambda f: f.area)
+    text = hasattr(solid, "face_area")                  # a record of the text-level reader
+    if text:
+        pts = solid.points
+        planes = [f for f in solid.faces() if f.surface == "plane"]
+        face = max(planes, key=solid.face_area)
+        outer = solid.outer_loop(face)
+        outer_ring = solid.ring(outer, 16)
+        inner_rings = [solid.ring(lp, 16) for lp in face.loops if lp is not outer]
+    else:
+        pts = np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
+        face = max(solid.faces(), key=lambda f: f.area)
+        outer_ring = _ring(face.outer_wire())
+        inner_rings = [_ring(w) for w in face.inner_wires()]
     c = pts.mean(axis=0)
     axes = np.linalg.svd(pts - c)[2]
     n = axes[2]
-    fo = np.array(tuple(face.outer_wire().edges()[0].start_point()), dtype=float)
+    fo = outer_ring[0]
     off = (pts - fo) @ n
     if abs(off.min()) > abs(off.max()):                 # n from the face into the solid
         n, off = -n, -off
@@ -196,8 +207,7 @@ def body_of(solid: Any) -> Body:
     def to2(q: np.ndarray) -> np.ndarray:
         return np.stack([(q - fo) @ ex, (q - fo) @ ey], axis=1)
 
-    outer = _ring(face.outer_wire())
-    flat = Polygon(to2(outer), [to2(_ring(w)) for w in face.inner_wires()]).buffer(0)
+    flat = Polygon(to2(outer_ring), [to2(r) for r in inner_rings]).buffer(0)
     convex = abs(flat.area - MultiPoint(to2(pts)).convex_hull.area) <= 1e-4 * max(flat.area, 1.0)
     return Body(pts, convex, fo, ex, ey, n, thick, flat)
 

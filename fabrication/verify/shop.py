@@ -185,10 +185,14 @@ def _unplace(points: np.ndarray, row: dict) -> np.ndarray:
 def _cover_holes(solid, frame: dict) -> np.ndarray:
     """Centres ``(h, 2)`` of the round holes of a cover plate solid, in a beam plate's frame (both rims of a
     hole project onto one centre)."""
-    centres = [e.arc_center for e in solid.edges() if str(e.geom_type).endswith("CIRCLE")]
-    if not centres:
+    if hasattr(solid, "circle_centres"):                 # a record of the text-level reader
+        centres = np.asarray(solid.circle_centres(), dtype=float).reshape(-1, 3)
+    else:
+        centres = np.array([[c.X, c.Y, c.Z] for c in (e.arc_center for e in solid.edges()
+                                                       if str(e.geom_type).endswith("CIRCLE"))]).reshape(-1, 3)
+    if not len(centres):
         return np.zeros((0, 2))
-    xy = to_frame(np.array([[c.X, c.Y, c.Z] for c in centres]), frame)[:, :2]
+    xy = to_frame(centres, frame)[:, :2]
     out: list[np.ndarray] = []
     for q in xy:
         if all(np.linalg.norm(q - o) > 1e-6 for o in out):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import Verification, check
+from ._shapes import solid_points
 from ._step_read import StepSolid
 
 
@@ -34,9 +35,9 @@ def check_step(v: Verification) -> None:
         if name not in beams:
             v.error(rel, name or "(unnamed)", "solid is not a beam part in parts.csv")
             continue
-        if not solid.is_valid:
+        if not solid.is_valid:                      # a text-level record's problems are findings of the reader
             v.error(rel, name, "solid is not valid (BRepCheck)")
-        pts = np.array([tuple(p) for p in solid.vertices()])
+        pts = solid_points(solid)
         c = pts - pts.mean(axis=0)
         normal = np.linalg.svd(c)[2][2]
         spread = float(np.ptp(c @ normal))

@@ -1,0 +1,602 @@
+"""A reader of STEP files (ISO 10303-21) at the text level, independent of the CAD kernel and of ppfab's writer.
+
+Every solid ppfab writes is a prism of a planar polygon, some with round holes: a closed shell of planar faces
+bounded by straight edges and circles, and cylindrical faces for the holes.  This module parses the entities
+(``#id = TYPE(…);`` across lines, strings with ``''`` escapes, lists, complex entities), follows the product
+tree (PRODUCT_DEFINITION → SHAPE_DEFINITION_REPRESENTATION, NEXT_ASSEMBLY_USAGE_OCCURRENCE with the
+CONTEXT_DEPENDENT_SHAPE_REPRESENTATION whose ITEM_DEFINED_TRANSFORMATION places the child), the B-rep of each
+solid (MANIFOLD_SOLID_BREP → CLOSED_SHELL → ADVANCED_FACE → FACE_BOUND → EDGE_LOOP → ORIENTED_EDGE →
+EDGE_CURVE → VERTEX_POINT → CARTESIAN_POINT, on PLANE or CYLINDRICAL_SURFACE, edges on LINE or CIRCLE) and the
+colours (STYLED_ITEM → … → COLOUR_RGB), and returns one light :class:`TextSolid` per placed solid: name,
+assembly path, colour, placed vertices and faces.  Volume (divergence theorem, exact for circular arcs and
+cylinder bands), face areas and a topological validity check are computed with numpy.
+
+Anything else in a B-rep (a B-spline surface, an ellipse) is refused with :class:`StepTextError` naming the
+entity; ``ppfab verify --kernel`` reads such a file with the CAD kernel.
+
+Not a check (the leading underscore keeps it out of the registry).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import sys
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+_ENTITY = re.compile(rb"#(\d+)\s*=\s*((?:[^;']|'(?:[^']|'')*')*);", re.S)
+_TOKEN = re.compile(r"\s*(?:'((?:[^']|'')*)'|#(\d+)|(\.[A-Z_0-9]*\.)|([-+0-9.][0-9.Ee+-]*)|([A-Za-z_][A-Za-z_0-9]*)"
+                    r"|(\()|(\))|(,)|(\$)|(\*))")
+
+
+class StepTextError(ValueError):
+    """A STEP file the text-level reader cannot read (a syntax error, a missing entity, an unsupported one)."""
+
+
+@dataclass(frozen=True)
+class Ref:
+    """A reference ``#id`` to another entity."""
+
+    id: int
+
+
+@dataclass(frozen=True)
+class Typed:
+    """A typed parameter ``NAME(args)`` (``LENGTH_MEASURE(1.E-07)``) or one part of a complex entity."""
+
+    name: str
+    args: list
+
+
+def parse_params(text: str) -> list:
+    """The parameter list of an entity, ``('a',#3,(1.,2.),.T.,$)`` → ``['a', Ref(3), [1.0, 2.0], True, None]``;
+    a complex entity ``( A(…) B(…) )`` → a list of :class:`Typed`.  Enumerations other than ``.T.``/``.F.`` stay
+    strings with their dots; ``*`` is ``'*'``."""
+    pos = 0
+    stack: list[list] = [[]]
+    pending: str | None = None
+    while True:
+        m = _TOKEN.match(text, pos)
+        if m is None:
+            if text[pos:].strip():
+                raise StepTextError(f"cannot parse {text[pos:pos + 40]!r}")
+            break
+        pos = m.end()
+        s, ref, enum, num, word, opn, cls, _comma, dollar, star = m.groups()
+        top = stack[-1]
+        if s is not None:
+            top.append(s.replace("''", "'"))
+        elif ref is not None:
+            top.append(Ref(int(ref)))
+        elif enum is not None:
+            top.append(True if enum == ".T." else False if enum == ".F." else enum)
+        elif num is not None:
+            top.append(float(num))
+        elif word is not None:
+            pending = word
+        elif opn is not None:
+            new: list = []
+            top.append(Typed(pending, new) if pending is not None else new)
+            pending = None
+            stack.append(new)
+        elif cls is not None:
+            stack.pop()
+            if not stack:
+                raise StepTextError(f"unbalanced parentheses in {text[:60]!r}")
+        elif dollar is not None:
+            top.append(None)
+        elif star is not None:
+            top.append("*")
+    if len(stack) != 1 or len(stack[0]) != 1:
+        raise StepTextError(f"unbalanced parentheses in {text[:60]!r}")
+    out = stack[0][0]
+    if isinstance(out, Typed):           # a simple entity: its arguments
+        return out.args
+    return out                           # a complex entity: its parts
+
+
+def read_entities(data: bytes) -> dict[int, tuple[str, str]]:
+    """``#id`` → (type name, the raw text of its parameters including the parentheses; a complex entity's type is
+    ``''``) for every entity of the DATA section."""
+    start = data.find(b"DATA;")
+    end = data.rfind(b"ENDSEC;")
+    if start < 0 or end < start:
+        raise StepTextError("no DATA section")
+    out: dict[int, tuple[str, str]] = {}
+    for m in _ENTITY.finditer(data, start + 5, end):
+        body = m.group(2).decode("latin-1").strip()
+        k = body.find("(")
+        if k < 0:
+            raise StepTextError(f"#{m.group(1).decode()}: no parameter list")
+        out[int(m.group(1))] = (body[:k].strip(), body[k:] if k else body)
+    return out
+
+
+@dataclass(frozen=True)
+class Arc:
+    """A circular edge: centre, unit axis about which it runs counter-clockwise from its start to its end vertex,
+    radius and sweep (radians, in (0, 2π])."""
+
+    centre: np.ndarray
+    axis: np.ndarray
+    radius: float
+    sweep: float
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A boundary loop of a face: indices into the solid's vertices, edge ``k`` running from ``vertices[k]`` to
+    ``vertices[k + 1]`` (cyclic), straight or ``arcs[k]``; ``edges[k]`` the id of its EDGE_CURVE and ``forward[k]``
+    whether the loop runs along it."""
+
+    vertices: np.ndarray
+    arcs: tuple[Arc | None, ...]
+    edges: tuple[int, ...]
+    forward: tuple[bool, ...]
+
+
+@dataclass(frozen=True)
+class Face:
+    """A face: ``surface`` ``"plane"`` or ``"cylinder"``; ``origin`` a point of the surface (on the axis of a
+    cylinder); ``normal`` the outward unit normal of a plane (the axis of a cylinder); ``outward`` whether the
+    face's normal is the surface's (for a cylinder: away from its axis); ``radius`` a cylinder's; its loops."""
+
+    surface: str
+    origin: np.ndarray
+    normal: np.ndarray
+    ref_dir: np.ndarray
+    outward: bool
+    radius: float
+    loops: tuple[Loop, ...]
+
+
+@dataclass
+class TextSolid:
+    """One placed solid of a STEP file as the text-level reader sees it: its product name, the names of the
+    assemblies above it (root first), its colour ``(r, g, b, a)`` or ``None``, its vertices placed in the
+    file's model space ``points (n, 3)`` mm, its faces (placed), the solid's vertices in its own representation
+    ``local (n, 3)`` and the placement ``transform (4, 4)`` taking them into model space, and the id of its
+    MANIFOLD_SOLID_BREP."""
+
+    name: str
+    path: tuple[str, ...]
+    colour: tuple[float, float, float, float] | None
+    points: np.ndarray
+    shell: list[Face]
+    local: np.ndarray
+    transform: np.ndarray
+    brep: int
+    _volume: float | None = field(default=None, repr=False)
+
+    def faces(self) -> list[Face]:
+        """The faces of the closed shell."""
+        return self.shell
+
+    @property
+    def volume(self) -> float:
+        """mm³ by the divergence theorem: ⅓ Σ over faces of ∫ x·n dA (exact for straight and circular edges and
+        for cylinder bands)."""
+        if self._volume is None:
+            self._volume = sum(_flux(self, f) for f in self.shell) / 3.0
+        return self._volume
+
+    def face_area(self, face: Face) -> float:
+        """Area of a planar face, mm² (its loops' signed areas about its normal summed, outer less holes)."""
+        return abs(sum(_loop_area(self.points, lp, face.normal) for lp in face.loops))
+
+    def outer_loop(self, face: Face) -> Loop:
+        """The loop of a planar face enclosing the largest area (its outer boundary)."""
+        return max(face.loops, key=lambda lp: abs(_loop_area(self.points, lp, face.normal)))
+
+    def ring(self, loop: Loop, arc_points: int = 0) -> np.ndarray:
+        """``(k, 3)`` the loop's points in order: its vertices, with ``arc_points - 1`` more along each circular
+        edge when ``arc_points`` > 0."""
+        out = []
+        for k, i in enumerate(loop.vertices.tolist()):
+            out.append(self.points[i])
+            arc = loop.arcs[k]
+            if arc is not None and arc_points > 0:
+                e1 = self.points[i] - arc.centre
+                e2 = np.cross(arc.axis, e1)
+                for t in np.linspace(0.0, arc.sweep, arc_points + 1)[1:-1]:
+                    out.append(arc.centre + e1 * math.cos(t) + e2 * math.sin(t))
+        return np.array(out, dtype=float).reshape(-1, 3)
+
+    def face_outline(self, normal: np.ndarray) -> np.ndarray | None:
+        """The outer boundary (vertices in order) of the planar face facing ``normal`` (either sense), or
+        ``None``."""
+        n = np.asarray(normal, dtype=float)
+        for f in self.shell:
+            if f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9:
+                return self.ring(self.outer_loop(f))
+        return None
+
+    def circle_centres(self) -> np.ndarray:
+        """``(c, 3)`` the centres of the circular edges (each edge once)."""
+        seen: dict[int, np.ndarray] = {}
+        for f in self.shell:
+            for lp in f.loops:
+                for e, arc in zip(lp.edges, lp.arcs):
+                    if arc is not None:
+                        seen.setdefault(e, arc.centre)
+        return np.array(list(seen.values()), dtype=float).reshape(-1, 3)
+
+    def problems(self, tol: float = 1e-6) -> list[str]:
+        """What makes the solid invalid at the text level (empty when none): an edge not used exactly twice in
+        opposite senses (the shell is not closed and oriented), a vertex off its face's plane or cylinder or a
+        circle's end off its circle by more than ``tol`` (relative to the solid's size), a volume not above 0."""
+        out: list[str] = []
+        use: dict[int, list[bool]] = {}
+        for f in self.shell:
+            for lp in f.loops:
+                for e, fw in zip(lp.edges, lp.forward):
+                    use.setdefault(e, []).append(fw)
+        bad = [e for e, u in use.items() if sorted(u) != [False, True]]
+        if bad:
+            out.append(f"{len(bad)} edge(s) not shared by exactly two faces in opposite senses (#{bad[0]})")
+        scale = max(1.0, float(np.abs(self.points).max()) if len(self.points) else 1.0)
+        eps = tol * scale
+        worst = 0.0
+        for f in self.shell:
+            idx = np.concatenate([lp.vertices for lp in f.loops])
+            p = self.points[idx] - f.origin
+            if f.surface == "plane":
+                worst = max(worst, float(np.abs(p @ f.normal).max()))
+            else:
+                radial = p - np.outer(p @ f.normal, f.normal)
+                worst = max(worst, float(np.abs(np.linalg.norm(radial, axis=1) - f.radius).max()))
+            for lp in f.loops:
+                for k, arc in enumerate(lp.arcs):
+                    if arc is not None:
+                        q = self.points[lp.vertices[[k, (k + 1) % len(lp.vertices)]]] - arc.centre
+                        worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
+                                    float(np.abs(q @ arc.axis).max()))
+        if worst > eps:
+            out.append(f"a vertex is {worst:.3g} mm off its face's surface or its edge's circle")
+        if not self.volume > 0:
+            out.append(f"volume {self.volume:.6g} mm³ is not positive (faces turned inside out)")
+        return out
+
+    @property
+    def is_valid(self) -> bool:
+        """No :meth:`problems`."""
+        return not self.problems()
+
+    def shape_key(self) -> tuple:
+        """What kind of solid this is, whatever its size and place: per face its surface and the edge counts and
+        arcs of its loops, sorted.  Solids of one key are read by the CAD kernel once (one instance each)."""
+        faces = sorted((f.surface, tuple(sorted((len(lp.vertices), sum(a is not None for a in lp.arcs))
+                                                for lp in f.loops))) for f in self.shell)
+        return (len(self.points), tuple(faces))
+
+
+def _loop_integral(points: np.ndarray, loop: Loop) -> np.ndarray:
+    """``∮ x × dx`` along a loop (twice its vector area): ``p × q`` for a straight edge, ``c × (q − p) + r² θ k``
+    for an arc of centre ``c``, radius ``r``, sweep ``θ`` about ``k``."""
+    p = points[loop.vertices]
+    q = np.roll(p, -1, axis=0)
+    total = np.cross(p, q).sum(axis=0)
+    for k, arc in enumerate(loop.arcs):
+        if arc is not None:
+            total = total - np.cross(p[k], q[k]) + np.cross(arc.centre, q[k] - p[k]) \
+                + arc.radius ** 2 * arc.sweep * arc.axis
+    return total
+
+
+def _loop_area(points: np.ndarray, loop: Loop, normal: np.ndarray) -> float:
+    return 0.5 * float(_loop_integral(points, loop) @ normal)
+
+
+def _flux(solid: TextSolid, face: Face) -> float:
+    """``∫ x·n dA`` over a face, ``n`` the solid's outward normal."""
+    sign = 1.0 if face.outward else -1.0
+    if face.surface == "plane":
+        area = sum(_loop_area(solid.points, lp, face.normal) for lp in face.loops)
+        return float(face.origin @ face.normal) * area
+    # a cylinder band θ0 … θ1 × s0 … s1 about the axis (origin o, unit a, radius r): x·u = o·u + r, so the flux
+    # is r h (o · ∫u dθ + r Δθ), the arcs at the band's lower end giving the angles
+    a, o, r = face.normal, face.origin, face.radius
+    idx = np.concatenate([lp.vertices for lp in face.loops])
+    s = (solid.points[idx] - o) @ a
+    h = float(s.max() - s.min())
+    arcs = [(arc, solid.points[lp.vertices[k]]) for lp in face.loops for k, arc in enumerate(lp.arcs)
+            if arc is not None]
+    if not arcs:
+        return 0.0
+    low = min(float((arc.centre - o) @ a) for arc, _ in arcs)
+    integral = np.zeros(3)
+    sweep = 0.0
+    for arc, start in arcs:
+        if abs(float((arc.centre - o) @ a) - low) > 1e-6 * max(1.0, h):
+            continue
+        e1 = (start - arc.centre) / arc.radius
+        e2 = np.cross(arc.axis, e1)
+        integral += e1 * math.sin(arc.sweep) + e2 * (1.0 - math.cos(arc.sweep))   # ∫ u dθ over the arc
+        sweep += arc.sweep
+    return sign * r * h * (float(o @ integral) + r * sweep)
+
+
+class _Model:
+    """The entities of one file and the readers of the records the solids are made of."""
+
+    def __init__(self, entities: dict[int, tuple[str, str]]):
+        self.raw = entities
+        self.cache: dict[int, list] = {}
+
+    def kind(self, i: int) -> str:
+        try:
+            return self.raw[i][0]
+        except KeyError:
+            raise StepTextError(f"#{i} is referenced but not defined") from None
+
+    def args(self, i: int) -> list:
+        got = self.cache.get(i)
+        if got is None:
+            got = self.cache[i] = parse_params(self.raw[i][1]) if i in self.raw else self._missing(i)
+        return got
+
+    @staticmethod
+    def _missing(i: int) -> list:
+        raise StepTextError(f"#{i} is referenced but not defined")
+
+    def ids(self, kind: str) -> list[int]:
+        return [i for i, (k, _) in self.raw.items() if k == kind]
+
+    def xyz(self, i: int) -> np.ndarray:
+        a = self.args(i)
+        if self.kind(i) not in ("CARTESIAN_POINT", "DIRECTION") or len(a[1]) != 3:
+            raise StepTextError(f"#{i} is a {self.kind(i)}, not a 3D point or direction")
+        return np.array(a[1], dtype=float)
+
+    def axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0)."""
+        if self.kind(i) != "AXIS2_PLACEMENT_3D":
+            raise StepTextError(f"#{i} is a {self.kind(i)}, not an AXIS2_PLACEMENT_3D")
+        a = self.args(i)
+        o = self.xyz(a[1].id)
+        z = self.xyz(a[2].id) if isinstance(a[2], Ref) else np.array([0.0, 0.0, 1.0])
+        z = z / np.linalg.norm(z)
+        x = self.xyz(a[3].id) if isinstance(a[3], Ref) else (np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9
+                                                             else np.array([0.0, 1.0, 0.0]))
+        x = x - (x @ z) * z
+        x = x / np.linalg.norm(x)
+        return o, z, x
+
+    def matrix(self, i: int) -> np.ndarray:
+        """``(4, 4)`` taking coordinates of the placement ``#i`` into those it is given in."""
+        o, z, x = self.axis2(i)
+        m = np.eye(4)
+        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(z, x), z, o
+        return m
+
+
+def _name(args: list) -> str:
+    """A PRODUCT's name, else its id."""
+    return str(args[1] or args[0]) if len(args) > 1 else str(args[0])
+
+
+def _solid_of(model: _Model, brep: int, transform: np.ndarray, name: str, path: tuple[str, ...],
+              colour: tuple[float, float, float, float] | None) -> TextSolid:
+    """The B-rep ``#brep`` as a :class:`TextSolid` placed by ``transform``."""
+    if model.kind(brep) != "MANIFOLD_SOLID_BREP":
+        raise StepTextError(f"#{brep} is a {model.kind(brep)}, not a MANIFOLD_SOLID_BREP")
+    shell = model.args(brep)[1].id
+    if model.kind(shell) != "CLOSED_SHELL":
+        raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
+    index: dict[int, int] = {}
+    local: list[np.ndarray] = []
+
+    def vertex(v: int) -> int:
+        k = index.get(v)
+        if k is None:
+            if model.kind(v) != "VERTEX_POINT":
+                raise StepTextError(f"#{v} is a {model.kind(v)}, not a VERTEX_POINT")
+            k = index[v] = len(local)
+            local.append(model.xyz(model.args(v)[1].id))
+        return k
+
+    raw_faces: list[tuple[str, int, bool, list[tuple[list[int], list[Any], list[int], list[bool]]]]] = []
+    for f in model.args(shell)[1]:
+        if model.kind(f.id) != "ADVANCED_FACE":
+            raise StepTextError(f"#{f.id} is a {model.kind(f.id)}, not an ADVANCED_FACE")
+        _, bounds, surf, same = model.args(f.id)
+        loops = []
+        for b in bounds:
+            if model.kind(b.id) not in ("FACE_BOUND", "FACE_OUTER_BOUND"):
+                raise StepTextError(f"#{b.id} is a {model.kind(b.id)}, not a FACE_BOUND")
+            _, loop, orient = model.args(b.id)
+            if model.kind(loop.id) != "EDGE_LOOP":
+                raise StepTextError(f"#{loop.id} is a {model.kind(loop.id)}, not an EDGE_LOOP (supported: edge loops)")
+            steps = []
+            for oe in model.args(loop.id)[1]:
+                if model.kind(oe.id) != "ORIENTED_EDGE":
+                    raise StepTextError(f"#{oe.id} is a {model.kind(oe.id)}, not an ORIENTED_EDGE")
+                ec, o = model.args(oe.id)[3].id, model.args(oe.id)[4]
+                if model.kind(ec) != "EDGE_CURVE":
+                    raise StepTextError(f"#{ec} is a {model.kind(ec)}, not an EDGE_CURVE")
+                _, v1, v2, curve, sense = model.args(ec)
+                steps.append((ec, bool(o), vertex(v1.id), vertex(v2.id), curve.id, bool(sense)))
+            if not orient:                               # the loop runs backwards: reverse it, edge by edge
+                steps = [(ec, not o, a, b, c, s) for ec, o, a, b, c, s in reversed(steps)]
+            verts: list[int] = []
+            arcs: list[tuple[int, bool, int, int] | None] = []
+            edges: list[int] = []
+            fwd: list[bool] = []
+            for ec, o, a, b, c, s in steps:
+                verts.append(a if o else b)
+                edges.append(ec)
+                fwd.append(o)
+                kind = model.kind(c)
+                if kind == "LINE":
+                    arcs.append(None)
+                elif kind == "CIRCLE":
+                    arcs.append((c, o == s, a if o else b, b if o else a))
+                else:
+                    raise StepTextError(f"#{c} is a {kind}: edges on lines and circles only (ppfab verify --kernel "
+                                        "reads any STEP file)")
+            loops.append((verts, arcs, edges, fwd))
+        raw_faces.append((model.kind(surf.id), surf.id, bool(same), loops))
+    pts_local = np.array(local, dtype=float).reshape(-1, 3)
+    rot, shift = transform[:3, :3], transform[:3, 3]
+    points = pts_local @ rot.T + shift
+    faces = []
+    for kind, surf, same, loops in raw_faces:
+        if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
+            raise StepTextError(f"#{surf} is a {kind}: planes and cylinders only (ppfab verify --kernel reads any "
+                                "STEP file)")
+        sa = model.args(surf)
+        o, z, x = model.axis2(sa[1].id)
+        radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
+        done = []
+        for verts, arcs, edges, fwd in loops:
+            placed_arcs: list[Arc | None] = []
+            for item in arcs:
+                if item is None:
+                    placed_arcs.append(None)
+                    continue
+                c, ccw, start, end = item
+                co, cz, _ = model.axis2(model.args(c)[1].id)
+                r = float(model.args(c)[2])
+                axis = rot @ (cz if ccw else -cz)
+                centre = rot @ co + shift
+                if start == end:
+                    sweep = 2.0 * math.pi
+                else:
+                    e1, e2 = points[start] - centre, points[end] - centre
+                    sweep = math.atan2(float(np.cross(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
+                placed_arcs.append(Arc(centre, axis, r, sweep))
+            done.append(Loop(np.array(verts, dtype=int), tuple(placed_arcs), tuple(edges), tuple(fwd)))
+        normal = rot @ z
+        if kind == "PLANE" and not same:
+            normal = -normal
+        faces.append(Face("plane" if kind == "PLANE" else "cylinder", rot @ o + shift, normal, rot @ x,
+                          same, radius, tuple(done)))
+    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep)
+
+
+def _colours(model: _Model) -> dict[int, tuple[float, float, float, float]]:
+    """Styled item (a B-rep or any other entity) → its colour, an overriding style winning over a plain one;
+    alpha 1 less a SURFACE_STYLE_TRANSPARENT's transparency."""
+    out: dict[int, tuple[float, float, float, float]] = {}
+    for kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM"):
+        for i in model.ids(kind):
+            a = model.args(i)
+            item = a[2]
+            if not isinstance(item, Ref):
+                continue
+            rgb: list[float] | None = None
+            alpha = 1.0
+            stack = list(a[1])
+            seen: set[int] = set()
+            while stack:
+                x = stack.pop()
+                if isinstance(x, list):
+                    stack.extend(x)
+                    continue
+                if isinstance(x, Typed):
+                    stack.extend(x.args)
+                    continue
+                if not isinstance(x, Ref) or x.id in seen:
+                    continue
+                seen.add(x.id)
+                k = model.kind(x.id)
+                if k == "COLOUR_RGB":
+                    rgb = [float(c) for c in model.args(x.id)[1:4]]
+                elif k == "SURFACE_STYLE_TRANSPARENT":
+                    alpha = 1.0 - float(model.args(x.id)[0])
+                elif k in ("PRESENTATION_STYLE_ASSIGNMENT", "PRESENTATION_STYLE_BY_CONTEXT", "SURFACE_STYLE_USAGE",
+                           "SURFACE_SIDE_STYLE", "SURFACE_STYLE_FILL_AREA", "FILL_AREA_STYLE",
+                           "FILL_AREA_STYLE_COLOUR", "SURFACE_STYLE_RENDERING_WITH_PROPERTIES"):
+                    stack.extend(model.args(x.id)[:2] if k == "PRESENTATION_STYLE_BY_CONTEXT"
+                                 else model.args(x.id))
+            if rgb is not None:
+                out[item.id] = (rgb[0], rgb[1], rgb[2], alpha)
+    return out
+
+
+def read_text_solids(path: str | os.PathLike, data: bytes | None = None) -> list[TextSolid]:
+    """Every solid of the STEP file ``path`` placed in its model space, depth first through the product tree
+    (children in the order of their NEXT_ASSEMBLY_USAGE_OCCURRENCE), with names, assembly path and colour.
+
+    Raises :class:`StepTextError` on a file it cannot read, and the audit event ``fabrication.verify.read``."""
+    sys.audit("fabrication.verify.read", os.fspath(path))
+    if data is None:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    model = _Model(read_entities(data))
+    return solids_of(model)
+
+
+def solids_of(model: _Model) -> list[TextSolid]:
+    """The placed solids of a parsed file (:func:`read_text_solids`)."""
+    rep_of: dict[int, list[int]] = {}                         # product definition → its shape representations
+    for i in model.ids("SHAPE_DEFINITION_REPRESENTATION"):
+        pds, rep = model.args(i)[:2]
+        target = model.args(pds.id)[2]
+        if isinstance(target, Ref) and model.kind(target.id) == "PRODUCT_DEFINITION":
+            rep_of.setdefault(target.id, []).append(rep.id)
+    linked: dict[int, list[int]] = {}                        # representation → representations tied to it
+    for kind in ("SHAPE_REPRESENTATION_RELATIONSHIP",):
+        for i in model.ids(kind):
+            a = model.args(i)
+            linked.setdefault(a[2].id, []).append(a[3].id)
+            linked.setdefault(a[3].id, []).append(a[2].id)
+    placement: dict[int, np.ndarray] = {}                    # NAUO → child coordinates → parent coordinates
+    for i in model.ids("CONTEXT_DEPENDENT_SHAPE_REPRESENTATION"):
+        rr, pds = model.args(i)[:2]
+        nauo = model.args(pds.id)[2]
+        parts = {t.name: t.args for t in model.args(rr.id) if isinstance(t, Typed)}
+        trans = parts.get("REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION")
+        if trans is None or not isinstance(nauo, Ref):
+            continue
+        idt = trans[0].id
+        if model.kind(idt) != "ITEM_DEFINED_TRANSFORMATION":
+            raise StepTextError(f"#{idt} is a {model.kind(idt)}: placements by ITEM_DEFINED_TRANSFORMATION only")
+        a1, a2 = model.args(idt)[2:4]
+        placement[nauo.id] = model.matrix(a2.id) @ np.linalg.inv(model.matrix(a1.id))
+    children: dict[int, list[tuple[int, int]]] = {}
+    is_child: set[int] = set()
+    for i in sorted(model.ids("NEXT_ASSEMBLY_USAGE_OCCURRENCE")):
+        a = model.args(i)
+        children.setdefault(a[3].id, []).append((i, a[4].id))
+        is_child.add(a[4].id)
+    colours = _colours(model)
+    out: list[TextSolid] = []
+
+    def name_of(pd: int) -> str:
+        pdf = model.args(pd)[2].id
+        return _name(model.args(model.args(pdf)[2].id))
+
+    def breps(pd: int) -> list[int]:
+        found: list[int] = []
+        todo = list(rep_of.get(pd, []))
+        seen: set[int] = set()
+        while todo:
+            r = todo.pop(0)
+            if r in seen:
+                continue
+            seen.add(r)
+            for item in model.args(r)[1]:
+                if isinstance(item, Ref) and model.kind(item.id) == "MANIFOLD_SOLID_BREP":
+                    found.append(item.id)
+            todo.extend(linked.get(r, []))
+        return found
+
+    def walk(pd: int, transform: np.ndarray, above: tuple[str, ...]) -> None:
+        name = name_of(pd)
+        kids = children.get(pd, [])
+        if kids:
+            for nauo, child in kids:
+                walk(child, transform @ placement.get(nauo, np.eye(4)), above + (name,))
+            return
+        for b in breps(pd):
+            out.append(_solid_of(model, b, transform, name, above, colours.get(b)))
+
+    for pd in sorted(model.ids("PRODUCT_DEFINITION")):
+        if pd not in is_child:
+            walk(pd, np.eye(4), ())
+    return out
