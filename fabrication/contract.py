@@ -209,6 +209,37 @@ def gasket_id(strip: str) -> str:
     return "GK" + strip[2:]
 
 
+def pressure_plate_id(strip: str) -> str:
+    """``CP-U03-07``: the pressure (clamping) plate over strip ``GS-U03-07`` (a solid of ``glazing.step``, a row
+    of ``retention.csv``)."""
+    return "CP" + strip[2:]
+
+
+def pressure_gasket_id(strip: str) -> str:
+    """``CG-U03-07``: the EPDM gasket between the pressure plate over strip ``GS-U03-07`` and the glass."""
+    return "CG" + strip[2:]
+
+
+def cover_cap_id(strip: str) -> str:
+    """``CC-U03-07``: the cover cap clipped over the pressure plate over strip ``GS-U03-07``."""
+    return "CC" + strip[2:]
+
+
+def setting_block_id(panel: str, k: int) -> str:
+    """``SB-U07-V12-1``: setting block ``k`` (1 or 2) under the down-slope edge of pane ``P-U07-V12``."""
+    return f"SB{panel[1:]}-{k}"
+
+
+def stop_id(panel: str, k: int) -> str:
+    """``ST-U07-V12-1``: the steel stop behind setting block ``k`` of pane ``P-U07-V12``."""
+    return f"ST{panel[1:]}-{k}"
+
+
+RETENTION_PREFIXES = ("CP-", "CG-", "CC-", "SB-", "ST-")
+"""The part id prefixes of the retention solids of ``glazing.step`` (pressure plates, their gaskets and caps,
+setting blocks, stops): rows of ``retention.csv``, not of ``parts.csv``."""
+
+
 def splice_plate_ids(beam: str, piece: int) -> tuple[str, str]:
     """``(SP-U03-02A, SP-U03-02B)``: the two cover plates (both faces of the plate) of the cut after piece 2
     of beam ``B-U03``."""
@@ -233,6 +264,14 @@ GLAZING_STEP, SPLICES_STEP, SPLICE_DIR = "glazing.step", "splices.step", "splice
 one flat DXF per cover-plate type (``splices/SP125x285-2.dxf``: CUT outline and holes, XDATA ``part_id`` = the
 type id and ``quantity``)."""
 BITES_CSV, STRIP_CUTS_CSV, WELDS_CSV = "bites.csv", "strip_cuts.csv", "welds.csv"
+RETENTION_CSV, RESTRAINT_CSV = "retention.csv", "restraint.csv"
+"""The retention parts of ``glazing.step`` (one row each: :data:`RETENTION_COLUMNS`) and the restraint check of
+every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``."""
+RETENTION_COLUMNS = ["part_id", "kind", "owner", "strip", "beam", "length_mm", "width_mm", "height_mm", "material",
+                     "screw", "screws", "screw_stations_mm"]
+RESTRAINT_COLUMNS = ["panel", "slope_deg", "weight_kg", "down_edge", "strip", "setting_blocks", "block_load_N",
+                     "block_pressure_N_mm2", "stops", "uplift_kN", "screws", "resistance_kN", "clamp_bite_mm",
+                     "max_screw_spacing_mm", "silicone_bite_mm", "ok"]
 """The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
 the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the welds
 (``node, part, to, dihedral_deg, weld_length_mm, preparation, throat_mm, joint``): ``joint = "T"`` a plate

@@ -48,6 +48,47 @@ class GlazingParams:
                                           "are named in a warning and in the report with a drainage note (water "
                                           "stands on flush-jointed glass below about 2-5°); 0 = no warning",
                                  min=0, max=90)
+    retention: str = param("pressure_plate", doc="what holds the panes down and in place: 'pressure_plate' (a "
+                                                 "clamping plate with an EPDM gasket and a cover cap on every "
+                                                 "strip, bolted at bolt_pitch into the strip through the joint), "
+                                                 "'silicone' (structural silicone between pane and strip, its bite "
+                                                 "checked against wind_suction; no plates) or 'none' (the design "
+                                                 "must name another system); see docs/glazing.md",
+                           choices=("pressure_plate", "silicone", "none"))
+    pressure_plate_width: float = param(50.0, doc="width of the pressure plate across its joint, mm; it bites "
+                                                  "(width − joint)/2 on each pane", exclusive_min=0)
+    pressure_plate_thickness: float = param(8.0, doc="thickness of the pressure plate, mm", exclusive_min=0)
+    pressure_plate_material: str = param("EN AW-6060 T66", doc="material of the pressure plates and cover caps")
+    pressure_gasket_thickness: float = param(4.0, doc="thickness of the EPDM gasket between pressure plate and "
+                                                      "glass, mm", exclusive_min=0)
+    cover_cap_height: float = param(15.0, doc="height of the cover cap clipped over the pressure plate, mm",
+                                    exclusive_min=0)
+    retention_bolt: str = param("M8 A4-70", doc="the screws clamping the pressure plates, '<size> <grade>' "
+                                                "(A2-70, A4-70, A4-80 stainless or 8.8): studs welded on the strip "
+                                                "in the joint's centre line")
+    bolt_pitch: float = param(250.0, doc="largest distance between the clamping screws along a pressure plate, "
+                                         "mm (and at most half of it from a plate's end)", exclusive_min=0)
+    wind_suction: float = param(1.0, doc="wind suction the retention is checked for, kN/m² (characteristic; "
+                                         "times load_factor)", min=0)
+    load_factor: float = param(1.5, doc="partial factor on the wind suction (EN 1990 γ_Q)", min=1)
+    min_clamp_bite: float = param(10.0, doc="smallest overlap of a pressure plate with each pane it clamps, mm",
+                                  min=0)
+    setting_block_width: float = param(4.0, doc="width of a setting block across the joint, from the pane's "
+                                                "down-slope edge face, mm", exclusive_min=0)
+    setting_block_material: str = param("silicone 80 Shore A", doc="setting block material and hardness, written "
+                                                                   "to retention.csv")
+    setting_block_pressure: float = param(1.0, doc="largest bearing pressure on a setting block, N/mm² (the "
+                                                   "pane's weight along its slope over two blocks, each bearing "
+                                                   "on the glass edge: length × glass thickness)", exclusive_min=0)
+    stop_min_slope_deg: float = param(5.0, doc="panes steeper than this get a steel stop in the joint under "
+                                               "each setting block, degrees; flatter panes are held along the "
+                                               "slope by the clamp's friction (weight along the slope under "
+                                               "9 % of it)", min=0, max=90)
+    stop_width: float = param(3.0, doc="width of a down-slope stop across the joint, mm (S355, fixed through "
+                                       "the gasket into the strip)", exclusive_min=0)
+    silicone_design_stress: float = param(0.14, doc="design tensile stress of structural silicone under wind, "
+                                                    "N/mm² (ETAG 002 σ_des); retention = 'silicone' only",
+                                          exclusive_min=0)
     max_tilt_deg: float = param(6.0, doc="largest angle between a pane and the strip it rests on, degrees; "
                                          "the gasket takes up the wedge (width × tan of the angle); steeper edges are warned "
                                          "about (they need tapered gaskets)",

@@ -9,7 +9,9 @@ only the solids whose box overlaps its own grown by :data:`SEARCH` (its own edge
 strips running through its corners).  For every such pair:
 
 * **clash**: the intersection of pane and solid; its depth is its extent along the pane's normal (a part
-  entering the pane from below meets it in a slab from the underside up to the part's top).  Deeper than
+  entering the pane from below meets it in a slab from the underside up to the part's top), or its thinnest
+  width over its face normals when that is less (a setting block against the glass's edge face meets it in a
+  sliver as tall as the glass and a rounding thin).  Deeper than
   :data:`~fabrication.glazing.seat.SEAT_TOLERANCE` is a finding naming pane, part and depth;
 * **contact**: the gap between pane and gasket (manifold3d's ``min_gap``, 0 where they touch).  A pane whose
   nearest gasket is farther than the tolerance bears on nothing: a finding naming pane, gasket and gap.
@@ -84,10 +86,14 @@ def pane_manifold(solid: Any) -> tuple[Any, np.ndarray]:
 
 def measure_pair(pane: Any, n: np.ndarray, other: Any, pane_id: str, part_id: str) -> PairMeasure:
     """Depth and gap of one pane (a manifold with unit normal ``n``) against one part (a manifold)."""
+    from .erection import depth_of
+
     common = pane ^ other
     if not common.is_empty() and common.volume() > 1e-9:
         z = np.asarray(common.to_mesh().vert_properties)[:, :3] @ n
-        return PairMeasure(pane_id, part_id, float(z.max() - z.min()), 0.0)
+        # a part against the glass's edge face (a setting block) meets it in a sliver as tall as the glass:
+        # the depth is never more than the sliver's thinnest width
+        return PairMeasure(pane_id, part_id, min(float(z.max() - z.min()), depth_of(common)[0]), 0.0)
     return PairMeasure(pane_id, part_id, 0.0, float(pane.min_gap(other, SEARCH)))
 
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contract import gasket_id
+from ..contract import RETENTION_PREFIXES, gasket_id
 from . import Verification, check
 from ._shapes import literal, number, set_distance, solid_points
 
@@ -158,7 +158,7 @@ def check_glazing_step(v: Verification) -> None:
     if len(spans) != len(rows) or bad:
         v.error("parts.csv", bad[0] if bad else rows[0]["part_id"], "edge_nodes is not two mesh vertices 'a;b'")
         return
-    names = set(solids)
+    names = {n for n in solids if not n.startswith(RETENTION_PREFIXES)}     # the retention check's (retention.py)
     for r in rows:
         names.discard(r["part_id"])
         names.discard(gasket_id(r["part_id"]))

@@ -2,7 +2,10 @@
 ``strip_cuts.csv``, ``welds.csv`` and ``bites.csv`` (see :mod:`fabrication.glazing`).
 
 ``glazing.step``: one solid per glazing strip (``GS-…``) and one per gasket (``GK-…``), each a rectangle
-extruded once in the strip's frame (:class:`~fabrication.glazing.strips.Strip`); ``splices.step``: the two
+extruded once in the strip's frame (:class:`~fabrication.glazing.strips.Strip`), and the retention parts
+(:mod:`fabrication.glazing.retention`: setting blocks ``SB-…``, stops ``ST-…``, pressure gaskets ``CG-…``,
+pressure plates ``CP-…`` and cover caps ``CC-…``), listed in ``retention.csv`` with every pane's restraint check
+in ``restraint.csv``; ``splices.step``: the two
 cover plates of every splice, each outline with its bolt holes extruded once from the beam plate's face.
 """
 
@@ -15,7 +18,8 @@ import numpy as np
 
 from ppfab.frame import Frame
 
-from ..contract import BITES_CSV, GLAZING_STEP, SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_CSV, WELDS_CSV, gasket_id
+from ..contract import (BITES_CSV, GLAZING_STEP, RESTRAINT_COLUMNS, RESTRAINT_CSV, RETENTION_COLUMNS, RETENTION_CSV,
+                        SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_CSV, WELDS_CSV, gasket_id)
 from ..parts import csv_text
 from . import Files, writer
 
@@ -47,6 +51,62 @@ def strip_solids(glazing) -> list:
         gasket.color = _colour("mesh")
         out += [strip, gasket]
     return out
+
+
+RETENTION_COLOURS = {"setting_block": "mesh", "stop": "rows", "pressure_gasket": "mesh", "pressure_plate": "cols",
+                     "cover_cap": "cols"}
+"""The colour (a family name of :func:`.step._colour`) of each kind of retention solid."""
+
+
+def retention_solids(retention) -> list:
+    """One prism per retention part (:class:`~fabrication.glazing.retention.Prism`), labelled by its part id."""
+    from .step import _colour, _placed_prism
+
+    out = []
+    for part in retention.parts:
+        solid = _placed_prism(part.outline, part.frame, part.z0, part.height, part.part_id)
+        solid.color = _colour(RETENTION_COLOURS[part.kind])
+        out.append(solid)
+    return out
+
+
+def retention_material(part, params) -> str:
+    """The material cell of a retention part."""
+    return {"setting_block": params.setting_block_material, "stop": "S355",
+            "pressure_gasket": "EPDM 70 Shore A"}.get(part.kind, params.pressure_plate_material)
+
+
+def retention_rows(retention) -> list[dict[str, object]]:
+    """The rows of ``retention.csv`` (columns :data:`~fabrication.contract.RETENTION_COLUMNS`)."""
+    p = retention.params
+    rows = []
+    for part in retention.parts:
+        xs = retention.stations.get(part.part_id)
+        screw = ""
+        if xs is not None and retention.bolt is not None:
+            screw = f"{retention.bolt.size} {retention.bolt.grade} stud welded on {part.strip}"
+        rows.append({"part_id": part.part_id, "kind": part.kind, "owner": part.owner, "strip": part.strip,
+                     "beam": part.beam, "length_mm": _plain(part.length), "width_mm": _plain(part.width),
+                     "height_mm": _plain(part.height), "material": retention_material(part, p), "screw": screw,
+                     "screws": len(xs) if xs is not None else "",
+                     "screw_stations_mm": ";".join(f"{_plain(x, 1):g}" for x in xs) if xs is not None else ""})
+    return rows
+
+
+def restraint_rows(retention) -> list[dict[str, object]]:
+    """The rows of ``restraint.csv`` (columns :data:`~fabrication.contract.RESTRAINT_COLUMNS`)."""
+    rows = []
+    for r in retention.panes:
+        rows.append({"panel": r.panel, "slope_deg": _plain(r.slope_deg, 3), "weight_kg": _plain(r.weight_kg),
+                     "down_edge": r.down_edge, "strip": r.strip, "setting_blocks": 2,
+                     "block_load_N": _plain(r.block_load_N, 1), "block_pressure_N_mm2": _plain(r.block_pressure, 4),
+                     "stops": "yes" if r.stops else "no", "uplift_kN": _plain(r.uplift_kN),
+                     "screws": _plain(r.screws, 2), "resistance_kN": _plain(r.resistance_kN, 2),
+                     "clamp_bite_mm": "" if r.clamp_bite_mm != r.clamp_bite_mm else _plain(r.clamp_bite_mm, 2),
+                     "max_screw_spacing_mm": _plain(r.max_spacing_mm, 1) if retention.stations else "",
+                     "silicone_bite_mm": _plain(r.silicone_bite_mm, 1),
+                     "ok": "yes" if not r.failures(retention.params) else "; ".join(r.failures(retention.params))})
+    return rows
 
 
 def splice_solids(glazing) -> list:
@@ -124,10 +184,27 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
     name = build.design.info.name
     notes = []
     if g.strips:
+        from ..glazing.retention import build_retention
+
+        retention = build_retention(build)
         beams = [s.beam_id for s in g.strips for _ in range(2)]
-        export_step(by_beam(strip_solids(g), beams, f"{name} glazing"), out / GLAZING_STEP,
-                    description=f"glazing strips and gaskets of {name}")
+        solids = strip_solids(g)
+        what = "glazing strips and gaskets"
+        if retention is not None:
+            solids += retention_solids(retention)
+            beams += [part.beam or "unsupported" for part in retention.parts]
+            what += ", setting blocks, stops and pressure plates"
+        export_step(by_beam(solids, beams, f"{name} glazing"), out / GLAZING_STEP, description=f"{what} of {name}")
         files["glazing_step"] = GLAZING_STEP
+        if retention is not None:
+            (out / RETENTION_CSV).write_text(csv_text(retention_rows(retention), RETENTION_COLUMNS), encoding="utf-8")
+            (out / RESTRAINT_CSV).write_text(csv_text(restraint_rows(retention), RESTRAINT_COLUMNS),
+                                             encoding="utf-8")
+            files["retention_csv"] = RETENTION_CSV
+            files["restraint_csv"] = RESTRAINT_CSV
+            bad = [r for r in retention.panes if r.failures(g.params)]
+            notes.append(f"{len(retention.parts)} retention parts"
+                         + (f", {len(bad)} pane(s) not held (restraint.csv)" if bad else ""))
         rows = [{"panel": b.panel, "edge": b.edge, "mesh_edge": b.mesh_edge, "strip": b.strip,
                  "bite_mm": _plain(b.bite), "supported_mm": _plain(b.supported), "edge_mm": _plain(b.length),
                  "tilt_deg": _plain(b.tilt_deg, 4)} for b in g.bites]

@@ -1,0 +1,425 @@
+"""What holds every pane: setting blocks and stops under its down-slope edge, pressure plates over its edges.
+
+**Setting blocks.**  A pane's weight ``W = m·g`` has the component ``W·sin α`` along its slope (``α`` the pane's
+angle to the horizontal, :func:`.slope.pane_slope_deg`) and ``W·cos α`` onto the gaskets.  The slope component
+is carried by two setting blocks against the glass edge face of the pane's *down-slope edge* — the outline edge
+whose outward normal points most down the slope (``−z`` made parallel to the pane) — centred at a quarter of the
+edge length from its corners (common glazing practice), each ``setting_block_length`` long and
+``setting_block_width`` wide across the joint.  Each block rests on the gasket of that edge's strip (its base
+the highest point of the gasket top under it, as the pane's seat is found in :mod:`.seat`) and reaches to 1 mm
+below the glass's top face.  Its bearing pressure is
+
+    p = W·sin α / (2 · ℓ_b · t),   at most ``setting_block_pressure``,
+
+with ``ℓ_b`` the block length and ``t`` the glass thickness (the block bears on the whole edge face).
+
+**Stops.**  Panes steeper than ``stop_min_slope_deg`` get a steel stop in the joint behind each block (from
+``setting_block_width`` to ``setting_block_width + stop_width`` beyond the glass edge), on the same gasket, fixed
+through it into the strip.  The joint must hold block and stop with 2 mm to spare: ``w_b + w_s + 2 ≤ gap``.
+
+**Pressure plates.**  With ``retention = "pressure_plate"`` every strip carrying a pane gets, in the strip's own
+frame (:class:`.strips.Strip`) and over the strip's length, an EPDM pressure gasket, an aluminium pressure plate
+and a cover cap, each ``pressure_plate_width`` wide.  The gasket's underside lies at the highest point of the
+glass top faces under it (the panes on both sides of the joint are kinked against each other: it touches the
+higher and stands off the other by its *gap*, which the gasket takes up when the screws are tightened).  Its
+*clamp bite* on each pane is the area of the pane's top face under the plate (projected along the strip's
+normal) over the length along the strip that area spans.
+
+The plate is clamped by screws on the joint's centre line at most ``bolt_pitch`` apart and half of that from the
+plate's ends, shifted out of the setting blocks and stops.  Each pane's wind suction ``γ_Q · q · A`` is shared
+by its edges in proportion to their length; a plate carries the shares of the panes on its strip and its screws
+resist ``F_t,Rd = k₂ · f_ub · A_s / γ_M2`` each (EN 1993-1-8 Table 3.4, ``k₂ = 0.9``, ``γ_M2 = 1.25``).
+
+With ``retention = "silicone"`` there are no plates: the structural silicone's bite must be at least
+``h_c = γ_Q · q · a / (2 · σ_des)`` (ETAG 002 §5.1.4.2.1, ``a`` the pane's shorter side, taken as the diameter
+of its inscribed circle's bounding square: the shortest width of its outline), which the strip's bite is
+checked against.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import weakref
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+
+from ppfab.errors import DesignError
+from ppfab.frame import Frame
+
+from ..contract import cover_cap_id, pressure_gasket_id, pressure_plate_id, setting_block_id, stop_id
+from .params import GlazingParams
+from .seat import PaneSeat
+from .slope import pane_slope_deg
+from .strips import Strip
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..panels import Panel
+    from ..pipeline.records import Build
+
+G = 9.81
+"""m/s²: gravity, for a pane's weight."""
+BLOCK_BELOW_TOP = 1.0
+"""mm: how far a setting block's and a stop's top stays below the glass's top face (clear of the pressure gasket)."""
+JOINT_SPARE = 2.0
+"""mm: the least room left in the joint beside setting block and stop, and beside a screw."""
+STRESS_AREA = {"M5": 14.2, "M6": 20.1, "M8": 36.6, "M10": 58.0, "M12": 84.3}
+"""Tensile stress area ``A_s`` of a metric thread, mm² (ISO 898-1)."""
+ULTIMATE = {"A2-70": 700.0, "A4-70": 700.0, "A4-80": 800.0, "8.8": 800.0}
+"""Ultimate tensile strength ``f_ub`` of the screw's grade, N/mm² (ISO 3506-1, ISO 898-1)."""
+K2, GAMMA_M2 = 0.9, 1.25
+"""EN 1993-1-8 Table 3.4 and Table 2.1: tension resistance factor and partial factor of a bolt."""
+
+
+@dataclass(frozen=True)
+class RetentionBolt:
+    """A clamping screw as ``retention_bolt`` names it: ``"M8 A4-70"`` → size ``M8`` (diameter 8 mm), grade."""
+
+    size: str
+    grade: str
+
+    @property
+    def diameter(self) -> float:
+        return float(self.size[1:])
+
+    @property
+    def tension_resistance_kN(self) -> float:
+        """``F_t,Rd = k₂ · f_ub · A_s / γ_M2`` in kN.
+
+        >>> round(RetentionBolt("M8", "A4-70").tension_resistance_kN, 2)
+        18.45
+        """
+        return K2 * ULTIMATE[self.grade] * STRESS_AREA[self.size] / GAMMA_M2 / 1000.0
+
+    @classmethod
+    def parse(cls, text: str) -> "RetentionBolt":
+        m = re.fullmatch(r"\s*(M\d+)\s+(\S+)\s*", text)
+        if m is None or m.group(1) not in STRESS_AREA or m.group(2) not in ULTIMATE:
+            raise DesignError("retention_bolt", f"{text!r} is not a clamping screw ppfab can check: write "
+                                                f"'<size> <grade>' with size one of {', '.join(STRESS_AREA)} and grade "
+                                                f"one of {', '.join(ULTIMATE)} (e.g. 'M8 A4-70')")
+        return cls(m.group(1), m.group(2))
+
+
+@dataclass(frozen=True, eq=False)
+class Prism:
+    """A retention part as a prism: part id, the pane or strip it belongs to, its frame, outline ``(4, 2)`` in
+    frame coordinates, base ``z0`` and height (mm) along the frame's normal, and its kind (``setting_block``,
+    ``stop``, ``pressure_gasket``, ``pressure_plate``, ``cover_cap``)."""
+
+    part_id: str
+    kind: str
+    owner: str
+    strip: str
+    beam: str
+    frame: Frame
+    outline: np.ndarray
+    z0: float
+    height: float
+
+    def corners(self) -> np.ndarray:
+        """``(8, 3)`` corners: the outline at ``z0`` then at ``z0 + height``."""
+        flat = self.frame.to3d(self.outline)
+        n = self.frame.normal
+        return np.concatenate([flat + self.z0 * n, flat + (self.z0 + self.height) * n])
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.outline[1] - self.outline[0]))
+
+    @property
+    def width(self) -> float:
+        return float(np.linalg.norm(self.outline[2] - self.outline[1]))
+
+
+@dataclass(frozen=True)
+class PaneRestraint:
+    """The restraint of one pane: slope (°), weight (kg), its down-slope outline edge and the strip under it,
+    the load on each setting block (N) and its bearing pressure (N/mm²), whether it has stops, its wind uplift
+    (design, kN), the screws of the plates on its edges that carry it (their share, may be fractional), the
+    uplift those screws resist (kN), the smallest clamp bite (mm; NaN without plates) and the largest screw
+    spacing (mm) on its edges."""
+
+    panel: str
+    slope_deg: float
+    weight_kg: float
+    down_edge: int
+    strip: str
+    block_load_N: float
+    block_pressure: float
+    stops: bool
+    uplift_kN: float
+    screws: float
+    resistance_kN: float
+    clamp_bite_mm: float
+    max_spacing_mm: float
+    silicone_bite_mm: float
+
+    def failures(self, p: GlazingParams) -> list[str]:
+        """What this pane's restraint does not satisfy, in words (empty: it holds)."""
+        out = []
+        if self.block_pressure > p.setting_block_pressure + 1e-9:
+            out.append(f"setting block pressure {self.block_pressure:.2f} N/mm² above glazing.setting_block_pressure "
+                       f"= {p.setting_block_pressure:g}")
+        if p.retention == "pressure_plate":
+            if self.uplift_kN > self.resistance_kN + 1e-9:
+                out.append(f"wind uplift {self.uplift_kN:.2f} kN above its screws' {self.resistance_kN:.2f} kN")
+            if not self.clamp_bite_mm >= p.min_clamp_bite - 1e-9:
+                out.append(f"clamp bite {self.clamp_bite_mm:.1f} mm below glazing.min_clamp_bite = "
+                           f"{p.min_clamp_bite:g} mm")
+            if self.max_spacing_mm > p.bolt_pitch + 1e-6:
+                out.append(f"screws {self.max_spacing_mm:.0f} mm apart, more than glazing.bolt_pitch = "
+                           f"{p.bolt_pitch:g} mm")
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class Retention:
+    """Setting blocks, stops and pressure-plate layers of a build (``parts``), the screw stations (mm along the
+    strip's ``x``) of every pressure plate by plate id, and every pane's :class:`PaneRestraint`."""
+
+    params: GlazingParams
+    bolt: RetentionBolt | None
+    parts: tuple[Prism, ...]
+    stations: dict[str, tuple[float, ...]]
+    panes: tuple[PaneRestraint, ...]
+
+
+def down_edge(panel: "Panel") -> int:
+    """The outline edge ``k`` (vertex ``k`` to ``k + 1``) whose outward normal points most down the slope; on a
+    level pane (no slope direction) the edge with the lowest midpoint."""
+    f = panel.frame
+    q = np.asarray(panel.outline, dtype=float)
+    d = np.roll(q, -1, axis=0) - q
+    out2 = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1, keepdims=True)   # right of a CCW edge
+    down = f.vec2d(np.array([0.0, 0.0, -1.0]))
+    if float(np.linalg.norm(down)) < 1e-9:
+        mid = f.to3d(0.5 * (q + np.roll(q, -1, axis=0)))
+        return int(np.argmin(mid[:, 2]))
+    return int(np.argmax(out2 @ down))
+
+
+def _gasket_height(points3: np.ndarray, normal: np.ndarray, strip: Strip, gasket: float) -> float:
+    """The highest point, along ``normal`` from ``points3``, of the strip's gasket top plane above them."""
+    top = strip.top_corners(gasket)
+    u = strip.frame.normal
+    denom = float(normal @ u)
+    if denom <= 1e-6:
+        return -math.inf
+    return float((((top[0] - points3) @ u) / denom).max())
+
+
+def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, p: GlazingParams,
+                   stops: bool) -> list[Prism]:
+    """The two setting blocks of a pane (and their stops when ``stops``) on outline edge ``edge``."""
+    f = panel.frame
+    N = f.normal
+    q = np.asarray(panel.outline, dtype=float)
+    a, b = q[edge], q[(edge + 1) % len(q)]
+    L = float(np.linalg.norm(b - a))
+    d = (b - a) / L
+    o = np.array([d[1], -d[0]])
+    lb = min(p.setting_block_length, 0.4 * L)
+    top = seat + panel.thickness_mm - BLOCK_BELOW_TOP
+    out = []
+    owner = panel.part_id
+    sid = strip.part_id if strip is not None else ""
+    beam = strip.beam_id if strip is not None else ""
+    for k, s in enumerate((0.25 * L, 0.75 * L), start=1):
+        layers = [("setting_block", setting_block_id(owner, k), 0.0, p.setting_block_width)]
+        if stops:
+            layers.append(("stop", stop_id(owner, k), p.setting_block_width, p.setting_block_width + p.stop_width))
+        for kind, pid, w0, w1 in layers:
+            rect = np.array([a + (s - 0.5 * lb) * d + w0 * o, a + (s + 0.5 * lb) * d + w0 * o,
+                             a + (s + 0.5 * lb) * d + w1 * o, a + (s - 0.5 * lb) * d + w1 * o])
+            base = seat
+            if strip is not None:
+                base = min(max(seat, _gasket_height(f.to3d(rect), N, strip, p.gasket_thickness)), top - 1.0)
+            if base < seat:
+                base = seat
+            out.append(Prism(pid, kind, owner, sid, beam, f, rect, base, top - base))
+    return out
+
+
+def _pane_top_under(strip_frame: Frame, rect: np.ndarray, panel: "Panel", top: float) -> tuple[float, float] | None:
+    """Over the footprint ``rect`` (strip frame), the highest point (along the strip's normal) of the pane's top
+    face ``top`` mm above its face plane, and the clamp bite (area over length along the strip); ``None`` when
+    the pane does not lie under the footprint."""
+    from shapely.geometry import Polygon
+
+    u = strip_frame.normal
+    N = panel.frame.normal
+    denom = float(N @ u)
+    if denom <= 1e-6:
+        return None
+    ring = panel.outline_3d() + top * N
+    under = Polygon(strip_frame.to2d(ring)).intersection(Polygon(rect))
+    if under.is_empty or under.area <= 1e-6:
+        return None
+    xy = np.array(getattr(under, "exterior", under.convex_hull.exterior).coords)[:-1]
+    x0, _, x1, _ = under.bounds
+    z = ((ring[0] - strip_frame.to3d(xy)) @ N) / denom
+    return float(z.max()), float(under.area / max(x1 - x0, 1e-9))
+
+
+def screw_stations(length: float, pitch: float, keep_out: Sequence[tuple[float, float]]) -> tuple[float, ...]:
+    """Screw positions along a plate ``[0, length]``: evenly at most ``pitch`` apart and ``pitch/2`` from the ends,
+    each moved out of the ``keep_out`` intervals to the nearer side, then a screw added midway in every gap still
+    wider than ``pitch`` (while one fits outside the intervals).
+
+    >>> screw_stations(1000.0, 250.0, [])
+    (125.0, 375.0, 625.0, 875.0)
+    """
+    n = max(1, math.ceil(length / pitch - 1e-9))
+    xs = [(k + 0.5) * length / n for k in range(n)]
+
+    def free(x: float) -> float:
+        for lo, hi in keep_out:
+            if lo < x < hi:
+                return lo if x - lo <= hi - x else hi
+        return x
+
+    xs = sorted(free(x) for x in xs)
+    for _ in range(64):
+        pts = [0.0 if not xs or xs[0] > 0.5 * pitch else xs[0]] + xs
+        gaps = [(pts[k + 1] - pts[k], k) for k in range(len(pts) - 1)]
+        wide = [(g, k) for g, k in gaps if g > pitch + 1e-6]
+        if not wide:
+            break
+        _, k = max(wide)
+        x = free(0.5 * (pts[k] + pts[k + 1]))
+        if any(abs(x - y) < 1e-6 for y in xs):
+            break
+        xs = sorted(xs + [x])
+    return tuple(round(x, 3) for x in xs if 0.0 <= x <= length)
+
+
+def _spacing(stations: Sequence[float], length: float) -> float:
+    """The largest distance between neighbouring screws, with each end counting at twice its distance (a screw
+    ``pitch/2`` from an end spaces like a neighbour ``pitch`` away)."""
+    if not stations:
+        return math.inf
+    inner = [b - a for a, b in zip(stations, stations[1:])]
+    return max(inner + [2.0 * stations[0], 2.0 * (length - stations[-1])])
+
+
+def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips: Sequence[Strip],
+                   pane_edge_strips: dict[tuple[str, int], Strip], p: GlazingParams, gap: float) -> Retention:
+    """Setting blocks, stops, pressure plates and every pane's restraint (module docstring).  ``pane_edge_strips``
+    maps ``(panel id, outline edge)`` to the strip under that edge; ``gap`` is the joint width (``[panels] gap``).
+
+    Raises :class:`~ppfab.errors.DesignError` when setting block, stop or screw do not fit in the joint."""
+    need = p.setting_block_width + p.stop_width + JOINT_SPARE
+    if need > gap + 1e-9:
+        raise DesignError("setting_block_width", f"setting block {p.setting_block_width:g} mm and stop "
+                                                 f"{p.stop_width:g} mm and {JOINT_SPARE:g} mm to spare do not fit in "
+                                                 f"the {gap:g} mm joint: narrow them or widen [panels] gap")
+    bolt = None
+    if p.retention == "pressure_plate":
+        bolt = RetentionBolt.parse(p.retention_bolt)
+        if bolt.diameter + JOINT_SPARE > gap + 1e-9:
+            raise DesignError("retention_bolt", f"a {bolt.size} screw with {JOINT_SPARE:g} mm to spare does not fit "
+                                                f"in the {gap:g} mm joint: use a smaller one or widen [panels] gap")
+    seat_of = {s.panel: s.offset for s in seats}
+    parts: list[Prism] = []
+    blocks_on: dict[str, list[tuple[float, float]]] = {}
+    down: dict[str, tuple[int, Strip | None, float]] = {}
+    for panel in panels:
+        k = down_edge(panel)
+        strip = pane_edge_strips.get((panel.part_id, k))
+        slope = pane_slope_deg(panel.frame.normal)
+        stops = slope > p.stop_min_slope_deg
+        blocks = setting_blocks(panel, seat_of.get(panel.part_id, 0.0), strip, k, p, stops)
+        parts += blocks
+        down[panel.part_id] = (k, strip, slope)
+        if strip is not None:
+            r = 0.5 * (bolt.diameter if bolt else 0.0) + JOINT_SPARE
+            for b in blocks:
+                along = strip.frame.to2d(b.frame.to3d(b.outline))[:, 0]
+                blocks_on.setdefault(strip.part_id, []).append((float(along.min()) - r, float(along.max()) + r))
+    panel_of = {x.part_id: x for x in panels}
+    by_strip: dict[str, list[tuple["Panel", int]]] = {}
+    for (pid, k), s in pane_edge_strips.items():
+        by_strip.setdefault(s.part_id, []).append((panel_of[pid], k))
+    stations: dict[str, tuple[float, ...]] = {}
+    bites: dict[str, list[float]] = {}
+    spacing: dict[str, list[float]] = {}
+    screws: dict[str, float] = {}
+    if p.retention == "pressure_plate":
+        by_id = {s.part_id: s for s in strips}
+        for sid, on in sorted(by_strip.items()):
+            s = by_id[sid]
+            half = 0.5 * p.pressure_plate_width
+            rect = np.array([[s.x0, -half], [s.x1, -half], [s.x1, half], [s.x0, half]])
+            under = {panel.part_id: _pane_top_under(s.frame, rect, panel, seat_of.get(panel.part_id, 0.0)
+                                                    + panel.thickness_mm) for panel, _ in on}
+            heights = [u[0] for u in under.values() if u is not None]
+            if not heights:
+                continue
+            z = max(heights)
+            layers = (("pressure_gasket", pressure_gasket_id(sid), p.pressure_gasket_thickness),
+                      ("pressure_plate", pressure_plate_id(sid), p.pressure_plate_thickness),
+                      ("cover_cap", cover_cap_id(sid), p.cover_cap_height))
+            for kind, pid, t in layers:
+                parts.append(Prism(pid, kind, sid, sid, s.beam_id, s.frame, rect, z, t))
+                z += t
+            xs = screw_stations(s.length, p.bolt_pitch, [(lo - s.x0, hi - s.x0) for lo, hi in blocks_on.get(sid, [])])
+            stations[pressure_plate_id(sid)] = xs
+            for panel, _ in on:
+                u = under[panel.part_id]
+                bites.setdefault(panel.part_id, []).append(u[1] if u is not None else 0.0)
+                spacing.setdefault(panel.part_id, []).append(_spacing(xs, s.length))
+            # each pane's share of the plate's screws: by the tributary of its edge (half a joint each side)
+            for panel, _ in on:
+                screws[panel.part_id] = screws.get(panel.part_id, 0.0) + len(xs) / len(on)
+    out = []
+    for panel in panels:
+        k, strip, slope = down[panel.part_id]
+        w = panel.weight_kg * G
+        lb = min(p.setting_block_length, 0.4 * float(np.linalg.norm(np.roll(panel.outline, -1, axis=0)[k]
+                                                                    - panel.outline[k])))
+        load = 0.5 * w * math.sin(math.radians(slope))
+        uplift = p.load_factor * p.wind_suction * panel.area_mm2 * 1e-6
+        n = screws.get(panel.part_id, 0.0)
+        res = n * bolt.tension_resistance_kN if bolt is not None else 0.0
+        short = _shortest_width(np.asarray(panel.outline, dtype=float))
+        sil = p.load_factor * p.wind_suction * 1e-3 * short / (2.0 * p.silicone_design_stress)
+        out.append(PaneRestraint(panel.part_id, slope, panel.weight_kg, k, strip.part_id if strip else "", load,
+                                 load / (lb * panel.thickness_mm), slope > p.stop_min_slope_deg, uplift, n, res,
+                                 min(bites.get(panel.part_id, [math.nan])),
+                                 max(spacing.get(panel.part_id, [0.0])), sil))
+    return Retention(p, bolt, tuple(parts), stations, tuple(out))
+
+
+def _shortest_width(outline: np.ndarray) -> float:
+    """The smallest width (mm) of a convex outline over the directions of its edge normals."""
+    d = np.roll(outline, -1, axis=0) - outline
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1, keepdims=True)
+    proj = outline @ n.T
+    return float((proj.max(axis=0) - proj.min(axis=0)).min())
+
+
+_CACHE: "weakref.WeakKeyDictionary[Any, Retention]" = weakref.WeakKeyDictionary()
+
+
+def build_retention(build: "Build") -> Retention | None:
+    """The :class:`Retention` of a build, computed once per build's glazing; ``None`` without glazing strips or
+    with ``retention = "none"``."""
+    from .bite import pane_edges
+    from .seat import build_seats
+
+    g = build.glazing
+    if g is None or not g.strips or g.params.retention == "none":
+        return None
+    r = _CACHE.get(g)
+    if r is None:
+        by_edge = {s.edge: s for s in g.strips}
+        support = build.support
+        pes = {(panel.part_id, q): by_edge[e] for panel, q, e in pane_edges(build.panels.panels, support.vertices,
+                                                                            support.edges) if e in by_edge}
+        r = make_retention(build.panels.panels, build_seats(build), g.strips, pes, g.params,
+                           float(build.design.panels.gap))
+        _CACHE[g] = r
+    return r
