@@ -8,6 +8,7 @@ The Python API of the whole pipeline (what the command line, the examples, the t
     b.write("out")                          # the output folder, written atomically
     assert b.verify().ok                    # the same checks as `ppfab verify out`
     b.summary                               # totals (panels, sheets, lengths, weights, torsion)
+    package = open_build("out")             # the typed parts, nodes, welds, sheets and mesh of a written folder
 
 Heavy libraries (build123d, ezdxf, matplotlib) are imported inside the functions that need them, and the
 API names below are loaded on first use, so ``import fabrication`` (and ``ppfab --version``) stays light.
@@ -24,11 +25,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from .pipeline.progress import Progress
     from .pipeline.records import Build
     from .verify import verify
+    from .model import Package
+    from .readers import open_build, package_of
 
 _API = {"Design": "design", "load_design": "design", "parse_design": "design",
-        "build": "pipeline.stages", "Build": "pipeline.records", "Progress": "pipeline.progress", "verify": "verify"}
+        "build": "pipeline.stages", "Build": "pipeline.records", "Progress": "pipeline.progress", "verify": "verify",
+        "open_build": "readers", "package_of": "readers", "Package": "model"}
 
-__all__ = ["Build", "Design", "Progress", "build", "load_design", "parse_design", "verify"]
+__all__ = ["Build", "Design", "Package", "Progress", "build", "load_design", "open_build", "package_of", "parse_design",
+           "verify"]
 
 
 def __getattr__(name: str) -> Any:

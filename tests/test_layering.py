@@ -26,10 +26,11 @@ STDLIB = set(sys.stdlib_module_names)
 CORE_THIRD_PARTY = {"numpy", "scipy"}
 # fabrication's layers, lowest first; a module may import its own layer and the ones below
 FAB_LAYERS = [
+    {"model"},                      # the records of a finished build: data only, imports nothing of fabrication
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
      "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter", "glazing", "repetition",
      "report_glazing", "erection", "erection_drawing"},
-    {"writers", "verify"},
+    {"writers", "verify", "readers"},
     {"pipeline"},
     {"cli", "studio", "sweep"},
 ]
