@@ -14,8 +14,8 @@ Points = tuple[tuple[float, float], ...]
 def unplace(points: Sequence[Sequence[float]], placement: Placement) -> Points:
     """Sheet points back into the part's own frame: ``p = M · R(−rotation) · (q − (x, y))``.
 
-    >>> unplace([(10.0, 21.0)], Placement(1, "s.dxf", 10.0, 20.0, 90.0, True))
-    ((-1.0, 0.0),)
+    >>> [(round(x, 9), round(y, 9)) for x, y in unplace([(10.0, 21.0)], Placement(1, "s.dxf", 10.0, 20.0, 90.0, True))]
+    [(-1.0, 0.0)]
     """
     a = math.radians(placement.rotation_deg)
     c, s = math.cos(a), math.sin(a)
@@ -24,7 +24,7 @@ def unplace(points: Sequence[Sequence[float]], placement: Placement) -> Points:
         dx, dy = float(qx) - placement.x, float(qy) - placement.y
         px, py = c * dx + s * dy, -s * dx + c * dy
         out.append((-px if placement.mirrored else px, py))
-    return tuple((x + 0.0, y + 0.0) for x, y in out)
+    return tuple(out)
 
 
 def unplace_outline(points: Sequence[Sequence[float]], placement: Placement) -> Points:
