@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ppfab import planes as pl
-from ppfab.conical.cones import extended_planes, vertex_planes
+from ppfab.conical.cones import axis_of_normals, extended_planes, vertex_planes
 from ppfab.errors import GeometryError
 from ppfab.folds import check_folds
 from ppfab.mesh import QuadGrid
@@ -177,8 +177,14 @@ def quad_circularity(F: np.ndarray) -> np.ndarray:
     return s[..., 3] / np.maximum(s[..., 0], 1e-300)
 
 
+CONICAL_TOLERANCE = 1e-6
+"""Largest distance (radians, to first order) of the unit face normals at a vertex (ghosts included) from
+their common circle for :func:`isotropic_transform` to accept a grid as conical — the tolerance of
+:func:`ppfab.conical.cones.laguerre_transform`."""
+
+
 def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, max_residual: float = 1e-7,
-                   min_span: float = 1e-9) -> QuadGrid:
+                        min_span: float = 1e-9, max_conical: float = CONICAL_TOLERANCE) -> QuadGrid:
     """Apply an isotropic Möbius transformation to the conical face image ``M°_F`` of a grid (Remark 2.2).
 
     The unit face planes (ghosts included, :func:`ppfab.conical.extended_planes`) are mapped; each
@@ -186,7 +192,10 @@ def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, 
     common to the four support planes ``f_{k+1} − f_k`` around it.
 
     Returns a grid with the weighted image in ``face_image`` and the unit planes, ghosts included, in
-    ``extended_face_planes``.  Raises :class:`GeometryError` when the
+    ``extended_face_planes``.  Raises :class:`GeometryError` when the input is not conical (the unit
+    normals at a vertex further than ``max_conical`` from a common circle: its unit face planes have no
+    orthogonal-node structure, and the four support planes around a vertex of the image would not share
+    an axis — torsion), when the
     four mapped planes of a vertex do not determine one point — their unit normals span only a plane
     (smallest/largest singular value of the 4×3 normal matrix ``≤ min_span``: the planes share a line) —
     or do not meet (relative residual ``s₃/s₀`` of the 4×4 plane matrix above ``max_residual``: the
@@ -194,6 +203,13 @@ def isotropic_transform(grid: QuadGrid, T: IsotropicMobius, check: bool = True, 
     when the image folds.
     """
     E = extended_planes(grid)
+    res = axis_of_normals(vertex_planes(grid, E)[..., :3])[2]
+    if np.max(res, initial=0.0) > max_conical:
+        idx = tuple(int(k) for k in np.argwhere(res == res.max())[0])
+        raise GeometryError(f"the mesh is not conical at vertex {idx} (normals off their circle by {res.max():.3g} "
+                            f"> {max_conical:g}); an isotropic Möbius map needs the orthogonal-node structure of "
+                            "a conical mesh (make it conical first: ppfab optimize --keep-conical)",
+                            element=f"vertex {idx}", value=float(res.max()))
     F = T(E)
     P = vertex_planes(grid, F)                                  # (rows, cols, 4, 4) weighted
     sn = np.linalg.svd(pl.normalize(P)[..., :3], compute_uv=False)
