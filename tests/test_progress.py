@@ -156,3 +156,42 @@ def test_a_terminal_gets_a_bar_with_the_time_left():
     text = s.getvalue()
     assert "%|" in text and "<" in text and "glass, 9 parts: best 2 sheets" in text     # bar, time left, status
     assert text.rstrip().endswith("glass: 2 sheets (" + text.rstrip().rsplit("(", 1)[1])
+
+
+def test_a_log_has_whole_lines_with_the_count_and_time_left_of_verify(run):
+    """In a log every line is whole: verify's status lines carry how many checks of all are done and the time
+    left, nothing is written into the middle of a stage line, and each stage ends in a line that starts with
+    its header and carries its summary."""
+    import re
+
+    p, _, text = run
+    lines = text.splitlines()
+    status = [ln for ln in lines if ln.startswith("  verify: ")]
+    assert status, text
+    assert all(re.match(r"  verify: \d+ of \d+ checks, ", ln) for ln in status), status
+    assert any("s left)" in ln for ln in status), status
+    assert not any("verify: " in ln and not ln.startswith("  verify: ") for ln in lines)
+    summaries = [ln for ln in lines if ln.startswith("[ppfab] ") and re.search(r"\(\d+\.\d s\)$", ln)]
+    for stage in ("geometry", "nesting", "step", "dxf", "report", "verify"):
+        assert any(ln.startswith(f"[ppfab] {stage:<10}") for ln in summaries), (stage, text)
+
+
+def test_a_warning_during_a_stage_gets_a_line_of_its_own():
+    """A warning logged while a stage line is open is printed on its own line, in a log and on a terminal
+    alike, and the stage's summary line still starts with its header."""
+    import logging
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    for stream, bar in ((io.StringIO(), False), (Terminal(), False)):
+        p = Progress(stream=stream, tick=0.0, bar=bar)
+        with p.logs_here():
+            p.start("beams", "10 plates")
+            logging.getLogger("ppfab.test").warning("B-U01: a warning about one plate")
+            p.done("10 plates, 2 slots")
+        lines = stream.getvalue().replace("\r\033[K", "\n").splitlines()
+        assert "B-U01: a warning about one plate" in lines, lines
+        assert lines[-1].startswith("[ppfab] beams") and lines[-1].endswith("10 plates, 2 slots (0.0 s)"), lines
+    assert logging.getLogger("ppfab").propagate and not logging.getLogger("ppfab").handlers

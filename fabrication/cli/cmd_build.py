@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     design = load_design(example_path(args.example) if args.example else args.design)
     progress = Progress(quiet=args.quiet or args.json)
     check_target(args.out, force=args.force, protect=design.input_files())    # refuse before the work
-    with OutputLock(args.out):                                                 # one run per output folder
+    with OutputLock(args.out), progress.logs_here():       # one run per output folder; warnings on lines of their own
         preload()
         result = build(design, progress=progress, allow_large=args.allow_large)
         out = result.write(args.out, force=args.force, progress=progress)

@@ -8,15 +8,23 @@ count of sheets so far; files: writers done of all; optimisation: iteration and 
 terminal; a status line every ``interval`` seconds in a log), so a long CAD-kernel call never looks like a hang.
 Every report is also an :class:`Event` in :attr:`Progress.events` and is passed to the ``hooks`` (tests and
 notebooks read them).
+
+In a log (not a terminal) every line is whole: a stage's status lines carry its count and time left
+(``verify: 31 of 48 checks, bite (12 s, ≈ 6 s left)``), a warning logged during a stage is printed on its own
+line (:meth:`Progress.message`, :class:`ProgressLogHandler`), and a stage whose header was broken by either ends
+with its header repeated in front of its summary, so the lines that begin with ``[ppfab]`` are one summary line
+per stage.
 """
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import sys
 import threading
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, TextIO
+from typing import Any, Callable, Iterator, TextIO
 
 
 @dataclass(frozen=True)
@@ -76,6 +84,7 @@ class Progress:
         self._counts: tuple[float | None, float | None] = (None, None)
         self._last_shown = time.perf_counter()
         self._status_shown = False
+        self._midline = False      # a log line was begun and not ended (the stage header, its notes)
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self._use_bar = self.tty if bar is None else bar
         self._bar: Any = None
@@ -107,7 +116,9 @@ class Progress:
             if self._use_bar:
                 self._open_bar()
             else:
+                self._end_line()
                 print(self._line, file=self.stream, end="", flush=True)
+                self._midline = True
             self._start_ticker()
 
     def note(self, text: str) -> None:
@@ -121,7 +132,8 @@ class Progress:
                 self._bar.set_description_str(self._line, refresh=True)
             else:
                 self._clear_status()
-                print(f" {text}", file=self.stream, end="", flush=True)
+                if self.tty or self._midline:       # a log whose header line was ended shows it in the summary
+                    print(f" {text}", file=self.stream, end="", flush=True)
 
     def advance(self, done: float, total: float | None = None, text: str = "") -> None:
         """The running stage has done ``done`` of ``total`` (``None``: not known), with a status ``text``."""
@@ -143,8 +155,8 @@ class Progress:
             if self.quiet:
                 return
             if self.verbose:
-                print(f"\n{text}" if self._line else text, file=self.stream, end="" if self._line else "\n",
-                      flush=True)
+                self._end_line()
+                print(text, file=self.stream, flush=True)
                 return
             self._show(force=False)
 
@@ -172,7 +184,9 @@ class Progress:
                     print(f"{self._line}{tail} ({dt:.1f} s)", file=self.stream, flush=True)
                 else:
                     self._clear_status()
-                    print(f"{tail} ({dt:.1f} s)", file=self.stream, flush=True)
+                    head = "" if self.tty or self._midline else self._line
+                    print(f"{head}{tail} ({dt:.1f} s)", file=self.stream, flush=True)
+                    self._midline = False
             self._stage, self._line = "", ""
 
     def fail(self) -> None:
@@ -186,7 +200,9 @@ class Progress:
                     print(f"{self._line} failed", file=self.stream, flush=True)
                 else:
                     self._clear_status()
-                    print(" failed", file=self.stream, flush=True)
+                    head = "" if self.tty or self._midline else self._line
+                    print(f"{head} failed", file=self.stream, flush=True)
+                    self._midline = False
             self._stage, self._line = "", ""
 
     def clear(self) -> None:
@@ -198,6 +214,41 @@ class Progress:
                 self._clear_status()
                 if self.tty and not self._line:
                     print("\r\033[K", file=self.stream, end="", flush=True)
+
+    def message(self, text: str) -> None:
+        """Print ``text`` (a warning, a notice) on a line of its own, the running stage's display kept intact:
+        on a terminal above the bar or status line, in a log after ending the line begun."""
+        with self._lock:
+            if self._bar is not None:
+                self._bar.write(text, file=self.stream)
+                return
+            if self.tty and self._stage:
+                print(f"\r\033[K{text}", file=self.stream, flush=True)
+                print(self._line, file=self.stream, end="", flush=True)
+                self._status_shown = False
+                return
+            self._end_line()
+            print(text, file=self.stream, flush=True)
+
+    @contextlib.contextmanager
+    def logs_here(self, name: str = "ppfab") -> Iterator[None]:
+        """Within the block, records of the logger ``name`` are printed through :meth:`message` (not by the
+        root logger's handler, which would write them into the middle of a stage line)."""
+        logger = logging.getLogger(name)
+        handler = ProgressLogHandler(self)
+        logger.addHandler(handler)
+        propagate, logger.propagate = logger.propagate, False
+        try:
+            yield
+        finally:
+            logger.removeHandler(handler)
+            logger.propagate = propagate
+
+    def _end_line(self) -> None:
+        """End a log line that was begun (the stage header), so that what follows starts a line of its own."""
+        if self._midline and not self.tty:
+            print(file=self.stream, flush=True)
+        self._midline = False
 
     # -- display -------------------------------------------------------------------------------------------
 
@@ -243,9 +294,10 @@ class Progress:
         status = self._status_text(now)
         if self.tty:
             print(f"\r\033[K{self._line} … {status}", file=self.stream, end="", flush=True)
+            self._status_shown = True
         else:
-            print(f"\n  {self._stage}: {status}", file=self.stream, end="", flush=True)
-        self._status_shown = True
+            self._end_line()
+            print(f"  {self._stage}: {status}", file=self.stream, flush=True)
 
     def _open_bar(self) -> None:
         from tqdm import tqdm
@@ -286,3 +338,23 @@ class Progress:
                 if now - self._last_shown >= (self.tick if self._bar is not None else self.interval):
                     self._event("tick", *self._counts, text=self._status)
                     self._show(force=True)
+
+
+class ProgressLogHandler(logging.Handler):
+    """A logging handler that prints each record (its message alone) through :meth:`Progress.message`; with a
+    quiet progress the record goes to the progress stream as a plain line, as the root handler would."""
+
+    def __init__(self, progress: Progress) -> None:
+        super().__init__()
+        self.progress = progress
+        self.setFormatter(logging.Formatter("%(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = self.format(record)
+            if self.progress.quiet:
+                print(text, file=self.progress.stream, flush=True)
+            else:
+                self.progress.message(text)
+        except Exception:                       # a handler never raises into the code that logs
+            self.handleError(record)

@@ -155,7 +155,8 @@ class Build:
         from ..verify import verify
 
         progress.start("verify")
-        result = verify(folder)
+        result = verify(folder, progress=lambda done, total, what: progress.advance(
+            done, total, f"{done} of {total} checks, {what}"))
         if not result.ok:
             progress.fail()
             shown = "; ".join(str(f) for f in result.findings[:3])

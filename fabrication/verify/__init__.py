@@ -114,14 +114,17 @@ FORK_AFTER = "types"
 per-type DXFs are read, so the glass order check finds them in ``data["type_dxf"]``."""
 
 
-def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = False) -> Verification:
+def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = False,
+           progress: Callable[[int, int, str], None] | None = None) -> Verification:
     """Run every check on an output folder (stopping after the manifest if it cannot be read).
 
     ``parallel`` (default: on with two cores and fork, :func:`fabrication.writers._parallel.parallel_enabled`)
     runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`FORK_AFTER` has run; the
     findings and the list of checks are assembled in check order, so the result equals a serial run.  When the
     second process fails (a check raising, the process dying), its checks run again here, so an error is the
-    check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files (:attr:`Verification.kernel`)."""
+    check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files (:attr:`Verification.kernel`).
+    ``progress(done, total, what)`` is called as checks finish here (``what``: the check just run, or what is
+    being waited for), so a long verify shows its count and time left."""
     v = Verification(Path(folder), kernel=kernel)
     if not v.folder.is_dir():
         v.error(str(folder), "", "is not a folder")
@@ -135,9 +138,11 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     first = [c for c in checks if c not in second]
     done: dict[str, tuple[list[Finding], list[str]]] = {}
     child = None
+    report = progress or (lambda done_, total_, what_: None)
     try:
         for c in first:
             _run_one(v, c, done)
+            report(len(done), len(checks), c.name)
             if not v.data.get("manifest"):
                 return v
             if c.name == FORK_AFTER and second:
@@ -145,6 +150,8 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
                     child = Forked(lambda: _run_all(v, second), "ppfab-verify")
                 except OSError:                 # no process to be had: the checks run here
                     child = None
+        if child is not None:
+            report(len(done), len(checks), f"waiting for {len(second)} checks in a second process")
         outcome: tuple[str, Any] = child.result() if child is not None else ("failed", "no second process")
     finally:
         if child is not None:
@@ -153,6 +160,7 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
         if outcome[0] != "ok":                  # no second process, or it failed: run its checks here
             for c in second:
                 _run_one(v, c, done)
+                report(len(done), len(checks), c.name)
         else:
             done.update(outcome[1])
     v.findings = [f for c in checks if c.name in done for f in done[c.name][0]]
