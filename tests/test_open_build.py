@@ -180,6 +180,27 @@ def test_an_older_build_reads_as_the_current_one(vault, tmp_path):
     assert any(isinstance(p.details, PanelData) for p in old.parts)
 
 
+def test_nodes_csv_reads_as_nodes_json_to_its_decimals(vault, tmp_path):
+    """Without ``nodes.json`` the nodes come from ``nodes.csv``: the same records to the CSV's decimals (positions
+    4, angles 4), without what only the JSON holds (beam planes, per-panel angles, pairs, axis to normal)."""
+    _, out = vault
+    folder = _copy(out, tmp_path / "n")
+    (folder / "nodes.json").unlink()
+    full, brief = open_build(out).nodes, open_build(folder).nodes
+
+    def json_only_dropped(n):
+        return replace(n, beams=tuple(replace(b, plane=None, panel_angles_deg=()) for b in n.beams), pairs=(),
+                       axis_normal_deg=None)
+
+    assert differences(tuple(json_only_dropped(n) for n in full), brief, abs_tol=5e-4, rel_tol=0.0) == []
+    assert any(b.trim_mm for n in brief for b in n.beams)           # the set-backs land on the ending plates
+    assert all(b.trim_mm is None for n in brief for b in n.beams if b.role == "through")
+    lines = (folder / "nodes.csv").read_text().splitlines()
+    lines[3] = lines[3].replace(",through;", ",through;through;", 1).replace(",end;", ",end;end;", 1)
+    (folder / "nodes.csv").write_text("\n".join(lines) + "\n")
+    assert re.search(r"nodes\.csv, row 3, column roles: 2 beams but 3 roles", _error(folder))
+
+
 def _error(folder: Path) -> str:
     with pytest.raises(BuildReadError) as exc:
         open_build(folder)

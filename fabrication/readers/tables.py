@@ -1,6 +1,6 @@
-"""Readers of the tables of a build: ``parts.json`` (or ``parts.csv``), ``nodes.json``, ``welds.csv`` and
-``manifest.json``.  Each returns plain rows (``(row number, columns)``) or records; a missing file or a
-malformed row is a :class:`~fabrication.readers.errors.BuildReadError` naming the file, row and column."""
+"""Readers of the tables of a build: ``parts.json`` (or ``parts.csv``), ``nodes.json`` (or ``nodes.csv``),
+``welds.csv`` and ``manifest.json``.  Each returns plain rows (``(row number, columns)``) or records; a missing
+file or a malformed row is a :class:`~fabrication.readers.errors.BuildReadError` naming the file, row and column."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from ..model import ColumnError, Node, Weld
-from ..model.values import csv_typed
+from ..model.values import csv_typed, words
 from .errors import bad, missing
 
 Row = tuple[int, dict[str, Any]]
@@ -83,9 +83,41 @@ def read_parts(folder: Path) -> tuple[Path, list[Row]]:
     return path, rows
 
 
+def _csv_node(row: dict[str, Any]) -> dict[str, Any]:
+    """A ``nodes.csv`` row as the ``nodes.json`` entry it abbreviates: no beam planes, per-panel angles, pairs or
+    ``axis_normal_deg``; each ending plate's set-back (``trims_mm`` lists them in order) on its beam."""
+    ids, roles = words(row.get("beams")), words(row.get("roles"))
+    mins, trims = words(row.get("beam_panel_deg")), words(row.get("trims_mm"))
+    if len(roles) != len(ids) or len(mins) not in (0, len(ids)):
+        raise ColumnError("roles" if len(roles) != len(ids) else "beam_panel_deg",
+                          f"{len(ids)} beams but {len(roles)} roles and {len(mins)} angles")
+    ending = [k for k, r in enumerate(roles) if r != "through"]
+    trim_of = dict(zip(ending, trims)) if len(trims) == len(ending) else {}
+    beams: list[dict[str, Any]] = [
+        {"part_id": pid, "role": role, "plane": None, "panel_angles_deg": [],
+         "panel_angle_min_deg": mins[k] if mins else None, "trim_mm": trim_of.get(k)}
+        for k, (pid, role) in enumerate(zip(ids, roles))]
+    known = {"beams", "roles", "beam_panel_deg", "trims_mm", "i", "j", "x", "y", "z", "axis_x", "axis_y", "axis_z"}
+    rec = {k: val for k, val in row.items() if k not in known}
+    rec.update(grid=None if row.get("i") in (None, "") else [row["i"], row["j"]],
+               position=[row.get(c) for c in "xyz"], axis=[row.get(f"axis_{c}") for c in "xyz"], beams=beams)
+    if trims and not trim_of:
+        rec["trims_mm"] = row["trims_mm"]                    # kept as written when it cannot be matched
+    return rec
+
+
 def read_nodes(folder: Path) -> tuple[Node, ...]:
-    """The nodes of ``nodes.json``, in vertex order."""
+    """The nodes of ``nodes.json`` (``nodes.csv`` when the JSON is absent), in vertex order."""
     path = folder / "nodes.json"
+    if not path.is_file() and (folder / "nodes.csv").is_file():
+        csv_path = folder / "nodes.csv"
+        found = []
+        for n, row in read_csv(csv_path, "the node table", ("node_id", "vertex", "x", "y", "z")):
+            try:
+                found.append(Node.from_record(_csv_node(row)))
+            except ColumnError as exc:
+                raise bad(csv_path, exc.reason, row=n, column=exc.column) from None
+        return tuple(found)
     doc = read_json(path, "the node table")
     nodes = doc.get("nodes") if isinstance(doc, dict) else None
     if not isinstance(nodes, list):
