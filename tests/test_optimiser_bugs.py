@@ -10,6 +10,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -47,3 +49,94 @@ def test_isotropic_transform_refuses_a_mesh_that_is_not_conical():
     assert err.value.value > 1e-5 and "\n" not in str(err.value)
     with pytest.raises(GeometryError, match="not conical"):                  # the same refusal as Laguerre's
         laguerre_transform(g, LaguerreMap(np.eye(4)))
+
+
+# -- ppfab optimize --quiet ----------------------------------------------------------------------------------
+
+def test_quiet_optimize_still_prints_the_result_line(tmp_path, capsys):
+    """--quiet hides the progress display and the detail lines, not whether the run met its targets."""
+    from conftest import shared_file
+    from fabrication.cli import main
+
+    tube = shared_file("compas_libigl__tubemesh.off")
+    out = tmp_path / "o.obj"
+    assert main(["optimize", str(tube), "-o", str(out), "--max-iter", "1", "--quiet"]) == 1
+    cap = capsys.readouterr()
+    lines = [ln for ln in cap.err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith(f"{tube} -> {out}: ") and "targets NOT met" in lines[0]
+    assert cap.out == "" and out.exists()
+
+
+# -- a P run on a real, nearly conical mesh: conical1 made P ----------------------------------------------------
+
+@pytest.fixture(scope="module")
+def conical1_p():
+    """DOS__conical1 (conical to 7.5e-4 rad, not P) optimised for planar rows, without keep_conical."""
+    from conftest import shared_file
+    from ppfab.io import load_mesh
+    from ppfab.optimize import optimize
+
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
+    return mesh, optimize(mesh, {"families": "rows"})
+
+
+def test_axis_angle_max_of_a_p_run_is_measured(conical1_p):
+    """A P run has one plane per vertex; axis_angle_max is the largest angle of the P support's axes to the
+    normals (0.0 before on every P run).  Independent bounds: an axis in the row plane can be no nearer
+    the normal than the normal's own angle to that plane, ``asin |n·u|`` (plane by SVD of the row's points,
+    normal from the diagonals of the faces around the vertex)."""
+    _, res = conical1_p
+    assert res.targets_met
+    qm = res.mesh if not hasattr(res.mesh, "to_quadmesh") else res.mesh.to_quadmesh()
+    v, f = qm.vertices, qm.faces
+    fn = np.cross(v[f[:, 2]] - v[f[:, 0]], v[f[:, 3]] - v[f[:, 1]])
+    fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+    vn = np.zeros_like(v)
+    np.add.at(vn, f.ravel(), np.repeat(fn, 4, axis=0))
+    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
+    bound = []
+    for k in res.polylines:
+        ids = qm.polylines[int(k)].vertices
+        pts = v[ids]
+        u = np.linalg.svd(pts - pts.mean(axis=0))[2][2]
+        bound.append(np.degrees(np.arcsin(np.abs(vn[ids] @ u))))
+    lower = np.concatenate(bound)
+    assert lower.max() > 5.0                                   # rows far from the normals exist (left out later)
+    assert lower.max() - 1e-6 <= res.axis_angle_max <= 90.0
+    assert 0.0 < res.axis_angle_mean < res.axis_angle_max
+    assert res.summary()["axis_angle_max"] == res.axis_angle_max
+
+
+def test_a_nearly_conical_input_that_loses_it_is_warned_about(conical1_p):
+    """conical1's max conical residual (|α0 − α1 + α2 − α3|, recomputed here from the corner angles) is
+    7.5e-4 rad; the P run meets its δ targets but leaves it at 0.67 rad: the result says so."""
+    mesh, res = conical1_p
+
+    def balance(m) -> float:
+        from ppfab.metrics import quality
+
+        return quality(m).conical_max
+
+    before = balance(mesh)
+    after = balance(res.mesh)
+    assert before < 1e-3 and after > 0.1
+    assert res.targets_met
+    assert len(res.warnings) == 1 and "nearly conical" in res.warnings[0] and "keep_conical" in res.warnings[0]
+    assert res.message.endswith(res.warnings[0]) and res.summary()["warnings"] == list(res.warnings)
+
+
+def test_never_worse_than_the_input_holds_for_every_measure():
+    """conical1 with faces weighted 0.01 and one iteration: the step lowers δ_P (which dominates the worst
+    target ratio) but raises max δ_f 200-fold (4.1e-5 → 8.1e-3).  That iterate is worse than the input, so
+    the input comes back and the message names the measure that rose."""
+    from conftest import shared_file
+    from ppfab.io import load_mesh
+    from ppfab.metrics import face_planarity
+    from ppfab.optimize import optimize
+
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
+    res = optimize(mesh, {"families": "rows", "weight_faces": 0.01, "max_iterations": 1})
+    assert res.returned == "input"
+    assert np.array_equal(res.mesh.vertices, mesh.vertices)
+    assert re.search(r"no iterate was better than the input \(the last: max δ_f [0-9.e+-]+ > input 4\.06e-05\)",
+                     res.message)

@@ -38,7 +38,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="set any optimisation parameter (TOML value syntax), repeatable")
     p.add_argument("--verbose", action="store_true", help="print energies and metrics of every iteration")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress display and no detail lines; the result line is still printed")
     p.add_argument("--json", action="store_true", help="print a JSON summary (with the per-iteration history)")
 
 
@@ -136,9 +137,10 @@ def run(args: argparse.Namespace) -> int:
         doc.update({"input": str(args.mesh), "output": str(out),
                     "history": [asdict(h) for h in result.history]})
         print(json.dumps(doc, indent=2))
-    elif not args.quiet:
+    else:
+        print(f"{args.mesh} -> {out}: {result.message}", file=sys.stderr)    # even with --quiet: met or not
+    if not args.json and not args.quiet:
         q = result.quality
-        print(f"{args.mesh} -> {out}: {result.message}", file=sys.stderr)
         print(f"  {result.iterations} iterations, {result.time:.2f} s; mean displacement "
               f"{result.displacement_mean:.3g} ({result.displacement_rel:.2e} of the bounding-box diagonal); "
               f"δ_P rows {q.delta_p_rows_max:.2e}, cols {q.delta_p_cols_max:.2e}", file=sys.stderr)

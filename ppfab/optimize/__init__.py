@@ -42,7 +42,8 @@ from ..metrics import (CreaseReport, Quality, conjugacy_defect, crease_report, d
                        quality)
 from ..schema import as_plain, parse_params
 from .guard import StepGuard
-from .outcome import Outcome, axis_normal_angles, message, support_panel_angles
+from .outcome import (Outcome, axis_normal_angles, conical_loss, message, p_axis_normal_angles,
+                      support_panel_angles)
 from .params import OptimizeParams
 from .reference import ReferenceSurface
 from .residuals import Residuals, Weights
@@ -97,13 +98,17 @@ class OptimizeResult:
     creases : :class:`~ppfab.metrics.CreaseReport` (angles and change per edge of ``mesh.edges``)
     creased_edges : (k, 2) vertex pairs of the created creases, worst first (never with ``targets_met``)
     support_angle_max : largest deviation from 90° between a support plane and a panel along it, degrees
-    axis_angle_max, axis_angle_mean : node axis (``U ∩ W``) vs vertex normal where two planes meet, degrees
+    axis_angle_max, axis_angle_mean : node axis vs vertex normal, degrees: where two planes meet (PP) the
+        axis is ``U ∩ W``; on a P run the axis of the exact P support in the planes (one free angle per
+        transverse strip, :func:`ppfab.optimize.outcome.p_axis_normal_angles`); 0 without planar polylines
     rejected : refused steps by reason (``energy``, ``fold``, ``crease``, ``flip``, ``nonconvex``, ``collapse``,
         ``nan``)
     returned : ``"last"`` (the final iterate), ``"best"`` (the final iterate was worse than the input; the
         best-scoring iterate is returned) or ``"input"`` (no iterate was better than the input)
     factorisations, cg_solves : how the linear systems were solved
     conjugacy_defect : :func:`ppfab.metrics.conjugacy_defect` of the input
+    warnings : what the targets do not say but the caller should know (also at the end of ``message`` and
+        logged): a nearly conical input that lost its conicality (:func:`.outcome.conical_loss`)
     """
 
     mesh: QuadMesh | QuadGrid
@@ -149,6 +154,7 @@ class OptimizeResult:
     factorisations: int = 0
     cg_solves: int = 0
     conjugacy_defect: float = 0.0
+    warnings: tuple[str, ...] = ()
 
     def summary(self) -> dict:
         """Plain-data summary (for ``--json`` and reports)."""
@@ -176,7 +182,7 @@ class OptimizeResult:
             "support_angle_max": self.support_angle_max, "axis_angle_max": self.axis_angle_max,
             "axis_angle_mean": self.axis_angle_mean, "rejected": dict(self.rejected), "returned": self.returned,
             "factorisations": self.factorisations, "cg_solves": self.cg_solves,
-            "conjugacy_defect": self.conjugacy_defect,
+            "conjugacy_defect": self.conjugacy_defect, "warnings": list(self.warnings),
         }
 
 
@@ -331,10 +337,13 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
     v_last = prob.residuals.unpack(state.z)[0]
-    last_score = control.score(prob.metrics(v_last)[0], prob.metrics(v_last)[2], prob.metrics.conical_max(v_last))
+    m_last = prob.metrics(v_last)
+    last = (m_last[0], m_last[2], prob.metrics.conical_max(v_last))
+    last_score = control.score(*last)
+    rose = control.rises(last, state.start_metrics)
     returned = "last"
     z_out = state.z
-    if last_score > state.start_score and state.best_z is not None:      # never hand back something worse
+    if (last_score > state.start_score or rose) and state.best_z is not None:   # never hand back something worse
         z_out = state.best_z
         returned = "input" if state.best_iteration == 0 else "best"
     v_n = prob.residuals.unpack(z_out)[0]
@@ -363,13 +372,19 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     faces = np.asarray(prob.mesh.faces, dtype=np.int64)
     sup = support_panel_angles(v, faces, planes, *_all_pairs(prob))
     axis = axis_normal_angles(v, faces, planes, prob.selection.planar)
+    if not len(axis) and len(prob.selection.planar):          # P: one plane per vertex, axes of the P support
+        axis = p_axis_normal_angles(out_qm, prob.selection.planar_index)
     defect = conjugacy_defect(prob.mesh) if not met else 0.0
     crease_in = float(np.nanmax(prob.crease0)) if np.isfinite(prob.crease0).any() else 0.0
     outcome = Outcome(state.stopped_by, met, dfm, dpm, con, df0, dp0, target_df, p.target_delta_p, target_c,
                       state.iterations, p.max_iterations, state.rejected, returned, state.best_iteration,
-                      creases, crease_in, prob.mesh.edges, defect if not met else None)
-    msg = message(outcome) + _notes(p, prob, per_line)
+                      creases, crease_in, prob.mesh.edges, defect if not met else None,
+                      rose if returned != "last" else ())
+    warns = tuple(w for w in (conical_loss(q_in.conical_max, q_out.conical_max, p.keep_conical),) if w)
+    msg = message(outcome) + _notes(p, prob, per_line) + "".join(f"; {w}" for w in warns)
     log.debug(msg)
+    for w in warns:
+        log.warning(w)
     return OptimizeResult(
         mesh=out, converged=state.stopped_by in ("targets", "stationary"), targets_met=met,
         iterations=state.iterations, history=state.history, message=msg,
@@ -389,7 +404,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         axis_angle_max=float(axis.max()) if len(axis) else 0.0,
         axis_angle_mean=float(axis.mean()) if len(axis) else 0.0,
         rejected=state.rejected, returned=returned, factorisations=state.factorisations,
-        cg_solves=state.cg_solves, conjugacy_defect=defect)
+        cg_solves=state.cg_solves, conjugacy_defect=defect, warnings=warns)
 
 
 def _all_pairs(prob: Problem) -> tuple[np.ndarray, np.ndarray]:

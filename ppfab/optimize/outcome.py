@@ -5,7 +5,8 @@ Measures of the returned mesh against the input (all in mesh units or degrees):
 * distance to the input *surface* (the input quads split along a diagonal, :mod:`.reference`),
 * creases created (dihedral angles, :func:`ppfab.metrics.crease_report`),
 * the angle between the support planes and the panels they carry (§2.3.2: 90° is the ideal) and, where two
-  support planes meet at a vertex (PP), the angle between their line — the node axis — and the vertex normal,
+  support planes meet at a vertex (PP), the angle between their line — the node axis — and the vertex normal
+  (on a P run, with one plane per vertex, the axes of the exact P support, :func:`p_axis_normal_angles`),
 
 and :func:`message`, which names the stop reason, every target missed, the steps the guard refused by
 reason, created creases by edge, a fallback to the best iterate or the input, and the advice to remesh when
@@ -19,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import planes as pl
+from ..errors import GeometryError
+from ..mesh import QuadMesh
 from ..metrics import CreaseReport
 from ..topology import Polyline
 
@@ -70,6 +73,44 @@ def axis_normal_angles(v: np.ndarray, faces: np.ndarray, planes: np.ndarray, lin
     return np.degrees(pl.line_angle(axis, nv))
 
 
+NEAR_CONICAL = 1e-2
+"""An input whose largest conical residual ``|α_0 − α_1 + α_2 − α_3|`` is below this (rad) counts as nearly
+conical (published conical meshes stored as text: 5e-6 … 1e-3; a mesh that is not conical: 0.03 and up)."""
+
+
+def conical_loss(before: float, after: float, keep_conical: bool) -> str:
+    """A warning when a nearly conical input (max residual below :data:`NEAR_CONICAL`) is no longer conical
+    after a run that did not ask to keep it (above ``NEAR_CONICAL`` and ten times the input's), else ``""``.
+    The δ targets say nothing about it, so a run can meet them and lose the conical property unnoticed."""
+    if keep_conical or not before <= NEAR_CONICAL or not after > max(NEAR_CONICAL, 10.0 * before):
+        return ""
+    return (f"warning: the input was nearly conical (max conical residual {before:.2e} rad) and is not any more "
+            f"({after:.2e} rad): set keep_conical = true (ppfab optimize --keep-conical) to keep it")
+
+
+def p_axis_normal_angles(mesh: QuadMesh, planar_index: np.ndarray) -> np.ndarray:
+    """Angle (degrees) between the node axis and the surface normal at every vertex of the planar polylines
+    of a P run (no vertex on two of them), the axes of the P support on their planes
+    (:func:`ppfab.support.planar.planar_support` with exact strips: one free angle per transverse strip,
+    chosen to keep the axes near the normals; nothing left out).  ``(M,)``; empty when the support cannot
+    be found (a degenerate strip)."""
+    from ppfab.support.planar import planar_support
+    from ppfab.support.structure import vertex_normals
+
+    idx = np.asarray(planar_index, dtype=np.int64)
+    if not len(idx):
+        return np.zeros(0)
+    cand = np.zeros(len(mesh.polylines), dtype=bool)
+    cand[idx] = True
+    families = tuple(sorted({int(mesh.polylines[int(k)].family) for k in idx}))
+    try:
+        s = planar_support(mesh, vertex_normals(mesh), cand, (), "p", families, strips=True)
+    except GeometryError:
+        return np.zeros(0)
+    on = np.unique(np.concatenate([mesh.polylines[int(k)].vertices for k in idx]))
+    return np.asarray(s.normal_angle_deg)[on]
+
+
 @dataclass(frozen=True)
 class Outcome:
     """The facts :func:`message` reports (see :class:`ppfab.optimize.OptimizeResult` for the fields)."""
@@ -93,6 +134,7 @@ class Outcome:
     crease_input_max: float
     edges: np.ndarray
     conjugacy_defect: float | None
+    rose: tuple[str, ...] = ()       # why the last iterate was worse than the input (SolverControl.rises)
 
 
 def _fmt_rejected(rejected: dict[str, int]) -> str:
@@ -141,11 +183,13 @@ def message(o: Outcome) -> str:
         parts.append(f"largest crease {c.max:.1f}° (limit {c.limit:.1f}° = input max {o.crease_input_max:.1f}° "
                      f"+ crease_limit); edge ({int(o.edges[k, 0])}, {int(o.edges[k, 1])}) grew by "
                      f"{c.change[k]:.1f}° to {c.angles[k]:.1f}°")
+    why = f" ({', '.join(o.rose)})" if o.rose else ""
     if o.returned == "best":
-        parts.append(f"the last iterate was worse than the input, so the best iterate (iteration "
+        parts.append(f"the last iterate was worse than the input{why}, so the best iterate (iteration "
                      f"{o.best_iteration}) is returned")
     elif o.returned == "input":
-        parts.append("no iterate was better than the input, so the input is returned unchanged")
+        parts.append(f"no iterate was better than the input{' (the last: ' + why[2:] if why else ''}, so the "
+                     "input is returned unchanged")
     if not o.targets_met and o.delta_f_max > max(o.delta_f_input, o.target_delta_f) * 1.0001:
         parts.append(f"max δ_f rose from {o.delta_f_input:.2e} (input)")
     if not o.targets_met and o.conjugacy_defect is not None and o.conjugacy_defect > CONJUGACY_ADVICE:

@@ -107,6 +107,11 @@ class PlanarityMetrics:
         return float(np.abs(angle_balance(vertices, self.stars)[0]).max())
 
 
+RISE = 1.0001
+"""Relative rise of a measure above its input value (and its target) that makes an iterate worse than the
+input (:meth:`SolverControl.rises`)."""
+
+
 @dataclass
 class SolverControl:
     """Stopping and continuation settings (see module docstring)."""
@@ -120,6 +125,18 @@ class SolverControl:
     tau: float = 1e-4
     max_rejections: int = 40
     target_conical: float = np.inf
+
+    def rises(self, now: tuple[float, float, float], start: tuple[float, float, float]) -> tuple[str, ...]:
+        """The targeted measures — max δ_f, max δ_P, max conical residual — of an iterate ``now`` that are
+        above both their target and their value at the ``start`` (by more than :data:`RISE`), each as
+        ``"max δ_f 8.09e-03 > input 4.06e-05"``: an iterate with any is worse than the input, whatever its
+        score."""
+        out = []
+        for name, x, x0, t in zip(("max δ_f", "max δ_P", "max conical residual"), now, start,
+                                  (self.target_delta_f, self.target_delta_p, self.target_conical)):
+            if np.isfinite(t) and x > max(x0 * RISE, t):
+                out.append(f"{name} {x:.2e} > input {x0:.2e}")
+        return tuple(out)
 
     def score(self, dfm: float, dpm: float, conical: float) -> float:
         """Worst target ratio of an iterate (``<= 1``: every target met)."""
@@ -136,13 +153,15 @@ class SolverState:
     iterations: int
     stopped_by: str           # "targets", "stationary", "max_iterations", "stuck"
     history: list[IterationRecord] = field(default_factory=list)
-    best_z: np.ndarray | None = None            # the best-scoring state seen (the start included)
+    best_z: np.ndarray | None = None            # the best-scoring state seen that is nowhere worse than the
+                                                # start (SolverControl.rises; the start included)
     best_iteration: int = 0                     # its iteration (0 = the start)
     best_score: float = np.inf
     start_score: float = np.inf
     rejected: dict[str, int] = field(default_factory=dict)   # refused steps by reason
     factorisations: int = 0
     cg_solves: int = 0
+    start_metrics: tuple[float, float, float] = (np.inf, np.inf, np.inf)   # max δ_f, max δ_P, conical
 
 
 class LevenbergMarquardt:
@@ -185,6 +204,7 @@ class LevenbergMarquardt:
         self.current_metrics = metrics(self.vertices)
         self.current_conical = metrics.conical_max(self.vertices)
         self.start_score = self.best_score = self._score()
+        self.start_metrics = self._measures()
         self.best_z = self.z.copy()
         self.best_iteration = 0
         self.rejected: dict[str, int] = {}
@@ -200,6 +220,9 @@ class LevenbergMarquardt:
                                    self.cache)
         if self.mu == 0.0:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
+
+    def _measures(self) -> tuple[float, float, float]:
+        return self.current_metrics[0], self.current_metrics[2], self.current_conical
 
     def _score(self) -> float:
         return self.c.score(self.current_metrics[0], self.current_metrics[2], self.current_conical)
@@ -255,7 +278,7 @@ class LevenbergMarquardt:
         self.current_metrics = self.metrics(self.vertices)
         self.current_conical = self.metrics.conical_max(self.vertices)
         score = self._score()
-        if score < self.best_score:
+        if score < self.best_score and not self.c.rises(self._measures(), self.start_metrics):
             self.best_score, self.best_z, self.best_iteration = score, self.z.copy(), self.iteration
         self._record(True, "", step_norm)
         if self.targets_met():
@@ -281,4 +304,4 @@ class LevenbergMarquardt:
             reason = self.step()
         return SolverState(self.z, self.iteration, reason, self.history, self.best_z, self.best_iteration,
                            self.best_score, self.start_score, dict(self.rejected), self.cache.factorisations,
-                           self.cache.cg_solves)
+                           self.cache.cg_solves, self.start_metrics)
