@@ -1,0 +1,262 @@
+"""The ``sections`` net: planar sections by parallel planes and their conjugate curves.
+
+On a height field ``z = f(x, y)`` (the plan frame of :mod:`.plan`: sections are ``x = const``) a section has
+the tangent ``∂y``; the direction ``w = (a, b)`` conjugate to it satisfies ``II(∂y, w) = f_xy·a + f_yy·b = 0``,
+so the conjugate curves solve ``dy/dx = −f_xy / f_yy``.  They are integrated (classical Runge–Kutta, all
+curves at once) from seeds spaced by ``spacing`` along the arc length of the middle section, and the
+vertices are their crossings with the planes ``x = x_i``, spaced by ``spacing`` along the arc length of the
+middle conjugate curve.  Row ``i`` of the grid therefore lies in its plane by construction (its vertices
+have the same ``x``), before any optimisation.
+
+Where the conjugate direction comes close to the section direction (``|f_xy| ≫ |f_yy|``: near a parabolic
+line along the sections, where ``f_yy`` changes sign) the net degenerates: :func:`sections_net` refuses with
+the location.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..errors import GeometryError
+from ..mesh import QuadGrid, QuadMesh
+from .heightfield import HeightField
+from .plan import PlanFrame
+from .trim import faces_inside, inside
+
+MAX_ANGLE_DEG = 75.0
+"""The conjugate direction may turn at most this far from the plane normal ``x`` (towards the sections)."""
+
+EDGE_MARGIN = 0.5
+"""The degeneracy is looked for this many ``spacing`` or more inside the outline."""
+
+SUBSTEPS_PER_SPACING = 12
+"""Runge–Kutta steps per ``spacing`` of ``x``."""
+
+
+@dataclass(frozen=True)
+class SectionsNet:
+    """The net as built, trimmed, in world coordinates (mm).
+
+    mesh : :class:`QuadGrid` when the kept faces form a rectangle of the grid, else :class:`QuadMesh`
+    planar_family : the family (``"rows"``) whose polylines lie in the section planes
+    planes : (R, 4) unit section planes ``n·p + d = 0`` of the rows of the full grid
+    row_of_vertex : (N,) int — the section (index into ``planes``) each vertex of ``mesh`` lies in
+    grid_faces : (m, n) bool — the faces of the full grid that were kept
+    faces_total, dropped_outside, dropped_sliver, dropped_island : faces of the full grid; removed because
+        they are not wholly inside the trim region, smaller than ``min_face`` of a square panel, or cut off
+        from the largest connected part
+    edge_lengths_rows, edge_lengths_cols : lengths of the kept edges along the sections and along the
+        conjugate curves, mm
+    """
+
+    mesh: QuadGrid | QuadMesh
+    planes: np.ndarray
+    row_of_vertex: np.ndarray
+    grid_faces: np.ndarray
+    faces_total: int
+    dropped_outside: int
+    dropped_sliver: int
+    dropped_island: int
+    edge_lengths_rows: np.ndarray
+    edge_lengths_cols: np.ndarray
+    planar_family: str = "rows"
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def conjugate_slope(hf: HeightField, x: np.ndarray, y: np.ndarray, floor: float, limit: float) -> np.ndarray:
+    """``dy/dx = −f_xy / f_yy`` of the curves conjugate to the sections, regularised by ``floor`` where
+    ``f_yy`` vanishes with ``f_xy`` (a flat direction) and clipped to ``±limit``."""
+    fxy, fyy = hf.fxy(x, y), hf.fyy(x, y)
+    return np.clip(-fxy * fyy / (fyy * fyy + floor * floor), -limit, limit)
+
+
+def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], limit: float,
+                      margin: float) -> float:
+    """Refuse when the conjugate direction comes within ``90° − MAX_ANGLE_DEG`` of the sections inside the
+    region, ``margin`` mm or more from its boundary (the fit is least sure at its edge); return the curvature
+    floor used to regularise the slope."""
+    X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
+    pts = np.stack([X.ravel(), Y.ravel()], axis=1)
+    ins = inside(pts, loops) if len(loops) else np.ones(len(pts), dtype=bool)
+    if len(loops) and margin > 0:
+        edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
+        ins &= cKDTree(edge).query(pts)[0] >= margin
+    p = pts[ins]
+    fxx, fxy, fyy = hf.fxx(p[:, 0], p[:, 1]), hf.fxy(p[:, 0], p[:, 1]), hf.fyy(p[:, 0], p[:, 1])
+    scale = float(np.max(np.abs(np.concatenate([fxx, fxy, fyy])))) if len(p) else 0.0
+    floor = max(1e-3 * scale, 1e-300)
+    ratio = np.abs(fxy) / (np.abs(fyy) + floor)
+    if len(p) and float(ratio.max()) > limit:
+        k = int(np.argmax(ratio))
+        w = frame.to_world(np.array([p[k, 0], p[k, 1], float(hf.f(p[k, 0], p[k, 1]))]))
+        signs = " (f_yy changes sign: a parabolic line along the sections)" if \
+            (fyy > floor).any() and (fyy < -floor).any() else ""
+        raise GeometryError(
+            f"sections net: the conjugate direction of the sections degenerates at (x, y) = ({w[0]:.0f}, "
+            f"{w[1]:.0f}) mm{signs}; rotate the section planes ([surface] plane_normal) or choose another net",
+            element=f"({w[0]:.0f}, {w[1]:.0f})", value=float(ratio.max()))
+    return floor
+
+
+def _densify(loop: np.ndarray, step: float) -> np.ndarray:
+    """Points along a closed plan loop ``(k, 2)`` at most ``step`` apart."""
+    a, b = loop, np.roll(loop, -1, axis=0)
+    n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / step)).astype(int)
+    return np.concatenate([a[k] + (b[k] - a[k]) * (np.arange(n[k])[:, None] / n[k]) for k in range(len(a))])
+
+
+def _rk4(hf: HeightField, x0: float, y0: np.ndarray, x1: float, h: float, floor: float,
+         limit: float) -> np.ndarray:
+    """Integrate ``dy/dx`` from ``x0`` to ``x1`` for all ``y0`` at once."""
+    n = max(1, int(np.ceil(abs(x1 - x0) / h)))
+    dx = (x1 - x0) / n
+    y = np.array(y0, dtype=float)
+    x = x0
+    for _ in range(n):
+        k1 = conjugate_slope(hf, np.full_like(y, x), y, floor, limit)
+        k2 = conjugate_slope(hf, np.full_like(y, x + dx / 2), y + dx / 2 * k1, floor, limit)
+        k3 = conjugate_slope(hf, np.full_like(y, x + dx / 2), y + dx / 2 * k2, floor, limit)
+        k4 = conjugate_slope(hf, np.full_like(y, x + dx), y + dx * k3, floor, limit)
+        y = y + dx / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x = x + dx
+    return y
+
+
+def _arc_positions(t: np.ndarray, pts: np.ndarray, centre: float, spacing: float) -> np.ndarray:
+    """Parameters ``t`` (sorted) where the arc length of the polyline ``pts`` measured from ``t = centre`` is a
+    multiple of ``spacing``, within the range of ``t``."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    s0 = float(np.interp(centre, t, s))
+    k = np.arange(np.ceil((s[0] - s0) / spacing - 1e-9), np.floor((s[-1] - s0) / spacing + 1e-9) + 1)
+    return np.interp(s0 + k * spacing, s, t)
+
+
+def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
+                 min_face: float = 0.25) -> SectionsNet:
+    """Build the sections net of a height field, trimmed to the plan region.
+
+    Parameters
+    ----------
+    hf : the surface as a height field in ``frame``
+    frame : the plan frame (sections are ``x = const``)
+    loops : the trim region's loops in plan ``(k, 2)`` (frame coordinates); empty: the box of the fit
+    spacing : target panel size, mm (along both families' arc length)
+    min_face : faces smaller than this fraction of ``spacing²`` are dropped as slivers
+    """
+    limit = float(np.tan(np.radians(MAX_ANGLE_DEG)))
+    loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
+    floor = _check_degenerate(hf, frame, loops, limit, EDGE_MARGIN * spacing)
+    if loops:
+        allp = np.concatenate(loops)
+        x_lo, x_hi = max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max())
+        y_lo, y_hi = max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max())
+    else:
+        x_lo, x_hi, y_lo, y_hi = hf.x[0], hf.x[-1], hf.y[0], hf.y[-1]
+    xc, yc = 0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)
+    h = spacing / SUBSTEPS_PER_SPACING
+    # seeds: along the middle section, spaced by arc length, over the region (and one spacing beyond)
+    lo_y, hi_y = max(hf.y[0], y_lo - spacing), min(hf.y[-1], y_hi + spacing)
+    ys = np.linspace(lo_y, hi_y, max(50, int((hi_y - lo_y) / h) + 1))
+    sec = np.stack([ys, hf.f(np.full_like(ys, xc), ys)], axis=1)
+    seeds = _arc_positions(ys, sec, yc, spacing)
+    # planes: along the middle conjugate curve, spaced by arc length, over the region (and one beyond)
+    lo_x, hi_x = max(hf.x[0], x_lo - spacing), min(hf.x[-1], x_hi + spacing)
+    xs_r = np.linspace(xc, hi_x, max(2, int((hi_x - xc) / h) + 1))
+    xs_l = np.linspace(xc, lo_x, max(2, int((xc - lo_x) / h) + 1))
+
+    def trace(xs: np.ndarray) -> np.ndarray:
+        out = [yc]
+        for a, b in zip(xs[:-1], xs[1:]):
+            out.append(float(_rk4(hf, float(a), np.array([out[-1]]), float(b), h, floor, limit)[0]))
+        return np.array(out)
+
+    xs = np.concatenate([xs_l[::-1], xs_r[1:]])
+    yline = np.concatenate([trace(xs_l)[::-1], trace(xs_r)[1:]])
+    curve = np.stack([xs, yline, hf.f(xs, yline)], axis=1)
+    planes_x = _arc_positions(xs, curve, xc, spacing)
+    if len(planes_x) < 2 or len(seeds) < 2:
+        raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
+                            "direction; give a smaller [surface] spacing", value=spacing)
+    # the conjugate curves at every plane, marching out from the middle
+    Y = np.empty((len(planes_x), len(seeds)))
+    mid = int(np.searchsorted(planes_x, xc))
+    y = _rk4(hf, xc, seeds, float(planes_x[mid]), h, floor, limit)
+    Y[mid] = y
+    for i in range(mid + 1, len(planes_x)):
+        Y[i] = y = _rk4(hf, float(planes_x[i - 1]), y, float(planes_x[i]), h, floor, limit)
+    y = Y[mid]
+    for i in range(mid - 1, -1, -1):
+        Y[i] = y = _rk4(hf, float(planes_x[i + 1]), y, float(planes_x[i]), h, floor, limit)
+    X = np.broadcast_to(planes_x[:, None], Y.shape)
+    valid = hf.inside_box(X, Y)
+    local = np.stack([X, Y, hf.f(X, Y)], axis=-1)
+    world = frame.to_world(local)
+    # rows lie in their planes exactly: the x of their vertices is the plane's
+    planes = np.stack([frame.section_plane(float(x)) for x in planes_x])
+    return _trim(world, local, valid, planes, loops, spacing, min_face)
+
+
+def _trim(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.ndarray,
+          loops: list[np.ndarray], spacing: float, min_face: float) -> SectionsNet:
+    """Keep the faces of the full grid inside the region, drop slivers and islands."""
+    m, n = world.shape[0] - 1, world.shape[1] - 1
+    ids = np.arange((m + 1) * (n + 1)).reshape(m + 1, n + 1)
+    quads = np.stack([ids[:-1, :-1], ids[1:, :-1], ids[1:, 1:], ids[:-1, 1:]], axis=-1).reshape(-1, 4)
+    ok = valid.ravel()[quads].all(axis=1)
+    plan = local[..., :2].reshape(-1, 2)[quads]
+    if loops:
+        ok &= faces_inside(plan, loops)
+    dropped_outside = int(quads.shape[0] - ok.sum())
+    v = world.reshape(-1, 3)
+    c = v[quads]
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=1)
+    sliver = ok & (area < min_face * spacing * spacing)
+    ok &= ~sliver
+    kept = np.flatnonzero(ok)
+    island = 0
+    if len(kept) > 1:
+        # faces sharing an edge: neighbours in the grid
+        fi, fj = np.divmod(kept, n)
+        pos = {int(k): t for t, k in enumerate(kept)}
+        a, b = [], []
+        for t, (i, j) in enumerate(zip(fi.tolist(), fj.tolist())):
+            for k2 in ((i + 1) * n + j if i + 1 < m else -1, i * n + j + 1 if j + 1 < n else -1):
+                if k2 in pos:
+                    a.append(t)
+                    b.append(pos[k2])
+        g = coo_matrix((np.ones(len(a)), (a, b)), shape=(len(kept), len(kept)))
+        _, label = connected_components(g, directed=False)
+        big = np.bincount(label).argmax()
+        island = int(np.count_nonzero(label != big))
+        ok[kept[label != big]] = False
+    if not ok.any():
+        raise GeometryError("no panel of the sections net lies wholly inside the surface's outline; give a "
+                            "smaller [surface] spacing")
+    grid_faces = ok.reshape(m, n)
+    rows_i = np.flatnonzero(grid_faces.any(axis=1))
+    cols_j = np.flatnonzero(grid_faces.any(axis=0))
+    i0, i1, j0, j1 = rows_i[0], rows_i[-1] + 1, cols_j[0], cols_j[-1] + 1
+    row_index = np.broadcast_to(np.arange(m + 1)[:, None], (m + 1, n + 1)).ravel()
+    mesh: QuadGrid | QuadMesh
+    if grid_faces[i0:i1, j0:j1].all():
+        block = world[i0:i1 + 1, j0:j1 + 1]
+        mesh = QuadGrid(block, support_u=planes[i0:i1 + 1])
+        row_of_vertex = np.repeat(np.arange(i0, i1 + 1), j1 - j0 + 1)
+    else:
+        f = quads[ok]
+        used = np.unique(f)
+        remap = np.full(len(v), -1)
+        remap[used] = np.arange(len(used))
+        mesh = QuadMesh(v[used], remap[f])
+        row_of_vertex = row_index[used]
+    fk = quads[ok]
+    er = np.linalg.norm(v[fk[:, 3]] - v[fk[:, 0]], axis=1)      # v[i,j] → v[i,j+1]: along the section
+    ec = np.linalg.norm(v[fk[:, 1]] - v[fk[:, 0]], axis=1)      # v[i,j] → v[i+1,j]: along the conjugate curve
+    return SectionsNet(mesh, planes, row_of_vertex, grid_faces, int(m * n), dropped_outside,
+                       int(sliver.sum()), island, er, ec)

@@ -1,0 +1,56 @@
+"""The ``[surface]`` table of a design file: a surface to remesh into a quad net.
+
+Examples
+--------
+>>> from ppfab.schema import parse_params
+>>> s = parse_params(SurfaceSpec, {"path": "roof.3dm", "spacing": 1500.0}, "surface")
+>>> s.net, s.spacing, s.plane_normal
+('sections', 1500.0, None)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import DesignError
+from ..schema import param
+
+NETS = ("sections",)
+"""The net kinds built so far (``principal``, ``conjugate`` and ``pp`` are not)."""
+
+UNITS = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+"""Length units a mesh file may be declared in, and their size in millimetres."""
+
+
+@dataclass(frozen=True)
+class SurfaceSpec:
+    """Which surface, which net on it, and how large the panels are."""
+
+    path: str = param("", doc="the surface file: a Rhino .3dm (the first NURBS surface or Brep face, trims "
+                              "kept) or a triangle mesh (.obj, .off, .stl, .ply); relative to the design file")
+    net: str = param("sections", doc="the net: sections (planar sections by parallel planes and their "
+                                     "conjugate curves; the sections are the rows, planar before optimising)",
+                     choices=NETS)
+    spacing: float = param(1500.0, doc="target panel size, mm (arc length along both families)",
+                           exclusive_min=0.0)
+    plane_normal: list[float] | None = param(None, doc="normal of the parallel section planes (default: "
+                                                       "vertical planes across the longer plan direction)",
+                                             length=3)
+    units: str | None = param(None, doc="units of a mesh file (mm, cm, m, in, ft); a .3dm states its own and "
+                                        "this must then be absent or agree", choices=tuple(UNITS))
+    smoothing: float = param(1.0, doc="knot spacing of the least-squares spline whose curvature sets the net's "
+                                      "directions, as a fraction of spacing (heights are not smoothed); raise "
+                                      "it for a coarse faceted mesh", exclusive_min=0.0)
+    min_face: float = param(0.25, doc="boundary panels smaller than this fraction of spacing² are dropped "
+                                      "as slivers", min=0.0, max=1.0)
+    object: str | None = param(None, doc="in a .3dm with several surfaces: the name of the object to use")
+
+    def __post_init__(self) -> None:
+        if not self.path:
+            raise DesignError("path", "give the surface file (.3dm, .obj, .off, .stl or .ply)")
+
+    def file(self, base_dir: Path | None = None) -> Path:
+        """The surface file, a relative path taken from ``base_dir`` (the design file's folder)."""
+        p = Path(self.path)
+        return p if p.is_absolute() or base_dir is None else base_dir / p
