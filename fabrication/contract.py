@@ -264,6 +264,9 @@ GLAZING_STEP, SPLICES_STEP, SPLICE_DIR = "glazing.step", "splices.step", "splice
 one flat DXF per cover-plate type (``splices/SP125x285-2.dxf``: CUT outline and holes, XDATA ``part_id`` = the
 type id and ``quantity``)."""
 BITES_CSV, STRIP_CUTS_CSV, WELDS_CSV = "bites.csv", "strip_cuts.csv", "welds.csv"
+BEVELS_CSV = "bevels.csv"
+"""The fit of every glazing strip on its beam plate: :data:`BEVEL_COLUMNS` (:mod:`fabrication.glazing.bevel`)."""
+BEVEL_COLUMNS = ["strip", "plate", "lean_deg", "overlap_mm", "delta_mm", "bevel"]
 RETENTION_CSV, RESTRAINT_CSV = "retention.csv", "restraint.csv"
 """The retention parts of ``glazing.step`` (one row each: :data:`RETENTION_COLUMNS`) and the restraint check of
 every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``."""

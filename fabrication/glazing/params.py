@@ -89,6 +89,10 @@ class GlazingParams:
     silicone_design_stress: float = param(0.14, doc="design tensile stress of structural silicone under wind, "
                                                     "N/mm² (ETAG 002 σ_des); retention = 'silicone' only",
                                           exclusive_min=0)
+    bevel_min_deg: float = param(2.0, doc="beam plates leaning more than this off the strip on them, degrees, get "
+                                          "their top edge raised by (t/2)·tan(lean) and bevelled at the lean to "
+                                          "the strip's underside (bevels.csv); below it the fillet weld takes up "
+                                          "the fit", min=0, max=45)
     max_tilt_deg: float = param(6.0, doc="largest angle between a pane and the strip it rests on, degrees; "
                                          "the gasket takes up the wedge (width × tan of the angle); steeper edges are warned "
                                          "about (they need tapered gaskets)",

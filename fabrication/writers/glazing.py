@@ -18,7 +18,7 @@ import numpy as np
 
 from ppfab.frame import Frame
 
-from ..contract import (BITES_CSV, GLAZING_STEP, RESTRAINT_COLUMNS, RESTRAINT_CSV, RETENTION_COLUMNS, RETENTION_CSV,
+from ..contract import (BEVEL_COLUMNS, BEVELS_CSV, BITES_CSV, GLAZING_STEP, RESTRAINT_COLUMNS, RESTRAINT_CSV, RETENTION_COLUMNS, RETENTION_CSV,
                         SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_CSV, WELDS_CSV, gasket_id)
 from ..parts import csv_text
 from . import Files, writer
@@ -219,7 +219,17 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
         (out / STRIP_CUTS_CSV).write_text(csv_text(cuts, ["bar", "start_mm", "length_mm", "part_id", "nest_tag",
                                                              "beam"]), encoding="utf-8")
         files["strip_cuts_csv"] = STRIP_CUTS_CSV
+        from ..glazing.bevel import strip_bevels
+
+        bevels = strip_bevels(g.strips, build.beams.plates, g.params.bevel_min_deg)
+        rows = [{"strip": b.strip, "plate": b.plate, "lean_deg": _plain(b.lean_deg, 3), "overlap_mm": _plain(b.overlap_mm),
+                 "delta_mm": _plain(b.delta_mm), "bevel": b.text()} for b in bevels]
+        (out / BEVELS_CSV).write_text(csv_text(rows, BEVEL_COLUMNS), encoding="utf-8")
+        files["bevels_csv"] = BEVELS_CSV
         notes.append(f"{len(g.strips)} strips, bite min {g.bite_min:.1f} mm")
+        if any(b.bevelled for b in bevels):
+            notes.append(f"{sum(b.bevelled for b in bevels)} plate top edges bevelled "
+                         f"(lean up to {max(b.lean_deg for b in bevels):.1f}°)")
     if g.splices:
         beams = [s.beam_id for s in g.splices for _ in s.part_ids]
         export_step(by_beam(splice_solids(g), beams, f"{name} splices"), out / SPLICES_STEP,
