@@ -148,6 +148,8 @@ def test_pressure_gaskets_touch_the_glass_and_enter_none(built):
     gaskets = [r for r in parts if r["kind"] == "pressure_gasket"]
     strips = {r["part_id"] for r in rows(built / "parts.csv") if r["kind"] == "strip"}
     assert {"GS" + r["part_id"][2:] for r in gaskets} <= strips and len(gaskets) >= 0.8 * len(strips)
+    bevels = rows(built / "bevels.csv")                      # the fit of every strip on its plate (test_plate_bevel)
+    assert {r["strip"] for r in bevels} == strips
     assert {r["kind"] for r in parts} == {"setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap"}
     centres = {k: np.array([tuple(p) for p in v.vertices()]).mean(axis=0) for k, v in glass.items()}
     for r in gaskets:
