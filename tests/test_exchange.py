@@ -209,6 +209,59 @@ def test_ifc_passes_the_express_rules(built):
     assert log.statements == []
 
 
+def test_ifc_structural_analysis_model_follows_the_nodes_and_edges(built, parts, mesh):
+    """The analysis hand-off: one curve member per mesh edge and one point connection per node, each member's
+    ends at its nodes' system points (the mesh vertex moved half the beam depth, 150 mm, along the node axis of
+    nodes.csv), its local z axis orthogonal to it and within a few degrees of the node axes, named after the plate
+    that carries the edge (the two pieces of a splice across it), the section the plate's 12 x 150 rectangle, the boundary nodes (counted from mesh.obj's
+    edges with one face) pinned, all grouped in one analysis model that serves the building."""
+    import ifcopenshell
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    [model] = f.by_type("IfcStructuralAnalysisModel")
+    members, connections = f.by_type("IfcStructuralCurveMember"), f.by_type("IfcStructuralPointConnection")
+    faces = [tuple(int(k) for k in face) for face in mesh.faces]
+    edge_faces: dict[tuple[int, int], int] = {}
+    for face in faces:
+        for a, b in zip(face, face[1:] + face[:1]):
+            edge_faces[(min(a, b), max(a, b))] = edge_faces.get((min(a, b), max(a, b)), 0) + 1
+    nodes = rows(built / "nodes.csv")
+    assert len(members) == len(edge_faces) and len(connections) == len(nodes)
+    pos = {n["node_id"]: np.array([float(n[k]) for k in "xyz"]) for n in nodes}
+    axis = {n["node_id"]: np.array([float(n[f"axis_{k}"]) for k in "xyz"]) for n in nodes}
+    system = {k: pos[k] + 75.0 * axis[k] / np.linalg.norm(axis[k]) for k in pos}
+    by_vertex = {int(n["vertex"]): n["node_id"] for n in nodes}
+    point = {c.Name: np.array(c.Representation.Representations[0].Items[0].VertexGeometry.Coordinates)
+             for c in connections}
+    assert max(np.linalg.norm(point[k] - system[k]) for k in system) < 1e-3          # nodes.csv: 0.1 µm
+    seen = set()
+    for m in members:
+        e = m.Representation.Representations[0].Items[0]
+        a, b = (np.array(v.VertexGeometry.Coordinates) for v in (e.EdgeStart, e.EdgeEnd))
+        ka, kb = m.Name.split("/")
+        assert np.linalg.norm(a - system[ka]) < 1e-3 and np.linalg.norm(b - system[kb]) < 1e-3
+        va, vb = (int(n["vertex"]) for n in nodes if n["node_id"] in (ka, kb))
+        seen.add((min(va, vb), max(va, vb)))
+        z = np.array(m.Axis.DirectionRatios)
+        assert abs(z @ (b - a)) / np.linalg.norm(b - a) < 1e-9
+        mean = axis[ka] / np.linalg.norm(axis[ka]) + axis[kb] / np.linalg.norm(axis[kb])
+        assert np.degrees(np.arccos(np.clip(z @ mean / np.linalg.norm(mean), -1, 1))) < 15.0
+        carried = [set(json.loads(parts[pid]["nodes"])) for pid in m.Description.split("+")]   # one plate or two
+        assert {va, vb} <= set().union(*carried) and all(c & {va, vb} for c in carried), (m.Name, m.Description)
+        ends = [r.RelatedStructuralConnection.Name for r in m.ConnectedBy]
+        assert sorted(ends) == sorted([ka, kb])
+    assert seen == set(edge_faces)
+    boundary = {v for e, c in edge_faces.items() if c == 1 for v in e}
+    supported = {c.Name for c in connections if c.AppliedCondition is not None}
+    assert supported == {by_vertex[v] for v in boundary}
+    [rel] = [r for r in f.by_type("IfcRelAssociatesMaterial") if r.RelatingMaterial.is_a("IfcMaterialProfileSet")]
+    prof = rel.RelatingMaterial.MaterialProfiles[0].Profile
+    assert (prof.XDim, prof.YDim) == (12.0, 150.0) and set(rel.RelatedObjects) == set(members)
+    [group] = model.IsGroupedBy
+    assert set(group.RelatedObjects) == set(members) | set(connections)
+    assert [b.Name for r in model.ServicesBuildings for b in r.RelatedBuildings] == [NAME]
+
+
 # -- Rhino ------------------------------------------------------------------------------------------------
 
 def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):

@@ -352,9 +352,13 @@ def ifc_model(build: "Build", files: Files) -> IfcModel:
 
 @writer("ifc", order=60, enabled=lambda design: design.output.ifc)
 def write_ifc(build: "Build", out: Path, files: Files) -> str:
+    from .ifc_analysis import add_analysis_model
+
     model = ifc_model(build, files)
+    add_analysis_model(model, build)
     model.write(out / IFC_FILE)
     files["ifc"] = IFC_FILE
     plates = len(model.f.by_type("IfcPlate"))
     members = len(model.f.by_type("IfcMember"))
-    return f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember"
+    analysis = len(model.f.by_type("IfcStructuralCurveMember"))
+    return f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember, analysis model of {analysis} members"
