@@ -121,8 +121,22 @@ def test_a_nearly_conical_input_that_loses_it_is_warned_about(conical1_p):
     after = balance(res.mesh)
     assert before < 1e-3 and after > 0.1
     assert res.targets_met
-    assert len(res.warnings) == 1 and "nearly conical" in res.warnings[0] and "keep_conical" in res.warnings[0]
-    assert res.message.endswith(res.warnings[0]) and res.summary()["warnings"] == list(res.warnings)
+    conical = [w for w in res.warnings if "nearly conical" in w]
+    assert len(conical) == 1 and "keep_conical" in conical[0] and conical[0] in res.message
+    assert res.summary()["warnings"] == list(res.warnings) and res.message.endswith(res.warnings[-1])
+
+
+def test_rows_made_planar_that_the_support_leaves_out_are_named(conical1_p):
+    """17 of conical1's 37 rows made planar lie up to 54° from the normal: the P support's rule 'tangent'
+    (30°) leaves exactly those out, and the optimiser's result says so."""
+    from ppfab.support.p import support_p
+
+    _, res = conical1_p
+    (w,) = [w for w in res.warnings if "polylines made planar" in w]
+    count, total, worst = re.search(r"(\d+) of the (\d+) polylines made planar .* \(up to (\d+)°\)", w).groups()
+    s = support_p(res.mesh, "rows")
+    assert int(count) == len(s.left_out) == 17 and int(total) == 37 and 50 <= int(worst) <= 60
+    assert all("from the surface normal" in why for _, why in s.left_out)
 
 
 def test_never_worse_than_the_input_holds_for_every_measure():

@@ -43,7 +43,7 @@ from ..metrics import (CreaseReport, Quality, conjugacy_defect, crease_report, d
 from ..schema import as_plain, parse_params
 from .guard import StepGuard
 from .outcome import (Outcome, axis_normal_angles, conical_loss, message, p_axis_normal_angles,
-                      support_panel_angles)
+                      support_panel_angles, tangent_planes)
 from .params import OptimizeParams
 from .reference import ReferenceSurface
 from .residuals import Residuals, Weights
@@ -108,7 +108,8 @@ class OptimizeResult:
     factorisations, cg_solves : how the linear systems were solved
     conjugacy_defect : :func:`ppfab.metrics.conjugacy_defect` of the input
     warnings : what the targets do not say but the caller should know (also at the end of ``message`` and
-        logged): a nearly conical input that lost its conicality (:func:`.outcome.conical_loss`)
+        logged): a nearly conical input that lost its conicality (:func:`.outcome.conical_loss`), polylines
+        made planar whose planes the support will leave out (:func:`.outcome.tangent_planes`)
     """
 
     mesh: QuadMesh | QuadGrid
@@ -242,8 +243,12 @@ def _initial_normals(v: np.ndarray, faces: np.ndarray, lines) -> tuple[np.ndarra
     return nf[:, :3], ns[:, :3]
 
 
-def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, **kw) -> Problem:
-    """Set up (but do not solve) the problem of :func:`optimize`; used by benchmarks and tests."""
+def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
+                  reference: tuple[np.ndarray, np.ndarray] | None = None, **kw) -> Problem:
+    """Set up (but do not solve) the problem of :func:`optimize`; used by benchmarks and tests.
+
+    ``reference`` : ``(vertices (R, 3), faces (G, 3 or 4))`` in mesh units — the surface to stay close to (a
+    designer's surface the mesh was made from); the input mesh itself when omitted."""
     p = _params(params, kw)
     qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
     if not isinstance(qm, QuadMesh):
@@ -301,14 +306,16 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     z0 = res.pack(vn, ns, nf)
     metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
     guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
-    surface = ReferenceSurface(vn, faces)
+    surface = ReferenceSurface(vn, faces) if reference is None else \
+        ReferenceSurface((np.asarray(reference[0], dtype=float) - center) / scale, reference[1])
     ref = surface if p.closeness == "surface" else None
     return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref, fairness,
                    "exact" if exact else "projected", stars, pairs, crease0, limit, surface)
 
 
 def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
-             callback: Callable[[IterationRecord], None] | None = None, **kw) -> OptimizeResult:
+             callback: Callable[[IterationRecord], None] | None = None,
+             reference: tuple[np.ndarray, np.ndarray] | None = None, **kw) -> OptimizeResult:
     """Make faces planar and polylines planar (P or PP) by the optimisation of §3.3.
 
     Parameters
@@ -316,6 +323,8 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     mesh : :class:`QuadMesh` (any all-quad mesh) or :class:`QuadGrid`
     params : :class:`OptimizeParams` or a dict of its fields (the design file's ``[optimize]`` table)
     callback : called with each :class:`IterationRecord` (progress display)
+    reference : ``(vertices, faces)`` of the surface to stay close to (triangles or quads, mesh units); the
+        input mesh when omitted (see :func:`build_problem`)
     **kw : fields of :class:`OptimizeParams` overriding ``params``
 
     Returns
@@ -328,7 +337,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     GeometryError : degenerate input (zero-length edges)
     """
     t0 = time.perf_counter()
-    prob = build_problem(mesh, params, **kw)
+    prob = build_problem(mesh, params, reference=reference, **kw)
     p = prob.params
     target_df = p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf   # faces left free
     target_c = p.target_conical if p.keep_conical else np.inf
@@ -380,7 +389,8 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
                       state.iterations, p.max_iterations, state.rejected, returned, state.best_iteration,
                       creases, crease_in, prob.mesh.edges, defect if not met else None,
                       rose if returned != "last" else ())
-    warns = tuple(w for w in (conical_loss(q_in.conical_max, q_out.conical_max, p.keep_conical),) if w)
+    warns = tuple(w for w in (conical_loss(q_in.conical_max, q_out.conical_max, p.keep_conical),
+                              tangent_planes(out_qm, prob.selection.planar_index)) if w)
     msg = message(outcome) + _notes(p, prob, per_line) + "".join(f"; {w}" for w in warns)
     log.debug(msg)
     for w in warns:

@@ -88,6 +88,32 @@ def conical_loss(before: float, after: float, keep_conical: bool) -> str:
             f"({after:.2e} rad): set keep_conical = true (ppfab optimize --keep-conical) to keep it")
 
 
+TANGENT_DEG = 30.0
+"""The default ``support.max_normal_angle_deg``: a polyline whose plane is further than this from the surface
+normal at one of its vertices is left out of the planar beams by the support (rule ``tangent``)."""
+
+
+def tangent_planes(mesh: QuadMesh, planar_index: np.ndarray, max_deg: float = TANGENT_DEG) -> str:
+    """A warning when some of the polylines made planar have planes further than ``max_deg`` from the
+    surface normal at one of their vertices (the support's rule ``tangent``): the P / PP support leaves
+    them out of the planar beams, so the run made polylines planar that the structure will not use as
+    such; ``""`` when there are none."""
+    from ppfab.support.lines import polyline_planes
+    from ppfab.support.structure import vertex_normals
+
+    idx = np.asarray(planar_index, dtype=np.int64)
+    if not len(idx):
+        return ""
+    tilt = np.nan_to_num(polyline_planes(mesh, vertex_normals(mesh)).tilt_deg[idx], nan=0.0)
+    bad = tilt > max_deg
+    if not bad.any():
+        return ""
+    return (f"warning: {int(bad.sum())} of the {len(idx)} polylines made planar have planes more than "
+            f"{max_deg:g}° from the surface normal at a vertex (up to {tilt.max():.0f}°): the support leaves "
+            "them out of the planar beams (support.max_normal_angle_deg, rule 'tangent') and cuts their "
+            "edges into one-edge beams")
+
+
 def p_axis_normal_angles(mesh: QuadMesh, planar_index: np.ndarray) -> np.ndarray:
     """Angle (degrees) between the node axis and the surface normal at every vertex of the planar polylines
     of a P run (no vertex on two of them), the axes of the P support on their planes
