@@ -14,7 +14,7 @@ class BuildReadError(FabricationError, ValueError):
 
 def missing(path: Path, what: str) -> BuildReadError:
     """``path`` is not there (``what``: why it is needed)."""
-    return BuildReadError(f"{path}: missing ({what}); is this a folder ppfab build wrote, complete?")
+    return BuildReadError(f"{path}: missing ({what}); give the folder of a complete ppfab build")
 
 
 def bad(path: Path, reason: str, row: int | None = None, column: str | None = None) -> BuildReadError:

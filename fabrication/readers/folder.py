@@ -15,6 +15,7 @@ splices or welds.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +63,10 @@ def open_build(folder: str | os.PathLike) -> Package:
         outline: Points | None = None
         holes: list[tuple[float, float, float]] = []
         pl = plain.placement
+        if pl is not None and not pl.sheet_file:            # a table without sheet_file: the manifest's list
+            listed = [rel for rel, kind in _sheet_files(manifest) if kind == plain.kind]
+            if 1 <= pl.sheet <= len(listed):
+                pl = replace(pl, sheet_file=listed[pl.sheet - 1])
         if pl is not None and pl.sheet_file:
             sheet = cuts(pl.sheet_file, f"the cutting sheet of {plain.part_id}, parts row {n}")
             if plain.part_id not in sheet.outlines:
@@ -77,7 +82,8 @@ def open_build(folder: str | os.PathLike) -> Package:
         elif plain.kind == "strip":
             d = plain.details
             outline = strip_outline(getattr(d, "length_mm", None), getattr(d, "width_mm", None))
-        parts.append(Part.from_columns(cols, outline, holes) if outline is not None else plain)
+        part = Part.from_columns(cols, outline, holes) if outline is not None else plain
+        parts.append(part if pl is plain.placement else replace(part, placement=pl))
     sheets = []
     numbers: dict[str, int] = {}
     for rel, kind in _sheet_files(manifest):
