@@ -5,6 +5,7 @@ construction parameters)::
 
     [design]            name, description
     [geometry]          method | mesh, scale, translate, rotate_z_deg, flip_orientation, planar_families
+    [surface]           instead of method | mesh: a surface (.3dm, triangle mesh) remeshed into a net
     [geometry.params]   the parameters of the chosen construction
     [optimize]          optional: optimise a mesh input for the P/PP property first
     [support]           how the node axes / support planes are found
@@ -36,6 +37,7 @@ from ppfab.schema import param, parse_params, suggest
 if TYPE_CHECKING:  # pragma: no cover
     from ppfab.optimize.params import OptimizeParams
     from ppfab.support.params import SupportParams
+    from ppfab.surface.spec import SurfaceSpec
 
     from .beams.params import BeamParams
     from .glazing.params import GlazingParams
@@ -101,9 +103,14 @@ def _section_types() -> dict[str, Callable[[], type]]:
         from ppfab.support.params import SupportParams
         return SupportParams
 
+    def surface():
+        from ppfab.surface.spec import SurfaceSpec
+        return SurfaceSpec
+
     return {
         "design": lambda: DesignInfo,
         "geometry": lambda: GeometrySpec,
+        "surface": surface,
         "optimize": optimize,
         "support": support,
         "beams": beams,
@@ -127,6 +134,9 @@ SECTION_TEXT: dict[str, str] = {
     "design": "Name and description shown in the report and the manifest.",
     "geometry": "What to build: a construction (`method` + `[geometry.params]`) or a quad mesh file (`mesh`), "
                 "and its placement in millimetres.",
+    "surface": "Instead of `[geometry] method` or `mesh`: a designer's surface (Rhino .3dm, triangle mesh) remeshed "
+               "into a quad net whose rows are planar sections (docs/remeshing.md); `[optimize]` then makes the "
+               "panels planar, staying close to that surface.",
     "optimize": "Optional, for `mesh = …`: optimise the mesh for planar faces and planar polylines first (§3.3).",
     "support": "How the node axes and support planes are found.",
     "beams": "Planar beam plates along the support planes and their joints.",
@@ -162,6 +172,11 @@ class Design:
     def optimize(self) -> "OptimizeParams | None":
         """``[optimize]``, or ``None`` when the design file has no such section."""
         return self.sections.get("optimize") if "optimize" in self.raw else None
+
+    @property
+    def surface(self) -> "SurfaceSpec | None":
+        """``[surface]``, or ``None`` when the design names a construction or a quad mesh."""
+        return self.sections.get("surface")
 
     @property
     def support(self) -> "SupportParams":
@@ -233,12 +248,16 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
                               f"; valid sections: {', '.join(types)}")
         if not isinstance(value, dict):
             raise DesignError(key, f"must be a table ([{key}]), got {type(value).__name__}")
-    if "geometry" not in doc:
+    if "geometry" not in doc and "surface" not in doc:
         raise DesignError("geometry", "missing required section [geometry] (with 'method' or 'mesh')")
     wanted = sections or tuple(types)
     records: dict[str, Any] = {}      # section name -> its parameter record (types differ by section)
     for name in wanted:
+        if name == "surface" and "surface" not in doc:
+            continue
         table = dict(doc.get(name, {}))
+        if name == "geometry" and "surface" in doc:
+            table = _surface_geometry(table, doc["surface"])
         for key, value in SECTION_DEFAULTS.get(name, {}).items():
             table.setdefault(key, value)
         records[name] = parse_params(types[name](), table, name)
@@ -254,6 +273,20 @@ def parse_design(doc: dict, source: str = "<dict>", sha256: str = "", base_dir: 
         raise DesignError("geometry.params", "only a construction ('method') takes parameters")
     return Design(source=source, sha256=sha256, base_dir=base_dir or Path.cwd(),
                   info=records["design"], geometry=geometry, sections=records, raw=doc)
+
+
+def _surface_geometry(table: dict, surface: dict) -> dict:
+    """``[geometry]`` of a design with ``[surface]``: no method or mesh of its own (the surface file stands as
+    its input file), and no scale (the surface's units say how long a millimetre is)."""
+    for key in ("method", "mesh", "params"):
+        if key in table:
+            raise DesignError(f"geometry.{key}", "a design with [surface] builds on its surface: leave out "
+                                                 "[geometry] method, mesh and params")
+    if table.get("scale", 1.0) != 1.0:
+        raise DesignError("geometry.scale", "a [surface] is read in its own units (a .3dm states them, a mesh "
+                                            "declares [surface] units): leave scale out")
+    path = surface.get("path") if isinstance(surface, dict) else None
+    return {**table, "mesh": path if isinstance(path, str) and path else "surface"}
 
 
 MAX_DESIGN_BYTES = 1 << 20

@@ -85,13 +85,15 @@ class Geometry:
 
     ``planar_families`` names the families (``"rows"``, ``"cols"``) that are planar by construction or were
     made planar by the optimiser; ``source`` is ``"method:<name>"`` or ``"mesh:<file>"``;
-    ``optimize_result`` the :class:`~ppfab.optimize.OptimizeResult` when ``[optimize]`` ran.
+    ``optimize_result`` the :class:`~ppfab.optimize.OptimizeResult` when ``[optimize]`` ran;
+    ``surface_deviation_mm`` the largest distance of a vertex to the designer's surface (``[surface]``).
     """
 
     mesh: QuadGrid | QuadMesh
     planar_families: tuple[str, ...]
     source: str
     optimize_result: Any = None
+    surface_deviation_mm: float | None = None
 
 
 def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | None = None,

@@ -82,8 +82,13 @@ def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geo
         refuse_before_optimising(mesh, families, design.support.max_normal_angle_deg, list(design.support.exclude),
                                  design.beams.fallback)
 
-    g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note,
-                       on_iteration=progress.iteration, before_optimize=before_optimize)
+    if design.surface is not None:
+        from .surface_stage import surface_geometry
+
+        g = surface_geometry(design, progress, allow_large, before_optimize)
+    else:
+        g = build_geometry(geo, design.optimize, design.base_dir, allow_large, note=progress.note,
+                           on_iteration=progress.iteration, before_optimize=before_optimize)
     mesh = g.mesh
     shape = mesh.shape if isinstance(mesh, QuadGrid) else (mesh.grid.shape if mesh.grid is not None else None)
     progress.done(f"{'grid ' + 'x'.join(map(str, shape)) if shape else 'quad mesh'}")

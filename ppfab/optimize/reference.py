@@ -58,20 +58,25 @@ class ReferenceSurface:
     Parameters
     ----------
     vertices : (N, 3) float
-    faces : (F, 4) int
+    faces : (F, 4) int quads, or (F, 3) int triangles (a designer's triangle mesh)
     candidates : number of nearest triangles (by centroid) examined per query point
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, candidates: int = 8):
         v = np.asarray(vertices, dtype=float)
         f = np.asarray(faces, dtype=np.int64)
-        self.tri = np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]])
-        self.quad_of = np.concatenate([np.arange(len(f)), np.arange(len(f))])
+        if f.shape[1] == 3:
+            self.tri = f
+            self.quad_of = np.arange(len(f))
+            n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+        else:
+            self.tri = np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]])
+            self.quad_of = np.concatenate([np.arange(len(f)), np.arange(len(f))])
+            n = np.cross(v[f[:, 2]] - v[f[:, 0]], v[f[:, 3]] - v[f[:, 1]])
         self.corners = v[self.tri]                                  # (2F, 3, 3)
-        n = np.cross(v[f[:, 2]] - v[f[:, 0]], v[f[:, 3]] - v[f[:, 1]])
         self.quad_normals = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         vn = np.zeros_like(v)
-        np.add.at(vn, f.ravel(), np.repeat(self.quad_normals, 4, axis=0))
+        np.add.at(vn, f.ravel(), np.repeat(self.quad_normals, f.shape[1], axis=0))
         self.vertex_normals = vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
         self.tree = cKDTree(self.corners.mean(axis=1))
         self.k = min(candidates, len(self.tri))
