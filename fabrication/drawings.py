@@ -196,7 +196,7 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
     span = float(max(hi - lo))
     pad = 0.04 * span
     head = 0.05 * span
-    bounds = (float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad + head))
+    bounds = (float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad + 2.0 * head))
     sheet = SvgSheet(bounds, width_px, title)
     normals = []
     for o in outl:
@@ -291,7 +291,8 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
         sheet.text(p.part_id, pl.centre, pl.height, pl.rotation_deg, p.part_id)
         label_polys.append(Polygon(where.box))
         labelled.append(p.part_id)
-    sheet.text(title, np.array([lo[0], hi[1] + pad + 0.5 * head]), 0.4 * head, 0.0, anchor="start")
+    sheet.text(title, np.array([lo[0], hi[1] + pad + 1.5 * head]), 0.4 * head, 0.0, anchor="start")
+    sheet_furniture(sheet, lo, hi, pad, head, view)
     if unfit:
         # parts whose label has no room at its place (panels overlapping in this view): listed below the view
         step = 1.6 * beam_h
@@ -305,6 +306,49 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
         rows = (len(unfit) + per_row - 1) // per_row
         sheet.extend_down(pad + (rows + 2.5) * step)
     return ViewResult(sheet.tostring(), tuple(labelled), tuple(unfit), tuple(sheet.texts))
+
+
+def scale_bar_length(width: float) -> float:
+    """The scale bar of a view ``width`` mm wide: the largest 1, 2 or 5 × 10^k mm not over a fifth of it.
+
+    >>> scale_bar_length(27_438.0), scale_bar_length(9_000.0), scale_bar_length(600.0)
+    (5000.0, 1000.0, 100.0)
+    """
+    top = 0.2 * float(width)
+    k = np.floor(np.log10(top))
+    return float(max(m * 10.0 ** k for m in (1.0, 2.0, 5.0) if m * 10.0 ** k <= top))
+
+
+def sheet_furniture(sheet: SvgSheet, lo: np.ndarray, hi: np.ndarray, pad: float, head: float, view: str) -> None:
+    """The row above a view's title: a scale bar (four alternating segments, ``data-length-mm``), the extent of
+    the view in mm with its axes, and on the key plan a north arrow (``+y`` is north, as the elevations' titles
+    say).  Each is placed after the one before, so no text overlaps."""
+    y = float(hi[1] + pad + 0.5 * head)
+    width = float(hi[0] - lo[0])
+    length = scale_bar_length(width)
+    label = f"{length / 1000:g} m" if length >= 1000 else f"{length:g} mm"
+    axes = {"plan": ("x", "y"), "front": ("x", "z"), "side": ("y", "z")}[view]
+    extent = (f"extent {hi[0] - lo[0]:,.0f} mm ({axes[0]}) x {hi[1] - lo[1]:,.0f} mm ({axes[1]})"
+              .replace(",", " "))
+    # the text height: 0.3 of the header, less where the row would not fit the view's width (a tall, narrow view)
+    h = min(0.3 * head, (width - length) / (LABEL_CHAR_WIDTH * (len(label) + len(extent)) + 5.0))
+    x = float(lo[0])
+    group = ET.SubElement(sheet.root, "g", {"class": "scale-bar", "data-length-mm": _fmt(length)})
+    for s in range(4):
+        a, b = x + s * length / 4, x + (s + 1) * length / 4
+        q = " ".join("{:.1f},{:.1f}".format(*sheet.xy(np.array(p))) for p in
+                     ((a, y - 0.25 * h), (b, y - 0.25 * h), (b, y + 0.25 * h), (a, y + 0.25 * h)))
+        ET.SubElement(group, "polygon", {"points": q, "fill": "#102a43" if s % 2 == 0 else "white",
+                                         "stroke": "#102a43", "stroke-width": _fmt(0.02 * h)})
+    x += length + 0.5 * h
+    sheet.text(label, np.array([x, y]), h, 0.0, anchor="start")
+    x += LABEL_CHAR_WIDTH * len(label) * h + 2.0 * h
+    sheet.text(extent, np.array([x, y]), h, 0.0, anchor="start")
+    if view == "plan":
+        tip = np.array([float(hi[0]) - 0.5 * h, y + 0.45 * head])
+        arrow = np.array([tip, tip + [0.35 * h, -0.8 * head], tip + [0.0, -0.6 * head], tip + [-0.35 * h, -0.8 * head]])
+        sheet.polygon(arrow, "#102a43", "#102a43", 0.02 * h, **{"class": "north-arrow"})
+        sheet.text("N", np.array([float(hi[0]) - 1.6 * h, y]), h, 0.0)
 
 
 # -- node sheets ----------------------------------------------------------------------------------

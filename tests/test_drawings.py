@@ -79,6 +79,7 @@ def test_labels_do_not_overlap(built, view):
     _, texts = _texts(built / "drawings" / f"{view}.svg")
     labels = [t for t in texts if t.get("data-part")]
     assert labels
+    labels += [t for t in texts if not t.get("data-part")]          # the title, scale, extent, north: all text
     boxes = [_measured_box(t) for t in labels]
     tree = STRtree(boxes)
     for i, b in enumerate(boxes):
@@ -87,6 +88,32 @@ def test_labels_do_not_overlap(built, view):
     for t in labels:
         rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
         assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0         # reads from the bottom or the right edge
+
+
+@pytest.mark.parametrize("view", ["key_plan", "elevation_front", "elevation_side"])
+def test_views_carry_a_true_scale_bar_and_their_extent(built, view):
+    """Each view has a scale bar whose drawn length (picture mm, the SVG's units) is the length its label says,
+    and states its extent, which equals the extent of the mesh's vertices (mesh.obj) along the view's axes; the
+    key plan has a north arrow pointing up the sheet (+y)."""
+    root, texts = _texts(built / "drawings" / f"{view}.svg")
+    [bar] = [g for g in root.iter(f"{NS}g") if g.get("class") == "scale-bar"]
+    xs = [float(v.split(",")[0]) for p in bar.iter(f"{NS}polygon") for v in p.get("points").split()]
+    drawn = max(xs) - min(xs)
+    said = [t.text for t in texts if re.fullmatch(r"[0-9.]+ (m|mm)", t.text or "")]
+    assert len(said) == 1
+    value, unit = said[0].split()
+    assert drawn == pytest.approx(float(value) * (1000.0 if unit == "m" else 1.0), abs=0.2)
+    v = load_mesh(built / "mesh.obj").vertices
+    axes = {"key_plan": (0, 1), "elevation_front": (0, 2), "elevation_side": (1, 2)}[view]
+    [extent] = [t.text for t in texts if (t.text or "").startswith("extent ")]
+    numbers = [float(s.replace(" ", "")) for s in re.findall(r"([0-9][0-9 ]*) mm", extent)]
+    want = [float(np.ptp(v[:, a])) for a in axes]
+    assert numbers == pytest.approx(want, abs=1.0), (extent, want)
+    arrows = [p for p in root.iter(f"{NS}polygon") if p.get("class") == "north-arrow"]
+    assert len(arrows) == (1 if view == "key_plan" else 0)
+    if arrows:
+        pts = np.array([[float(c) for c in q.split(",")] for q in arrows[0].get("points").split()])
+        assert pts[0, 1] < pts[1:, 1].min()                  # the tip is the highest point (SVG y runs down)
 
 
 def test_node_sheets_hold_every_node_once_with_angles_within_the_type(built):

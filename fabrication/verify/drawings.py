@@ -154,7 +154,10 @@ def _check_view_polygons(v: Verification, rel: str, view: str) -> None:
     k = min(8, len(want))                        # panes behind each other in an elevation project close together
     drawn: set[str] = set()
     count = 0
-    for n, el in enumerate(root.iter(f"{_SVG}polygon"), start=1):
+    furniture = {id(p) for g in root.iter(f"{_SVG}g") if g.get("class") == "scale-bar"
+                 for p in g.iter(f"{_SVG}polygon")}
+    panes = [el for el in root.iter(f"{_SVG}polygon") if id(el) not in furniture and el.get("class") != "north-arrow"]
+    for n, el in enumerate(panes, start=1):                # the scale bar and the north arrow are no panes
         count += 1
         try:
             pts = _points(el.get("points", ""))
