@@ -203,6 +203,9 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
         ("panels above tolerance", len(over)),
         ("beam plates not slidable through their slots", beams.report.totals()["not_slidable"]),
     ]
+    if build.geometry.surface_deviation_mm is not None:
+        rows.append(("largest distance of a node to the designer's surface ([surface])",
+                     f"{build.geometry.surface_deviation_mm:.2f} mm"))
     rep.key_values(rows)
     if over:
         rep.table(["panel", "deviation [mm]"], [(p.part_id, p.deviation_mm) for p in over])

@@ -1,0 +1,85 @@
+"""A design with ``[surface]``: parsed, refused when it mixes sources, and built into a P package (slow)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surface_cases import write_nurbs
+
+DOME = [[0.0, 0.5, 0.5, 0.0], [0.5, 1.3, 1.2, 0.5], [0.5, 1.2, 1.3, 0.5], [0.0, 0.5, 0.5, 0.0]]
+
+ROOF = """[design]
+name = "surface roof"
+
+[surface]
+path = "roof.3dm"
+spacing = 1500.0
+
+[optimize]
+families = "rows"
+target_delta_f = 1e-7
+target_delta_p = 1e-7
+
+[support]
+method = "p"
+family = "rows"
+
+[beams]
+joint = "segmented"
+continuous = "rows"
+fallback = "segmented"
+
+[glazing]
+retention = "silicone"
+"""
+
+
+def test_surface_design_parses_without_geometry(tmp_path):
+    from fabrication import parse_design
+
+    d = parse_design({"surface": {"path": "roof.3dm", "spacing": 2000.0}}, base_dir=tmp_path)
+    assert d.surface is not None and d.surface.spacing == 2000.0 and d.surface.net == "sections"
+    assert d.input_files() == [tmp_path / "roof.3dm"]                  # the output folder must not hold it
+
+
+@pytest.mark.parametrize("geometry, key", [({"method": "bisector"}, "geometry.method"),
+                                           ({"mesh": "a.obj"}, "geometry.mesh"),
+                                           ({"scale": 1000.0}, "geometry.scale")])
+def test_surface_design_refuses_a_second_source_or_a_scale(geometry, key):
+    from fabrication import parse_design
+    from ppfab.errors import DesignError
+
+    with pytest.raises(DesignError) as exc:
+        parse_design({"surface": {"path": "roof.3dm"}, "geometry": geometry})
+    assert exc.value.key == key
+
+
+def test_surface_design_refuses_an_unknown_net():
+    from fabrication import parse_design
+    from ppfab.errors import DesignError
+
+    with pytest.raises(DesignError, match="sections"):
+        parse_design({"surface": {"path": "roof.3dm", "net": "principal"}})
+
+
+@pytest.mark.slow
+def test_surface_design_builds_a_p_package(tmp_path):
+    """A NURBS dome (9 × 6 m, written with rhino3dm in metres) → sections net → P optimised with closeness to
+    the NURBS → support, beams, glazing, nesting → written and verified."""
+    from fabrication import build, load_design
+    from fabrication.surfacefile import read_surface
+
+    write_nurbs(tmp_path / "roof.3dm", DOME, 9.0, 6.0, "Meters")
+    (tmp_path / "roof.toml").write_text(ROOF, encoding="utf-8")
+    b = build(load_design(tmp_path / "roof.toml"))
+    opt = b.geometry.optimize_result
+    assert opt is not None and opt.delta_f_max <= 1e-6 and opt.delta_p_max <= 1e-6
+    assert b.quality.delta_p_rows_max <= 1e-6
+    v = np.asarray(b.geometry.mesh.vertices).reshape(-1, 3)
+    dist = read_surface(tmp_path / "roof.3dm").distance(v)                  # measured again, here
+    assert dist.max() < 2.0 and b.geometry.surface_deviation_mm == pytest.approx(dist.max(), abs=1e-6)
+    out = tmp_path / "out"
+    b.write(out)
+    assert b.verify().ok
+    assert "distance of a node to the designer" in (out / "report.html").read_text(encoding="utf-8")
