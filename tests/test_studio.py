@@ -201,6 +201,34 @@ def test_studio_server_survives_bad_input_and_binds_loopback(default):
         studio.stop()
 
 
+def test_a_refused_value_reverts_its_field_and_says_why_beside_it(default):
+    """A value the model refuses does not stay in its field as if applied: the field shows the model's value
+    again and the reason appears right under that field (the next control comes after it); a value that is not a
+    number is refused the same way; the next applied edit takes the message away."""
+    pytest.importorskip("viser")
+    from fabrication.studio.app import Studio
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
+    try:
+        scale = studio._controls["geometry.scale"][0]
+        kept = float(studio.model.geometry["scale"])
+        for bad in (-5.0, float("nan")):
+            scale.value = bad                                  # as the page sends it: the callbacks run
+            assert float(studio.model.geometry["scale"]) == kept
+            assert scale.value == kept                         # the field shows what the model keeps
+            msg = studio.field_message
+            assert msg is not None and "not applied" in msg.content and f"stays {kept:g}" in msg.content
+            later = [h.order for h, _ in studio._controls.values() if h.order > scale.order]
+            assert scale.order < msg.order < min(later, default=float("inf"))
+        scale.value = 2 * kept
+        assert float(studio.model.geometry["scale"]) == 2 * kept and studio.field_message is None
+    finally:
+        studio.stop()
+
+
 def test_cli_studio_bad_input(capsys):
     assert main(["studio", "--port", "0", "--no-browser"]) == 2
     assert capsys.readouterr().err.strip().startswith("ppfab: error: --port")

@@ -90,6 +90,7 @@ class Studio:
         self._handles: dict[str, Any] = {}
         self._items: dict[str, Any] = {}
         self._controls: dict[str, tuple[Any, str]] = {}
+        self.field_message: Any = None          # the refusal shown right under the field that was refused
         self.redraws = 0
         self._build_gui(design_path)
         self.server.on_client_connect(self._frame_camera)
@@ -176,14 +177,15 @@ class Studio:
 
             for k, sc in enumerate(handle_set(self.model.method).scalars(params)):
                 h = gui.add_number(sc.label, sc.get(params), step=0.01)
-                h.on_update(lambda e, sc=sc: self._guard(lambda: self._scalar(sc, float(e.target.value))))
+                h.on_update(lambda e, sc=sc, k=k: self._guard(lambda: self._scalar(sc, float(e.target.value)),
+                                                              field=f"#scalar{k}"))
                 self._controls[f"#scalar{k}"] = (h, f"#scalar{k}")
             geo = self.model.geometry
             for key, make in (("geometry.scale", lambda: gui.add_number("scale", float(geo.get("scale", 1.0)))),
                               ("geometry.rotate_z_deg", lambda: gui.add_slider(
                                   "rotate_z_deg", -180.0, 180.0, 1.0, float(geo.get("rotate_z_deg", 0.0))))):
                 h = make()
-                h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, e.target.value)))
+                h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, e.target.value), field=key))
                 self._controls[key] = (h, key)
 
     def _control(self, key: str, tp: Any, meta: Any, value: Any) -> Any:
@@ -208,10 +210,10 @@ class Studio:
             h = gui.add_text(key, json.dumps(value), multiline=False, hint=hint)
 
             def on_text(e: Any, key: str = key) -> None:
-                self._guard(lambda: self._set(key, _parse_list(str(e.target.value), key)))
+                self._guard(lambda: self._set(key, _parse_list(str(e.target.value), key)), field=key)
             h.on_update(on_text)
             return h
-        h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, _plain(e.target.value))))
+        h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, _plain(e.target.value)), field=key))
         return h
 
     def _sync_controls(self) -> None:
@@ -235,8 +237,12 @@ class Studio:
             self._syncing = False
 
     # -- callbacks ------------------------------------------------------------------------------------
-    def _guard(self, fn: Any) -> None:
-        """Run a callback; any error a user can cause becomes the status line, the server keeps running."""
+    def _guard(self, fn: Any, field: str = "") -> None:
+        """Run a callback; any error a user can cause becomes the status line, the server keeps running.
+
+        ``field``: the control whose edit runs ``fn``.  When the edit is refused, every control shows the model's
+        value again (the refused value does not stay in its field as if applied) and the reason is shown right
+        under that field, where the user looks, until the next edit is applied."""
         if self._syncing:
             return
         with self.lock:
@@ -245,16 +251,42 @@ class Studio:
             except Exception as exc:                # the message is the user's: never a traceback
                 log.info("studio: %s", exc, exc_info=True)
                 self.model.error = str(exc)
+                self._sync_controls()
+                self._show_field_message(field, str(exc))
                 self._show_status()
+            else:
+                if field:
+                    self._show_field_message("", "")
+
+    def _show_field_message(self, field: str, text: str) -> None:
+        """Show ``text`` under the control ``field`` (remove the message when ``field`` is empty)."""
+        if self.field_message is not None:
+            self.field_message.remove()
+            self.field_message = None
+        control = self._controls.get(field)
+        if not field or not text or control is None:
+            return
+        handle = control[0]
+        shown = _field_value(handle.value)
+        with self.params_folder:
+            self.field_message = self.server.gui.add_markdown(
+                f"**not applied:** {text} — {field.removeprefix('geometry.')} stays {shown}",
+                order=float(handle.order) + 1e-6)
 
     def _set(self, key: str, value: Any) -> None:
-        self.model.set_param(key, value)
+        if isinstance(value, float) and not np.isfinite(value):
+            raise ValueError(f"{key.removeprefix('geometry.')}: {value} is not a number; type a number")
+        applied = self.model.set_param(key, value)
         self.redraw(handles=True)
+        if not applied:                        # refused by the model: its reason goes under the field
+            raise ValueError(self.model.error)
 
     def _scalar(self, sc: Any, value: float) -> None:
         doc_params = sc.set(self.model.params, value)
-        self.model.set_param("geometry.params", {k: v for k, v in doc_params.items() if v is not None})
+        applied = self.model.set_param("geometry.params", {k: v for k, v in doc_params.items() if v is not None})
         self.redraw(handles=True)
+        if not applied:
+            raise ValueError(self.model.error)
 
     def _history(self, step: Any) -> None:
         if step():
@@ -561,3 +593,10 @@ def serve(model: StudioModel, host: str, port: int, open_browser: bool, design_p
             time.sleep(1.0)
     finally:
         studio.stop()
+
+
+def _field_value(value: Any) -> str:
+    """A control's value as the message under it quotes it (``1000``, ``0.25``, ``(1, 2)``)."""
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
