@@ -62,6 +62,7 @@ def test_regular_p_grids_are_torsion_free_with_one_free_angle_per_column(name):
     assert row_plane_distance(g, s.axes) <= 1e-9
     # every column is one strip, solved by propagation; nothing is left to the penalty solve
     assert s.meta["exact_strips"] == g.shape[1] and s.meta["penalty_strips"] == 0
+    assert s.meta["penalty_torsion_max_deg"] == 0.0
     assert s.meta["exact_vertices"] == g.vertices.shape[0] * g.vertices.shape[1]
     assert not s.left_out and s.normal_angle_deg.max() < 30.0
 
@@ -136,6 +137,7 @@ def test_closed_strips_with_planes_in_general_position():
     fam = next(p.family for p in mesh.polylines if not p.closed)
     s = support_p(mesh, fam, exclude=[], beams=BeamContext(DEPTH, LIMIT))
     assert s.meta["exact_strips"] == 4 and s.meta["penalty_strips"] == 3
+    assert s.summary()["penalty_torsion_max_deg"] > 1e-4                 # reported with the structure
     h = height_mm(s.mesh, s.axes)
     e = s.mesh.topology.edges
     per_strip = []

@@ -131,6 +131,21 @@ def _max_offset(mesh: QuadMesh, sol: AxisSolution, depth: float) -> float:
     return float(torsion_offset(mesh, sol.axes, depth).max()) if len(mesh.topology.edges) else 0.0
 
 
+def _penalty_torsion_deg(mesh: QuadMesh, sol: AxisSolution) -> float:
+    """Largest torsion (degrees: the angle between the planes spanned by the edge and each end's axis) of
+    the free edges whose axes the penalty solve found (not both ends propagated exactly): what the
+    combinatorics left, reported."""
+    e = mesh.topology.edges
+    exact = sol.exact if sol.exact is not None else np.zeros(len(mesh.vertices), dtype=bool)
+    pick = sol.free_edges & ~(exact[e[:, 0]] & exact[e[:, 1]])
+    if not pick.any():
+        return 0.0
+    d = mesh.vertices[e[pick, 1]] - mesh.vertices[e[pick, 0]]
+    ni, nj = np.cross(d, sol.axes[e[pick, 0]]), np.cross(d, sol.axes[e[pick, 1]])
+    ang = np.arctan2(np.linalg.norm(np.cross(ni, nj), axis=1), np.abs(np.einsum("ij,ij->i", ni, nj)))
+    return float(np.degrees(ang.max()))
+
+
 def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, exclude: Sequence[int | str],
                    kind: str, families: tuple[int, ...], flip: bool = False, max_normal_angle_deg: float = 30.0,
                    planar_tolerance: float = 1e-6, beams: BeamContext | None = None,
@@ -200,6 +215,7 @@ def planar_support(mesh: QuadMesh, normals: np.ndarray, candidates: np.ndarray, 
             "normal_weight": sol.normal_weight, "misfit_max": float(sol.misfit.max(initial=0.0)), "left_out": len(reasons),
             "straight_polylines": int(pp.straight.sum()), "exact_strips": sol.strips,
             "penalty_strips": sol.forced,
-            "exact_vertices": int(sol.exact.sum()) if sol.exact is not None else 0}
+            "exact_vertices": int(sol.exact.sum()) if sol.exact is not None else 0,
+            "penalty_torsion_max_deg": _penalty_torsion_deg(mesh, sol)}
     return _assemble(mesh, sol.axes, pp.planes, planar, kept, kind, meta,
                      left_out=tuple(sorted(reasons.items())), planes_at=sol.planes_at, misfit=sol.misfit)
