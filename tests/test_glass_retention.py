@@ -292,3 +292,34 @@ def test_a_real_mesh_patch_is_held_and_verifies(tmp_path):
     blocks = [r for r in rows(out / "retention.csv") if r["kind"] == "setting_block"]
     assert len(blocks) == 2 * len(checks)
     assert main(["verify", str(out), "--quiet"]) == 0
+
+
+def test_structural_silicone_makes_no_plates_and_states_the_etag_bite(vault):
+    from dataclasses import replace
+
+    from shapely.geometry import Polygon
+
+    from fabrication.glazing.bite import pane_edges
+    from fabrication.glazing.retention import make_retention
+    from fabrication.glazing.seat import build_seats
+
+    b = vault[0]
+    g = b.glazing
+    by_edge = {s.edge: s for s in g.strips}
+    pes = {(p.part_id, q): by_edge[e] for p, q, e in pane_edges(b.panels.panels, b.support.vertices, b.support.edges)
+           if e in by_edge}
+    bites = {}
+    for x in g.bites:
+        bites[x.panel] = min(bites.get(x.panel, np.inf), x.bite)
+    sil = replace(g.params, retention="silicone")
+    r = make_retention(b.panels.panels, build_seats(b), g.strips, pes, sil, float(b.design.panels.gap), bites)
+    assert {p.kind for p in r.parts} == {"setting_block", "stop"} and not r.stations
+    for panel, pr in zip(b.panels.panels, r.panes):
+        rect = Polygon(panel.outline).minimum_rotated_rectangle
+        xy = np.asarray(rect.exterior.coords)[:4]
+        a = min(np.linalg.norm(xy[1] - xy[0]), np.linalg.norm(xy[2] - xy[1]))
+        assert pr.silicone_bite_mm == pytest.approx(1.5 * 1.0e-3 * a / (2 * 0.14), rel=0.02)   # ETAG 002, N/mm
+        assert pr.failures(sil) == []                       # ~10 mm bead on bites of some 20 mm
+    thin = replace(sil, silicone_design_stress=0.01)        # a bead 14 times as wide no longer fits on the strip
+    r2 = make_retention(b.panels.panels, build_seats(b), g.strips, pes, thin, float(b.design.panels.gap), bites)
+    assert all("structural silicone bite" in p.failures(thin)[0] for p in r2.panes)

@@ -31,9 +31,9 @@ by its edges in proportion to their length; a plate carries the shares of the pa
 resist ``F_t,Rd = k₂ · f_ub · A_s / γ_M2`` each (EN 1993-1-8 Table 3.4, ``k₂ = 0.9``, ``γ_M2 = 1.25``).
 
 With ``retention = "silicone"`` there are no plates: the structural silicone's bite must be at least
-``h_c = γ_Q · q · a / (2 · σ_des)`` (ETAG 002 §5.1.4.2.1, ``a`` the pane's shorter side, taken as the diameter
-of its inscribed circle's bounding square: the shortest width of its outline), which the strip's bite is
-checked against.
+``h_c = γ_Q · q · a / (2 · σ_des)`` (ETAG 002 §5.1.4.2.1, ``a`` the pane's shorter side, taken as the smallest
+width of its outline over its edge normals), and the pane's smallest bite on its strips (:mod:`.bite`) must hold
+that bead.
 """
 
 from __future__ import annotations
@@ -156,6 +156,7 @@ class PaneRestraint:
     clamp_bite_mm: float
     max_spacing_mm: float
     silicone_bite_mm: float
+    strip_bite_mm: float = math.nan
 
     def failures(self, p: GlazingParams) -> list[str]:
         """What this pane's restraint does not satisfy, in words (empty: it holds)."""
@@ -163,6 +164,9 @@ class PaneRestraint:
         if self.block_pressure > p.setting_block_pressure + 1e-9:
             out.append(f"setting block pressure {self.block_pressure:.2f} N/mm² above glazing.setting_block_pressure "
                        f"= {p.setting_block_pressure:g}")
+        if p.retention == "silicone" and not self.strip_bite_mm >= self.silicone_bite_mm - 1e-9:
+            out.append(f"structural silicone bite {self.silicone_bite_mm:.1f} mm needed, the pane bites "
+                       f"{self.strip_bite_mm:.1f} mm on its strips")
         if p.retention == "pressure_plate":
             if self.uplift_kN > self.resistance_kN + 1e-9:
                 out.append(f"wind uplift {self.uplift_kN:.2f} kN above its screws' {self.resistance_kN:.2f} kN")
@@ -306,9 +310,11 @@ def _spacing(stations: Sequence[float], length: float) -> float:
 
 
 def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips: Sequence[Strip],
-                   pane_edge_strips: dict[tuple[str, int], Strip], p: GlazingParams, gap: float) -> Retention:
+                   pane_edge_strips: dict[tuple[str, int], Strip], p: GlazingParams, gap: float,
+                   strip_bites: dict[str, float] | None = None) -> Retention:
     """Setting blocks, stops, pressure plates and every pane's restraint (module docstring).  ``pane_edge_strips``
-    maps ``(panel id, outline edge)`` to the strip under that edge; ``gap`` is the joint width (``[panels] gap``).
+    maps ``(panel id, outline edge)`` to the strip under that edge; ``gap`` is the joint width (``[panels] gap``);
+    ``strip_bites`` each pane's smallest bite on its strips (mm, for ``retention = "silicone"``).
 
     Raises :class:`~ppfab.errors.DesignError` when setting block, stop or screw do not fit in the joint."""
     need = p.setting_block_width + p.stop_width + JOINT_SPARE
@@ -389,7 +395,8 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         out.append(PaneRestraint(panel.part_id, slope, panel.weight_kg, k, strip.part_id if strip else "", load,
                                  load / (lb * panel.thickness_mm), slope > p.stop_min_slope_deg, uplift, n, res,
                                  min(bites.get(panel.part_id, [math.nan])),
-                                 max(spacing.get(panel.part_id, [0.0])), sil))
+                                 max(spacing.get(panel.part_id, [0.0])), sil,
+                                 (strip_bites or {}).get(panel.part_id, math.nan)))
     return Retention(p, bolt, tuple(parts), stations, tuple(out))
 
 
@@ -419,7 +426,10 @@ def build_retention(build: "Build") -> Retention | None:
         support = build.support
         pes = {(panel.part_id, q): by_edge[e] for panel, q, e in pane_edges(build.panels.panels, support.vertices,
                                                                             support.edges) if e in by_edge}
+        bites: dict[str, float] = {}
+        for b in g.bites:
+            bites[b.panel] = min(bites.get(b.panel, math.inf), b.bite)
         r = make_retention(build.panels.panels, build_seats(build), g.strips, pes, g.params,
-                           float(build.design.panels.gap))
+                           float(build.design.panels.gap), bites)
         _CACHE[g] = r
     return r
