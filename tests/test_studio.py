@@ -152,7 +152,20 @@ def test_figures_against_independent_formulas(default):
     c = face_corners(v)
     tri = 0.5 * (np.linalg.norm(np.cross(c[..., 1, :] - c[..., 0, :], c[..., 2, :] - c[..., 0, :]), axis=-1) +
                  np.linalg.norm(np.cross(c[..., 2, :] - c[..., 0, :], c[..., 3, :] - c[..., 0, :]), axis=-1))
-    assert f.glass_area_m2 == pytest.approx(tri.sum() / 1e6, rel=1e-9)
+    assert tri.sum() / 1e6 > f.glass_area_m2                     # the faces; the glass is the panes as cut
+    # the panes as cut: each face (in its own plane) inset by half the gap, by shapely's mitred buffer
+    from shapely.geometry import Polygon
+
+    from fabrication.design import load_design
+
+    gap = load_design(None).section("panels").gap
+    cut = 0.0
+    for q in c.reshape(-1, 4, 3):
+        o, e1 = q[0], (q[1] - q[0]) / np.linalg.norm(q[1] - q[0])
+        nrm = np.cross(q[1] - q[0], q[3] - q[0])
+        e2 = np.cross(nrm / np.linalg.norm(nrm), e1)
+        cut += Polygon((q - o) @ np.stack([e1, e2], axis=1)).buffer(-0.5 * gap, join_style="mitre").area
+    assert f.glass_area_m2 == pytest.approx(cut / 1e6, rel=1e-6) and f.gap_mm == gap
     # the bound a nesting of the real panes reports: make_panels insets every face, lower_bound grows the panes
     from fabrication.design import load_design
     from fabrication.nesting import lower_bound
@@ -177,6 +190,29 @@ def test_figures_against_independent_formulas(default):
     rect = np.array([[[0, 0, 0], [3, 0, 0], [3, 2, 0], [0, 2, 0]]], float)
     assert panel_boxes(rect)[0] == pytest.approx([3.0, 2.0])
     assert face_metric(st.placed, "corner angle").min() == pytest.approx(f.min_corner_deg)
+
+
+@pytest.mark.parametrize("example", ["conical_spheres", "default_pp_gridshell"])
+def test_figures_count_what_the_build_counts(example):
+    """The studio's torsion is that of the support structure the build makes (here a P support of the conical
+    vault, whose construction's cone axes are 14 mm off), and its glass area that of the panes as the build
+    cuts them: both against the build's own stages (geometry, support, panels, summary's definition)."""
+    from fabrication.design import load_design
+    from fabrication.pipeline.progress import Progress
+    from fabrication.pipeline.stages import stage_geometry, stage_panels, stage_support
+
+    path = REPO / "examples" / f"{example}.toml"
+    figs = StudioModel.load(path).state.figures
+    design = load_design(path)
+    quiet = Progress(quiet=True)
+    geometry = stage_geometry(design, quiet, allow_large=False)
+    support = stage_support(design, geometry, quiet)
+    build_torsion = float(np.max(support.torsion_offset(design.beams.depth), initial=0.0))
+    assert figs.torsion_mm == pytest.approx(build_torsion, abs=1e-6)
+    assert "support the build makes" in figs.torsion_of
+    panels = stage_panels(design, geometry, quiet).panels
+    assert figs.glass_area_m2 == pytest.approx(sum(p.flat_part().area for p in panels) / 1e6, rel=1e-6)
+    assert f"faces inset by half the {design.panels.gap:g} mm gap" in figs.markdown()
 
 
 def test_studio_server_survives_bad_input_and_binds_loopback(default):

@@ -5,6 +5,8 @@ All lengths in mm (the placed mesh), angles in degrees.  For a grid ``v (m+1, n+
 ``f[i, j] = (v[i,j], v[i+1,j], v[i+1,j+1], v[i,j+1])``:
 
 * panel area ``A = ½ |d₁ × d₂|`` (the diagonals ``d₁ = c₂ − c₀``, ``d₂ = c₃ − c₁``; exact for a planar quad);
+  the glass area is that of the panes as cut, as the build counts it: each face inset by half the panel gap
+  (:func:`pane_areas`), not the faces;
 * the smallest rectangle around a panel has a side along one of its edges (rotating calipers), so the
   sheet it needs is the least-area of the four edge-aligned boxes in the panel's plane;
 * glass sheets: at least :func:`sheets_lower_bound` — the panes (faces inset by half the panel gap) grown by
@@ -13,7 +15,9 @@ All lengths in mm (the placed mesh), angles in degrees.  For a grid ``v (m+1, n+
 * beams: the polylines of the planar families, their length ``Σ |v_{k+1} − v_k|`` and pieces
   ``Σ ⌈L / max_length⌉``;
 * torsion: the largest distance of a node axis's end ``v + depth · a`` from the plane of a beam through
-  ``v`` (the least-squares plane of the polyline): 0 for a torsion-free support structure (§2.1);
+  ``v`` (the least-squares plane of the polyline): 0 for a torsion-free support structure (§2.1); the studio
+  replaces it by the torsion of the support structure the build makes (``[support]``, the offset of an axis at
+  beam depth, as ``nodes.csv`` ``torsion_mm``) and says which (:attr:`Figures.torsion_of`);
 * node angle: at every interior node the angle between the row and the column through it (central
   differences of the two polylines);
 * panel types: panels whose sorted edge lengths and diagonals agree to 1 mm.
@@ -45,6 +49,8 @@ class Figures:
     beam_pieces: int
     torsion_mm: float
     node_angle_deg: tuple[float, float]
+    gap_mm: float = 0.0
+    torsion_of: str = "the construction's node axes"
 
     def markdown(self) -> str:
         w, h = self.largest_panel_mm
@@ -53,9 +59,10 @@ class Figures:
             f"- panels: **{self.panels}** in {self.panel_types} types",
             f"- largest panel: {w:.0f} × {h:.0f} mm on {self.sheet_mm[0]:.0f} × {self.sheet_mm[1]:.0f} ({fit})",
             f"- min corner angle: {self.min_corner_deg:.1f}°",
-            f"- glass: {self.glass_area_m2:.1f} m², at least {self.glass_sheets_min} sheets",
+            f"- glass as cut: {self.glass_area_m2:.1f} m² (faces inset by half the {self.gap_mm:g} mm gap), "
+            f"at least {self.glass_sheets_min} sheets",
             f"- beams: {self.beams} ({self.beam_pieces} pieces), {self.beam_length_m:.1f} m",
-            f"- torsion: {self.torsion_mm:.2e} mm",
+            f"- torsion: {self.torsion_mm:.2e} mm ({self.torsion_of})",
             f"- node angles: {self.node_angle_deg[0]:.1f}° – {self.node_angle_deg[1]:.1f}°",
         ])
 
@@ -100,6 +107,20 @@ def _polylines(v: np.ndarray, family: str, closed: bool) -> np.ndarray:
     if family == "rows":
         return np.concatenate([v, v[:, :1]], axis=1) if closed else v
     return np.swapaxes(v, 0, 1)
+
+
+def pane_areas(corners: np.ndarray, gap: float) -> np.ndarray:
+    """``(F,)`` area of each pane of the planar quads ``corners (F, 4, 3)``: the face with every edge moved inward
+    by ``d = gap/2``, ``A' = A − dP + d² Σ cot(θ_i/2)`` (the inner parallel polygon of a convex quad; 0 where the
+    inset closes the face)."""
+    c = np.asarray(corners, dtype=float).reshape(-1, 4, 3)
+    if len(c) == 0:
+        return np.zeros(0)
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=-1)
+    per = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=-1).sum(axis=1)
+    cot = 1.0 / np.tan(0.5 * np.radians(corner_angles(c)))
+    d = 0.5 * gap
+    return np.maximum(area - d * per + d * d * cot.sum(axis=1), 0.0)
 
 
 def grown_pane_areas(corners: np.ndarray, spacing: float, gap: float) -> np.ndarray:
@@ -171,5 +192,6 @@ def figures(v: np.ndarray, axes: np.ndarray | None, families: tuple[str, ...], c
         panels=int(area.size), panel_types=int(panel_types(corners).max()) + 1,
         largest_panel_mm=(float(largest[0]), float(largest[1])), sheet_mm=(float(max(sheet)), float(min(sheet))),
         panels_over_sheet=over, min_corner_deg=float(corner_angles(corners).min()),
-        glass_area_m2=float(area.sum()) / 1e6, glass_sheets_min=sheets_min,
-        beams=beams, beam_length_m=length / 1000.0, beam_pieces=pieces, torsion_mm=torsion, node_angle_deg=node)
+        glass_area_m2=float(pane_areas(corners, gap).sum()) / 1e6, glass_sheets_min=sheets_min,
+        beams=beams, beam_length_m=length / 1000.0, beam_pieces=pieces, torsion_mm=torsion, node_angle_deg=node,
+        gap_mm=float(gap))

@@ -112,11 +112,35 @@ def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = N
                    (float(nest.sheet[0]), float(nest.sheet[1])), (x1 - x0, y1 - y0),
                    float(beams.get("depth", 200.0)), float(beams.get("max_length", 0.0) or 0.0),
                    float(nest.spacing), float(gap))
+    figs = _support_torsion(doc, placed, families, figs)
     try:
         folded = np.asarray(folded_faces(placed), dtype=bool)
     except Exception:                            # a grid too small for the fold test: nothing to mark
         folded = np.zeros(face_corners(placed.vertices, placed.closed).shape[:2], dtype=bool)
     return Solve(raw, placed, families, delta, figs, folded, time.perf_counter() - t0)
+
+
+def _support_torsion(doc: dict, placed: QuadGrid, families: tuple[str, ...], figs: Figures) -> Figures:
+    """``figs`` with the torsion of the support structure the build would make of ``placed`` (``[support]``,
+    ``[beams] depth``: the largest offset of an axis at beam depth, ``nodes.csv`` ``torsion_mm``); where that
+    support cannot be made, the construction's axes stay measured and the figure says why."""
+    import dataclasses
+
+    from ppfab.schema import parse_params
+    from ppfab.support.params import BeamContext, SupportParams
+    from ppfab.support.select import support_structure
+
+    beams = _section(doc, "beams")
+    depth = float(beams.get("depth", 200.0))
+    try:
+        params = parse_params(SupportParams, dict(_section(doc, "support")), "support")
+        support = support_structure(placed, params, planar_families=families or None,
+                                    beams=BeamContext(depth, float(beams.get("max_torsion_mm", 0.5))))
+        torsion = float(np.max(support.torsion_offset(depth), initial=0.0))
+    except Exception as exc:                     # the build would refuse: keep the construction's figure, say why
+        return dataclasses.replace(figs, torsion_of=f"the construction's axes; no support: {exc}")
+    kind = str(support.summary().get("kind", params.method)).upper()
+    return dataclasses.replace(figs, torsion_mm=torsion, torsion_of=f"the {kind} support the build makes")
 
 
 def face_metric(placed: QuadGrid, metric: str) -> np.ndarray:
