@@ -57,8 +57,8 @@ class StripAxes:
     """Axes found by exact propagation.
 
     ``axes (N, 3)`` unit and inward where ``solved``, ``nan`` elsewhere; ``solved (N,)`` bool;
-    ``strips`` how many strips were propagated (``free`` of them with a free angle, ``closed`` closed ones);
-    ``forced`` how many strips were left to the penalty solve.
+    ``strips`` how many strips were propagated (``free`` of them with a free angle chosen, ``closed`` of
+    them closed); ``forced`` how many strips were left to the penalty solve.
     """
 
     axes: np.ndarray
@@ -197,8 +197,6 @@ def strip_axes(vertices: np.ndarray, edges: np.ndarray, free_edges: np.ndarray, 
         return StripAxes(axes, solved, 0, 0, 0, 0)
     g = coo_matrix((np.ones(len(fe)), (fe[:, 0], fe[:, 1])), shape=(nv, nv))
     ncomp, label = connected_components(g, directed=False)
-    touched = np.zeros(nv, dtype=bool)
-    touched[fe.ravel()] = True
     edge_label = label[fe[:, 0]]
     order_e = np.argsort(edge_label, kind="stable")
     cuts = np.searchsorted(edge_label[order_e], np.arange(ncomp + 1))
@@ -226,6 +224,7 @@ def strip_axes(vertices: np.ndarray, edges: np.ndarray, free_edges: np.ndarray, 
             ends = [v for v in adj if len(adj[v]) == 1]
             root = min(ends) if ends else int(verts.min())
         order = _bfs(root, adj)
+        free_angle = False
         if n_fixed:
             a = _propagate(order, vertices, plane, fixed[root], len(verts), strip.pos)
         else:
@@ -242,11 +241,11 @@ def strip_axes(vertices: np.ndarray, edges: np.ndarray, free_edges: np.ndarray, 
                 else:
                     costs = [float(strip.cost(np.cos(t) * P + np.sin(t) * Q)) for t in cand]
                     t = cand[int(np.argmin(costs))]
-                stats["closed"] += 1
+                free_angle = cand is None
             else:
                 t = strip.best_angle(P, Q)
+                free_angle = True
             a = np.cos(t) * P + np.sin(t) * Q
-            stats["free"] += 1
         n = np.linalg.norm(a, axis=1)
         if not np.all(n > DEGENERATE * n.max()):
             stats["forced"] += 1
@@ -254,6 +253,8 @@ def strip_axes(vertices: np.ndarray, edges: np.ndarray, free_edges: np.ndarray, 
         axes[verts] = strip.oriented(a)
         solved[verts] = True
         stats["strips"] += 1
+        stats["free"] += int(free_angle)
+        stats["closed"] += int(closed)
     return StripAxes(axes, solved, stats["strips"], stats["free"], stats["closed"], stats["forced"])
 
 
