@@ -312,6 +312,73 @@ def _smallest_example(method: str) -> Any:
     return best
 
 
+def _is_triangle_mesh(source: str) -> bool:
+    """Whether an OBJ/OFF file has a face that is not a quad (then it is a surface to remesh)."""
+    import trimesh
+
+    if not Path(source).is_file():
+        return False
+    from ppfab.errors import PpfabError
+    from ppfab.io import read_mesh
+
+    try:
+        read_mesh(source)
+        return False
+    except PpfabError:
+        try:
+            loaded: Any = trimesh.load(source, force="mesh", process=False)
+            return len(loaded.faces) > 0
+        except Exception:                   # neither a quad mesh nor a triangle mesh: the quad reader's error
+            return False
+
+
+def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    """The sections of a starter design on a surface file, and the comment lines that say what was measured:
+    a ``[surface]`` (sections net) with P optimisation, the P support and segmented beams."""
+    import numpy as np
+
+    from ppfab.errors import GeometryError
+    from ppfab.surface import SurfaceSpec, remesh
+
+    from .surfacefile import read_surface
+
+    if not Path(source).is_file():
+        raise DesignError("new", f"{source}: no such surface file (.3dm, .obj, .off, .stl, .ply)")
+    sf = read_surface(source)
+    ext = sf.samples.points.max(axis=0) - sf.samples.points.min(axis=0)
+    units = None
+    if sf.kind == "mesh" and ext.max() < 500.0:              # a roof a few hundred mm wide is in metres
+        units = "m"
+        sf = read_surface(source, units="m")
+        ext = ext * 1000.0
+    rel = os.path.relpath(Path(source).resolve(), out_dir).replace(os.sep, "/")
+    spacing = float(min(1500.0, max(300.0, np.round(ext[:2].min() / 4.0, -2))))
+    surface: dict[str, Any] = {"path": rel, "net": "sections", "spacing": spacing}
+    if units:
+        surface["units"] = units
+    try:
+        r = remesh(sf.samples, SurfaceSpec(path=rel, spacing=spacing, units=units))
+        found = (f"the sections net at {spacing:g} mm has {int(r.net.grid_faces.sum())} panels, edges "
+                 f"{r.panel_size_min:.2f}–{r.panel_size_max:.2f} × spacing")
+    except GeometryError as exc:
+        found = f"the sections net refuses: {exc}"
+    given: dict[str, dict[str, Any]] = {
+        "design": {"name": Path(source).stem},
+        "surface": surface,
+        "optimize": {"families": "rows", "target_delta_f": 1e-7, "target_delta_p": 1e-7},
+        "support": {"method": "p", "family": "rows"},
+        "beams": {"joint": "segmented", "continuous": "rows", "fallback": "segmented"},
+    }
+    head = [f"# Starter design for the surface {Path(source).name}, written by `ppfab new`.",
+            f"# Read: {sf.samples.source}, in {units or sf.samples.units}"
+            + (" (no units in the file: a mesh under 500 units wide is taken as metres)" if units else "")
+            + f"; {ext[0] / 1000:.1f} × {ext[1] / 1000:.1f} × {ext[2] / 1000:.1f} m.",
+            f"# Measured: {found}.",
+            "# Proposed: rows = the planar sections, made P by [optimize] close to the surface; the P support;",
+            "# segmented beams (the rows run through)."]
+    return given, head
+
+
 def starter_text(source: str | None, out: str | os.PathLike) -> str:
     """The text of a starter design for a construction method or a mesh file ``source`` (``None``: the default
     method), to be written to ``out`` (a mesh path is written relative to ``out``'s folder)."""
@@ -324,8 +391,14 @@ def starter_text(source: str | None, out: str | os.PathLike) -> str:
     given: dict[str, dict[str, Any]] = {}
     why: dict[str, dict[str, str]] = {}
     head: list[str]
-    is_mesh = Path(source).suffix.lower() in (".obj", ".off")
-    if is_mesh:
+    suffix = Path(source).suffix.lower()
+    is_surface = suffix in (".3dm", ".stl", ".ply") or (suffix in (".obj", ".off") and _is_triangle_mesh(source))
+    is_mesh = suffix in (".obj", ".off") and not is_surface
+    if is_surface:
+        given, head = _surface_start(source, out_dir)
+        example = None
+        method = None
+    elif is_mesh:
         if not Path(source).is_file():
             raise DesignError("new", f"{source}: no such mesh file (a quad mesh .obj or .off)")
         s = survey(source)
@@ -374,9 +447,11 @@ def starter_text(source: str | None, out: str | os.PathLike) -> str:
                 lines += _section("geometry.params", f"The parameters of '{method}' (`ppfab methods {method}`).",
                                   c.params, dict(params or given.get("geometry", {}).get("params", {})))
             continue
-        active = name != "optimize" or "optimize" in given
+        active = (name != "optimize" or "optimize" in given) and (name != "surface" or is_surface)
         about = SECTION_TEXT.get(name, "")
-        if not active:
+        if name == "surface" and not active:
+            about += " (Commented out: this design builds on its [geometry].)"
+        elif not active:
             about += " (Commented out: a construction is planar by design; uncomment for a mesh file.)"
         lines += _section(name, about, cls, values, SECTION_DEFAULTS.get(name), active=active)
     return "\n".join(lines) + "\n"

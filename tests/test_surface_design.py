@@ -83,3 +83,22 @@ def test_surface_design_builds_a_p_package(tmp_path):
     b.write(out)
     assert b.verify().ok
     assert "distance of a node to the designer" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def test_new_on_a_surface_proposes_a_surface_design(tmp_path):
+    from fabrication import load_design
+    from fabrication.cli import main
+
+    src = tmp_path / "dome.3dm"
+    write_nurbs(src, DOME, 12.0, 9.0, "Meters")
+    out = tmp_path / "dome.toml"
+    assert main(["new", str(src), "-o", str(out)]) == 0
+    text = out.read_text(encoding="utf-8")
+    assert "the sections net at 1500 mm has" in text
+    d = load_design(out)
+    assert d.surface is not None and d.surface.path == "dome.3dm" and d.optimize is not None
+    assert d.support.method == "p" and d.optimize.families == "rows"
+    # a construction's starter keeps [surface] commented out
+    other = tmp_path / "bisector.toml"
+    assert main(["new", "bisector", "-o", str(other)]) == 0
+    assert load_design(other).surface is None
