@@ -255,6 +255,50 @@ def test_more_wind_than_the_screws_hold_is_stated_per_pane(vault):
     assert weakest in {p.panel for p in failing}
 
 
+def retention_findings(folder: Path) -> list[str]:
+    """What verify's retention check alone finds in ``folder``."""
+    from fabrication.verify import Verification, read_csv
+    from fabrication.verify.retention import check_retention
+
+    v = Verification(folder)
+    v.data["manifest"] = json.loads((folder / "manifest.json").read_text())
+    v.data["parts"] = read_csv(folder / "parts.csv")
+    check_retention(v)
+    assert "retention" in v.checked
+    return [str(f) for f in v.findings]
+
+
+def test_verify_retention_finds_nothing_as_written_and_names_a_block_moved_off_the_glass(built, tmp_path):
+    from build123d import Location
+
+    from fabrication.writers.step import export_step, named_solids
+
+    assert retention_findings(built) == []
+    copy = tmp_path / "copy"
+    shutil.copytree(built, copy)
+    pane_id = sorted(k for k in solids(built / "panels.step") if k.startswith("P-"))[0]
+    n, ring, _ = pane_frame(solids(built / "panels.step")[pane_id])
+    a, b = down_slope_edge(n, ring)
+    o = np.cross(b - a, n)
+    o /= np.linalg.norm(o)
+    o = o if o @ (0.5 * (a + b) - ring.mean(axis=0)) > 0 else -o
+    from build123d import import_step
+
+    target = "SB" + pane_id[1:] + "-1"
+    out = []
+    for name, solid in named_solids(import_step(str(copy / "glazing.step"))):
+        if name == target:
+            solid = solid.moved(Location(tuple(float(x) for x in 2.0 * o)))
+        solid.label = name
+        out.append(solid)
+    export_step(out, copy / "glazing.step", "moved block")
+    found = retention_findings(copy)
+    assert len(found) == 2, found
+    assert f"glazing.step: {target}: setting block of {pane_id} is not against its down-slope edge: 2.00 mm off the " \
+        "edge face" in found[0]
+    assert found[1] == f"glazing.step: ST{target[2:]}: stop is 2.00 mm into its setting block {target}"
+
+
 @pytest.mark.slow
 def test_verify_passes_and_names_a_missing_block_and_an_overloaded_one(built, tmp_path, capsys):
     assert main(["verify", str(built), "--quiet"]) == 0

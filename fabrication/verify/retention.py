@@ -153,7 +153,8 @@ def check_retention(v: Verification) -> None:
                 if s["part_id"][-2:] == r["part_id"][-2:] and s["part_id"] in solids:
                     gap = float(((solids[s["part_id"]] - a) @ o).min()) - float(out.max())
                     if abs(gap) > TOUCH:
-                        v.error(rel_g, s["part_id"], f"stop is {gap:.2f} mm off its setting block {r['part_id']}")
+                        how = f"{gap:.2f} mm off" if gap > 0 else f"{-gap:.2f} mm into"
+                        v.error(rel_g, s["part_id"], f"stop is {how} its setting block {r['part_id']}")
         x = restraint.get(pane_id)
         if x is None:
             v.error(rel_x, pane_id, "pane has no restraint row")
