@@ -365,7 +365,8 @@ def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]
     given: dict[str, dict[str, Any]] = {
         "design": {"name": Path(source).stem},
         "surface": surface,
-        "optimize": {"families": "rows", "target_delta_f": 1e-7, "target_delta_p": 1e-7},
+        "optimize": {"families": "rows", "target_delta_f": 1e-7, "target_delta_p": 1e-7, "fairness": "relative",
+                     "weight_close": 1.0},
         "support": {"method": "p", "family": "rows"},
         "beams": {"joint": "segmented", "continuous": "rows", "fallback": "segmented"},
     }
@@ -374,7 +375,8 @@ def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]
             + (" (no units in the file: a mesh under 500 units wide is taken as metres)" if units else "")
             + f"; {ext[0] / 1000:.1f} × {ext[1] / 1000:.1f} × {ext[2] / 1000:.1f} m.",
             f"# Measured: {found}.",
-            "# Proposed: rows = the planar sections, made P by [optimize] close to the surface; the P support;",
+            "# Proposed: rows = the planar sections, made P by [optimize] close to the surface (relative fairness",
+            "# and weight_close 1: the net is already on the surface and nearly conjugate); the P support;",
             "# segmented beams (the rows run through)."]
     return given, head
 

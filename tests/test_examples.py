@@ -25,7 +25,13 @@ EXAMPLES = sorted((REPO / "examples").glob("*.toml"))
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_geometry(path):
     design = load_design(path)
-    g = build_geometry(design.geometry, design.optimize, design.base_dir)
+    if design.surface is not None:                      # a surface: read, remeshed, optimised by the stage
+        from fabrication.pipeline.progress import Progress
+        from fabrication.pipeline.stages import stage_geometry
+
+        g = stage_geometry(design, Progress(quiet=True), True)
+    else:
+        g = build_geometry(design.geometry, design.optimize, design.base_dir)
     q = quality(g.mesh)
     assert q.delta_f_max <= 1e-6 and q.flipped_edges == 0
     if "rows" in g.planar_families:

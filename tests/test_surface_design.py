@@ -20,6 +20,8 @@ spacing = 1500.0
 families = "rows"
 target_delta_f = 1e-7
 target_delta_p = 1e-7
+fairness = "relative"
+weight_close = 1.0
 
 [support]
 method = "p"
