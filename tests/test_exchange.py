@@ -122,7 +122,8 @@ def test_ifc_reopens_with_one_element_per_part_and_the_parts_data(built, parts):
                 assert qto["Length"] == pytest.approx(float(row["length_mm"]))
             else:
                 assert row["kind"] == "splice" and "Length" not in qto
-        assert qto["NetArea"] == pytest.approx(float(row["area_mm2"]) * 1e-6, rel=1e-12)    # m²
+        holes = float(row.get("holes") or 0) * np.pi / 4.0 * float(row.get("hole_mm") or 0.0) ** 2
+        assert qto["NetArea"] == pytest.approx((float(row["area_mm2"]) - holes) * 1e-6, rel=1e-12)    # m², net
         if row["kind"] == "panel":                     # the make-up's layers, outside ply first
             layers = ue.get_material(e, should_skip_usage=True)
             assert layers.LayerSetName == row["material"]
@@ -156,7 +157,8 @@ def test_ifc_spatial_structure_and_beam_assemblies(built, parts):
 
 
 def test_ifc_solids_have_the_parts_volume_where_the_mesh_is(built, parts, mesh):
-    """ifcopenshell's geometry kernel tessellates every element: its volume is area × thickness, a pane lies
+    """ifcopenshell's geometry kernel tessellates every element: its volume is area × thickness (less the bolt
+    holes of plates and cover plates), a pane lies
     parallel to its mesh face at the height of its solid in panels.step (on its gaskets), a plate on its support
     plane (independent of ppfab's own readers)."""
     import ifcopenshell
@@ -179,7 +181,10 @@ def test_ifc_solids_have_the_parts_volume_where_the_mesh_is(built, parts, mesh):
         seen.add(name)
         t = float(row["thickness_mm"])
         volume = us.get_volume(shape.geometry) * 1e9                    # the kernel works in metres
-        assert volume == pytest.approx(float(row["area_mm2"]) * t, rel=1e-7)
+        # bolt holes (parts.csv holes x hole_mm) are cut: the kernel tessellates their circles, within 2 %
+        n, hole = float(row.get("holes") or 0), np.pi / 4.0 * float(row.get("hole_mm") or 0.0) ** 2
+        full = float(row["area_mm2"]) * t
+        assert abs(volume - (full - n * hole * t)) <= 1e-7 * full + 0.02 * n * hole * t, (name, volume, full)
         x = np.asarray(us.get_vertices(shape.geometry)) * 1e3
         if row["kind"] == "panel":
             c = mesh.vertices[mesh.faces[int(row["face"])]]
@@ -260,6 +265,41 @@ def test_ifc_structural_analysis_model_follows_the_nodes_and_edges(built, parts,
     [group] = model.IsGroupedBy
     assert set(group.RelatedObjects) == set(members) | set(connections)
     assert [b.Name for r in model.ServicesBuildings for b in r.RelatedBuildings] == [NAME]
+
+
+def test_bolt_holes_are_cut_in_the_ifc_and_rhino_solids(built, parts):
+    """Every beam plate and splice cover plate carries the bolt holes parts.csv lists, as circular voids of its
+    IFC profile and inner profiles of its Rhino extrusion, each of the hole diameter and inside the outline."""
+    import ifcopenshell
+    import rhino3dm
+    from shapely.geometry import Point, Polygon
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    drilled = {pid: r for pid, r in parts.items() if r["kind"] in ("beam", "splice") and int(r["holes"] or 0)}
+    assert drilled and any(r["kind"] == "beam" for r in drilled.values())
+    for e in f.by_type("IfcElement"):
+        row = parts.get(e.Name)
+        if row is None or row["kind"] not in ("beam", "splice"):
+            continue
+        [solid] = [it for r in e.Representation.Representations for it in r.Items if it.is_a("IfcExtrudedAreaSolid")]
+        inner = list(getattr(solid.SweptArea, "InnerCurves", None) or ())
+        assert len(inner) == int(row["holes"] or 0), e.Name
+        outline = Polygon([p.Coordinates for p in solid.SweptArea.OuterCurve.Points])
+        for c in inner:
+            assert c.is_a("IfcCircle") and 2.0 * c.Radius == pytest.approx(float(row["hole_mm"]))
+            assert outline.contains(Point(c.Position.Location.Coordinates).buffer(c.Radius))
+    model = rhino3dm.File3dm.Read(str(built / "model.3dm"))
+    seen = 0
+    for o in model.Objects:
+        row = drilled.get(o.Attributes.Name)
+        if row is None:
+            continue
+        g = o.Geometry
+        assert g.ProfileCount - 1 == int(row["holes"]), o.Attributes.Name
+        assert all(2.0 * g.Profile3d(k, 0.0).Radius == pytest.approx(float(row["hole_mm"]))
+                   for k in range(1, g.ProfileCount))
+        seen += 1
+    assert seen == len(drilled)
 
 
 # -- Rhino ------------------------------------------------------------------------------------------------

@@ -103,15 +103,19 @@ def check_outline_place(v: Verification, rel: str, row: dict[str, str], ring: np
 
 
 def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, volume: float,
-                     eps: float = 1e-6, volume_tol: float = 1e-6, ring: np.ndarray | None = None) -> None:
+                     eps: float = 1e-6, volume_tol: float = 1e-6, ring: np.ndarray | None = None,
+                     holes: bool = False) -> None:
     """The placement and volume of one part's solid (vertices ``points (n, 3)`` mm, ``volume`` mm³; with
-    ``ring``, its base polygon, also where it lies in its plane)."""
+    ``ring``, its base polygon, also where it lies in its plane; with ``holes``, the solid has the bolt holes
+    ``parts.csv`` lists (``holes`` × ``hole_mm``), so its volume is the area less theirs times the thickness)."""
     pid = row["part_id"]
     if ring is not None:
         check_outline_place(v, rel, row, ring, max(eps, 1e-4))
     fab = v.data.get("manifest", {}).get("fabrication", {})
     t = float(row.get("thickness_mm") or 0.0)
     area = float(row.get("area_mm2") or 0.0)
+    if holes and row["kind"] in ("beam", "splice"):
+        area -= np.pi / 4.0 * float(row.get("holes") or 0) * float(row.get("hole_mm") or 0.0) ** 2
     pts = np.asarray(points, dtype=float)
     allowed = volume_tol * area * t
     if row["kind"] == "panel":

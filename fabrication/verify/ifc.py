@@ -41,6 +41,11 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
     top[:, :3] += s.Depth * (pos[:3, :3] @ direction)
     world = np.concatenate([local, top]) @ m.T
     area = abs(float(polygon_area(q)))
+    for inner in getattr(s.SweptArea, "InnerCurves", None) or ():      # voids: circles (bolt holes), polylines
+        if inner.is_a("IfcCircle"):
+            area -= np.pi * float(inner.Radius) ** 2
+        elif inner.is_a("IfcPolyline"):
+            area -= abs(float(polygon_area(np.array([p.Coordinates for p in inner.Points], dtype=float))))
     height = s.Depth * abs(float(direction[2]))
     return world[:, :3], area * height
 
@@ -102,7 +107,7 @@ def check_ifc(v: Verification) -> None:
         if prism is None:
             v.error(rel, p.Name, "has no single extruded solid of a polyline profile")
             continue
-        check_part_solid(v, rel, row, prism[0], prism[1], ring=prism[0][:len(prism[0]) // 2])
+        check_part_solid(v, rel, row, prism[0], prism[1], ring=prism[0][:len(prism[0]) // 2], holes=True)
     names = [m.Name for m in f.by_type("IfcMaterial")]
     for name in sorted({n for n in names if names.count(n) > 1}):
         v.error(rel, f"IfcMaterial {name}", f"defined {names.count(name)} times (one shared material per name)")

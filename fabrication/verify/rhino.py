@@ -17,6 +17,17 @@ def _points(curve) -> np.ndarray:
     return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
 
 
+def _curve_area(curve, samples: int = 720) -> float:
+    """The area inside a closed planar curve (an inner profile): ``π r²`` of a complete circle (a bolt hole),
+    else from ``samples`` points along it."""
+    if getattr(curve, "IsCompleteCircle", False):
+        return float(np.pi * curve.Radius ** 2)
+    d = curve.Domain
+    ts = np.linspace(d.T0, d.T1, samples, endpoint=False)
+    pts = np.array([[curve.PointAt(t).X, curve.PointAt(t).Y, curve.PointAt(t).Z] for t in ts])
+    return polygon_area_3d(pts)
+
+
 @check("rhino", 72)
 def check_rhino(v: Verification) -> None:
     m = v.data.get("manifest", {})
@@ -66,7 +77,8 @@ def check_rhino(v: Verification) -> None:
             continue
         bottom, top = _points(g.Profile3d(0, 0.0)), _points(g.Profile3d(0, 1.0))
         height = float(np.linalg.norm(top.mean(axis=0) - bottom.mean(axis=0)))
-        check_part_solid(v, rel, row, np.concatenate([bottom, top]), polygon_area_3d(bottom) * height, ring=bottom)
+        area = polygon_area_3d(bottom) - sum(_curve_area(g.Profile3d(k, 0.0)) for k in range(1, g.ProfileCount))
+        check_part_solid(v, rel, row, np.concatenate([bottom, top]), area * height, ring=bottom, holes=True)
     mesh = v.data.get("mesh")
     nodes_rel = m.get("files", {}).get("nodes_csv")
     if nodes_rel and mesh is not None:

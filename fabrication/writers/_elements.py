@@ -9,7 +9,9 @@ Every part is a flat outline extruded once, so one record describes it for every
   from its seat ``z0`` (:func:`fabrication.glazing.seat.pane_offsets`: the underside on the gaskets, about
   strip + gasket above the mesh face) to ``z0`` + the glass thickness;
 * a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
-  ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane.
+  ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane — with the bolt holes of its splices
+  (``holes``: centre and diameter in the frame; IFC and Rhino cut them, the glTF view leaves them out);
+* a splice cover plate: its outline and bolt holes in the splice frame, on either face of the beam plate.
 
 The data of an element (:data:`fabrication.contract.EXCHANGE_PROPERTIES`) are the values of its ``parts.csv``
 row, so the IFC property sets and the Rhino user text agree with the parts list by construction; for a beam plate
@@ -58,7 +60,8 @@ class Element:
     """One part as a prism: ``outline (k, 2)`` in ``frame``, extruded from ``z0`` by ``height`` (mm).
 
     ``layer`` is ``"glass"`` or the beam family (``"rows"``, ``"cols"``), ``group`` the beam id of a plate
-    (``""`` for a panel), ``props`` the part's data (the keys of ``EXCHANGE_PROPERTIES`` that apply).
+    (``""`` for a panel), ``props`` the part's data (the keys of ``EXCHANGE_PROPERTIES`` that apply), ``holes``
+    ``(h, 3)`` the through holes: centre ``x, y`` in the frame and diameter, mm.
     """
 
     part_id: str
@@ -70,6 +73,15 @@ class Element:
     z0: float
     height: float
     props: dict[str, Value] = field(default_factory=dict)
+    holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    @property
+    def net_area(self) -> float:
+        """The outline's area less its holes, mm²."""
+        from ppfab.metrics import polygon_area
+
+        d = np.asarray(self.holes, dtype=float).reshape(-1, 3)[:, 2]
+        return abs(float(polygon_area(np.asarray(self.outline, dtype=float)))) - float(np.pi / 4.0 * (d * d).sum())
 
     def base(self, z: float | None = None) -> np.ndarray:
         """``(k, 3)`` the outline in 3D at height ``z`` above the frame (default ``z0``), mm."""
@@ -142,13 +154,12 @@ def elements(build: "Build", files: Files) -> list[Element]:
         row.setdefault("family", FAMILY_NAMES[b.family])
         t = float(b.thickness)
         out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.outline, b.frame, -0.5 * t, t,
-                           _props(row)))
+                           _props(row), np.asarray(b.holes, dtype=float).reshape(-1, 3)))
     return out + _glazing_elements(build, rows)
 
 
 def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
-    """The glazing strips (on their beams' top edges) and the splice cover plates (without their holes: the
-    exchange models carry each part as one prism)."""
+    """The glazing strips (on their beams' top edges) and the splice cover plates with their bolt holes."""
     g = build.glazing
     if g is None:
         return []
@@ -163,8 +174,9 @@ def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
             row = dict(rows[pid])
             row["weight_kg"] = row.get("mass_kg", "")
             z0 = 0.5 * sp.beam_thickness if sign > 0 else -0.5 * sp.beam_thickness - sp.thickness
+            holes = np.c_[np.asarray(sp.holes, dtype=float).reshape(-1, 2), np.full(len(sp.holes), float(sp.hole))]
             out.append(Element(pid, "splice", str(row.get("family") or "rows"), "", sp.outline, sp.frame, z0,
-                               float(sp.thickness), _props(row)))
+                               float(sp.thickness), _props(row), holes))
     return out
 
 

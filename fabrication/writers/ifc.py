@@ -32,6 +32,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ppfab import __version__
 
 from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
@@ -169,8 +171,15 @@ class IfcModel:
             parent = self._assembly(el).ObjectPlacement
         placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
         pts = [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y))) for x, y in el.outline]
-        profile = f.create_entity("IfcArbitraryClosedProfileDef", ProfileType="AREA",
-                                  OuterCurve=f.create_entity("IfcPolyline", Points=pts + pts[:1]))
+        outer = f.create_entity("IfcPolyline", Points=pts + pts[:1])
+        if len(el.holes):                        # bolt holes: circular voids of the profile
+            inner = [f.create_entity("IfcCircle", Radius=0.5 * float(d), Position=f.create_entity(
+                "IfcAxis2Placement2D", Location=f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y)))))
+                for x, y, d in np.asarray(el.holes, dtype=float).tolist()]
+            profile = f.create_entity("IfcArbitraryProfileDefWithVoids", ProfileType="AREA", OuterCurve=outer,
+                                      InnerCurves=inner)
+        else:
+            profile = f.create_entity("IfcArbitraryClosedProfileDef", ProfileType="AREA", OuterCurve=outer)
         solid = f.create_entity("IfcExtrudedAreaSolid", SweptArea=profile,
                                 Position=self._placement3d((0.0, 0.0, el.z0)),
                                 ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
@@ -270,6 +279,9 @@ class IfcModel:
     def _quantities(self, el: Element, product) -> None:
         f = self.f
         area = float(el.props.get("area_mm2", 0.0))
+        if len(el.holes):                        # the net area: less the bolt holes
+            d = np.asarray(el.holes, dtype=float)[:, 2]
+            area -= float(np.pi / 4.0 * (d * d).sum())
         weight = el.props.get("weight_kg")
         q = [f.create_entity("IfcQuantityArea", Name="NetArea", AreaValue=area * 1e-6),
              f.create_entity("IfcQuantityVolume", Name="NetVolume", VolumeValue=area * el.height * 1e-9)]

@@ -27,6 +27,8 @@ import zlib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ppfab import __version__
 
 from ..contract import COLOURS, RHINO_FILE, RHINO_LAYERS
@@ -131,7 +133,8 @@ class RhinoModel:
 
     def add(self, el: Element, material: str) -> None:
         """One part as a closed extrusion of its outline along its frame normal from ``z0`` by its height
-        (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side)."""
+        (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side),
+        its bolt holes as inner profiles (circles, in the extrusion's profile plane)."""
         r = self.r
         base = el.base()
         ring = r.Point3dList()                   # (a list of Point3d is not accepted by rhino3dm 8.0)
@@ -146,6 +149,14 @@ class RhinoModel:
 
             raise FabricationError(f"{el.part_id}: Rhino cannot extrude its outline "
                                    f"({outline_problem(el.outline, el.height)})")
+        if len(el.holes):
+            plane = ext.GetProfilePlane(0.0)
+            origin = np.array([plane.Origin.X, plane.Origin.Y, plane.Origin.Z])
+            axes = np.array([[plane.XAxis.X, plane.XAxis.Y, plane.XAxis.Z],
+                             [plane.YAxis.X, plane.YAxis.Y, plane.YAxis.Z]])
+            for x, y, d in np.asarray(el.holes, dtype=float).tolist():
+                u, v = axes @ (el.frame.to3d(np.array([[x, y]]))[0] + el.z0 * el.frame.normal - origin)
+                ext.AddInnerProfile(r.ArcCurve.CreateFromCircle(r.Circle(r.Point3d(float(u), float(v), 0.0), 0.5 * d)))
         layer = "glass" if el.kind == "panel" else f"beams::{el.layer}"
         attrs = self._attributes(el.part_id, layer, el.props, el.part_id)
         attrs.MaterialIndex = self.material(material, "glass" if el.kind == "panel" else el.layer)
