@@ -20,8 +20,8 @@ EXAMPLES_DIR = Path(__file__).resolve().parent / "data" / "examples"
 
 @dataclass(frozen=True)
 class Example:
-    """One bundled example: its ``name`` (file stem), ``path``, the construction ``method`` or ``mesh`` file it
-    builds, and its ``[design]`` name and description."""
+    """One bundled example: its ``name`` (file stem), ``path``, the construction ``method``, ``mesh`` file or
+    ``[surface]`` file it builds, and its ``[design]`` name and description."""
 
     name: str
     path: Path
@@ -29,18 +29,22 @@ class Example:
     mesh: str
     title: str
     description: str
+    surface: str = ""
 
     @property
     def source(self) -> str:
         """What it builds from: ``method 'bisector'`` or ``mesh meshes/DOS__conical1.obj``."""
-        return f"method '{self.method}'" if self.method else f"mesh {self.mesh}"
+        if self.method:
+            return f"method '{self.method}'"
+        return f"surface {self.surface}" if self.surface else f"mesh {self.mesh}"
 
 
 def _example(path: Path) -> Example:
     doc = tomllib.loads(path.read_text(encoding="utf-8"))
     geo, info = doc.get("geometry", {}), doc.get("design", {})
     return Example(path.stem, path, str(geo.get("method", "")), str(geo.get("mesh", "")),
-                   str(info.get("name", path.stem)), str(info.get("description", "")))
+                   str(info.get("name", path.stem)), str(info.get("description", "")),
+                   str(doc.get("surface", {}).get("path", "")))
 
 
 def examples() -> list[Example]:

@@ -52,8 +52,9 @@ def test_default_is_an_example():
 def small_form(text: str, folder: Path) -> str:
     """An example as CI builds it from another folder: the same design, the same stages and writers, with
     nesting budgets of 0.5 s of nominal work for the glass and the plates (PPFAB_FULL=1 keeps the example's
-    own budgets); a mesh file given relative to the example's ``folder`` is given by its full path."""
-    text = re.sub(r'^mesh = "([^"]+)"', lambda m: f'mesh = "{(folder / m.group(1)).resolve()}"', text, flags=re.M)
+    own budgets); a mesh or surface file given relative to the example's ``folder`` is given by its full path."""
+    text = re.sub(r'^(mesh|path) = "([^"]+)"', lambda m: f'{m.group(1)} = "{(folder / m.group(2)).resolve()}"',
+                  text, flags=re.M)                                 # [geometry] mesh, [surface] path
     if FULL:
         return text
     text = re.sub(r"time_budget = [0-9.]+", "time_budget = 0.5", text)

@@ -204,3 +204,32 @@ def test_units_of_a_mesh_are_declared_and_a_3dm_disagreeing_is_refused(tmp_path)
     write_nurbs(src, DOME, 12.0, 9.0, "Meters")
     with pytest.raises(DesignError, match="disagrees"):
         read_surface(src, units="ft")
+
+
+@pytest.mark.parametrize("case", ["missing", "garbage_stl", "not_a_surface", "no_surface_in_3dm", "spacing",
+                                  "vertical_normal", "not_obj", "too_coarse"])
+def test_remesh_refuses_bad_input_in_one_line(tmp_path, capsys, case):
+    import rhino3dm
+
+    from fabrication.cli import main
+
+    dome = tmp_path / "dome.3dm"
+    write_nurbs(dome, DOME, 12.0, 9.0, "Meters")
+    out = tmp_path / "net.obj"
+    args = {"missing": [str(tmp_path / "nothere.3dm")],
+            "garbage_stl": [str(tmp_path / "bad.stl")],
+            "not_a_surface": [str(tmp_path / "design.toml")],
+            "no_surface_in_3dm": [str(tmp_path / "point.3dm")],
+            "spacing": [str(dome), "--spacing", "-5"],
+            "vertical_normal": [str(dome), "--plane-normal", "0", "0", "1"],
+            "not_obj": [str(dome)],
+            "too_coarse": [str(dome), "--spacing", "50000"]}[case]
+    (tmp_path / "bad.stl").write_text("garbage\n")
+    (tmp_path / "design.toml").write_text("[design]\n")
+    model = rhino3dm.File3dm()
+    model.Objects.AddPoint(rhino3dm.Point3d(0, 0, 0))
+    model.Write(str(tmp_path / "point.3dm"), 7)
+    target = tmp_path / "net.txt" if case == "not_obj" else out
+    code = main(["remesh", *args, "-o", str(target)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code in (1, 2) and len(err) == 1 and err[0].startswith("ppfab: error: ") and not target.exists()
