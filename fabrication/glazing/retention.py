@@ -18,7 +18,9 @@ with ``ℓ_b`` the block length and ``t`` the glass thickness (the block bears o
 through it into the strip.  The joint must hold block and stop with 2 mm to spare: ``w_b + w_s + 2 ≤ gap``.
 
 **Pressure plates.**  With ``retention = "pressure_plate"`` every strip carrying a pane gets, in the strip's own
-frame (:class:`.strips.Strip`) and over the strip's length, an EPDM pressure gasket, an aluminium pressure plate
+frame (:class:`.strips.Strip`) and over the strip's length where its panes lie, stopping :data:`PLATE_END_GAP`
+short of their ends (a plate running on to the node meets the corner of the next span's pane, which a kink there
+lifts into it), an EPDM pressure gasket, an aluminium pressure plate
 and a cover cap, each ``pressure_plate_width`` wide.  The gasket's underside lies at the highest point of the
 glass top faces under it (the panes on both sides of the joint are kinked against each other: it touches the
 higher and stands off the other by its *gap*, which the gasket takes up when the screws are tightened).  Its
@@ -63,6 +65,9 @@ G = 9.81
 """m/s²: gravity, for a pane's weight."""
 BLOCK_BELOW_TOP = 1.0
 """mm: how far a setting block's and a stop's top stays below the glass's top face (clear of the pressure gasket)."""
+PLATE_END_GAP = 20.0
+"""mm: how far a pressure plate stops short of the end of its panes' edges (where the plates of the other spans
+at the node begin, and a kink lifts the corner of the next span's pane)."""
 JOINT_SPARE = 2.0
 """mm: the least room left in the joint beside setting block and stop, and beside a screw."""
 STRESS_AREA = {"M5": 14.2, "M6": 20.1, "M8": 36.6, "M10": 58.0, "M12": 84.3}
@@ -358,7 +363,14 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         for sid, on in sorted(by_strip.items()):
             s = by_id[sid]
             half = 0.5 * p.pressure_plate_width
-            rect = np.array([[s.x0, -half], [s.x1, -half], [s.x1, half], [s.x0, half]])
+            # over its own panes only: a plate running on to the node would meet the corner of a pane of the next
+            # span, which a kink there lifts into it
+            spans = [s.frame.to2d(panel.outline_3d())[:, 0] for panel, _ in on]
+            x0 = max(s.x0, min(float(a.min()) for a in spans)) + PLATE_END_GAP
+            x1 = min(s.x1, max(float(a.max()) for a in spans)) - PLATE_END_GAP
+            if x1 - x0 <= 1.0:
+                continue
+            rect = np.array([[x0, -half], [x1, -half], [x1, half], [x0, half]])
             under = {panel.part_id: _pane_top_under(s.frame, rect, panel, seat_of.get(panel.part_id, 0.0)
                                                     + panel.thickness_mm) for panel, _ in on}
             heights = [u[0] for u in under.values() if u is not None]
@@ -371,12 +383,12 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             for kind, pid, t in layers:
                 parts.append(Prism(pid, kind, sid, sid, s.beam_id, s.frame, rect, z, t))
                 z += t
-            xs = screw_stations(s.length, p.bolt_pitch, [(lo - s.x0, hi - s.x0) for lo, hi in blocks_on.get(sid, [])])
+            xs = screw_stations(x1 - x0, p.bolt_pitch, [(lo - x0, hi - x0) for lo, hi in blocks_on.get(sid, [])])
             stations[pressure_plate_id(sid)] = xs
             for panel, _ in on:
                 u = under[panel.part_id]
                 bites.setdefault(panel.part_id, []).append(u[1] if u is not None else 0.0)
-                spacing.setdefault(panel.part_id, []).append(_spacing(xs, s.length))
+                spacing.setdefault(panel.part_id, []).append(_spacing(xs, x1 - x0))
             # each pane's share of the plate's screws: by the tributary of its edge (half a joint each side)
             for panel, _ in on:
                 screws[panel.part_id] = screws.get(panel.part_id, 0.0) + len(xs) / len(on)
