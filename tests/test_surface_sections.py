@@ -233,3 +233,29 @@ def test_remesh_refuses_bad_input_in_one_line(tmp_path, capsys, case):
     code = main(["remesh", *args, "-o", str(target)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code in (1, 2) and len(err) == 1 and err[0].startswith("ppfab: error: ") and not target.exists()
+
+
+def test_trimmed_brep_face_keeps_inside_its_trim_loop(tmp_path):
+    """A flat roof disc: a plane Brep trimmed by a 5 m circle (rhino3dm). The trim loop is read from the Brep's
+    edges; every kept vertex lies inside the circle, the corners of the square beyond it are dropped, and a
+    flat surface (no curvature at all) gives the plan grid, without NaN."""
+    import rhino3dm
+
+    from fabrication.surfacefile import read_surface
+    from ppfab.surface import SurfaceSpec, remesh
+
+    circle = rhino3dm.Circle(rhino3dm.Point3d(0, 0, 3.0), 5.0).ToNurbsCurve()
+    plane = rhino3dm.Plane(rhino3dm.Point3d(0, 0, 3.0), rhino3dm.Vector3d(0, 0, 1))
+    model = rhino3dm.File3dm()
+    model.Settings.ModelUnitSystem = rhino3dm.UnitSystem.Meters
+    model.Objects.AddBrep(rhino3dm.Brep.CreateTrimmedPlane(plane, circle))
+    path = tmp_path / "disc.3dm"
+    model.Write(str(path), 7)
+    sf = read_surface(path)
+    assert len(sf.samples.boundary) == 1
+    assert np.allclose(np.hypot(*sf.samples.boundary[0][:, :2].T), 5000.0, atol=1e-6)
+    r = remesh(sf.samples, SurfaceSpec(path=str(path), spacing=1500.0))
+    v = np.asarray(r.net.mesh.vertices).reshape(-1, 3)
+    assert np.isfinite(v).all() and np.allclose(v[:, 2], 3000.0, atol=1e-6)
+    assert np.hypot(v[:, 0], v[:, 1]).max() <= 5000.0 and r.net.dropped_outside > 0
+    assert r.panel_size_min == pytest.approx(1.0, abs=1e-9) and r.panel_size_max == pytest.approx(1.0, abs=1e-9)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import (CloughTocher2DInterpolator, NdBSpline, NearestNDInterpolator, RectBivariateSpline,
                                make_lsq_spline)
-from scipy.spatial import QhullError
+from scipy.spatial import Delaunay, QhullError
 
 from ..errors import GeometryError
 
@@ -97,7 +97,8 @@ def fit_height_field(local: np.ndarray, cell: float, smoothing: float) -> Height
     gx, gy = np.linspace(lo[0], hi[0], nx), np.linspace(lo[1], hi[1], ny)
     X, Y = np.meshgrid(gx, gy, indexing="ij")
     try:
-        z = CloughTocher2DInterpolator(p[:, :2], p[:, 2])(X, Y)
+        tri = Delaunay(p[:, :2], qhull_options="Qbb Qc Qz Q12")
+        z = CloughTocher2DInterpolator(tri, p[:, 2])(X, Y)
     except QhullError:
         raise GeometryError("the surface samples lie on a line in plan: not a height field over this "
                             "plan — give [surface] plane_normal") from None

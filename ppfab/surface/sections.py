@@ -32,6 +32,9 @@ from .trim import faces_inside, inside
 MAX_ANGLE_DEG = 75.0
 """The conjugate direction may turn at most this far from the plane normal ``x`` (towards the sections)."""
 
+FLAT = 1e-10
+"""Second derivatives (1/mm) below this are numerical noise: a radius of curvature of 10 000 km is flat."""
+
 EDGE_MARGIN = 0.5
 """The degeneracy is looked for this many ``spacing`` or more inside the outline."""
 
@@ -90,7 +93,7 @@ def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndar
     p = pts[ins]
     fxx, fxy, fyy = hf.fxx(p[:, 0], p[:, 1]), hf.fxy(p[:, 0], p[:, 1]), hf.fyy(p[:, 0], p[:, 1])
     scale = float(np.max(np.abs(np.concatenate([fxx, fxy, fyy])))) if len(p) else 0.0
-    floor = max(1e-3 * scale, 1e-300)
+    floor = max(1e-3 * scale, FLAT)
     ratio = np.abs(fxy) / (np.abs(fyy) + floor)
     if len(p) and float(ratio.max()) > limit:
         k = int(np.argmax(ratio))
