@@ -500,6 +500,53 @@ def test_per_type_dxf_is_dimensioned_with_the_edges_and_diagonals(built):
                            atol=0.006)
 
 
+def test_per_type_dxf_texts_keep_clear_of_the_dimensions(built):
+    """On every per-type DXF the pane's label keeps clear of the two dimensioned diagonals and their texts, and the
+    title runs through no dimension's line (extension lines included): each text's box (0.8 heights a character,
+    1.2 heights deep) is tested against the lines the dimensions render (ezdxf's virtual entities)."""
+    import ezdxf
+    from shapely.geometry import LineString, Polygon
+
+    def box(e, centred: bool) -> Polygon:
+        h, a = float(e.dxf.height), np.radians(float(e.dxf.get("rotation", 0.0)))
+        w = 0.8 * len(e.dxf.text) * h
+        u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+        if centred:
+            c = np.array(tuple(e.dxf.align_point)[:2])
+            pts = [c + s * 0.5 * w * u + r * 0.6 * h * v for s, r in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        else:
+            o = np.array(tuple(e.dxf.insert)[:2])
+            pts = [o - 0.1 * h * v, o + w * u - 0.1 * h * v, o + w * u + 1.1 * h * v, o + 1.1 * h * v]
+        return Polygon(pts)
+
+    files = [built / r["file"] for r in rows(built / "glass_order.csv")]
+    assert files
+    for path in files:
+        msp = ezdxf.readfile(path).modelspace()
+        lines, dim_texts = [], []
+        for dim in msp.query("DIMENSION"):
+            for ve in dim.virtual_entities():
+                if ve.dxftype() == "LINE":
+                    lines.append(LineString([tuple(ve.dxf.start)[:2], tuple(ve.dxf.end)[:2]]))
+                elif ve.dxftype() == "MTEXT":
+                    c, h = np.array(tuple(ve.dxf.insert)[:2]), float(ve.dxf.char_height)
+                    dim_texts.append(Polygon([c + [-3 * h, -0.6 * h], c + [3 * h, -0.6 * h], c + [3 * h, 0.6 * h],
+                                              c + [-3 * h, 0.6 * h]]))
+        (cut,) = msp.query("LWPOLYLINE[layer=='CUT']")
+        q = np.array(list(cut.get_points("xy")))
+        diagonals = [LineString([q[0], q[2]]), LineString([q[1], q[3]])]
+        texts = list(msp.query("TEXT"))
+        titles = [e for e in texts if e.dxf.get("align_point") is None]
+        labels = [e for e in texts if e.dxf.get("align_point") is not None]
+        assert len(titles) == 1 and labels
+        title = box(titles[0], centred=False)
+        assert not any(title.intersects(ln) for ln in lines), (path.name, titles[0].dxf.text)
+        for e in labels:
+            b = box(e, centred=True)
+            assert not any(b.intersects(d) for d in diagonals), (path.name, e.dxf.text)
+            assert not any(b.intersects(d) for d in dim_texts), (path.name, e.dxf.text)
+
+
 @pytest.mark.parametrize("version, code", [("r12", "AC1009"), ("r2000", "AC1015")])
 def test_legacy_dxf_reopens_and_keeps_the_outlines(built, version, code):
     import ezdxf

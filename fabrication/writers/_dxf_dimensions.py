@@ -20,6 +20,38 @@ def text_height(outline: np.ndarray) -> float:
     return float(np.clip(0.02 * extent, 10.0, 60.0))
 
 
+EDGE_OFFSET = 120.0
+"""An edge's dimension line lies ``2.5 h + EDGE_OFFSET`` mm outside the edge (``h`` the text height)."""
+
+
+def title_position(outline: np.ndarray, title_height: float = 40.0) -> tuple[float, float]:
+    """Where a per-type DXF's title starts: below everything the edge dimensions draw (their lines ``2.5 h +``
+    :data:`EDGE_OFFSET` outside the outline, extension lines ``0.6 h`` beyond, text above the line), so no
+    extension line runs through it."""
+    p = np.asarray(outline, dtype=float)
+    h = text_height(p)
+    lo = p.min(axis=0)
+    return float(lo[0]), float(lo[1] - (2.5 * h + EDGE_OFFSET) - 3.0 * h - title_height)
+
+
+def dimension_keep_out(outline: np.ndarray) -> tuple[np.ndarray, ...]:
+    """What a pane's label keeps clear of inside a dimensioned quad ``(4, 2)``: its two diagonals (dimensioned
+    along their length) and a box around each diagonal's text, a quarter of the way along it."""
+    p = np.asarray(outline, dtype=float)
+    if len(p) != 4:
+        return ()
+    h = text_height(p)
+    out: list[np.ndarray] = []
+    for a, b in ((p[0], p[2]), (p[1], p[3])):
+        out.append(np.array([a, b]))
+        c, u = 0.75 * a + 0.25 * b, (b - a) / np.linalg.norm(b - a)
+        v = np.array([-u[1], u[0]])
+        half = 4.0 * h                              # "1234.5" at height h, with its arrows' gap
+        out.append(np.array([c - half * u - 1.5 * h * v, c + half * u - 1.5 * h * v, c + half * u + 1.5 * h * v,
+                             c - half * u + 1.5 * h * v, c - half * u - 1.5 * h * v]))
+    return tuple(out)
+
+
 def add_pane_dimensions(doc, outline: np.ndarray) -> int:
     """Add the edge and diagonal dimensions of a counter-clockwise outline ``(k, 2)`` to ``doc``'s modelspace;
     returns the number added (``k`` edges, and 2 diagonals when ``k = 4``).
@@ -36,7 +68,7 @@ def add_pane_dimensions(doc, outline: np.ndarray) -> int:
              "dimexe": 0.6 * h, "dimgap": 0.3 * h, "dimtad": 1}
     msp = doc.modelspace()
     k = len(p)
-    pairs = [(p[i], p[(i + 1) % k], -(2.5 * h + 120.0), None) for i in range(k)]
+    pairs = [(p[i], p[(i + 1) % k], -(2.5 * h + EDGE_OFFSET), None) for i in range(k)]
     if k == 4:
         pairs += [(p[0], p[2], 0.0, 0.75 * p[0] + 0.25 * p[2]), (p[1], p[3], 0.0, 0.75 * p[1] + 0.25 * p[3])]
     for a, b, distance, text_at in pairs:

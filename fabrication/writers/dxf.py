@@ -163,7 +163,8 @@ class CuttingSheet:
 
     def __init__(self, sheet_size: tuple[float, float] | None = None,
                  usable: tuple[float, float, float, float] | None = None, title: str = "",
-                 version: str = DXF_VERSION, stock: tuple[str, str] | None = None):
+                 version: str = DXF_VERSION, stock: tuple[str, str] | None = None,
+                 title_at: tuple[float, float] = (0.0, -80.0)):
         self.version = version
         self._ctx = _fixed_metadata()
         self._ctx.__enter__()
@@ -180,19 +181,21 @@ class CuttingSheet:
             self.msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
                                     dxfattribs={"layer": "TRIM"})
         if stock is not None:
-            add_stock(self.doc, self.msp, stock, title)
+            add_stock(self.doc, self.msp, stock, title, insert=title_at)
         elif title:
-            self.msp.add_text(dxf_text(title), height=40.0, dxfattribs={"layer": "LABEL", "insert": (0.0, -80.0)})
+            self.msp.add_text(dxf_text(title), height=40.0, dxfattribs={"layer": "LABEL", "insert": title_at})
         if self.doc.dxfversion >= "AC1018":          # $CUSTOMPROPERTY exists from R2004 on
             self.doc.header.custom_vars.append("PPFAB_OUTLINES", "nominal: no kerf offset, the CAM compensates")
             for process, note in KERF_NOTES.items():
                 self.doc.header.custom_vars.append(f"PPFAB_KERF_{process.upper()}", note)
 
-    def add_part(self, part: FlatPart, placement: Placement | None = None) -> None:
+    def add_part(self, part: FlatPart, placement: Placement | None = None,
+                 keep_out: tuple[np.ndarray, ...] = ()) -> None:
         """The part's outline on CUT (with XDATA), its label on LABEL, its marks on MARK.
 
         With ``placement`` everything is mapped to sheet coordinates; without, the part is
-        drawn in its own flat frame.
+        drawn in its own flat frame.  ``keep_out``: more polylines ``(p, 2)`` (sheet coordinates) the label keeps
+        clear of (the dimensioned diagonals of a per-type DXF).
         """
         def to_sheet(pts: np.ndarray) -> np.ndarray:
             p = np.asarray(pts, dtype=float)
@@ -224,7 +227,7 @@ class CuttingSheet:
         cap = PLATE_TEXT_MAX if part.kind == "beam" else PANEL_TEXT_MAX
         where = place_label(outline, lines, margin=float(np.clip(0.05 * short, 2.0, 40.0)),
                             max_height=float(np.clip(0.15 * short, 2.0, cap)), min_height=2.0,
-                            keep_out=tuple(marks) + tuple(circles) if part.kind == "beam" else ())
+                            keep_out=(tuple(marks) + tuple(circles) if part.kind == "beam" else ()) + tuple(keep_out))
         from ezdxf.enums import TextEntityAlignment
 
         for pl in where.lines:
@@ -281,8 +284,12 @@ def write_part_dxf(part: FlatPart, path: str | os.PathLike, title: str = "", ver
                    dimensions: bool = False) -> Path:
     """One part flat in its own coordinates (for processors whose optimiser re-nests); with ``dimensions`` its
     edges and diagonals dimensioned on layer DIM (:mod:`fabrication.writers._dxf_dimensions`)."""
-    builder = CuttingSheet(None, None, title, version, stock_of([part]))
-    builder.add_part(part, None)
+    from ._dxf_dimensions import dimension_keep_out, title_position
+
+    p = np.asarray(part.outline, dtype=float)
+    builder = CuttingSheet(None, None, title, version, stock_of([part]),
+                           title_at=title_position(p) if dimensions else (0.0, -80.0))
+    builder.add_part(part, None, keep_out=dimension_keep_out(p) if dimensions else ())
     if dimensions:
         from ._dxf_dimensions import add_pane_dimensions
 
