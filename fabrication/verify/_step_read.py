@@ -1,12 +1,18 @@
-"""One reader of the STEP files for the verify checks: every solid with its name, the assemblies above it and its
-colour, read by the CAD kernel's STEP translator (XCAF, names on).
+"""The reader of the STEP files for the verify checks: every solid with its name, the assemblies above it and its
+colour.
 
-``build123d.import_step`` reads the same document but then builds a Python tree of the whole assembly
-(attaching each child walks its siblings) and looks for a colour on every face of a solid that has none on its
-label; at 21,416 solids (the glazing of an 88 × 60 roof) that bookkeeping, not the kernel, dominated.  Here
-the labels are walked once, each located shape is composed with the locations of the assemblies above it,
-and a colour is looked up on the component and the product label only, which is where ppfab's writers put
-it.  The solids are build123d :class:`~build123d.Solid` objects, so the checks measure them as before.
+:func:`read_or_report` reads a build's file once per process.  By default every solid comes from the text-level
+reader (:mod:`._step_text_read`, a :class:`~._step_text_read.TextSolid` each) and the CAD kernel loads the
+file's complete product tree with one solid of each kind (:func:`kernel_sample`), which must agree with it;
+with :attr:`Verification.kernel` (``ppfab verify --kernel``) the kernel's STEP translator reads every solid
+(:func:`read_step_solids`, build123d solids).
+
+:func:`read_step_solids` uses XCAF with names on.  ``build123d.import_step`` reads the same document but then
+builds a Python tree of the whole assembly (attaching each child walks its siblings) and looks for a colour on
+every face of a solid that has none on its label; at 21,416 solids (the glazing of an 88 × 60 roof) that
+bookkeeping, not the kernel, dominated.  Here the labels are walked once, each located shape is composed with
+the locations of the assemblies above it, and a colour is looked up on the component and the product label
+only, which is where ppfab's writers put it.
 
 Not a check (the leading underscore keeps it out of the registry).
 """
@@ -21,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._step_text_read import TextSolid, read_entities, read_text_solids
+from ._step_text_read import TextSolid, StepModel, read_entities, solids_of
 
 if TYPE_CHECKING:  # pragma: no cover
     from . import Verification
@@ -149,11 +155,14 @@ def _refs(text: str) -> list[int]:
 _REF = re.compile(r"'(?:[^']|'')*'|#(\d+)")
 
 
-def sample_file(data: bytes, solids: list[TextSolid]) -> tuple[bytes, list[bool]]:
+def sample_file(data: bytes, solids: list[TextSolid],
+                entities: dict[int, tuple[str, str]] | None = None) -> tuple[bytes, list[bool]]:
     """A STEP file with the whole product tree of ``data`` (every product, occurrence and placement) but the
     B-rep and colour of one solid per kind (:meth:`TextSolid.shape_key`) only: the representation of every other
-    solid is left empty.  Also, per solid, whether it is its kind's first (kept)."""
-    entities = read_entities(data)
+    solid is left empty.  Also, per solid, whether it is its kind's first (kept).  ``entities``: those of
+    ``data`` when already read (:func:`~._step_text_read.read_entities`)."""
+    if entities is None:
+        entities = read_entities(data)
     seen: set[tuple] = set()
     kept = []
     for s in solids:
@@ -172,9 +181,24 @@ def sample_file(data: bytes, solids: list[TextSolid]) -> tuple[bytes, list[bool]
             params = params.replace(",)", ")")
         return params
 
+    emptied = {i for i, (kind, params) in entities.items() if kind == "ADVANCED_BREP_SHAPE_REPRESENTATION"
+               and not any(entities.get(r, ("",))[0] == "MANIFOLD_SOLID_BREP" for r in _refs(text(i)))}
+
+    def kind_of(i: int) -> str:
+        """An emptied B-rep representation becomes a plain one (the kernel reads an empty B-rep
+        representation thirty times slower)."""
+        return "SHAPE_REPRESENTATION" if i in emptied else entities[i][0]
+
+    inside: set[int] = set()                       # every entity of a B-rep
+    todo = [i for i, (kind, _) in entities.items() if kind == "MANIFOLD_SOLID_BREP"]
+    while todo:
+        i = todo.pop()
+        if i not in inside and i in entities:
+            inside.add(i)
+            todo.extend(_refs(entities[i][1]))
     keep: set[int] = set()
-    todo = [i for i, (kind, _) in entities.items() if kind not in ("MANIFOLD_SOLID_BREP", "STYLED_ITEM",
-                                                                    "OVER_RIDING_STYLED_ITEM")]
+    todo = [i for i, (kind, _) in entities.items() if i not in inside and kind not in ("STYLED_ITEM",
+                                                                                      "OVER_RIDING_STYLED_ITEM")]
     todo += [s.brep for s, k in zip(solids, kept) if k]
     todo += [i for i, (kind, _) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
              and i not in styles]
@@ -184,11 +208,12 @@ def sample_file(data: bytes, solids: list[TextSolid]) -> tuple[bytes, list[bool]
             keep.add(i)
             todo.extend(_refs(text(i)))
     head = data[:data.find(b"DATA;")]
-    body = "\n".join(f"#{i} = {entities[i][0]}{text(i)};" for i in sorted(keep)).encode("latin-1")
+    body = "\n".join(f"#{i} = {kind_of(i)}{text(i)};" for i in sorted(keep)).encode("latin-1")
     return head + b"DATA;\n" + body + b"\nENDSEC;\nEND-ISO-10303-21;\n", kept
 
 
-def kernel_sample(path: str | os.PathLike, solids: list[TextSolid]) -> list[str]:
+def kernel_sample(path: str | os.PathLike, solids: list[TextSolid], data: bytes | None = None,
+                  entities: dict[int, tuple[str, str]] | None = None) -> list[str]:
     """Load through the CAD kernel the complete product tree of the STEP file ``path`` and one solid of each kind
     (:func:`sample_file`, written to a temporary file), and compare it with what the text-level reader read:
     the same products in the same order with the same names, assembly paths and placements; each solid loaded
@@ -198,9 +223,10 @@ def kernel_sample(path: str | os.PathLike, solids: list[TextSolid]) -> list[str]
 
     from ._shapes import set_distance
 
-    with open(path, "rb") as fh:
-        data = fh.read()
-    sample, kept = sample_file(data, solids)
+    if data is None:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    sample, kept = sample_file(data, solids, entities)
     fd, tmp = tempfile.mkstemp(suffix=".step")
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -271,7 +297,10 @@ def _read_kernel(v: "Verification", rel: str, colours: bool) -> list[StepSolid] 
 
 def _read_text(v: "Verification", rel: str) -> list[StepSolid] | None:
     try:
-        solids = read_text_solids(v.folder / rel)
+        sys.audit("fabrication.verify.read", os.fspath(v.folder / rel))
+        data = (v.folder / rel).read_bytes()
+        entities = read_entities(data)
+        solids = solids_of(StepModel(entities))
     except (OSError, ValueError, IndexError, KeyError, TypeError, AttributeError) as exc:
         v.error(rel, "", f"cannot be read at the text level ({exc})")
         return None
@@ -279,7 +308,7 @@ def _read_text(v: "Verification", rel: str) -> list[StepSolid] | None:
         for problem in s.problems():
             v.error(rel, s.name or "(unnamed)", f"solid is not valid: {problem}")
     try:
-        for problem in kernel_sample(v.folder / rel, solids):
+        for problem in kernel_sample(v.folder / rel, solids, data, entities):
             v.error(rel, "", f"the CAD kernel check of the file: {problem}")
     except Exception as exc:  # noqa: BLE001 - reported as a finding
         v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
