@@ -18,7 +18,7 @@ from surface_cases import resample_quad_mesh, write_nurbs
 DOME = [[0.0, 0.5, 0.5, 0.0], [0.5, 1.3, 1.2, 0.5], [0.5, 1.2, 1.3, 0.5], [0.0, 0.5, 0.5, 0.0]]
 SADDLE = [[0.0, 4.0, 4.0, 0.0], [-3.0, 0.5, 0.5, -3.0], [-3.0, 0.5, 0.5, -3.0], [1.0, 4.5, 4.5, 0.0]]
 # case: control heights, size, unit, written as a Brep, mm per unit, spacing mm, largest edge / spacing measured
-NURBS = {"dome_m": (DOME, 12.0, 9.0, "Meters", False, 1000.0, 1500.0, 1.40),
+NURBS = {"dome_m": (DOME, 12.0, 9.0, "Meters", False, 1000.0, 1500.0, 1.25),
          "saddle_ft_brep": (SADDLE, 40.0, 28.0, "Feet", True, 304.8, 1500.0, 1.25)}
 
 
@@ -86,8 +86,7 @@ def test_nurbs_surface_becomes_a_sections_net(tmp_path, case):
     assert _rows_in_planes(net) <= 1e-9                                          # sections planar exactly
     v = np.asarray(net.mesh.vertices).reshape(-1, 3)
     assert sf.distance(v).max() < 0.5                                            # on the NURBS (mm)
-    # the conjugate curves fan out on the dome: its largest edge is 1.37 × spacing (docs/remeshing.md)
-    assert 0.75 <= r.panel_size_min and r.panel_size_max <= largest
+    assert 0.75 <= r.panel_size_min and r.panel_size_max <= largest              # ±25 % of the spacing
     assert net.grid_faces.sum() >= 20
     twist = quad_twist(sf.samples.points, net.mesh, spacing)
     naive = plan_grid_twist(sf.samples.points, net.mesh, spacing)

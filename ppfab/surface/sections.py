@@ -141,7 +141,7 @@ def _arc_positions(t: np.ndarray, pts: np.ndarray, centre: float, spacing: float
 
 
 def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
-                 min_face: float = 0.25) -> SectionsNet:
+                 min_face: float = 0.25, steps: tuple[float, float] = (1.0, 1.0)) -> SectionsNet:
     """Build the sections net of a height field, trimmed to the plan region.
 
     Parameters
@@ -151,6 +151,9 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     loops : the trim region's loops in plan ``(k, 2)`` (frame coordinates); empty: the box of the fit
     spacing : target panel size, mm (along both families' arc length)
     min_face : faces smaller than this fraction of ``spacing²`` are dropped as slivers
+    steps : the seed step along the middle section and the plane step along the middle conjugate curve, as
+        fractions of ``spacing`` (:func:`ppfab.surface.remesh.remesh` balances them so that the edges that
+        grow and shrink away from the middle straddle ``spacing``)
     """
     limit = float(np.tan(np.radians(MAX_ANGLE_DEG)))
     loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
@@ -167,7 +170,7 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     lo_y, hi_y = max(hf.y[0], y_lo - spacing), min(hf.y[-1], y_hi + spacing)
     ys = np.linspace(lo_y, hi_y, max(50, int((hi_y - lo_y) / h) + 1))
     sec = np.stack([ys, hf.f(np.full_like(ys, xc), ys)], axis=1)
-    seeds = _arc_positions(ys, sec, yc, spacing)
+    seeds = _arc_positions(ys, sec, yc, spacing * steps[0])
     # planes: along the middle conjugate curve, spaced by arc length, over the region (and one beyond)
     lo_x, hi_x = max(hf.x[0], x_lo - spacing), min(hf.x[-1], x_hi + spacing)
     xs_r = np.linspace(xc, hi_x, max(2, int((hi_x - xc) / h) + 1))
@@ -182,7 +185,7 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     xs = np.concatenate([xs_l[::-1], xs_r[1:]])
     yline = np.concatenate([trace(xs_l)[::-1], trace(xs_r)[1:]])
     curve = np.stack([xs, yline, hf.f(xs, yline)], axis=1)
-    planes_x = _arc_positions(xs, curve, xc, spacing)
+    planes_x = _arc_positions(xs, curve, xc, spacing * steps[1])
     if len(planes_x) < 2 or len(seeds) < 2:
         raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
                             "direction; give a smaller [surface] spacing", value=spacing)
