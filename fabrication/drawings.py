@@ -132,7 +132,7 @@ class SvgSheet:
         w = LABEL_CHAR_WIDTH * len(text) * height
         a = np.radians(rotation_deg)
         ux, vy = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
-        lo = 0.0 if anchor == "start" else -0.5 * w
+        lo = {"start": 0.0, "end": -w}.get(anchor, -0.5 * w)
         box = np.array([centre + lo * ux - 0.75 * height * vy, centre + (lo + w) * ux - 0.75 * height * vy,
                         centre + (lo + w) * ux + 0.75 * height * vy, centre + lo * ux + 0.75 * height * vy])
         drawn = DrawnText(part_id, text, np.asarray(centre, dtype=float), height, rotation_deg, box)
@@ -353,8 +353,24 @@ def sheet_furniture(sheet: SvgSheet, lo: np.ndarray, hi: np.ndarray, pad: float,
 
 # -- node sheets ----------------------------------------------------------------------------------
 
-def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.0) -> str:
-    """One node type (:class:`~fabrication.nodetypes.NodeType`) as an SVG sheet (see module docstring)."""
+def direction_deg(t2: np.ndarray) -> float:
+    """The direction of ``t2 (2,)`` in degrees (``atan2``), ``(−180°, 180°]``."""
+    return float(np.degrees(np.arctan2(t2[1], t2[0])))
+
+
+NODE_BAND = 50.0
+"""Half the length of a plate's band in a node sheet's view along the axis (picture units)."""
+
+
+def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.0,
+                   ends: dict[str, np.ndarray] | None = None) -> str:
+    """One node type (:class:`~fabrication.nodetypes.NodeType`) as an SVG sheet (see module docstring).
+
+    ``ends``: for a plate that ends at the type's representative node, the direction ``(3,)`` from the node into
+    the plate — it is drawn on that side only (a corner's two plates meet in an L, not cross in an X); a plate
+    running through is drawn on both sides.  Each label lies beyond its band's end, reading from the bottom or the
+    right edge (:func:`~fabrication.marking.upright_deg`), inside the view's square, clear of the lines above and
+    below it."""
     rep = ntype.nodes[0]
     axis = np.asarray(rep["axis"], dtype=float)
     rows = []
@@ -373,36 +389,47 @@ def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.
                f"{len(ntype.nodes)} nodes", np.array([10.0, top]), 11.0, anchor="start")
     sheet.text(f"axis of {rep['node_id']}: ({axis[0]:.4f}, {axis[1]:.4f}, {axis[2]:.4f}), pointing into the "
                "structure", np.array([10.0, top - 18.0]), 9.0, anchor="start")
-    # plates seen along the axis
-    c = np.array([150.0, top - 175.0])
+    # plates seen along the axis: the view's square spans top − 50 … top − 290 (caption above, pairs below)
+    c = np.array([150.0, top - 170.0])
     ex = np.cross(axis, [0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.cross(axis, [1.0, 0.0, 0.0])
     ex /= np.linalg.norm(ex)
     ey = np.cross(axis, ex)
-    sheet.line(np.array([c - [6, 0], c + [6, 0]]), "#000", 0.8)
-    sheet.line(np.array([c - [0, 6], c + [0, 6]]), "#000", 0.8)
-    dirs = []
+    sheet.line(np.array([c - [6, 0], c + [6, 0]]), "#000", 0.8, **{"class": "node-centre"})
+    sheet.line(np.array([c - [0, 6], c + [0, 6]]), "#000", 0.8, **{"class": "node-centre"})
+    ends = ends or {}
     for b in rep["beams"]:
         n = np.asarray(b["plane"][:3], dtype=float)
         t = np.cross(axis, n)
         t2 = np.array([t @ ex, t @ ey])
         t2 /= max(np.linalg.norm(t2), 1e-12)
-        dirs.append(t2)
+        end = ends.get(b["part_id"])
+        side = None
+        if end is not None and b.get("role") == "end":
+            s = float(np.asarray(end, dtype=float) @ (t2[0] * ex + t2[1] * ey))
+            side = 1.0 if s >= 0 else -1.0
+        a, z = (c, c + NODE_BAND * side * t2) if side is not None else (c - NODE_BAND * t2, c + NODE_BAND * t2)
         half = 4.0
         nrm = np.array([-t2[1], t2[0]])
-        band = np.array([c - 80 * t2 - half * nrm, c + 80 * t2 - half * nrm, c + 80 * t2 + half * nrm,
-                         c - 80 * t2 + half * nrm])
+        band = np.array([a - half * nrm, z - half * nrm, z + half * nrm, a + half * nrm])
         colour = "#b5541c" if b["part_id"].startswith("B-U") else "#1f5f9e"
-        sheet.polygon(band, "#f4e3d7" if colour == "#b5541c" else "#d7e6f4", colour, 0.8)
-    for b, t2 in zip(rep["beams"], dirs):
-        out = t2 if (t2[0] > 1e-9 or (abs(t2[0]) <= 1e-9 and t2[1] > 0)) else -t2     # reads outwards, upright
-        ang = float(np.degrees(np.arctan2(out[1], out[0])))
-        sheet.text(b["part_id"], c + 88 * out, 9.0, ang, b["part_id"], anchor="start")
+        sheet.polygon(band, "#f4e3d7" if colour == "#b5541c" else "#d7e6f4", colour, 0.8,
+                      **{"data-part": b["part_id"], "data-role": str(b.get("role", ""))})
+        # the label beyond the band's end; on a through plate the end whose direction reads from the bottom or the
+        # right edge, so it reads outwards from the node
+        if side is not None:
+            out = side * t2
+        else:
+            out = t2 if abs(upright_deg(direction_deg(t2)) - direction_deg(t2)) < 1e-9 else -t2
+        ang = direction_deg(out)
+        shown = upright_deg(ang)
+        sheet.text(b["part_id"], c + (NODE_BAND + 6.0) * out, 8.0, shown, b["part_id"],
+                   anchor="start" if abs(shown - ang) < 1e-6 else "end")
     for k, p in enumerate(rep.get("pairs", [])):
         if p.get("dihedral_deg") is None:
             continue
         sheet.text(f"{p['a']} / {p['b']}: {p['dihedral_deg']:.2f} deg", np.array([10.0, top - 300.0 - 12 * k]),
                    8.0, anchor="start")
-    sheet.text("plates seen along the node axis", np.array([10.0, top - 40.0]), 8.0, anchor="start")
+    sheet.text("plates seen along the node axis", np.array([10.0, top - 34.0]), 8.0, anchor="start")
     # slot detail
     sx, sy = 330.0, top - 260.0
     scale = 180.0 / max(depth, 1e-9)

@@ -135,6 +135,40 @@ def test_node_sheets_hold_every_node_once_with_angles_within_the_type(built):
     assert sorted(seen) == sorted(nodes)
 
 
+def test_node_sheets_have_no_overlapping_text_and_corners_meet_in_an_l(built):
+    """On every node sheet no two texts overlap (measured with the font's metrics) and every label reads from
+    the bottom or the right edge; a plate that ends at the node is drawn on one side of it only (a corner's two
+    plates meet in an L), a plate running through on both sides."""
+    from shapely import STRtree
+
+    sheets = sorted((built / "drawings" / "nodes").glob("node_type_*.svg"))
+    assert sheets
+    roles = set()
+    for path in sheets:
+        root, texts = _texts(path)
+        boxes = [_measured_box(t) for t in texts]
+        tree = STRtree(boxes)
+        for i, b in enumerate(boxes):
+            hits = [int(j) for j in tree.query(b, predicate="intersects") if j != i]
+            assert not hits, (path.name, texts[i].text, [texts[j].text for j in hits])
+        for t in texts:
+            rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
+            assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0, (path.name, t.text)
+        centre = [p for p in root.iter(f"{NS}polyline") if p.get("class") == "node-centre"]
+        pts = np.array([[float(c) for c in q.split(",")] for q in centre[0].get("points").split()])
+        c = pts.mean(axis=0)
+        for band in (p for p in root.iter(f"{NS}polygon") if p.get("data-role") is not None):
+            q = np.array([[float(x) for x in s.split(",")] for s in band.get("points").split()])
+            axis = q[1] - q[0]
+            along = (q - c) @ (axis / np.linalg.norm(axis))
+            roles.add(band.get("data-role"))
+            if band.get("data-role") == "end":
+                assert along.min() > -0.2 or along.max() < 0.2, (path.name, band.get("data-part"))  # 0.1 rounding
+            else:
+                assert along.min() < -10.0 and along.max() > 10.0, (path.name, band.get("data-part"))
+    assert {"through", "end"} <= roles
+
+
 def test_verify_names_a_part_missing_from_the_key_plan(built, tmp_path):
     from fabrication.verify import verify
 

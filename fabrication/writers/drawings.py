@@ -7,6 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from . import Files, writer
 
 from ..contract import DRAWINGS_DIR, NODE_SHEET_DIR, node_sheet_file, view_file
@@ -35,8 +37,28 @@ def write_drawings(build: "Build", out: Path, files: Files) -> str:
     types = node_types(build.nodes.records)
     for t in types:
         rel = f"{DRAWINGS_DIR}/{NODE_SHEET_DIR}/{node_sheet_file(t.type_id)}"
-        (out / rel).write_text(node_sheet_svg(t, params.depth, params.thickness), encoding="utf-8")
+        (out / rel).write_text(node_sheet_svg(t, params.depth, params.thickness, ends=plate_ends(build, t.nodes[0])),
+                               encoding="utf-8")
         sheets.append(rel)
     files["drawings"] = views
     files["node_sheets"] = sheets
     return f"{len(views)} views, {len(types)} node types"
+
+
+def plate_ends(build: "Build", record: dict) -> dict[str, np.ndarray]:
+    """For each plate that ends at the node of ``record`` (a ``nodes.json`` record): the direction ``(3,)`` from
+    the node along the plate's polyline to its next node (where the plate lies)."""
+    k = int(record["vertex"])
+    v = np.asarray(build.support.vertices, dtype=float)
+    out: dict[str, np.ndarray] = {}
+    for b in record["beams"]:
+        plate = build.beams.by_id.get(b["part_id"])
+        if b.get("role") != "end" or plate is None:
+            continue
+        nodes = [int(x) for x in plate.nodes]
+        if k not in nodes or len(nodes) < 2:
+            continue
+        i = nodes.index(k)
+        other = nodes[1] if i == 0 else nodes[i - 1]
+        out[b["part_id"]] = v[other] - v[k]
+    return out
