@@ -92,6 +92,21 @@ def test_nurbs_surface_becomes_a_sections_net(tmp_path, case):
     naive = plan_grid_twist(sf.samples.points, net.mesh, spacing)
     assert np.median(twist) < 0.03 and twist.max() < 0.1
     assert np.median(naive) > 5 * np.median(twist)                               # the test can tell
+    _p_optimised_close(net, sf, 2.0)
+
+
+def _p_optimised_close(net, sf, mm: float) -> None:
+    """The net P-optimised with closeness to the surface as read: planar faces, planar rows, and every vertex
+    within ``mm`` of the surface (measured by the reader's independent distance)."""
+    from ppfab.metrics import quality
+    from ppfab.optimize import optimize
+
+    res = optimize(net.mesh, {"families": "rows", "target_delta_f": 1e-7, "target_delta_p": 1e-7,
+                              "fairness": "relative", "weight_close": 1.0},
+                   reference=(sf.samples.points, sf.samples.triangles))
+    q = quality(res.mesh)
+    assert res.targets_met and q.delta_f_max <= 1e-6 and q.delta_p_rows_max <= 1e-6
+    assert sf.distance(np.asarray(res.mesh.vertices).reshape(-1, 3)).max() < mm
 
 
 @pytest.fixture(scope="module")
@@ -126,6 +141,7 @@ def test_real_mesh_patch_becomes_a_sections_net(bubble_patch):
     naive = plan_grid_twist(sf.samples.points, net.mesh, 1500.0)
     assert np.median(twist) < 0.1 and np.median(naive) > 2 * np.median(twist)
     assert net.grid_faces.sum() >= 15
+    _p_optimised_close(net, sf, 30.0)
 
 
 def test_trimmed_to_the_outline_and_its_hole(bubble_patch):
