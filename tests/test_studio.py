@@ -265,6 +265,29 @@ def test_a_refused_value_reverts_its_field_and_says_why_beside_it(default):
         studio.stop()
 
 
+def test_the_colour_legend_names_what_the_colours_show(default):
+    """The legend under "colour by" gives the ramp's two ends with the values there (min and max of the panel
+    areas in m², δ_f's fixed 0 … 1e-3 scale) and the number of panel types when coloured by type."""
+    pytest.importorskip("viser")
+    from fabrication.studio.app import Studio
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
+    try:
+        area = face_metric(studio.model.state.placed, "panel area")
+        text = studio.legend.content
+        assert "panel area" in text and f"{area.min():.3g} m²" in text and f"{area.max():.3g} m²" in text
+        studio.metric_dd.value = "planarity"
+        assert "δ_f" in studio.legend.content and "0.001 and above" in studio.legend.content
+        studio.metric_dd.value = "type"
+        types = int(face_metric(studio.model.state.placed, "type").max()) + 1
+        assert f"{types} types" in studio.legend.content
+    finally:
+        studio.stop()
+
+
 def test_cli_studio_bad_input(capsys):
     assert main(["studio", "--port", "0", "--no-browser"]) == 2
     assert capsys.readouterr().err.strip().startswith("ppfab: error: --port")

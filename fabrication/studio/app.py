@@ -45,6 +45,32 @@ def ramp(values: np.ndarray, bounds: tuple[float, float] | None = None) -> np.nd
     return ((1 - f) * _RAMP[k] + f * _RAMP[k + 1]).astype(np.uint8)
 
 
+METRIC_UNITS = {"planarity": ("δ_f (§3.3)", ""), "panel area": ("panel area", " m²"),
+                "corner angle": ("smallest corner angle", "°"), "type": ("panel type", "")}
+"""What each colouring shows and its unit."""
+
+
+def legend_html(metric: str, values: np.ndarray, folds: bool = False) -> str:
+    """The colour legend of the panels: the ramp from its low to its high end with the values there (the fixed
+    0 … 1e-3 scale of δ_f), the number of types for ``type``, and the fold colour when faces fold."""
+    label, unit = METRIC_UNITS.get(metric, (metric, ""))
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    if metric == "type":
+        body = f"{label}: {int(x.max()) + 1 if x.size else 0} types, one colour each"
+    else:
+        lo, hi = (0.0, 1e-3) if metric == "planarity" else ((float(x.min()), float(x.max())) if x.size else (0, 0))
+        stops = ", ".join(f"rgb({int(r)},{int(g)},{int(b)})" for r, g, b in _RAMP)
+        top = " and above" if metric == "planarity" else ""
+        body = (f"{label}<div style='height:10px;margin:2px 0;background:linear-gradient(to right,{stops})'></div>"
+                f"<span style='float:left'>{lo:.3g}{unit}</span><span style='float:right'>{hi:.3g}{unit}{top}</span>"
+                "<div style='clear:both'></div>")
+    if folds:
+        r, g, b = FOLD_RGB
+        body += f"<div><span style='color:rgb({r},{g},{b})'>&#9632;</span> folded faces</div>"
+    return f"<div style='font-size:12px'>{body}</div>"
+
+
 def quat_matrix(wxyz: Any) -> np.ndarray:
     """The rotation matrix ``(3, 3)`` of a unit quaternion ``(w, x, y, z)``."""
     w, x, y, z = np.asarray(wxyz, dtype=float) / max(float(np.linalg.norm(wxyz)), 1e-300)
@@ -112,6 +138,7 @@ class Studio:
         with gui.add_folder("View"):
             self.metric_dd = gui.add_dropdown("colour by", METRICS, initial_value=self.metric)
             self.metric_dd.on_update(lambda _: self._guard(self._set_metric))
+            self.legend = gui.add_html("")
             self.show_beams = gui.add_checkbox("beams", True)
             self.show_axes = gui.add_checkbox("node axes", True)
             for cb in (self.show_beams, self.show_axes):
@@ -418,6 +445,8 @@ class Studio:
             colours = ramp(np.minimum(values, 1e-3), (0.0, 1e-3))
         else:
             colours = ramp(values)
+        self.legend.content = legend_html(self.metric, values, bool(st.folded.any() or (
+            self.model.refused_folds is not None and self.model.refused_folds.any())))
         colours[st.folded.reshape(-1)] = FOLD_RGB
         if self.model.refused_folds is not None:
             colours[self.model.refused_folds.reshape(-1)] = FOLD_RGB
