@@ -215,77 +215,63 @@ def test_figures_count_what_the_build_counts(example):
     assert f"faces inset by half the {design.panels.gap:g} mm gap" in figs.markdown()
 
 
-def test_studio_server_survives_bad_input_and_binds_loopback(default):
+@pytest.fixture
+def studio(default):
+    """A studio server on a free loopback port, editing a fresh model of the default design; stopped after."""
     pytest.importorskip("viser")
-    from fabrication.studio.app import Studio, _parse_list
+    from fabrication.studio.app import Studio
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
-    try:
-        assert studio.server.get_host() == "127.0.0.1"
-        studio._guard(lambda: studio._set("g", _parse_list("[[0.0, 1", "g")))
-        assert studio.model.error.startswith("g: not a list")
-        studio._guard(lambda: studio.model.save("/nonexistent-folder/x.toml"))
-        assert "no such folder" in studio.model.error
-        studio._guard(lambda: studio._set("faces_u", 12))
-        assert studio.model.error == "" and studio.model.state.placed.vertices.shape[0] == 13
-        with socket.create_connection(("127.0.0.1", studio.server.get_port()), timeout=5):
-            pass
-    finally:
-        studio.stop()
+    server = Studio(StudioModel(default.doc, default.base_dir), port=port)
+    yield server
+    server.stop()
 
 
-def test_a_refused_value_reverts_its_field_and_says_why_beside_it(default):
+def test_studio_server_survives_bad_input_and_binds_loopback(studio):
+    from fabrication.studio.app import _parse_list
+
+    assert studio.server.get_host() == "127.0.0.1"
+    studio._guard(lambda: studio._set("g", _parse_list("[[0.0, 1", "g")))
+    assert studio.model.error.startswith("g: not a list")
+    studio._guard(lambda: studio.model.save("/nonexistent-folder/x.toml"))
+    assert "no such folder" in studio.model.error
+    studio._guard(lambda: studio._set("faces_u", 12))
+    assert studio.model.error == "" and studio.model.state.placed.vertices.shape[0] == 13
+    with socket.create_connection(("127.0.0.1", studio.server.get_port()), timeout=5):
+        pass
+
+
+def test_a_refused_value_reverts_its_field_and_says_why_beside_it(studio):
     """A value the model refuses does not stay in its field as if applied: the field shows the model's value
     again and the reason appears right under that field (the next control comes after it); a value that is not a
     number is refused the same way; the next applied edit takes the message away."""
-    pytest.importorskip("viser")
-    from fabrication.studio.app import Studio
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
-    try:
-        scale = studio._controls["geometry.scale"][0]
-        kept = float(studio.model.geometry["scale"])
-        for bad in (-5.0, float("nan")):
-            scale.value = bad                                  # as the page sends it: the callbacks run
-            assert float(studio.model.geometry["scale"]) == kept
-            assert scale.value == kept                         # the field shows what the model keeps
-            msg = studio.field_message
-            assert msg is not None and "not applied" in msg.content and f"stays {kept:g}" in msg.content
-            later = [h.order for h, _ in studio._controls.values() if h.order > scale.order]
-            assert scale.order < msg.order < min(later, default=float("inf"))
-        scale.value = 2 * kept
-        assert float(studio.model.geometry["scale"]) == 2 * kept and studio.field_message is None
-    finally:
-        studio.stop()
+    scale = studio._controls["geometry.scale"][0]
+    kept = float(studio.model.geometry["scale"])
+    for bad in (-5.0, float("nan")):
+        scale.value = bad                                  # as the page sends it: the callbacks run
+        assert float(studio.model.geometry["scale"]) == kept
+        assert scale.value == kept                         # the field shows what the model keeps
+        msg = studio.field_message
+        assert msg is not None and "not applied" in msg.content and f"stays {kept:g}" in msg.content
+        later = [h.order for h, _ in studio._controls.values() if h.order > scale.order]
+        assert scale.order < msg.order < min(later, default=float("inf"))
+    scale.value = 2 * kept
+    assert float(studio.model.geometry["scale"]) == 2 * kept and studio.field_message is None
 
 
-def test_the_colour_legend_names_what_the_colours_show(default):
+def test_the_colour_legend_names_what_the_colours_show(studio):
     """The legend under "colour by" gives the ramp's two ends with the values there (min and max of the panel
     areas in m², δ_f's fixed 0 … 1e-3 scale) and the number of panel types when coloured by type."""
-    pytest.importorskip("viser")
-    from fabrication.studio.app import Studio
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    studio = Studio(StudioModel(default.doc, default.base_dir), port=port)
-    try:
-        area = face_metric(studio.model.state.placed, "panel area")
-        text = studio.legend.content
-        assert "panel area" in text and f"{area.min():.3g} m²" in text and f"{area.max():.3g} m²" in text
-        studio.metric_dd.value = "planarity"
-        assert "δ_f" in studio.legend.content and "0.001 and above" in studio.legend.content
-        studio.metric_dd.value = "type"
-        types = int(face_metric(studio.model.state.placed, "type").max()) + 1
-        assert f"{types} types" in studio.legend.content
-    finally:
-        studio.stop()
+    area = face_metric(studio.model.state.placed, "panel area")
+    text = studio.legend.content
+    assert "panel area" in text and f"{area.min():.3g} m²" in text and f"{area.max():.3g} m²" in text
+    studio.metric_dd.value = "planarity"
+    assert "δ_f" in studio.legend.content and "0.001 and above" in studio.legend.content
+    studio.metric_dd.value = "type"
+    types = int(face_metric(studio.model.state.placed, "type").max()) + 1
+    assert f"{types} types" in studio.legend.content
 
 
 def test_cli_studio_bad_input(capsys):

@@ -109,37 +109,37 @@ def _polylines(v: np.ndarray, family: str, closed: bool) -> np.ndarray:
     return np.swapaxes(v, 0, 1)
 
 
-def pane_areas(corners: np.ndarray, gap: float) -> np.ndarray:
-    """``(F,)`` area of each pane of the planar quads ``corners (F, 4, 3)``: the face with every edge moved inward
-    by ``d = gap/2``, ``A' = A − dP + d² Σ cot(θ_i/2)`` (the inner parallel polygon of a convex quad; 0 where the
-    inset closes the face)."""
+def _inset(corners: np.ndarray, gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(c (F, 4, 3), A' (F,), P' (F,))``: the quads and the area and perimeter of their panes, each face with
+    every edge moved inward by ``d = gap/2`` — for a convex quad of perimeter ``P``, area ``A`` and interior angles
+    ``θ_i`` the inner parallel polygon, ``A' = A − dP + d² Σ cot(θ_i/2)``, ``P' = P − 2d Σ cot(θ_i/2)``."""
     c = np.asarray(corners, dtype=float).reshape(-1, 4, 3)
     if len(c) == 0:
-        return np.zeros(0)
+        return c, np.zeros(0), np.zeros(0)
     area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=-1)
     per = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=-1).sum(axis=1)
-    cot = 1.0 / np.tan(0.5 * np.radians(corner_angles(c)))
+    cot = (1.0 / np.tan(0.5 * np.radians(corner_angles(c)))).sum(axis=1)
     d = 0.5 * gap
-    return np.maximum(area - d * per + d * d * cot.sum(axis=1), 0.0)
+    return c, area - d * per + d * d * cot, per - 2.0 * d * cot
+
+
+def pane_areas(corners: np.ndarray, gap: float) -> np.ndarray:
+    """``(F,)`` area of each pane of the planar quads ``corners (F, 4, 3)``: the face inset by half the ``gap``
+    (:func:`_inset`; 0 where the inset closes the face)."""
+    return np.maximum(_inset(corners, gap)[1], 0.0)
 
 
 def grown_pane_areas(corners: np.ndarray, spacing: float, gap: float) -> np.ndarray:
     """``(F,)`` area of each pane of the planar quads ``corners (F, 4, 3)`` grown by half the ``spacing``.
 
-    A pane is its face with every edge moved inward by ``d = gap/2``; for a convex quad with perimeter ``P``,
-    area ``A`` and interior angles ``θ_i`` that is the inner parallel polygon, ``A' = A − dP + d² Σ cot(θ_i/2)``
-    and ``P' = P − 2d Σ cot(θ_i/2)``.  Grown by ``r = spacing/2`` (Steiner) it covers ``A' + rP' + πr²``.  A
-    non-convex face (or one the inset would close) gives 0, which keeps a sum of these a lower bound.
+    A pane is its face inset by half the ``gap`` (area ``A'``, perimeter ``P'``: :func:`_inset`); grown by
+    ``r = spacing/2`` (Steiner) it covers ``A' + rP' + πr²``.  A non-convex face (or one the inset would close)
+    gives 0, which keeps a sum of these a lower bound.
     """
-    c = np.asarray(corners, dtype=float).reshape(-1, 4, 3)
+    c, pane_area, pane_per = _inset(corners, gap)
     if len(c) == 0:
         return np.zeros(0)
-    area = 0.5 * np.linalg.norm(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), axis=-1)
-    per = np.linalg.norm(np.roll(c, -1, axis=1) - c, axis=-1).sum(axis=1)
-    cot = 1.0 / np.tan(0.5 * np.radians(corner_angles(c)))
-    d, r = 0.5 * gap, 0.5 * spacing
-    pane_area = area - d * per + d * d * cot.sum(axis=1)
-    pane_per = per - 2.0 * d * cot.sum(axis=1)
+    r = 0.5 * spacing
     grown = pane_area + r * pane_per + math.pi * r * r
     keep = ~nonconvex_faces(c) & (pane_per > 0) & (pane_area > 0)
     return np.where(keep, grown, 0.0)
