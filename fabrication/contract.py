@@ -273,7 +273,7 @@ every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``."""
 RETENTION_COLUMNS = ["part_id", "kind", "owner", "strip", "beam", "length_mm", "width_mm", "height_mm", "material",
                      "screw", "screws", "screw_stations_mm"]
 RESTRAINT_COLUMNS = ["panel", "slope_deg", "weight_kg", "down_edge", "strip", "setting_blocks", "block_load_N",
-                     "block_pressure_N_mm2", "stops", "uplift_kN", "screws", "resistance_kN", "clamp_bite_mm",
+                     "block_pressure_N_mm2", "block_contact_mm", "stops", "uplift_kN", "screws", "resistance_kN", "clamp_bite_mm",
                      "max_screw_spacing_mm", "silicone_bite_mm", "ok"]
 """The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
 the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the welds
@@ -315,6 +315,11 @@ def type_file(type_id: str, prefix: str = TYPE_PREFIX) -> str:
 # -- exchange models: IFC, Rhino, glTF; structure and colours of the STEP files ------------------------
 
 IFC_FILE, RHINO_FILE, GLB_FILE = "model.ifc", "model.3dm", "model.glb"
+
+GLB_HOLE_SEGMENTS = 24
+"""Corners of a bolt hole in ``model.glb``: a regular polygon of the hole's area (its circumradius
+``r √(π / (m/2 · sin(2π/m)))``), so the mesh's volume is exact; each ring follows the outline's in the vertex
+order (:meth:`fabrication.writers._elements.Element.prism_mesh`)."""
 
 FIXED_TIMESTAMP = "2000-01-01T00:00:00"
 """The time stamp written into every file header that has one (STEP, IFC, Rhino): builds stay byte-identical."""

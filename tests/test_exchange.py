@@ -302,6 +302,25 @@ def test_bolt_holes_are_cut_in_the_ifc_and_rhino_solids(built, parts):
     assert seen == len(drilled)
 
 
+def test_a_prism_with_holes_is_a_closed_mesh_of_the_net_volume():
+    """A plate with two bolt holes as the glTF writer meshes it: watertight, outward (positive volume), its volume
+    (trimesh) the outline's area less the two circles' times the thickness, the outline's corners first."""
+    import trimesh
+
+    from fabrication.writers._elements import Element
+    from ppfab.frame import Frame
+
+    frame = Frame(np.array([10.0, 20.0, 30.0]), np.array([0.6, 0.8, 0.0]), np.array([0.0, 0.0, 1.0]))
+    outline = np.array([[0.0, 0.0], [400.0, 0.0], [400.0, 150.0], [0.0, 150.0]])
+    el = Element("B-U00", "beam", "rows", "B-U00", outline, frame, -6.0, 12.0,
+                 holes=np.array([[60.0, 75.0, 22.0], [340.0, 75.0, 22.0]]))
+    v, f = el.prism_mesh()
+    mesh = trimesh.Trimesh(v, f, process=False)
+    assert mesh.is_watertight and mesh.volume > 0
+    assert mesh.volume == pytest.approx((400.0 * 150.0 - 2 * np.pi * 11.0 ** 2) * 12.0, rel=1e-9)
+    assert np.allclose(v[:4], frame.to3d(outline) - 6.0 * frame.normal)
+
+
 # -- Rhino ------------------------------------------------------------------------------------------------
 
 def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):
@@ -434,7 +453,9 @@ def test_glb_node_names_and_bounds(built, parts):
         lo_all.append((lo, hi))
         row = parts[name]
         assert mesh.is_watertight
-        assert abs(mesh.volume) * 1e9 == pytest.approx(float(row["area_mm2"]) * float(row["thickness_mm"]), rel=1e-4)
+        holes = float(row.get("holes") or 0) * np.pi / 4.0 * float(row.get("hole_mm") or 0.0) ** 2   # drilled
+        assert abs(mesh.volume) * 1e9 == pytest.approx((float(row["area_mm2"]) - holes) * float(row["thickness_mm"]),
+                                                       rel=1e-4)
         if row["kind"] == "beam":                                         # the same box as the STEP solid
             bb = solids[name].bounding_box()
             assert np.allclose(lo, [bb.min.X, bb.min.Y, bb.min.Z], atol=0.05)

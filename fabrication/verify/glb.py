@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..contract import GLB_HOLE_SEGMENTS
 from . import Verification, check
 from ._solids import check_names, check_part_solid
 
@@ -43,6 +44,9 @@ def check_glb(v: Verification) -> None:
         # float32 vertices: about 1e-7 of the structure's size
         eps = 2e-7 * float(np.abs(pts).max()) + 1e-6
         volume = abs(float(mesh.volume)) * abs(np.linalg.det(transform[:3, :3])) * 1e9
-        # the writer's vertex order: the base ring, then the top ring
-        check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:len(pts) // 2])
+        # the writer's vertex order: the base rings (the outline's, then each bolt hole's), then the top rings;
+        # a hole is a polygon of its circle's area, so the volume is the area less the holes times the thickness
+        holes = int(float(row.get("holes") or 0)) if row["kind"] in ("beam", "splice") else 0
+        k = len(pts) // 2 - holes * GLB_HOLE_SEGMENTS
+        check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:max(k, 0)], holes=True)
     v.checked.append("glb")

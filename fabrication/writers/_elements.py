@@ -10,7 +10,8 @@ Every part is a flat outline extruded once, so one record describes it for every
   strip + gasket above the mesh face) to ``z0`` + the glass thickness;
 * a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
   ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane — with the bolt holes of its splices
-  (``holes``: centre and diameter in the frame; IFC and Rhino cut them, the glTF view leaves them out);
+  (``holes``: centre and diameter in the frame; IFC and Rhino cut them as circles, the glTF mesh as polygons of
+  the same area, :data:`fabrication.contract.GLB_HOLE_SEGMENTS`);
 * a splice cover plate: its outline and bolt holes in the splice frame, on either face of the beam plate.
 
 The data of an element (:data:`fabrication.contract.EXCHANGE_PROPERTIES`) are the values of its ``parts.csv``
@@ -88,28 +89,48 @@ class Element:
         h = self.z0 if z is None else z
         return self.frame.to3d(np.asarray(self.outline, dtype=float)) + h * self.frame.normal
 
+    def hole_rings(self) -> list[np.ndarray]:
+        """Each bolt hole as a clockwise regular polygon ``(m, 2)`` in the frame with the hole's area
+        (:data:`~fabrication.contract.GLB_HOLE_SEGMENTS` corners)."""
+        from ..contract import GLB_HOLE_SEGMENTS as m
+
+        grow = np.sqrt(np.pi / (0.5 * m * np.sin(2.0 * np.pi / m)))
+        t = -2.0 * np.pi * np.arange(m) / m                   # clockwise: the material lies outside
+        unit = np.c_[np.cos(t), np.sin(t)]
+        return [np.array([x, y]) + 0.5 * d * grow * unit for x, y, d in np.asarray(self.holes, float).reshape(-1, 3)]
+
     def prism_mesh(self) -> tuple[np.ndarray, np.ndarray]:
-        """The closed triangle mesh of the prism: vertices ``(2k, 3)`` (bottom ring, then top ring) and
-        faces ``(2(k − 2) + 2k, 3)`` oriented outwards (caps by a constrained Delaunay triangulation)."""
-        k = len(self.outline)
-        tri = cap_triangles(self.outline)
-        bottom, top = self.base(), self.base(self.z0 + self.height)
-        ring = np.arange(k)
-        nxt = np.roll(ring, -1)
-        sides = np.concatenate([np.stack([ring, nxt, nxt + k], axis=1), np.stack([ring, nxt + k, ring + k], axis=1)])
-        faces = np.concatenate([tri[:, ::-1], tri + k, sides])
+        """The closed triangle mesh of the prism: vertices ``(2n, 3)`` (the bottom rings — the outline's ``k``
+        corners, then each hole's — then the top rings in the same order) and faces oriented outwards (caps by a
+        constrained Delaunay triangulation, a side quad per ring edge)."""
+        rings = [np.asarray(self.outline, dtype=float)] + self.hole_rings()
+        flat = np.concatenate(rings)
+        n = len(flat)
+        tri = cap_triangles(self.outline, rings[1:])
+        bottom = self.frame.to3d(flat) + self.z0 * self.frame.normal
+        top = bottom + self.height * self.frame.normal
+        sides = []
+        start = 0
+        for r in rings:
+            ring = start + np.arange(len(r))
+            nxt = start + np.roll(np.arange(len(r)), -1)
+            sides += [np.stack([ring, nxt, nxt + n], axis=1), np.stack([ring, nxt + n, ring + n], axis=1)]
+            start += len(r)
+        faces = np.concatenate([tri[:, ::-1], tri + n] + sides)
         return np.concatenate([bottom, top]), faces
 
 
-def cap_triangles(outline: np.ndarray) -> np.ndarray:
-    """``(k − 2, 3)`` counter-clockwise triangles of a simple polygon ``(k, 2)`` on its own vertices
-    (shapely's constrained Delaunay triangulation, mapped back to vertex indices)."""
+def cap_triangles(outline: np.ndarray, holes: list[np.ndarray] | tuple = ()) -> np.ndarray:
+    """``(k + Σ m_i + 2h − 2, 3)`` counter-clockwise triangles of a simple polygon ``(k, 2)`` with ``h`` holes
+    ``(m_i, 2)`` on their own vertices, numbered outline first, then each hole (shapely's constrained Delaunay
+    triangulation, mapped back to vertex indices)."""
     import shapely
 
-    pts = np.asarray(outline, dtype=float)
+    rings = [np.asarray(outline, dtype=float)] + [np.asarray(h, dtype=float) for h in holes]
+    pts = np.concatenate(rings)
     index = {(float(x), float(y)): i for i, (x, y) in enumerate(pts)}
     tris = []
-    for t in shapely.constrained_delaunay_triangles(shapely.Polygon(pts)).geoms:
+    for t in shapely.constrained_delaunay_triangles(shapely.Polygon(rings[0], rings[1:])).geoms:
         try:
             ids = [index[(float(x), float(y))] for x, y in list(t.exterior.coords)[:3]]
         except KeyError:
@@ -119,7 +140,7 @@ def cap_triangles(outline: np.ndarray) -> np.ndarray:
             ids = ids[::-1]
         tris.append(ids)
     out = np.array(tris, dtype=np.int64).reshape(-1, 3)
-    if len(out) != len(pts) - 2:
+    if len(out) != len(pts) + 2 * len(holes) - 2:
         raise FabricationError(f"triangulating a part outline of {len(pts)} corners gave {len(out)} triangles")
     return out
 
