@@ -165,12 +165,22 @@ def test_block_pressure_and_uplift_are_the_pane_weight_and_area_over_blocks_and_
     parts = {r["part_id"]: r for r in rows(built / "parts.csv")}
     glass = {k: v for k, v in solids(built / "panels.step").items() if k.startswith("P-")}
     g = json.loads((built / "manifest.json").read_text())["fabrication"]["glazing"]
+    glazing = solids(built / "glazing.step")
     for r in rows(built / "restraint.csv"):
-        n, _, t = pane_frame(glass[r["panel"]])
+        pane = glass[r["panel"]]
+        n, _, t = pane_frame(pane)
+        z = np.array([tuple(p) for p in pane.vertices()]) @ n
+        bears = []                                        # the height over which each block meets the glass edge
+        for k in (1, 2):
+            zb = np.array([tuple(p) for p in glazing["SB" + r["panel"][1:] + f"-{k}"].vertices()]) @ n
+            bears.append(min(zb.max(), z.max()) - max(zb.min(), z.min()))
+        assert min(bears) == pytest.approx(t - 1.0, abs=0.02)        # to 1 mm below the glass top
+        assert float(r["block_contact_mm"]) == pytest.approx(min(bears), abs=0.02)
         alpha = math.acos(abs(float(n[2])))
         weight = float(parts[r["panel"]]["weight_kg"]) * 9.81
         assert float(r["slope_deg"]) == pytest.approx(math.degrees(alpha), abs=0.01)
-        assert float(r["block_pressure_N_mm2"]) == pytest.approx(weight * math.sin(alpha) / (2 * 100.0 * t), rel=0.01)
+        assert float(r["block_pressure_N_mm2"]) == pytest.approx(weight * math.sin(alpha) / (2 * 100.0 * min(bears)),
+                                                                 rel=0.01)
         uplift = g["load_factor"] * g["wind_suction"] * float(parts[r["panel"]]["area_mm2"]) * 1e-6
         assert float(r["uplift_kN"]) == pytest.approx(uplift, rel=1e-3)
         assert r["ok"] == "yes" and float(r["resistance_kN"]) > uplift

@@ -9,9 +9,11 @@ edge length from its corners (common glazing practice), each ``setting_block_len
 the highest point of the gasket top under it, as the pane's seat is found in :mod:`.seat`) and reaches to 1 mm
 below the glass's top face.  Its bearing pressure is
 
-    p = W·sin α / (2 · ℓ_b · t),   at most ``setting_block_pressure``,
+    p = W·sin α / (2 · ℓ_b · h),   at most ``setting_block_pressure``,
 
-with ``ℓ_b`` the block length and ``t`` the glass thickness (the block bears on the whole edge face).
+with ``ℓ_b`` the block length and ``h`` the height over which it bears on the glass edge (the glass thickness
+less 1 mm; less where a kink tilts the edge face of the pane across the joint over the block, which then
+reaches only to 1 mm below that face: a block bearing on less than half the glass is warned about).
 
 **Stops.**  Panes steeper than ``stop_min_slope_deg`` get a steel stop in the joint behind each block (from
 ``setting_block_width`` to ``setting_block_width + stop_width`` beyond the glass edge), on the same gasket, fixed
@@ -40,6 +42,7 @@ that bead.
 
 from __future__ import annotations
 
+import logging
 import math
 import re
 import weakref
@@ -60,6 +63,8 @@ from .strips import Strip
 if TYPE_CHECKING:  # pragma: no cover
     from ..panels import Panel
     from ..pipeline.records import Build
+
+log = logging.getLogger("ppfab")
 
 G = 9.81
 """m/s²: gravity, for a pane's weight."""
@@ -162,6 +167,7 @@ class PaneRestraint:
     max_spacing_mm: float
     silicone_bite_mm: float
     strip_bite_mm: float = math.nan
+    block_contact_mm: float = math.nan
 
     def failures(self, p: GlazingParams) -> list[str]:
         """What this pane's restraint does not satisfy, in words (empty: it holds)."""
@@ -220,9 +226,23 @@ def _gasket_height(points3: np.ndarray, normal: np.ndarray, strip: Strip, gasket
     return float((((top[0] - points3) @ u) / denom).max())
 
 
+def _below_face(points3: np.ndarray, normal: np.ndarray, face: tuple[np.ndarray, np.ndarray] | None) -> float:
+    """How far (mm) ``points3`` may rise along ``normal`` before one of them reaches the plane ``face`` (a point
+    on it and its unit normal, pointing to the side the points are on); ``inf`` when none comes nearer."""
+    if face is None:
+        return math.inf
+    origin, m = face
+    rate = float(normal @ m)
+    if rate >= -1e-9:
+        return math.inf
+    return float((((points3 - origin) @ m) / -rate).min())
+
+
 def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, p: GlazingParams,
-                   stops: bool) -> list[Prism]:
-    """The two setting blocks of a pane (and their stops when ``stops``) on outline edge ``edge``."""
+                   stops: bool, across: tuple[np.ndarray, np.ndarray] | None = None) -> list[Prism]:
+    """The two setting blocks of a pane (and their stops when ``stops``) on outline edge ``edge``; ``across``
+    is the edge face of the pane across the joint (a point on it and its outward unit normal): where a kink
+    tilts that face over the joint, a block or stop reaches only to :data:`JOINT_SPARE` / 2 below it."""
     f = panel.frame
     N = f.normal
     q = np.asarray(panel.outline, dtype=float)
@@ -248,7 +268,9 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
                 base = min(max(seat, _gasket_height(f.to3d(rect), N, strip, p.gasket_thickness)), top - 1.0)
             if base < seat:
                 base = seat
-            out.append(Prism(pid, kind, owner, sid, beam, f, rect, base, top - base))
+            reach = _below_face(f.to3d(rect) + base * N, N, across) - 0.5 * JOINT_SPARE
+            height = max(min(top - base, reach), 1.0)
+            out.append(Prism(pid, kind, owner, sid, beam, f, rect, base, height))
     return out
 
 
@@ -337,23 +359,34 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
     parts: list[Prism] = []
     blocks_on: dict[str, list[tuple[float, float]]] = {}
     down: dict[str, tuple[int, Strip | None, float]] = {}
+    contact: dict[str, float] = {}
+    panel_of = {x.part_id: x for x in panels}
+    by_strip: dict[str, list[tuple["Panel", int]]] = {}
+    for (pid, k), s in pane_edge_strips.items():
+        by_strip.setdefault(s.part_id, []).append((panel_of[pid], k))
     for panel in panels:
         k = down_edge(panel)
         strip = pane_edge_strips.get((panel.part_id, k))
         slope = pane_slope_deg(panel.frame.normal)
         stops = slope > p.stop_min_slope_deg
-        blocks = setting_blocks(panel, seat_of.get(panel.part_id, 0.0), strip, k, p, stops)
+        across = None
+        for other, q in by_strip.get(strip.part_id, []) if strip is not None else []:
+            if other.part_id != panel.part_id:
+                ring = other.outline_3d() + seat_of.get(other.part_id, 0.0) * other.frame.normal
+                e = ring[(q + 1) % len(ring)] - ring[q]
+                m = np.cross(e, other.frame.normal)            # outward of a counter-clockwise outline
+                across = (ring[q], m / np.linalg.norm(m))
+        seat = seat_of.get(panel.part_id, 0.0)
+        blocks = setting_blocks(panel, seat, strip, k, p, stops, across)
         parts += blocks
+        contact[panel.part_id] = min(min(b.z0 + b.height, seat + panel.thickness_mm) - max(b.z0, seat)
+                                     for b in blocks if b.kind == "setting_block")
         down[panel.part_id] = (k, strip, slope)
         if strip is not None:
             r = 0.5 * (bolt.diameter if bolt else 0.0) + JOINT_SPARE
             for b in blocks:
                 along = strip.frame.to2d(b.frame.to3d(b.outline))[:, 0]
                 blocks_on.setdefault(strip.part_id, []).append((float(along.min()) - r, float(along.max()) + r))
-    panel_of = {x.part_id: x for x in panels}
-    by_strip: dict[str, list[tuple["Panel", int]]] = {}
-    for (pid, k), s in pane_edge_strips.items():
-        by_strip.setdefault(s.part_id, []).append((panel_of[pid], k))
     stations: dict[str, tuple[float, ...]] = {}
     bites: dict[str, list[float]] = {}
     spacing: dict[str, list[float]] = {}
@@ -405,10 +438,15 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         short = _shortest_width(np.asarray(panel.outline, dtype=float))
         sil = p.load_factor * p.wind_suction * 1e-3 * short / (2.0 * p.silicone_design_stress)
         out.append(PaneRestraint(panel.part_id, slope, panel.weight_kg, k, strip.part_id if strip else "", load,
-                                 load / (lb * panel.thickness_mm), slope > p.stop_min_slope_deg, uplift, n, res,
-                                 min(bites.get(panel.part_id, [math.nan])),
+                                 load / (lb * max(contact[panel.part_id], 1.0)), slope > p.stop_min_slope_deg,
+                                 uplift, n, res, min(bites.get(panel.part_id, [math.nan])),
                                  max(spacing.get(panel.part_id, [0.0])), sil,
-                                 (strip_bites or {}).get(panel.part_id, math.nan)))
+                                 (strip_bites or {}).get(panel.part_id, math.nan), contact[panel.part_id]))
+    low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
+    if low:
+        log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
+                    "the joint over the block: %s; widen [panels] gap there or give them a bracket under the edge",
+                    len(low), ", ".join(f"{x.part_id} ({c:.1f} of {x.thickness_mm:g} mm)" for x, c in low[:8]))
     return Retention(p, bolt, tuple(parts), stations, tuple(out))
 
 

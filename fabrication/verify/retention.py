@@ -8,15 +8,15 @@ parallel to the pane.  Then:
 
 * **setting blocks**: the two ``SB-…-1``/``-2`` solids of ``retention.csv`` for the pane exist in glazing.step;
   each lies against that edge — its nearest vertices within :data:`TOUCH` of the edge's face (neither entering
-  the glass nor standing off it), its centre beyond the edge within the edge's length — and spans at least half
-  the glass thickness along ``n``;
+  the glass nor standing off it), its centre beyond the edge within the edge's length — and bears on at least
+  :data:`MIN_CONTACT` of the glass thickness along ``n`` (less than half of it is a warning);
 * **stops**: where ``restraint.csv`` says ``stops = yes``, the two ``ST-…`` solids exist, beyond their blocks and
   touching them (within :data:`TOUCH`);
 * **pressure plates** (``glazing.retention = "pressure_plate"``): at a quarter, half and three quarters of every
   edge of the pane, the point ``glazing.min_clamp_bite`` inside the edge on the glass top lies, seen along ``n``,
   under a pressure gasket ``CG-…`` (the convex hull of its vertices projected into the pane's plane);
-* **loads**: the bearing pressure of a block ``m·g·sin α / (2·ℓ·t)`` (``m`` the pane's ``weight_kg`` of
-  parts.csv, ``ℓ`` the block's extent along the edge) at most ``glazing.setting_block_pressure``; the wind
+* **loads**: the bearing pressure of a block ``m·g·sin α / (2·ℓ·h)`` (``m`` the pane's ``weight_kg`` of
+  parts.csv, ``ℓ`` the block's extent along the edge, ``h`` the height over which it bears on the glass) at most ``glazing.setting_block_pressure``; the wind
   uplift ``γ_Q·q·A`` (``A`` the pane's ``area_mm2``) at most the tension resistance of its share of the screws of
   the plates over its edges (``screws`` of ``retention.csv`` over the number of panes a plate covers), and no two
   screws of a plate farther apart than ``glazing.bolt_pitch`` (an end counting at twice its distance).
@@ -26,6 +26,7 @@ That no retention solid enters the glass is the clash check's (it measures every
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -34,6 +35,9 @@ from ..contract import RESTRAINT_COLUMNS, RETENTION_COLUMNS
 from . import Verification, check
 from ._shapes import face_outline, number, solid_points
 
+MIN_CONTACT = 3.0
+"""mm: the least height over which a setting block must bear on the glass edge (less than half the glass is a
+warning: a kink closing the joint over the block)."""
 TOUCH = 0.1
 """mm: how far a setting block may stand off, or reach into, the glass edge face it bears on (the STEP file's
 decimals), and a stop off its block."""
@@ -117,6 +121,7 @@ def check_retention(v: Verification) -> None:
         reach = max(0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) for _, pts in gaskets)
     limit = float(gl.get("setting_block_pressure", math.inf))
     bite = float(gl.get("min_clamp_bite", 0.0))
+    low: list[str] = []
     covers: dict[str, set[str]] = {}
     plate_of: dict[str, set[str]] = {}
     for pane_id, solid in sorted(panes.items()):
@@ -134,7 +139,8 @@ def check_retention(v: Verification) -> None:
         blocks = sorted(mine.get("setting_block", []), key=lambda r: r["part_id"])
         if len(blocks) != 2:
             v.error(rel_r, pane_id, f"has {len(blocks)} setting blocks, expected 2 under its down-slope edge")
-        lengths = []
+        lengths: list[float] = []
+        contacts: list[float] = []
         for r in blocks:
             pts = solids.get(r["part_id"])
             if pts is None:
@@ -144,11 +150,14 @@ def check_retention(v: Verification) -> None:
             up = (pts - ring[0]) @ n
             span = min(float(up.max()), t) - max(float(up.min()), 0.0)
             c = float(along.mean())
-            if abs(float(out.min())) > TOUCH or not 0.0 < c < L or span < 0.5 * t:
+            if span < 0.5 * t:
+                low.append(f"{r['part_id']} ({span:.1f} of {t:.1f} mm)")
+            if abs(float(out.min())) > TOUCH or not 0.0 < c < L or span < MIN_CONTACT:
                 v.error(rel_g, r["part_id"], f"setting block of {pane_id} is not against its down-slope edge: "
                                              f"{float(out.min()):.2f} mm off the edge face, centre {c:.0f} mm along "
                                              f"its {L:.0f} mm, {span:.1f} mm of the {t:.1f} mm glass")
             lengths.append(float(np.ptp(along)))
+            contacts.append(max(span, MIN_CONTACT))
             for s in mine.get("stop", []):
                 if s["part_id"][-2:] == r["part_id"][-2:] and s["part_id"] in solids:
                     gap = float(((solids[s["part_id"]] - a) @ o).min()) - float(out.max())
@@ -163,7 +172,7 @@ def check_retention(v: Verification) -> None:
         weight = number(parts.get(pane_id, {}).get("weight_kg"))
         slope = math.acos(min(1.0, abs(float(n[2]))))
         if lengths and math.isfinite(weight) and t > 0:
-            p = weight * G * math.sin(slope) / (2.0 * min(lengths) * t)
+            p = weight * G * math.sin(slope) / (2.0 * min(lengths) * min(contacts))
             if p > limit + 1e-6:
                 v.error(rel_x, pane_id, f"setting block pressure {p:.3f} N/mm² is above glazing.setting_block_pressure"
                                         f" = {limit:g} N/mm²")
@@ -192,6 +201,10 @@ def check_retention(v: Verification) -> None:
                     break
                 covers.setdefault(hit, set()).add(pane_id)
                 plate_of.setdefault(pane_id, set()).add("CP" + hit[2:])
+    if low:
+        logging.getLogger("ppfab").warning(
+            "retention: %d setting block(s) bear on less than half the glass edge (a kink closes the joint over them): "
+            "%s", len(low), ", ".join(low[:6]))
     if not plates:
         v.checked.append("retention")
         return

@@ -100,6 +100,7 @@ def restraint_rows(retention) -> list[dict[str, object]]:
         rows.append({"panel": r.panel, "slope_deg": _plain(r.slope_deg, 3), "weight_kg": _plain(r.weight_kg),
                      "down_edge": r.down_edge, "strip": r.strip, "setting_blocks": 2,
                      "block_load_N": _plain(r.block_load_N, 1), "block_pressure_N_mm2": _plain(r.block_pressure, 4),
+                     "block_contact_mm": _plain(r.block_contact_mm, 2),
                      "stops": "yes" if r.stops else "no", "uplift_kN": _plain(r.uplift_kN),
                      "screws": _plain(r.screws, 2), "resistance_kN": _plain(r.resistance_kN, 2),
                      "clamp_bite_mm": "" if r.clamp_bite_mm != r.clamp_bite_mm else _plain(r.clamp_bite_mm, 2),
