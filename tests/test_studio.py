@@ -274,6 +274,31 @@ def test_the_colour_legend_names_what_the_colours_show(studio):
     assert f"{types} types" in studio.legend.content
 
 
+def test_plane_handles_are_drawn_as_labelled_planes():
+    """The plane-spline design's tangent-plane handles (the paper's Fig. 12): each is drawn as a translucent
+    square in its plane (normal and point from the handle set, placed like the mesh) and carries its label."""
+    pytest.importorskip("viser")
+    from fabrication.studio.app import Studio
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    model = StudioModel.load(REPO / "examples" / "pp_plane_splines.toml")
+    studio = Studio(model, port=port)
+    try:
+        planes = [h for h in model.handles() if h.normal is not None]
+        assert len(planes) >= 4
+        for h in planes:
+            mesh = studio._handles[f"{h.key}-plane"]
+            v = np.asarray(mesh.vertices, dtype=float)
+            n = np.cross(v[1] - v[0], v[3] - v[0])
+            assert abs(abs(n @ h.normal) / np.linalg.norm(n) - 1.0) < 1e-5            # in the handle's plane
+            assert np.allclose(v.mean(axis=0), h.position, atol=1e-5)
+            assert studio._handles[f"{h.key}-label"].text == h.label
+    finally:
+        studio.stop()
+
+
 def test_cli_studio_bad_input(capsys):
     assert main(["studio", "--port", "0", "--no-browser"]) == 2
     assert capsys.readouterr().err.strip().startswith("ppfab: error: --port")

@@ -71,6 +71,19 @@ def legend_html(metric: str, values: np.ndarray, folds: bool = False) -> str:
     return f"<div style='font-size:12px'>{body}</div>"
 
 
+def plane_square(centre: np.ndarray, normal: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
+    """A square ``2·half`` wide in the plane through ``centre (3,)`` with ``normal (3,)``: vertices ``(4, 3)``
+    float32 and two triangles ``(2, 3)``."""
+    n = np.asarray(normal, dtype=float) / max(float(np.linalg.norm(normal)), 1e-300)
+    a = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(n, a)
+    c = np.asarray(centre, dtype=float)
+    verts = np.array([c - half * a - half * b, c + half * a - half * b, c + half * a + half * b,
+                      c - half * a + half * b], dtype=np.float32)
+    return verts, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
+
+
 def quat_matrix(wxyz: Any) -> np.ndarray:
     """The rotation matrix ``(3, 3)`` of a unit quaternion ``(w, x, y, z)``."""
     w, x, y, z = np.asarray(wxyz, dtype=float) / max(float(np.linalg.norm(wxyz)), 1e-300)
@@ -528,6 +541,12 @@ class Studio:
                                              disable_rotations=not h.rotatable, disable_sliders=True)
             g.on_update(self._gizmo_callback(h.key))
             self._handles[h.key] = g
+            label = scene.add_label(f"/handles/{h.key}-label", h.label, position=tuple(h.position))
+            self._handles[f"{h.key}-label"] = label
+            if h.normal is not None:                 # a plane handle: its plane, translucent, in its colour
+                verts, faces = plane_square(np.asarray(h.position, float), h.normal, 0.6 * size)
+                self._handles[f"{h.key}-plane"] = scene.add_mesh_simple(
+                    f"/handles/{h.key}-plane", verts, faces, color=h.color, opacity=0.25, side="double")
         if self.model.method == "conical_spheres":
             s, R, t = _placement(self.model.geometry)
             for k, sph in enumerate(self.model.params.get("spheres", [])):

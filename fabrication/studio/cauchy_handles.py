@@ -73,10 +73,10 @@ class CauchyHandles(HandleSet):
         v = np.asarray(grid.vertices, dtype=float)
         for i in range(v.shape[0]):
             out.append(Handle(f"support_u_{i}", 0.5 * (v[i, -2] + v[i, -1]), f"plane U_{i}",
-                              _PLANE_COLOURS["support_u"], rotatable=True))
+                              _PLANE_COLOURS["support_u"], rotatable=True, normal=U[i, :3]))
         for j in range(v.shape[1]):
             out.append(Handle(f"support_w_{j}", 0.5 * (v[-2, j] + v[-1, j]), f"plane W_{j}",
-                              _PLANE_COLOURS["support_w"], rotatable=True))
+                              _PLANE_COLOURS["support_w"], rotatable=True, normal=W[j, :3]))
         return out
 
     def apply(self, params: Params, grid: Any, key: str, position: np.ndarray, rotation: np.ndarray) -> Params:

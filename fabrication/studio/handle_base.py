@@ -13,13 +13,15 @@ Params = dict[str, Any]
 
 @dataclass(frozen=True)
 class Handle:
-    """One handle: ``position (3,)`` in construction units, whether it turns, a label and its RGB colour."""
+    """One handle: ``position (3,)`` in construction units, whether it turns, a label and its RGB colour; a
+    plane handle has the plane's ``normal (3,)`` (the studio draws the plane, as the paper's Fig. 12 does)."""
 
     key: str
     position: np.ndarray
     label: str
     color: tuple[int, int, int]
     rotatable: bool = False
+    normal: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

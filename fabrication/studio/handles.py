@@ -103,7 +103,8 @@ class FaceImageHandles(HandleSet):
             colour = (230, 90, 40) if name == "g" else (40, 110, 230)
             for k, (t, plane) in enumerate(zip(nodes, planes)):
                 out.append(Handle(f"{name}{k}", self._anchor(params, grid, name, float(t), plane),
-                                  f"{name}({t:.3g}): tangent plane", colour, rotatable=True))
+                                  f"{name}({t:.3g}): tangent plane", colour, rotatable=True,
+                                  normal=np.asarray(plane[:3], dtype=float)))
         return out
 
     def apply(self, params: Params, grid: Any, key: str, position: np.ndarray, rotation: np.ndarray) -> Params:

@@ -238,7 +238,8 @@ class StudioModel:
         s, R, t = placement(self.geometry)
         out = []
         for h in handle_set(self.method).handles(self.params, self.state.raw):
-            out.append(Handle(h.key, (s * R @ h.position + t) / 1000.0, h.label, h.color, h.rotatable))
+            normal = None if h.normal is None else R @ h.normal / max(float(np.linalg.norm(h.normal)), 1e-300)
+            out.append(Handle(h.key, (s * R @ h.position + t) / 1000.0, h.label, h.color, h.rotatable, normal))
         return out
 
     # -- edits ----------------------------------------------------------------------------------------

@@ -217,7 +217,7 @@ class PlaneSplineHandles(HandleSet):
                 if name == "v_planes" and k == 0:
                     continue                          # the common corner plane: the handle u_planes_0
                 out.append(Handle(f"{name}_{k}", self._anchor(centres, name, k, len(planes), plane),
-                                  f"{name}[{k}]", colour, rotatable=True))
+                                  f"{name}[{k}]", colour, rotatable=True, normal=np.asarray(plane[:3], dtype=float)))
         return out
 
     def apply(self, params: Params, grid: Any, key: str, position: np.ndarray, rotation: np.ndarray) -> Params:
