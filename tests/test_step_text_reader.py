@@ -159,3 +159,21 @@ def test_kernel_option_reads_every_solid_with_the_kernel(built):
     assert all(hasattr(s.solid, "wrapped") for s in read)          # build123d solids
     text = read_or_report(Verification(built), "panels.step")
     assert text is not None and all(isinstance(s.solid.points, np.ndarray) for s in text)
+
+
+def test_a_file_written_with_p_curves_is_read(built, tmp_path):
+    """Another writer's file (build123d's export with p-curves: every edge a SURFACE_CURVE or SEAM_CURVE over its
+    3D line or circle) gives the same solids: vertices to 1e-9 mm, volumes to 1e-9."""
+    from build123d import Compound, export_step
+
+    kernel = read_step_solids(built / "splices.step")[:3]
+    for s in kernel:
+        s.solid.label = s.name
+    out = tmp_path / "again.step"
+    export_step(Compound(children=[s.solid for s in kernel]), str(out))
+    assert b"SURFACE_CURVE(" in out.read_bytes()
+    again = read_text_solids(out)
+    assert [s.name for s in again] == [s.name for s in kernel]
+    for mine, kern in zip(again, kernel):
+        assert _apart(np.array([tuple(p) for p in kern.solid.vertices()]), mine.points) <= 1e-9
+        assert mine.volume == pytest.approx(kern.solid.volume, rel=1e-9) and mine.problems() == []

@@ -493,6 +493,9 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
                 edges.append(ec)
                 fwd.append(o)
                 kind = model.kind(c)
+                while kind in ("SURFACE_CURVE", "SEAM_CURVE"):      # written with p-curves: its 3D curve
+                    c = model.args(c)[1].id
+                    kind = model.kind(c)
                 if kind == "LINE":
                     arcs.append(None)
                 elif kind == "CIRCLE":
