@@ -102,8 +102,10 @@ def read_entities(data: bytes) -> dict[int, tuple[str, str]]:
     ``''``) for every entity of the DATA section."""
     start = data.find(b"DATA;")
     end = data.rfind(b"ENDSEC;")
-    if start < 0 or end < start:
+    if start < 0:
         raise StepTextError("no DATA section")
+    if end < start:
+        raise StepTextError("the DATA section does not end (no ENDSEC; after it): the file is cut short")
     out: dict[int, tuple[str, str]] = {}
     chunks = data[start + 5:end].decode("latin-1").split(";")
     k = 0
