@@ -233,7 +233,11 @@ class Progress:
     @contextlib.contextmanager
     def logs_here(self, name: str = "ppfab") -> Iterator[None]:
         """Within the block, records of the logger ``name`` are printed through :meth:`message` (not by the
-        root logger's handler, which would write them into the middle of a stage line)."""
+        root logger's handler, which would write them into the middle of a stage line).  A quiet progress draws
+        no stage lines: the records then go where logging sends them, unchanged."""
+        if self.quiet:
+            yield
+            return
         logger = logging.getLogger(name)
         handler = ProgressLogHandler(self)
         logger.addHandler(handler)
@@ -341,8 +345,8 @@ class Progress:
 
 
 class ProgressLogHandler(logging.Handler):
-    """A logging handler that prints each record (its message alone) through :meth:`Progress.message`; with a
-    quiet progress the record goes to the progress stream as a plain line, as the root handler would."""
+    """A logging handler that prints each record (its message alone) through :meth:`Progress.message` (with a
+    quiet progress, as a plain line on the progress stream)."""
 
     def __init__(self, progress: Progress) -> None:
         super().__init__()

@@ -59,9 +59,15 @@ def _pane_geometry(solid) -> tuple[np.ndarray, np.ndarray, float, np.ndarray] | 
     return n, ring, float(z.max() - z.min()), c
 
 
-def _down_edge(n: np.ndarray, ring: np.ndarray) -> tuple[int, np.ndarray]:
+LEVEL_DEG = 0.5
+"""A pane sloping less than this (degrees) has no down-slope edge to speak of: its blocks may sit under any edge,
+and the check takes the edge they are against."""
+
+
+def _down_edge(n: np.ndarray, ring: np.ndarray, near: np.ndarray | None = None) -> tuple[int, np.ndarray]:
     """The edge ``k`` of ``ring`` whose outward in-plane normal points most down the slope, and the outward
-    normals ``(k, 3)`` of all edges."""
+    normals ``(k, 3)`` of all edges; on a pane sloping less than :data:`LEVEL_DEG`, the edge nearest the point
+    ``near`` (the setting blocks' centre) when given."""
     d = np.roll(ring, -1, axis=0) - ring
     o = np.cross(d, n)
     o /= np.linalg.norm(o, axis=1, keepdims=True)
@@ -70,6 +76,8 @@ def _down_edge(n: np.ndarray, ring: np.ndarray) -> tuple[int, np.ndarray]:
     o *= np.sign(np.einsum("ij,ij->i", mid - centre, o))[:, None]          # outward whatever the turning sense
     down = np.array([0.0, 0.0, -1.0])
     down = down - (down @ n) * n
+    if near is not None and float(np.linalg.norm(down)) < np.sin(np.radians(LEVEL_DEG)):
+        return int(np.argmin(np.linalg.norm(mid - near, axis=1))), o
     if float(np.linalg.norm(down)) < 1e-9:
         return int(np.argmin(mid[:, 2])), o
     return int(np.argmax(o @ down)), o
@@ -130,13 +138,14 @@ def check_retention(v: Verification) -> None:
             v.error(rel_p, pane_id, "pane has no planar face to measure its restraint on")
             continue
         n, ring, t, centre = geo
-        k, outward = _down_edge(n, ring)
+        mine = by_owner.get(pane_id, {})
+        blocks = sorted(mine.get("setting_block", []), key=lambda r: r["part_id"])
+        placed = [solids[r["part_id"]] for r in blocks if r["part_id"] in solids]
+        k, outward = _down_edge(n, ring, np.concatenate(placed).mean(axis=0) if placed else None)
         a, b = ring[k], ring[(k + 1) % len(ring)]
         L = float(np.linalg.norm(b - a))
         d = (b - a) / L
         o = outward[k]
-        mine = by_owner.get(pane_id, {})
-        blocks = sorted(mine.get("setting_block", []), key=lambda r: r["part_id"])
         if len(blocks) != 2:
             v.error(rel_r, pane_id, f"has {len(blocks)} setting blocks, expected 2 under its down-slope edge")
         lengths: list[float] = []
