@@ -59,9 +59,11 @@ def upright_deg(angle_deg: float) -> float:
     >>> upright_deg(180.0), upright_deg(-90.0), upright_deg(271.0), upright_deg(90.0), upright_deg(-87.0)
     (0.0, 90.0, 91.0, 90.0, 93.0)
     """
-    lo, _ = READING_RANGE_DEG
+    lo, hi = READING_RANGE_DEG
     a = (float(angle_deg) - lo) % 180.0 + lo
-    return 135.0 if a <= lo + 1e-12 else a + 0.0
+    # within 0.01° above the lower end: the upper end (a turn of at most 0.01°), so that a drawing's rounding of
+    # the angle (an SVG writes two decimals) never lands on −45° itself
+    return hi if a <= lo + 0.01 else a + 0.0
 
 
 def face_sign(frame_normal: np.ndarray, plane_normal: np.ndarray, mirrored: bool) -> int:

@@ -308,6 +308,7 @@ def test_optimize_replaces_only_its_own_unchanged_output_and_only_with_force(tmp
         assert out.read_text() == "# my mesh\nv 0 0 0\n"
     out.unlink()
     assert main(["optimize", str(MESH), "-o", str(out), "--quiet"]) in (0, 1)
+    assert "targets" in capsys.readouterr().err                     # --quiet keeps the one result line
     assert written_by_ppfab(out)
     first = out.read_bytes()
     assert main(["optimize", str(MESH), "-o", str(out), "--quiet"]) == 2               # no --force
