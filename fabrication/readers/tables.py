@@ -68,19 +68,28 @@ def read_parts(folder: Path) -> tuple[Path, list[Row]]:
     if not path.is_file() and (folder / "parts.csv").is_file():
         csv_path = folder / "parts.csv"
         return csv_path, read_csv(csv_path, "the parts list", ("part_id", "kind"))
-    doc = read_json(path, "the parts list")
-    parts = doc.get("parts") if isinstance(doc, dict) else None
-    if not isinstance(parts, list):
-        raise bad(path, "no list 'parts' at the top level")
     rows = []
-    for n, row in enumerate(parts, start=1):
-        if not isinstance(row, dict):
-            raise bad(path, f"expected a table of columns, got {type(row).__name__}", row=n)
+    for n, row in _json_tables(path, "the parts list", "parts"):
         for col in ("part_id", "kind"):
             if not isinstance(row.get(col), str) or not row[col]:
                 raise bad(path, f"no {col}", row=n, column=col)
         rows.append((n, row))
     return path, rows
+
+
+def _json_tables(path: Path, what: str, key: str) -> list[tuple[int, dict[str, Any]]]:
+    """``(row number, table)`` of the list ``key`` at the top level of the JSON file ``path`` (``what`` it holds,
+    for the error); a missing list or an entry that is not a table is a :func:`bad` error naming the row."""
+    doc = read_json(path, what)
+    entries = doc.get(key) if isinstance(doc, dict) else None
+    if not isinstance(entries, list):
+        raise bad(path, f"no list '{key}' at the top level")
+    out = []
+    for n, entry in enumerate(entries, start=1):
+        if not isinstance(entry, dict):
+            raise bad(path, f"expected a table of columns, got {type(entry).__name__}", row=n)
+        out.append((n, entry))
+    return out
 
 
 def _csv_node(row: dict[str, Any]) -> dict[str, Any]:
@@ -118,14 +127,8 @@ def read_nodes(folder: Path) -> tuple[Node, ...]:
             except ColumnError as exc:
                 raise bad(csv_path, exc.reason, row=n, column=exc.column) from None
         return tuple(found)
-    doc = read_json(path, "the node table")
-    nodes = doc.get("nodes") if isinstance(doc, dict) else None
-    if not isinstance(nodes, list):
-        raise bad(path, "no list 'nodes' at the top level")
     out = []
-    for n, rec in enumerate(nodes, start=1):
-        if not isinstance(rec, dict):
-            raise bad(path, f"expected a table, got {type(rec).__name__}", row=n)
+    for n, rec in _json_tables(path, "the node table", "nodes"):
         try:
             out.append(Node.from_record(rec))
         except ColumnError as exc:
