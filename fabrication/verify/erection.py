@@ -213,8 +213,9 @@ def body_of(solid: Any) -> Body:
 
 
 def depth_of(shape: Any) -> tuple[float, float]:
-    """``(depth, volume)`` of an intersection: the smallest width over face normals of its thickest connected
-    piece, and its volume (0, 0 when empty)."""
+    """``(depth, volume)`` of an intersection: the depth of its thickest connected piece — the smallest width over
+    its face normals; a sliver left where two solids only touch (no face with an area, or thinner than 1 µm on
+    average) has none — and its volume (0, 0 when empty)."""
     if shape.is_empty():
         return 0.0, 0.0
     vol = float(shape.volume())
@@ -230,9 +231,16 @@ def depth_of(shape: Any) -> tuple[float, float]:
         nn = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
         ln = np.linalg.norm(nn, axis=1)
         dirs = nn[ln > 1e-12] / ln[ln > 1e-12, None]
-        dirs = np.unique(np.round(dirs, 6), axis=0) if len(dirs) else np.eye(3)
-        proj = v @ dirs.T
-        best = max(best, float((proj.max(axis=0) - proj.min(axis=0)).min()))
+        if len(dirs) == 0:                      # no face with an area: a degenerate sliver, no depth
+            continue
+        keys, group = np.unique(np.round(dirs, 6), axis=0, return_inverse=True)
+        proj = v @ keys.T
+        width = float((proj.max(axis=0) - proj.min(axis=0)).min())
+        # a piece thinner than a micrometre on average (volume over its largest face, the triangles of one normal
+        # summed) is where two solids only touch: no depth, whatever its facets' directions say
+        face = float(np.bincount(np.asarray(group).reshape(-1), weights=0.5 * ln[ln > 1e-12]).max())
+        if abs(float(comp.volume())) >= 1e-3 * face:
+            best = max(best, width)
     return best, vol
 
 
