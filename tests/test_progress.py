@@ -185,13 +185,21 @@ def test_a_warning_during_a_stage_gets_a_line_of_its_own():
         def isatty(self) -> bool:
             return True
 
-    for stream, bar in ((io.StringIO(), False), (Terminal(), False)):
-        p = Progress(stream=stream, tick=0.0, bar=bar)
-        with p.logs_here():
-            p.start("beams", "10 plates")
-            logging.getLogger("ppfab.test").warning("B-U01: a warning about one plate")
-            p.done("10 plates, 2 slots")
-        lines = stream.getvalue().replace("\r\033[K", "\n").splitlines()
-        assert "B-U01: a warning about one plate" in lines, lines
-        assert lines[-1].startswith("[ppfab] beams") and lines[-1].endswith("10 plates, 2 slots (0.0 s)"), lines
+    logger = logging.getLogger("ppfab.test")       # its own level: earlier tests may have quietened "ppfab"
+    level, disabled = logger.level, logging.root.manager.disable
+    logger.setLevel(logging.WARNING)
+    logging.disable(logging.NOTSET)
+    try:
+        for stream, bar in ((io.StringIO(), False), (Terminal(), False)):
+            p = Progress(stream=stream, tick=0.0, bar=bar)
+            with p.logs_here():
+                p.start("beams", "10 plates")
+                logger.warning("B-U01: a warning about one plate")
+                p.done("10 plates, 2 slots")
+            lines = stream.getvalue().replace("\r\033[K", "\n").splitlines()
+            assert "B-U01: a warning about one plate" in lines, lines
+            assert lines[-1].startswith("[ppfab] beams") and lines[-1].endswith("10 plates, 2 slots (0.0 s)"), lines
+    finally:
+        logger.setLevel(level)
+        logging.disable(disabled)
     assert logging.getLogger("ppfab").propagate and not logging.getLogger("ppfab").handlers
