@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from typing import Any
 
 # -- parts.csv / parts.json -----------------------------------------------------------------------------
 
@@ -164,6 +165,18 @@ def xdata_strings(part_id: str, nest_tag: str, kind: str, type_id: str) -> list[
     """
     values = (part_id, nest_tag, kind, type_id)
     return [(1000, f"{k}={v}") for k, v in zip(XDATA_KEYS, values)]
+
+
+def xdata_fields(entity: Any) -> dict[str, str]:
+    """The ``key=value`` strings of an ezdxf entity's :data:`XDATA_APPID` XDATA as a dict (empty without any):
+    the reading of :func:`xdata_strings` and the other tags ppfab writes."""
+    out: dict[str, str] = {}
+    if entity.has_xdata(XDATA_APPID):
+        for code, value in entity.get_xdata(XDATA_APPID):
+            if code == 1000 and "=" in str(value):
+                k, val = str(value).split("=", 1)
+                out[k] = val
+    return out
 
 
 # -- identifiers -----------------------------------------------------------------------------------------

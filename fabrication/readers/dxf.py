@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..contract import STOCK_HEADER_VARS, XDATA_APPID
+from ..contract import STOCK_HEADER_VARS, XDATA_APPID, xdata_fields
 from .errors import bad, missing
 
 Points = tuple[tuple[float, float], ...]
@@ -27,16 +27,6 @@ class DxfCuts:
     trim: Points | None = None
     material: str = ""
     thickness: str = ""
-
-
-def _xdata(entity: Any) -> dict[str, str]:
-    out: dict[str, str] = {}
-    if entity.has_xdata(XDATA_APPID):
-        for code, value in entity.get_xdata(XDATA_APPID):
-            if code == 1000 and "=" in str(value):
-                k, val = str(value).split("=", 1)
-                out[k] = val
-    return out
 
 
 def read_cuts(path: Path, what: str) -> DxfCuts:
@@ -63,7 +53,7 @@ def read_cuts(path: Path, what: str) -> DxfCuts:
             pts = tuple((float(p[0]), float(p[1])) for p in e.points())   # R12: a 2D POLYLINE
         elif kind == "CIRCLE" and layer == "CUT":
             c = e.dxf.center
-            out.holes.setdefault(_xdata(e).get("part_id", ""), []).append(
+            out.holes.setdefault(xdata_fields(e).get("part_id", ""), []).append(
                 (float(c[0]), float(c[1]), 2.0 * float(e.dxf.radius)))
             continue
         else:
@@ -73,7 +63,7 @@ def read_cuts(path: Path, what: str) -> DxfCuts:
         elif layer == "TRIM":
             out.trim = pts
         elif layer == "CUT":
-            x = _xdata(e)
+            x = xdata_fields(e)
             pid = x.get("part_id", "")
             if not pid:
                 raise bad(path, f"a CUT outline (handle {e.dxf.handle}) has no {XDATA_APPID} part_id XDATA")

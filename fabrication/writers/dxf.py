@@ -43,7 +43,7 @@ from . import Files, writer
 
 from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
                         GLASS_SHEET_PREFIX, KERF_NOTES, LAYERS, MARK_LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
-                        REQUIRED_LAYERS, STOCK_HEADER_VARS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text,
+                        REQUIRED_LAYERS, STOCK_HEADER_VARS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text, xdata_fields,
                         sheet_file, stock_title, stock_xdata, thickness_text, type_file, xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
 from ..marking import TextLine, face_marks, face_sign, place_label
@@ -366,16 +366,6 @@ class DXFContent:
     holes: list[DXFHole] = field(default_factory=list)
 
 
-def _xdata(entity) -> dict:
-    out = {}
-    if entity.has_xdata(XDATA_APPID):
-        for code, value in entity.get_xdata(XDATA_APPID):
-            if code == 1000 and "=" in str(value):
-                k, v = str(value).split("=", 1)
-                out[k] = v
-    return out
-
-
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     """Re-read a DXF with ``ezdxf.readfile``, audit it and extract parts, outlines, labels and marks."""
     import ezdxf
@@ -405,7 +395,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             pts = np.array([(p[0], p[1]) for p in e.get_points("xy")], dtype=float)
         if kind == "LWPOLYLINE":
             if layer == "CUT":
-                x = _xdata(e)
+                x = xdata_fields(e)
                 parts.append(DXFPart(x.get("part_id", ""), x.get("nest_tag", ""), pts, bool(e.is_closed), x))
             elif layer == "SHEET":
                 sheet = pts
@@ -426,10 +416,10 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             where = align if align is not None else e.dxf.insert
             texts.append(DXFText(layer, e.dxf.text, np.array([where[0], where[1]], dtype=float), float(e.dxf.height),
                                  float(e.dxf.get("rotation", 0.0)), bool(int(e.dxf.get("text_generation_flag", 0)) & 2),
-                                 _xdata(e)))
-        elif kind == "CIRCLE" and layer == "CUT" and _xdata(e).get("part_id"):
+                                 xdata_fields(e)))
+        elif kind == "CIRCLE" and layer == "CUT" and xdata_fields(e).get("part_id"):
             c = e.dxf.center
-            holes.append(DXFHole(_xdata(e)["part_id"], np.array([c[0], c[1]], dtype=float), 2.0 * float(e.dxf.radius)))
+            holes.append(DXFHole(xdata_fields(e)["part_id"], np.array([c[0], c[1]], dtype=float), 2.0 * float(e.dxf.radius)))
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
             block = doc.blocks.get(e.dxf.get("geometry", "")) if e.dxf.get("geometry") else None
