@@ -345,8 +345,8 @@ class Progress:
 
 
 class ProgressLogHandler(logging.Handler):
-    """A logging handler that prints each record (its message alone) through :meth:`Progress.message` (with a
-    quiet progress, as a plain line on the progress stream)."""
+    """A logging handler that prints each record (its message alone) through :meth:`Progress.message`
+    (installed by :meth:`Progress.logs_here`, never for a quiet progress)."""
 
     def __init__(self, progress: Progress) -> None:
         super().__init__()
@@ -355,10 +355,6 @@ class ProgressLogHandler(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            text = self.format(record)
-            if self.progress.quiet:
-                print(text, file=self.progress.stream, flush=True)
-            else:
-                self.progress.message(text)
+            self.progress.message(self.format(record))
         except Exception:                       # a handler never raises into the code that logs
             self.handleError(record)
