@@ -52,7 +52,9 @@ class StepReadError(ValueError):
 
 def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: bool = False) -> list[StepSolid]:
     """Every solid of the STEP file ``path`` in file order (depth first); ``colours`` also reads the colours;
-    ``leaves``: one record per product that is no assembly, with its placement, its solid or ``None``.
+    ``leaves``: one record per product that is no assembly, with its placement, its solid or ``None``.  A solid
+    is named by its occurrence (the kernel's component label, from NEXT_ASSEMBLY_USAGE_OCCURRENCE), else by its
+    product: one product of an instanced shape is placed once per occurrence, under the occurrence's name.
 
     Raises the audit event ``fabrication.verify.read`` with the path first (the kernel opens the file outside
     Python, where the ``open`` event does not see it), so a hook can tell which files a check read."""
@@ -119,7 +121,8 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: boo
         for i in range(1, labels.Length() + 1):
             sub = labels.Value(i)
             ref = sub
-            if shapes.IsReference_s(sub):
+            is_ref = shapes.IsReference_s(sub)
+            if is_ref:
                 ref = TDF_Label()
                 shapes.GetReferredShape_s(sub, ref)
             here = loc.Multiplied(shapes.GetLocation_s(sub)) if parent is not None else loc
@@ -127,6 +130,7 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: boo
             if shapes.IsAssembly_s(ref):
                 walk(ref, here, above + (name,))
                 continue
+            name = (name_of(sub) if is_ref else "") or name    # the occurrence's name (an instanced shape)
             own = shapes.GetShape_s(ref)
             colour = colour_of(sub, ref, own) if colours else None
             found = TopExp_Explorer(own.Moved(here), TopAbs_SOLID)
@@ -169,7 +173,7 @@ def sample_file(data: bytes, solids: list[TextSolid],
         key = s.shape_key()
         kept.append(key not in seen)
         seen.add(key)
-    dropped = {s.brep for s, k in zip(solids, kept) if not k}
+    dropped = {s.brep for s, k in zip(solids, kept) if not k} - {s.brep for s, k in zip(solids, kept) if k}
     styles = {i for i, (kind, params) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
               and any(r in dropped for r in _refs(params))}
     gone = dropped | styles

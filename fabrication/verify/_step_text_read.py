@@ -381,6 +381,7 @@ class StepModel:
     def __init__(self, entities: dict[int, tuple[str, str]]):
         self.raw = entities
         self.cache: dict[int, list] = {}
+        self.topology: dict[int, tuple[np.ndarray, list]] = {}
         self.by_kind: dict[str, list[int]] = {}
         for i, (k, _) in entities.items():
             self.by_kind.setdefault(k, []).append(i)
@@ -451,6 +452,50 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
     shell = model.args(brep)[1].id
     if model.kind(shell) != "CLOSED_SHELL":
         raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
+    pts_local, raw_faces = _topology(model, brep, shell)
+    rot, shift = transform[:3, :3], transform[:3, 3]
+    points = pts_local @ rot.T + shift
+    faces = []
+    for kind, surf, same, loops in raw_faces:
+        if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
+            raise StepTextError(f"#{surf} is a {kind}: planes and cylinders only (ppfab verify --kernel reads any "
+                                "STEP file)")
+        sa = model.args(surf)
+        o, z, x = model.axis2(sa[1].id)
+        radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
+        done = []
+        for verts, arcs, edges, fwd in loops:
+            placed_arcs: list[Arc | None] = []
+            for item in arcs:
+                if item is None:
+                    placed_arcs.append(None)
+                    continue
+                c, ccw, start, end = item
+                co, cz, _ = model.axis2(model.args(c)[1].id)
+                r = float(model.args(c)[2])
+                axis = rot @ (cz if ccw else -cz)
+                centre = rot @ co + shift
+                if start == end:
+                    sweep = 2.0 * math.pi
+                else:
+                    e1, e2 = points[start] - centre, points[end] - centre
+                    sweep = math.atan2(float(np.cross(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
+                placed_arcs.append(Arc(centre, axis, r, sweep))
+            done.append(Loop(np.array(verts, dtype=int), tuple(placed_arcs), tuple(edges), tuple(fwd)))
+        normal = rot @ z
+        if kind == "PLANE" and not same:
+            normal = -normal
+        faces.append(Face("plane" if kind == "PLANE" else "cylinder", rot @ o + shift, normal, rot @ x,
+                          same, radius, tuple(done)))
+    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep)
+
+
+def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:
+    """The vertices ``(n, 3)`` of the B-rep ``#brep`` in its own coordinates and its faces as index loops (read
+    once per B-rep: a B-rep shared by many products, an instanced shape, is placed once per product)."""
+    got = model.topology.get(brep)
+    if got is not None:
+        return got
     index: dict[int, int] = {}
     local: list[np.ndarray] = []
 
@@ -507,42 +552,8 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
                                         "reads any STEP file)")
             loops.append((verts, arcs, edges, fwd))
         raw_faces.append((model.kind(surf.id), surf.id, bool(same), loops))
-    pts_local = np.array(local, dtype=float).reshape(-1, 3)
-    rot, shift = transform[:3, :3], transform[:3, 3]
-    points = pts_local @ rot.T + shift
-    faces = []
-    for kind, surf, same, loops in raw_faces:
-        if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
-            raise StepTextError(f"#{surf} is a {kind}: planes and cylinders only (ppfab verify --kernel reads any "
-                                "STEP file)")
-        sa = model.args(surf)
-        o, z, x = model.axis2(sa[1].id)
-        radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
-        done = []
-        for verts, arcs, edges, fwd in loops:
-            placed_arcs: list[Arc | None] = []
-            for item in arcs:
-                if item is None:
-                    placed_arcs.append(None)
-                    continue
-                c, ccw, start, end = item
-                co, cz, _ = model.axis2(model.args(c)[1].id)
-                r = float(model.args(c)[2])
-                axis = rot @ (cz if ccw else -cz)
-                centre = rot @ co + shift
-                if start == end:
-                    sweep = 2.0 * math.pi
-                else:
-                    e1, e2 = points[start] - centre, points[end] - centre
-                    sweep = math.atan2(float(np.cross(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
-                placed_arcs.append(Arc(centre, axis, r, sweep))
-            done.append(Loop(np.array(verts, dtype=int), tuple(placed_arcs), tuple(edges), tuple(fwd)))
-        normal = rot @ z
-        if kind == "PLANE" and not same:
-            normal = -normal
-        faces.append(Face("plane" if kind == "PLANE" else "cylinder", rot @ o + shift, normal, rot @ x,
-                          same, radius, tuple(done)))
-    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep)
+    got = model.topology[brep] = (np.array(local, dtype=float).reshape(-1, 3), raw_faces)
+    return got
 
 
 def _colours(model: StepModel) -> dict[int, tuple[float, float, float, float]]:
@@ -588,6 +599,9 @@ def _colours(model: StepModel) -> dict[int, tuple[float, float, float, float]]:
 def read_text_solids(path: str | os.PathLike, data: bytes | None = None) -> list[TextSolid]:
     """Every solid of the STEP file ``path`` placed in its model space, depth first through the product tree
     (children in the order of their NEXT_ASSEMBLY_USAGE_OCCURRENCE), with names, assembly path and colour.
+    A solid's name is that of the occurrence placing it (NEXT_ASSEMBLY_USAGE_OCCURRENCE's name), else its
+    product's: a product of one shape placed many times (an instanced shape) is one solid per occurrence, each
+    named by its occurrence.
 
     Raises :class:`StepTextError` on a file it cannot read, and the audit event ``fabrication.verify.read``."""
     sys.audit("fabrication.verify.read", os.fspath(path))
@@ -624,11 +638,11 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             raise StepTextError(f"#{idt} is a {model.kind(idt)}: placements by ITEM_DEFINED_TRANSFORMATION only")
         a1, a2 = model.args(idt)[2:4]
         placement[nauo.id] = model.matrix(a2.id) @ np.linalg.inv(model.matrix(a1.id))
-    children: dict[int, list[tuple[int, int]]] = {}
+    children: dict[int, list[tuple[int, int, str]]] = {}
     is_child: set[int] = set()
     for i in sorted(model.ids("NEXT_ASSEMBLY_USAGE_OCCURRENCE")):
         a = model.args(i)
-        children.setdefault(a[3].id, []).append((i, a[4].id))
+        children.setdefault(a[3].id, []).append((i, a[4].id, str(a[1] or "")))
         is_child.add(a[4].id)
     colours = _colours(model)
     out: list[TextSolid] = []
@@ -652,13 +666,14 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             todo.extend(linked.get(r, []))
         return found
 
-    def walk(pd: int, transform: np.ndarray, above: tuple[str, ...]) -> None:
+    def walk(pd: int, transform: np.ndarray, above: tuple[str, ...], occurrence: str = "") -> None:
         name = name_of(pd)
         kids = children.get(pd, [])
         if kids:
-            for nauo, child in kids:
-                walk(child, transform @ placement.get(nauo, np.eye(4)), above + (name,))
+            for nauo, child, called in kids:
+                walk(child, transform @ placement.get(nauo, np.eye(4)), above + (name,), called)
             return
+        name = occurrence or name                      # a shape used by many occurrences: each one's name
         for b in breps(pd):
             out.append(_solid_of(model, b, transform, name, above, colours.get(b)))
 
