@@ -32,6 +32,9 @@ from .spec import SurfaceSpec
 CELL_PER_SPACING = 8
 """Plan cells of the height-field fit per panel ``spacing``."""
 
+BALANCED = 0.25
+"""Panel edges within ``±BALANCED`` of the spacing need no re-seeding."""
+
 
 @dataclass(frozen=True)
 class RemeshResult:
@@ -44,6 +47,12 @@ class RemeshResult:
     planarity_mm : largest distance of a section row's vertex from its plane, before any optimisation
     panel_size_min, panel_size_max : shortest and longest kept edge, as a fraction of ``spacing``
     seconds : CPU time of the fit and the net
+    seeding : how the seeds and planes were placed: ``"uniform"`` (spacing along the middle lines),
+        ``"scaled"`` (both steps scaled so the extremes straddle the spacing), ``"strips"`` (each strip on
+        its own, :mod:`.balance`)
+    fan_out : the largest ratio of the longest to the shortest section edge within one strip between two
+        neighbouring conjugate curves: no choice of seeds narrows a strip's range below it (a quad net has
+        no T-junctions to end or start a curve)
     """
 
     net: SectionsNet
@@ -54,6 +63,8 @@ class RemeshResult:
     panel_size_min: float
     panel_size_max: float
     seconds: float
+    seeding: str = "uniform"
+    fan_out: float = 1.0
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -65,7 +76,7 @@ class RemeshResult:
                 "section_normal": self.frame.axes[0].tolist(),
                 "fit_deviation_mm": self.fit_deviation_mm, "planarity_mm": self.planarity_mm,
                 "panel_size_min": self.panel_size_min, "panel_size_max": self.panel_size_max,
-                "seconds": self.seconds}
+                "seconds": self.seconds, "seeding": self.seeding, "fan_out": self.fan_out}
 
 
 def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
@@ -91,17 +102,46 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     # without losing more than a fifth of the panels
     g = tuple(float(np.sqrt(e.min() * e.max())) / spec.spacing for e in (net.edge_lengths_rows,
                                                                        net.edge_lengths_cols))
+    first, seeding = net, "uniform"
+    candidates = []
     if max(abs(np.log(g[0])), abs(np.log(g[1]))) > 0.02:
-        other = sections_net(hf, frame, loops, spec.spacing, spec.min_face, (1.0 / g[0], 1.0 / g[1]))
+        candidates.append(("scaled", sections_net(hf, frame, loops, spec.spacing, spec.min_face,
+                                                  (1.0 / g[0], 1.0 / g[1]))))
+    # every strip balanced on its own (seeds and planes chosen on a dense net): kept when it narrows the range
+    if _worst(first, spec.spacing) > np.log(1.0 / (1.0 - BALANCED)):
+        candidates.append(("strips", sections_net(hf, frame, loops, spec.spacing, spec.min_face, balance=True)))
+    for how, other in candidates:
         if _worst(other, spec.spacing) < _worst(net, spec.spacing) and \
-                other.grid_faces.sum() >= 0.8 * net.grid_faces.sum():
-            net = other
-    v = np.asarray(net.mesh.vertices).reshape(-1, 3)
-    planes = net.planes[net.row_of_vertex]
-    planarity = float(np.max(np.abs(np.einsum("ij,ij->i", v, planes[:, :3]) + planes[:, 3])))
+                other.grid_faces.sum() >= 0.8 * first.grid_faces.sum():
+            net, seeding = other, how
+    planarity = planarity_mm(net)
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
-                        time.process_time() - t0)
+                        time.process_time() - t0, seeding, fan_out(net))
+
+
+def planarity_mm(net: SectionsNet) -> float:
+    """The largest distance of a vertex from the plane of its row (and of its column, when the columns are
+    planar too), mm; 0 for a net with no planar family."""
+    v = np.asarray(net.mesh.vertices).reshape(-1, 3)
+    worst = 0.0
+    for planes, index in ((net.planes, net.row_of_vertex), (net.planes_cols, net.col_of_vertex)):
+        if planes is not None and index is not None:
+            p = planes[index]
+            worst = max(worst, float(np.max(np.abs(np.einsum("ij,ij->i", v, p[:, :3]) + p[:, 3]))))
+    return worst
+
+
+def fan_out(net: SectionsNet) -> float:
+    """The largest ``max / min`` of the section edges (rows) of the kept faces within one strip (a column
+    of faces between two neighbouring curves of the other family)."""
+    strip = np.argwhere(net.grid_faces)[:, 1]          # kept faces in row-major order, as the edge lengths
+    e = net.edge_lengths_rows
+    worst = 1.0
+    for j in np.unique(strip):
+        ej = e[strip == j].ravel()
+        worst = max(worst, float(ej.max() / max(float(ej.min()), 1e-300)))
+    return worst
 
 
 def _worst(net: SectionsNet, spacing: float) -> float:

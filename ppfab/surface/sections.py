@@ -41,25 +41,31 @@ EDGE_MARGIN = 0.5
 SUBSTEPS_PER_SPACING = 12
 """Runge–Kutta steps per ``spacing`` of ``x``."""
 
+BALANCE_DENSITY = 8
+"""Curves and planes per ``spacing`` of the dense net the balanced seeds are chosen on."""
+
 
 @dataclass(frozen=True)
 class SectionsNet:
     """The net as built, trimmed, in world coordinates (mm).
 
     mesh : :class:`QuadGrid` when the kept faces form a rectangle of the grid, else :class:`QuadMesh`
-    planar_family : the family (``"rows"``) whose polylines lie in the section planes
-    planes : (R, 4) unit section planes ``n·p + d = 0`` of the rows of the full grid
+    planar_family : the families whose polylines lie in planes before optimisation: ``"rows"`` (sections),
+        ``"both"`` (pp), ``"none"`` (principal)
+    planes : (R, 4) unit section planes ``n·p + d = 0`` of the rows of the full grid (None: rows not planar)
+    planes_cols : (C, 4) planes of the columns of the full grid, when they are planar (pp)
+    col_of_vertex : (N,) int — the column of the full grid each vertex of ``mesh`` lies in
     row_of_vertex : (N,) int — the section (index into ``planes``) each vertex of ``mesh`` lies in
     grid_faces : (m, n) bool — the faces of the full grid that were kept
     faces_total, dropped_outside, dropped_sliver, dropped_island : faces of the full grid; removed because
         they are not wholly inside the trim region, smaller than ``min_face`` of a square panel, or cut off
         from the largest connected part
-    edge_lengths_rows, edge_lengths_cols : lengths of the kept edges along the sections and along the
-        conjugate curves, mm
+    edge_lengths_rows, edge_lengths_cols : (F, 2) — per kept face (row-major order of ``grid_faces``) the
+        lengths of its two edges along the rows (sections) and its two along the columns (conjugate curves), mm
     """
 
     mesh: QuadGrid | QuadMesh
-    planes: np.ndarray
+    planes: np.ndarray | None
     row_of_vertex: np.ndarray
     grid_faces: np.ndarray
     faces_total: int
@@ -70,6 +76,8 @@ class SectionsNet:
     edge_lengths_cols: np.ndarray
     planar_family: str = "rows"
     notes: tuple[str, ...] = field(default_factory=tuple)
+    col_of_vertex: np.ndarray | None = None
+    planes_cols: np.ndarray | None = None
 
 
 def conjugate_slope(hf: HeightField, x: np.ndarray, y: np.ndarray, floor: float, limit: float) -> np.ndarray:
@@ -141,7 +149,8 @@ def _arc_positions(t: np.ndarray, pts: np.ndarray, centre: float, spacing: float
 
 
 def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
-                 min_face: float = 0.25, steps: tuple[float, float] = (1.0, 1.0)) -> SectionsNet:
+                 min_face: float = 0.25, steps: tuple[float, float] = (1.0, 1.0),
+                 balance: bool = False) -> SectionsNet:
     """Build the sections net of a height field, trimmed to the plan region.
 
     Parameters
@@ -154,23 +163,19 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     steps : the seed step along the middle section and the plane step along the middle conjugate curve, as
         fractions of ``spacing`` (:func:`ppfab.surface.remesh.remesh` balances them so that the edges that
         grow and shrink away from the middle straddle ``spacing``)
+    balance : place every seed and plane so that the panels of its own strip straddle ``spacing``
+        (:mod:`.balance`), instead of a uniform step along the middle lines
     """
     limit = float(np.tan(np.radians(MAX_ANGLE_DEG)))
     loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
     floor = _check_degenerate(hf, frame, loops, limit, EDGE_MARGIN * spacing)
-    if loops:
-        allp = np.concatenate(loops)
-        x_lo, x_hi = max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max())
-        y_lo, y_hi = max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max())
-    else:
-        x_lo, x_hi, y_lo, y_hi = hf.x[0], hf.x[-1], hf.y[0], hf.y[-1]
+    x_lo, x_hi, y_lo, y_hi = region_box(hf, loops)
     xc, yc = 0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)
     h = spacing / SUBSTEPS_PER_SPACING
     # seeds: along the middle section, spaced by arc length, over the region (and one spacing beyond)
     lo_y, hi_y = max(hf.y[0], y_lo - spacing), min(hf.y[-1], y_hi + spacing)
     ys = np.linspace(lo_y, hi_y, max(50, int((hi_y - lo_y) / h) + 1))
     sec = np.stack([ys, hf.f(np.full_like(ys, xc), ys)], axis=1)
-    seeds = _arc_positions(ys, sec, yc, spacing * steps[0])
     # planes: along the middle conjugate curve, spaced by arc length, over the region (and one beyond)
     lo_x, hi_x = max(hf.x[0], x_lo - spacing), min(hf.x[-1], x_hi + spacing)
     xs_r = np.linspace(xc, hi_x, max(2, int((hi_x - xc) / h) + 1))
@@ -185,13 +190,53 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     xs = np.concatenate([xs_l[::-1], xs_r[1:]])
     yline = np.concatenate([trace(xs_l)[::-1], trace(xs_r)[1:]])
     curve = np.stack([xs, yline, hf.f(xs, yline)], axis=1)
-    planes_x = _arc_positions(xs, curve, xc, spacing * steps[1])
+    if balance:
+        # a dense net (eight curves and planes per panel) decides where the seeds and planes go
+        from .balance import balanced_positions
+
+        d_seeds = _arc_positions(ys, sec, yc, spacing * steps[0] / BALANCE_DENSITY)
+        d_planes = _arc_positions(xs, curve, xc, spacing * steps[1] / BALANCE_DENSITY)
+        if len(d_planes) < 2 or len(d_seeds) < 2:
+            raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
+                                "direction; give a smaller [surface] spacing", value=spacing)
+        dY = _march(hf, d_seeds, d_planes, xc, h, floor, limit)
+        dX = np.broadcast_to(d_planes[:, None], dY.shape)
+        dense = np.stack([dX, dY, hf.f(dX, dY)], axis=-1)
+        ins = hf.inside_box(dX, dY)
+        if loops:
+            ins &= inside(dense[..., :2].reshape(-1, 2), loops).reshape(ins.shape)
+        seeds, planes_x = balanced_positions(dense, ins, d_seeds, d_planes, yc, xc, spacing)
+    else:
+        seeds = _arc_positions(ys, sec, yc, spacing * steps[0])
+        planes_x = _arc_positions(xs, curve, xc, spacing * steps[1])
     if len(planes_x) < 2 or len(seeds) < 2:
         raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
                             "direction; give a smaller [surface] spacing", value=spacing)
-    # the conjugate curves at every plane, marching out from the middle
+    Y = _march(hf, seeds, planes_x, xc, h, floor, limit)
+    X = np.broadcast_to(planes_x[:, None], Y.shape)
+    valid = hf.inside_box(X, Y)
+    local = np.stack([X, Y, hf.f(X, Y)], axis=-1)
+    world = frame.to_world(local)
+    # rows lie in their planes exactly: the x of their vertices is the plane's
+    planes = np.stack([frame.section_plane(float(x)) for x in planes_x])
+    return trim_grid(world, local, valid, planes, loops, spacing, min_face)
+
+
+def region_box(hf: HeightField, loops: Sequence[np.ndarray]) -> tuple[float, float, float, float]:
+    """``(x_lo, x_hi, y_lo, y_hi)``: the plan box of the trim loops within the box of the fit."""
+    if loops:
+        allp = np.concatenate(loops)
+        return (max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max()),
+                max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max()))
+    return float(hf.x[0]), float(hf.x[-1]), float(hf.y[0]), float(hf.y[-1])
+
+
+def _march(hf: HeightField, seeds: np.ndarray, planes_x: np.ndarray, xc: float, h: float, floor: float,
+           limit: float) -> np.ndarray:
+    """``Y (len(planes_x), len(seeds))``: the conjugate curves through ``(xc, seeds)`` at every plane,
+    marching out from the middle."""
     Y = np.empty((len(planes_x), len(seeds)))
-    mid = int(np.searchsorted(planes_x, xc))
+    mid = min(int(np.searchsorted(planes_x, xc)), len(planes_x) - 1)
     y = _rk4(hf, xc, seeds, float(planes_x[mid]), h, floor, limit)
     Y[mid] = y
     for i in range(mid + 1, len(planes_x)):
@@ -199,18 +244,17 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
     y = Y[mid]
     for i in range(mid - 1, -1, -1):
         Y[i] = y = _rk4(hf, float(planes_x[i + 1]), y, float(planes_x[i]), h, floor, limit)
-    X = np.broadcast_to(planes_x[:, None], Y.shape)
-    valid = hf.inside_box(X, Y)
-    local = np.stack([X, Y, hf.f(X, Y)], axis=-1)
-    world = frame.to_world(local)
-    # rows lie in their planes exactly: the x of their vertices is the plane's
-    planes = np.stack([frame.section_plane(float(x)) for x in planes_x])
-    return _trim(world, local, valid, planes, loops, spacing, min_face)
+    return Y
 
 
-def _trim(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.ndarray,
-          loops: list[np.ndarray], spacing: float, min_face: float) -> SectionsNet:
-    """Keep the faces of the full grid inside the region, drop slivers and islands."""
+def trim_grid(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.ndarray | None,
+              loops: Sequence[np.ndarray], spacing: float, min_face: float, planes_cols: np.ndarray | None = None,
+              planar_family: str = "rows", what: str = "sections") -> SectionsNet:
+    """Keep the faces of a full grid ``world (m+1, n+1, 3)`` inside the region, drop slivers and islands.
+
+    local : the same points in the plan frame; valid : (m+1, n+1) bool, vertices that exist (in the fit's box,
+    curves that cross); planes, planes_cols : the planes of the rows and columns, if they are planar
+    """
     m, n = world.shape[0] - 1, world.shape[1] - 1
     ids = np.arange((m + 1) * (n + 1)).reshape(m + 1, n + 1)
     quads = np.stack([ids[:-1, :-1], ids[1:, :-1], ids[1:, 1:], ids[:-1, 1:]], axis=-1).reshape(-1, 4)
@@ -242,18 +286,21 @@ def _trim(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.nd
         island = int(np.count_nonzero(label != big))
         ok[kept[label != big]] = False
     if not ok.any():
-        raise GeometryError("no panel of the sections net lies wholly inside the surface's outline; give a "
+        raise GeometryError(f"no panel of the {what} net lies wholly inside the surface's outline; give a "
                             "smaller [surface] spacing")
     grid_faces = ok.reshape(m, n)
     rows_i = np.flatnonzero(grid_faces.any(axis=1))
     cols_j = np.flatnonzero(grid_faces.any(axis=0))
     i0, i1, j0, j1 = rows_i[0], rows_i[-1] + 1, cols_j[0], cols_j[-1] + 1
     row_index = np.broadcast_to(np.arange(m + 1)[:, None], (m + 1, n + 1)).ravel()
+    col_index = np.broadcast_to(np.arange(n + 1)[None, :], (m + 1, n + 1)).ravel()
     mesh: QuadGrid | QuadMesh
     if grid_faces[i0:i1, j0:j1].all():
         block = world[i0:i1 + 1, j0:j1 + 1]
-        mesh = QuadGrid(block, support_u=planes[i0:i1 + 1])
+        mesh = QuadGrid(block, support_u=None if planes is None else planes[i0:i1 + 1],
+                        support_w=None if planes_cols is None else planes_cols[j0:j1 + 1])
         row_of_vertex = np.repeat(np.arange(i0, i1 + 1), j1 - j0 + 1)
+        col_of_vertex = np.tile(np.arange(j0, j1 + 1), i1 - i0 + 1)
     else:
         f = quads[ok]
         used = np.unique(f)
@@ -261,8 +308,12 @@ def _trim(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.nd
         remap[used] = np.arange(len(used))
         mesh = QuadMesh(v[used], remap[f])
         row_of_vertex = row_index[used]
+        col_of_vertex = col_index[used]
     fk = quads[ok]
-    er = np.linalg.norm(v[fk[:, 3]] - v[fk[:, 0]], axis=1)      # v[i,j] → v[i,j+1]: along the section
-    ec = np.linalg.norm(v[fk[:, 1]] - v[fk[:, 0]], axis=1)      # v[i,j] → v[i+1,j]: along the conjugate curve
+    # per kept face its two edges along the rows (v[i,j] → v[i,j+1], v[i+1,j] → v[i+1,j+1]) and its two
+    # along the columns (v[i,j] → v[i+1,j], v[i,j+1] → v[i+1,j+1])
+    er = np.linalg.norm(v[fk[:, [3, 2]]] - v[fk[:, [0, 1]]], axis=2)
+    ec = np.linalg.norm(v[fk[:, [1, 2]]] - v[fk[:, [0, 3]]], axis=2)
     return SectionsNet(mesh, planes, row_of_vertex, grid_faces, int(m * n), dropped_outside,
-                       int(sliver.sum()), island, er, ec)
+                       int(sliver.sum()), island, er, ec, planar_family, col_of_vertex=col_of_vertex,
+                       planes_cols=planes_cols)
