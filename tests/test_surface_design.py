@@ -62,7 +62,7 @@ def test_surface_design_refuses_an_unknown_net():
     from ppfab.errors import DesignError
 
     with pytest.raises(DesignError, match="sections"):
-        parse_design({"surface": {"path": "roof.3dm", "net": "principal"}})
+        parse_design({"surface": {"path": "roof.3dm", "net": "conjugate"}})
 
 
 @pytest.mark.slow

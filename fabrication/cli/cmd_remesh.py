@@ -7,8 +7,9 @@ import json
 import sys
 
 NAME = "remesh"
-HELP = "remesh a surface (.3dm NURBS or a triangle mesh .obj/.off/.stl/.ply) into a quad net whose rows are " \
-       "planar sections (sections net), written as a quad OBJ"
+HELP = "remesh a surface (.3dm NURBS or a triangle mesh .obj/.off/.stl/.ply) into a quad net (sections: planar " \
+       "rows and their conjugate curves; principal: curvature lines; pp: two families of planar sections), " \
+       "written as a quad OBJ"
 ORDER = 6
 
 
@@ -16,9 +17,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("surface", help="the surface file (.3dm, .obj, .off, .stl, .ply)")
     p.add_argument("-o", "--out", required=True, help="the quad mesh to write (.obj)")
     p.add_argument("--spacing", type=float, default=1500.0, help="target panel size in mm (default 1500)")
-    p.add_argument("--net", default="sections", help="the net kind (sections)")
+    p.add_argument("--net", default="sections", help="the net kind: sections, principal or pp (default sections)")
     p.add_argument("--plane-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
                    help="normal of the section planes (default: vertical planes across the longer plan direction)")
+    p.add_argument("--second-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
+                   help="pp net: normal of the column planes, horizontal (default: across --plane-normal in plan)")
     p.add_argument("--units", default=None, help="units of a mesh file: mm, cm, m, in, ft (a .3dm states its own)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="knot spacing of the curvature fit as a fraction of the spacing (default 1.0)")
@@ -46,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     target = check_output_file(out, inputs=[args.surface], force=args.force)
     spec = parse_params(SurfaceSpec, {k: v for k, v in {
         "path": args.surface, "net": args.net, "spacing": args.spacing, "plane_normal": args.plane_normal,
-        "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
+        "second_normal": args.second_normal, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
     surface = read_surface(args.surface, spec.units, spec.object)
     if surface.note:
@@ -54,8 +57,10 @@ def run(args: argparse.Namespace) -> int:
     result = remesh(surface.samples, spec)
     v = np.asarray(result.net.mesh.vertices).reshape(-1, 3)
     deviation = float(surface.distance(v).max())
+    planar = {"rows": "rows are the planar sections", "both": "rows and columns are planar sections",
+              "none": "rows and columns are curvature lines"}[result.net.planar_family]
     header = (f"ppfab remesh: {spec.net} net of {surface.samples.source}, spacing {spec.spacing:g} mm, "
-              f"units mm; rows are the planar sections")
+              f"units mm; {planar}")
     write_output(target, lambda tmp: write_obj(result.net.mesh, tmp, header))
     summary = {**result.summary(), "deviation_mm": deviation, "surface": surface.samples.source,
                "units": surface.samples.units, "out": str(out)}
@@ -65,7 +70,9 @@ def run(args: argparse.Namespace) -> int:
         n = result.net
         print(f"ppfab: wrote {out}: {summary['faces']} quads, {summary['vertices']} vertices "
               f"({n.dropped_outside} boundary quads dropped, {n.dropped_sliver} slivers, {n.dropped_island} "
-              f"cut off); sections planar to {result.planarity_mm:.1e} mm; largest distance to the surface "
-              f"{deviation:.2f} mm; edges {result.panel_size_min:.2f}–{result.panel_size_max:.2f} × spacing",
-              file=sys.stderr)
+              f"cut off); {planar}" + (f", planar to {result.planarity_mm:.1e} mm" if n.planar_family != "none"
+                                       else "") +
+              f"; largest distance to the surface {deviation:.2f} mm; edges {result.panel_size_min:.2f}–"
+              f"{result.panel_size_max:.2f} × spacing; twist median {summary['twist_median']:.3f}, max "
+              f"{summary['twist_max']:.3f} (0: conjugate)", file=sys.stderr)
     return 0

@@ -37,7 +37,7 @@ def surface_geometry(design: Design, progress: Progress, allow_large: bool,
     r = remesh(surface.samples, spec)
     mesh: QuadGrid | QuadMesh = r.net.mesh
     check_size(vertex_count(mesh), geo.max_vertices, allow_large)
-    families: tuple[str, ...] = tuple(geo.planar_families or (r.net.planar_family,))
+    families: tuple[str, ...] = tuple(geo.planar_families or families_of(r.net.planar_family))
     result = None
     if design.optimize is not None:
         from ppfab.optimize import optimize

@@ -1,4 +1,4 @@
-"""A surface → a quad net on it: :func:`remesh` (the ``sections`` net so far), with what it measured.
+"""A surface → a quad net on it: :func:`remesh` (``sections``, ``principal`` or ``pp``), with what it measured.
 
 Examples
 --------
@@ -18,16 +18,20 @@ Examples
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import DesignError
+from ..mesh import QuadGrid
+from .curvature import quad_twist
 from .heightfield import HeightField, fit_height_field
 from .plan import PlanFrame, plan_frame
+from .pp import pp_net
+from .principal import principal_net
 from .samples import SurfaceSamples
 from .sections import SectionsNet, sections_net
-from .spec import SurfaceSpec
+from .spec import NETS, SurfaceSpec
 
 CELL_PER_SPACING = 8
 """Plan cells of the height-field fit per panel ``spacing``."""
@@ -53,6 +57,9 @@ class RemeshResult:
     fan_out : the largest ratio of the longest to the shortest section edge within one strip between two
         neighbouring conjugate curves: no choice of seeds narrows a strip's range below it (a quad net has
         no T-junctions to end or start a curve)
+    twist : (F,) per kept face, ``|II(a, b)| / (|a||b| max|κ|)`` of its two directions in the fitted
+        surface's second fundamental form: 0 for a conjugate net (how far a PP optimisation must move it)
+    umbilics : (U, 3) umbilics found near the outline of a principal net (world, mm)
     """
 
     net: SectionsNet
@@ -65,6 +72,8 @@ class RemeshResult:
     seconds: float
     seeding: str = "uniform"
     fan_out: float = 1.0
+    twist: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    umbilics: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -76,7 +85,10 @@ class RemeshResult:
                 "section_normal": self.frame.axes[0].tolist(),
                 "fit_deviation_mm": self.fit_deviation_mm, "planarity_mm": self.planarity_mm,
                 "panel_size_min": self.panel_size_min, "panel_size_max": self.panel_size_max,
-                "seconds": self.seconds, "seeding": self.seeding, "fan_out": self.fan_out}
+                "seconds": self.seconds, "seeding": self.seeding, "fan_out": self.fan_out,
+                "twist_median": float(np.median(self.twist)) if len(self.twist) else 0.0,
+                "twist_max": float(self.twist.max()) if len(self.twist) else 0.0,
+                "umbilics_mm": np.round(self.umbilics, 1).tolist()}
 
 
 def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
@@ -87,15 +99,36 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     GeometryError : the surface is not a height field over the plan of the sections, or the net degenerates
         (the message gives the place in mm)
     DesignError : a net kind that is not built
+    GeometryError : (principal) an umbilic inside the outline; (pp) the two plane families far from
+        conjugate
     """
     t0 = time.process_time()
-    if spec.net != "sections":
-        raise DesignError("surface.net", f"{spec.net!r} is not built yet; use 'sections'")
+    if spec.net not in NETS:
+        raise DesignError("surface.net", f"{spec.net!r} is not a net ppfab builds; use one of {', '.join(NETS)}")
     frame = plan_frame(samples.points, spec.plane_normal)
     local = frame.to_local(samples.points)
     hf = fit_height_field(local, spec.spacing / CELL_PER_SPACING, spec.smoothing * spec.spacing)
     fit_dev = float(np.max(np.abs(hf.f(local[:, 0], local[:, 1]) - local[:, 2])))
     loops = [frame.to_local(b)[:, :2] for b in samples.boundary]
+    seeding, twist, found = "uniform", None, np.zeros((0, 3))
+    if spec.net == "principal":
+        net, twist, found = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
+    elif spec.net == "pp":
+        net, twist = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal)
+    else:
+        net, seeding = _balanced_sections(hf, frame, loops, spec)
+    if twist is None:
+        kept = np.argwhere(net.grid_faces)
+        twist = np.zeros(0) if not len(kept) else _twist_of(net, frame, hf)
+    planarity = planarity_mm(net)
+    sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
+    return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
+                        time.process_time() - t0, seeding, fan_out(net), twist, found)
+
+
+def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray],
+                       spec: SurfaceSpec) -> tuple[SectionsNet, str]:
+    """The sections net with the seeding that keeps its edges nearest the spacing."""
     net = sections_net(hf, frame, loops, spec.spacing, spec.min_face)
     # the conjugate curves fan out or converge away from the middle: scale the two steps so that each
     # family's shortest and longest edge straddle the spacing (geometric mean 1), if that narrows the range
@@ -114,10 +147,13 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
         if _worst(other, spec.spacing) < _worst(net, spec.spacing) and \
                 other.grid_faces.sum() >= 0.8 * first.grid_faces.sum():
             net, seeding = other, how
-    planarity = planarity_mm(net)
-    sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
-    return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
-                        time.process_time() - t0, seeding, fan_out(net))
+    return net, seeding
+
+
+def _twist_of(net: SectionsNet, frame: PlanFrame, hf: HeightField) -> np.ndarray:
+    """Per kept face (row-major) the twist of its two directions in the fitted surface's second form."""
+    qm = net.mesh.to_quadmesh() if isinstance(net.mesh, QuadGrid) else net.mesh
+    return quad_twist(hf, frame.to_local(np.asarray(qm.vertices)[np.asarray(qm.faces)]))
 
 
 def planarity_mm(net: SectionsNet) -> float:

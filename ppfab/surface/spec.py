@@ -16,8 +16,8 @@ from pathlib import Path
 from ..errors import DesignError
 from ..schema import param
 
-NETS = ("sections",)
-"""The net kinds built so far (``principal``, ``conjugate`` and ``pp`` are not)."""
+NETS = ("sections", "principal", "pp")
+"""The net kinds built (a general ``conjugate`` net is not)."""
 
 UNITS = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 """Length units a mesh file may be declared in, and their size in millimetres."""
@@ -30,13 +30,18 @@ class SurfaceSpec:
     path: str = param("", doc="the surface file: a Rhino .3dm (the first NURBS surface or Brep face, trims "
                               "kept) or a triangle mesh (.obj, .off, .stl, .ply); relative to the design file")
     net: str = param("sections", doc="the net: sections (planar sections by parallel planes and their "
-                                     "conjugate curves; the sections are the rows, planar before optimising)",
+                                     "conjugate curves; the sections are the rows, planar before optimising), "
+                                     "principal (curvature lines: conjugate and orthogonal; refused at an "
+                                     "umbilic) or pp (two families of planar sections, both planar before "
+                                     "optimising; refused when far from conjugate)",
                      choices=NETS)
     spacing: float = param(1500.0, doc="target panel size, mm (arc length along both families)",
                            exclusive_min=0.0)
     plane_normal: list[float] | None = param(None, doc="normal of the parallel section planes (default: "
                                                        "vertical planes across the longer plan direction)",
                                              length=3)
+    second_normal: list[float] | None = param(None, doc="pp net: normal of the column planes, horizontal "
+                                                        "(default: across plane_normal in plan)", length=3)
     units: str | None = param(None, doc="units of a mesh file (mm, cm, m, in, ft); a .3dm states its own and "
                                         "this must then be absent or agree", choices=tuple(UNITS))
     smoothing: float = param(1.0, doc="knot spacing of the least-squares spline whose curvature sets the net's "
