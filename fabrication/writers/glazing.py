@@ -5,7 +5,8 @@
 extruded once in the strip's frame (:class:`~fabrication.glazing.strips.Strip`), and the retention parts
 (:mod:`fabrication.glazing.retention`: setting blocks ``SB-…``, stops ``ST-…``, pressure gaskets ``CG-…``,
 pressure plates ``CP-…`` and cover caps ``CC-…``), listed in ``retention.csv`` with every pane's restraint check
-in ``restraint.csv``; ``splices.step``: the two
+in ``restraint.csv``; written from the template (:mod:`fabrication.writers.step_template`, solids of one shape
+once, placed per part), not through the CAD kernel; ``splices.step``: the two
 cover plates of every splice, each outline with its bolt holes extruded once from the beam plate's face.
 """
 
@@ -51,6 +52,31 @@ def strip_solids(glazing) -> list:
         gasket.color = _colour("mesh")
         out += [strip, gasket]
     return out
+
+
+def strip_prisms(glazing) -> list:
+    """The solids of :func:`strip_solids` as :class:`~fabrication.writers.step_template.PlanarSolid` records (the
+    same prisms and colours), for the template writer."""
+    from ..contract import COLOURS
+    from .step_template import PlanarSolid
+
+    out = []
+    g = glazing.params.gasket_thickness
+    for s in glazing.strips:
+        outline = s.outline()
+        out.append(PlanarSolid.prism(s.part_id, COLOURS["rows"], outline, s.frame, 0.0, s.thickness))
+        out.append(PlanarSolid.prism(gasket_id(s.part_id), COLOURS["mesh"], outline, s.frame, s.thickness, g))
+    return out
+
+
+def retention_prisms(retention) -> list:
+    """The solids of :func:`retention_solids` as :class:`~fabrication.writers.step_template.PlanarSolid`
+    records."""
+    from ..contract import COLOURS
+    from .step_template import PlanarSolid
+
+    return [PlanarSolid.prism(part.part_id, COLOURS[RETENTION_COLOURS[part.kind]], part.outline, part.frame,
+                              part.z0, part.height) for part in retention.parts]
 
 
 RETENTION_COLOURS = {"setting_block": "mesh", "stop": "rows", "pressure_gasket": "mesh", "pressure_plate": "cols",
@@ -177,7 +203,9 @@ def _plain(value: float, digits: int = 3) -> float:
 @writer("glazing", order=25, enabled=lambda design: True)
 def write_glazing(build: "Build", out: Path, files: Files) -> str:
     """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
+    from ._step_text import step_label
     from .step import export_step
+    from .step_template import Assembly, grouped, write_step
 
     g = build.glazing
     if g is None:
@@ -189,13 +217,14 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
 
         retention = build_retention(build)
         beams = [s.beam_id for s in g.strips for _ in range(2)]
-        solids = strip_solids(g)
+        solids = strip_prisms(g)
         what = "glazing strips and gaskets"
         if retention is not None:
-            solids += retention_solids(retention)
+            solids += retention_prisms(retention)
             beams += [part.beam or "unsupported" for part in retention.parts]
             what += ", setting blocks, stops and pressure plates"
-        export_step(by_beam(solids, beams, f"{name} glazing"), out / GLAZING_STEP, description=f"{what} of {name}")
+        write_step(Assembly(step_label(f"{name} glazing"), list(grouped(solids, beams))), out / GLAZING_STEP,
+                   description=f"{what} of {name}")
         files["glazing_step"] = GLAZING_STEP
         if retention is not None:
             (out / RETENTION_CSV).write_text(csv_text(retention_rows(retention), RETENTION_COLUMNS), encoding="utf-8")

@@ -39,6 +39,8 @@ from ..beams.plates import BeamPlate
 from ppfab.metrics import polygon_area
 from ..contract import COLOURS, FIXED_TIMESTAMP, STEP_GLASS_GROUP
 from ._step_text import canonical_styles, replace_header, step_label
+from .step_template import Assembly, PlanarSolid, write_step
+from .step_template import grouped as template_grouped
 
 from . import Files, writer
 
@@ -375,7 +377,9 @@ def placed_pane_solids(panels: Sequence["Panel"], offsets: dict[str, float]) -> 
 
 
 def _export_glass(solids: list, ids: list[str], path: str | os.PathLike, name: str) -> Path:
-    """The assembly ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per pane, in the glass colour."""
+    """The assembly ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per pane, in the glass colour,
+    written by the CAD kernel from build123d solids (a tampered copy in the tests; a build writes
+    :func:`_write_glass`)."""
     from build123d import Compound
 
     for s in solids:
@@ -385,22 +389,62 @@ def _export_glass(solids: list, ids: list[str], path: str | os.PathLike, name: s
     return export_step(root, path, description=f"glass panels of {name}" if name else "glass panels")
 
 
+def glass_tree(solids: Sequence[PlanarSolid], name: str) -> Assembly:
+    """The product tree of ``panels.step``: ``name`` → ``glass`` → row (:func:`panel_groups`) → one solid per
+    pane."""
+    ids = [s.label for s in solids]
+    glass = Assembly(STEP_GLASS_GROUP, list(template_grouped(solids, panel_groups(ids))))
+    return Assembly(step_label(name or "panels"), [glass])
+
+
+def _write_glass(solids: list[PlanarSolid], path: str | os.PathLike, name: str) -> Path:
+    """``panels.step`` written from the template (:mod:`fabrication.writers.step_template`): panes of one shape
+    are written once and placed per pane."""
+    return write_step(glass_tree(solids, name), path,
+                      description=f"glass panels of {name}" if name else "glass panels")
+
+
+def panel_prisms(corners: np.ndarray, thickness: float, ids: Iterable[str]) -> list[PlanarSolid]:
+    """The solids of :func:`panel_solids` as :class:`~fabrication.writers.step_template.PlanarSolid` records
+    (the same frames, outlines and heights), in the glass colour."""
+    c = np.asarray(corners, dtype=float)
+    planes, _ = pl.fit_plane(c)
+    n = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
+    flip = np.einsum("ij,ij->i", planes[:, :3], n) < 0
+    planes[flip] *= -1.0
+    out = []
+    for k, pid in enumerate(ids):
+        nrm = planes[k, :3]
+        proj = c[k] - np.outer(c[k] @ nrm + planes[k, 3], nrm)
+        ex = proj[1] - proj[0]
+        ex /= np.linalg.norm(ex)
+        frame = Frame(proj.mean(axis=0), ex, np.cross(nrm, ex))
+        out.append(PlanarSolid.prism(pid, COLOURS["glass"], frame.to2d(proj), frame, 0.0, thickness))
+    return out
+
+
 def export_panels_step(corners: np.ndarray, path: str | os.PathLike, thickness: float = 10.0,
                        ids: Sequence[str] | None = None, name: str = "") -> Path:
-    """A STEP file of whole mesh faces as thin solids on the outside of the mesh (:func:`panel_solids`), for a
+    """A STEP file of whole mesh faces as thin solids on the outside of the mesh (:func:`panel_prisms`), for a
     quick look at a mesh; a build's ``panels.step`` holds the placed panes instead (:func:`export_placed_panes`)."""
     ids = list(ids) if ids is not None else [f"P{k:04d}" for k in range(len(corners))]
     if len(ids) != len(corners):
         raise FabricationError(f"{len(ids)} panel ids for {len(corners)} panels")
-    return _export_glass(panel_solids(corners, thickness, ids), ids, path, name)
+    return _write_glass(panel_prisms(corners, thickness, ids), path, name)
+
+
+def placed_panes(panels: Sequence["Panel"], offsets: dict[str, float]) -> list[PlanarSolid]:
+    """The panes of :func:`placed_pane_solids` as :class:`~fabrication.writers.step_template.PlanarSolid`
+    records, in the glass colour."""
+    return [PlanarSolid.prism(p.part_id, COLOURS["glass"], p.outline, p.frame, offsets[p.part_id],
+                              float(p.thickness_mm)) for p in panels]
 
 
 def export_placed_panes(panels: Sequence["Panel"], offsets: dict[str, float], path: str | os.PathLike,
                         name: str = "") -> Path:
-    """``panels.step``: the panes as cut (inset outlines) where they sit on the gaskets
-    (:func:`placed_pane_solids`), for clash checks."""
-    ids = [p.part_id for p in panels]
-    return _export_glass(placed_pane_solids(panels, offsets), ids, path, name)
+    """``panels.step``: the panes as cut (inset outlines) where they sit on the gaskets (:func:`placed_panes`),
+    for clash checks, written from the template."""
+    return _write_glass(placed_panes(panels, offsets), path, name)
 
 
 @writer("step", order=20)

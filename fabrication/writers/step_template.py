@@ -267,7 +267,7 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
         count[key] = count.get(key, 0) + 1
     key_of = {id(s): key for s, key in zip(solids, keys)}
     styled: list[tuple[int, tuple[float, float, float, float]]] = []
-    shapes: dict[object, tuple[int, int, np.ndarray]] = {}    # shape key → (product definition, B-rep rep, shift)
+    shapes: dict[object, tuple[int, int]] = {}               # shape key → (product definition, B-rep representation)
     nauo = [0]
 
     def product(name: str) -> tuple[int, int]:
@@ -294,7 +294,7 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
         data.add(f"CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#{rel},#{pds})")
         return target
 
-    def shape_of(s: PlanarSolid) -> tuple[int, int, np.ndarray]:
+    def shape_of(s: PlanarSolid) -> tuple[int, int]:
         """The product of ``s``'s shape (written at its first solid): named by the solid when the shape is used
         once, else ``<prefix> shape <k>``; its B-rep in the first solid's coordinates shifted to its first
         vertex."""
@@ -303,12 +303,11 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
         if got is None:
             name = s.label if count[key] == 1 else f"{s.label.split('-')[0]} shape {len(shapes) + 1}"
             pd, pds = product(name)
-            v0 = s.vertices[0].copy()
-            brep = _brep(data, s, s.vertices - v0)
+            brep = _brep(data, s, s.vertices - s.vertices[0])
             styled.append((brep, s.colour))
             rep = data.add(f"ADVANCED_BREP_SHAPE_REPRESENTATION('',(#{origin},#{brep}),#{ctx})")
             data.add(f"SHAPE_DEFINITION_REPRESENTATION(#{pds},#{rep})")
-            got = shapes[key] = (pd, rep, v0)
+            got = shapes[key] = (pd, rep)
         return got
 
     def assembly(node: Assembly) -> tuple[int, int]:
@@ -322,8 +321,8 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
                 items.append(place(pd, rep, kpd, krep, kid.name, None))
             else:
                 _check_rigid(kid)
-                spd, srep, v0 = shape_of(kid)
-                items.append(place(pd, rep, spd, srep, kid.label, _shift(kid.placement, v0)))
+                spd, srep = shape_of(kid)                 # its B-rep starts at the shape's first vertex
+                items.append(place(pd, rep, spd, srep, kid.label, _shift(kid.placement, kid.vertices[0])))
         data.lines[rep - 1] = "SHAPE_REPRESENTATION('',(" + ",".join(f"#{i}" for i in dict.fromkeys(items)) \
             + f"),#{ctx})"
         return pd, rep
