@@ -235,7 +235,10 @@ def _shift(m: np.ndarray, t: np.ndarray) -> np.ndarray:
     return m @ s
 
 
-def _check_rigid(solid: PlanarSolid) -> None:
+def _check(solid: PlanarSolid) -> None:
+    """Refuse a solid with a coordinate that is not a finite number or a placement that is not a rigid motion."""
+    if not np.all(np.isfinite(solid.vertices)):
+        raise FabricationError(f"{solid.label}: a vertex is not a finite number: the geometry is broken")
     m = np.asarray(solid.placement, dtype=float)
     r = m[:3, :3]
     if m.shape != (4, 4) or not np.all(np.isfinite(m)) or float(np.abs(r.T @ r - np.eye(3)).max()) > 1e-9 \
@@ -261,6 +264,8 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
     pdctx = data.add(f"PRODUCT_DEFINITION_CONTEXT('part definition',#{app},'design')")
     origin = data.axis(np.zeros(3), np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
     solids = list(_leaves(root))
+    for s in solids:
+        _check(s)
     keys = [_shape_key(s) if instance else k for k, s in enumerate(solids)]
     count: dict[object, int] = {}
     for key in keys:
@@ -320,7 +325,6 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
                 kpd, krep = assembly(kid)
                 items.append(place(pd, rep, kpd, krep, kid.name, None))
             else:
-                _check_rigid(kid)
                 spd, srep = shape_of(kid)                 # its B-rep starts at the shape's first vertex
                 items.append(place(pd, rep, spd, srep, kid.label, _shift(kid.placement, kid.vertices[0])))
         data.lines[rep - 1] = "SHAPE_REPRESENTATION('',(" + ",".join(f"#{i}" for i in dict.fromkeys(items)) \
