@@ -31,6 +31,10 @@ UMBILIC = 0.1
 """``|κ1 − κ2|`` below this fraction of the surface's typical ``max |κ|`` counts as umbilic."""
 
 
+MAX_UMBILICS = 8
+"""At most this many umbilics are located and reported."""
+
+
 def umbilics(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], margin: float) -> np.ndarray:
     """Umbilics: local minima of ``|κ1 − κ2|`` on the fit's plan grid below :data:`UMBILIC` of the 90th
     percentile of ``max(|κ1|, |κ2|)``, inside the outline and ``margin`` mm or more from it.
@@ -63,9 +67,36 @@ def umbilics(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], mar
     low = ins & (gap <= nb.min(axis=0)) & (gap < UMBILIC * scale)
     idx = np.argwhere(low)
     idx = idx[np.argsort(gap[low])]
-    loc = np.stack([X[idx[:, 0], idx[:, 1]], Y[idx[:, 0], idx[:, 1]],
-                    hf.f(X[idx[:, 0], idx[:, 1]], Y[idx[:, 0], idx[:, 1]])], axis=-1)
-    return frame.to_world(loc) if len(loc) else np.zeros((0, 3))
+    cell = float(max(gx[1] - gx[0], gy[1] - gy[0]))
+    found: list[np.ndarray] = []
+    for i, j in idx:
+        start = np.array([X[i, j], Y[i, j]])
+        if any(np.hypot(*(start - q)) <= 4 * cell for q in found):     # half a spacing apart
+            continue
+        p = _refine(hf, start, cell)
+        if all(np.hypot(*(p - q)) > 4 * cell for q in found):
+            found.append(p)
+        if len(found) >= MAX_UMBILICS:
+            break
+    if not found:
+        return np.zeros((0, 3))
+    xy = np.array(found)
+    return frame.to_world(np.column_stack([xy, hf.f(xy[:, 0], xy[:, 1])]))
+
+
+def _refine(hf: HeightField, p: np.ndarray, cell: float) -> np.ndarray:
+    """The minimum of ``(κ1 − κ2)²`` near a grid point (Nelder–Mead within two cells of it)."""
+    from scipy.optimize import minimize
+
+    def gap2(q: np.ndarray) -> float:
+        k1, k2, _, _ = principal(*forms(hf, np.array([q[0]]), np.array([q[1]])))
+        return float((k1[0] - k2[0]) ** 2)
+
+    res = minimize(gap2, p, method="Nelder-Mead",
+                   options={"initial_simplex": [p, p + [cell, 0.0], p + [0.0, cell]], "xatol": 1.0,
+                            "fatol": 0.0, "maxiter": 200})
+    q = np.asarray(res.x, dtype=float)
+    return q if np.hypot(*(q - p)) <= 2 * cell else p
 
 
 def _direction(hf: HeightField, p: np.ndarray, family: int, prev: np.ndarray) -> np.ndarray:

@@ -1,0 +1,165 @@
+"""The ``principal`` and ``pp`` nets on a designer's surface (ppfab.surface.principal, ppfab.surface.pp).
+
+Checked independently of the code under test: conjugacy with the second fundamental form of a local quadric
+fitted to the surface's own samples (``quad_twist`` of test_surface_sections, not the height-field spline);
+right angles from the net's 3D edges; planarity of every polyline of the mesh (found from its connectivity)
+against its own least-squares plane; distances to the NURBS through rhino3dm; umbilics and conjugate
+directions of analytic surfaces (a paraboloid of revolution, a hyperbolic paraboloid) known in closed form.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from surface_cases import write_nurbs
+from test_surface_sections import SADDLE, plan_grid_twist, quad_twist
+
+
+def _faces(mesh) -> np.ndarray:
+    return np.asarray(mesh.to_quadmesh().faces if hasattr(mesh, "to_quadmesh") else mesh.faces)
+
+
+def _right_angle_error(mesh) -> np.ndarray:
+    """Per face |90° − angle| between its mean row and mean column edge, degrees."""
+    v = np.asarray(mesh.vertices).reshape(-1, 3)
+    c = v[_faces(mesh)]
+    a = 0.5 * ((c[:, 3] - c[:, 0]) + (c[:, 2] - c[:, 1]))
+    b = 0.5 * ((c[:, 1] - c[:, 0]) + (c[:, 2] - c[:, 3]))
+    cos = np.abs(np.einsum("ij,ij->i", a, b)) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+    return 90.0 - np.degrees(np.arccos(np.clip(cos, 0, 1)))
+
+
+def _polyline_planarity(mesh) -> tuple[float, int]:
+    """Largest distance of a vertex from the least-squares plane of its polyline (both families, from the
+    mesh's connectivity), mm, and how many polylines of 3 or more vertices were checked."""
+    from ppfab.mesh import QuadMesh
+
+    qm = mesh.to_quadmesh() if not isinstance(mesh, QuadMesh) else mesh
+    v = np.asarray(qm.vertices)
+    worst, count = 0.0, 0
+    for pl in qm.polylines:
+        p = v[np.asarray(pl.vertices)]
+        if len(p) < 3:
+            continue
+        q = p - p.mean(axis=0)
+        n = np.linalg.svd(q)[2][-1]
+        worst = max(worst, float(np.abs(q @ n).max()))
+        count += 1
+    return worst, count
+
+
+@pytest.fixture(scope="module")
+def saddle(tmp_path_factory):
+    """The saddle NURBS of test_surface_sections, 40 × 28 ft, a one-face Brep written with rhino3dm."""
+    from fabrication.surfacefile import read_surface
+
+    path = tmp_path_factory.mktemp("saddle") / "saddle.3dm"
+    write_nurbs(path, SADDLE, 40.0, 28.0, "Feet", as_brep=True)
+    return read_surface(path)
+
+
+def _height_mesh(tmp_path, z, half: float = 6000.0, n: int = 41):
+    """A triangle mesh (mm) of ``z(x, y)`` over a square of ``2 half``, written as PLY; its path."""
+    import trimesh
+
+    x, y = np.meshgrid(np.linspace(-half, half, n), np.linspace(-half, half, n), indexing="ij")
+    ids = np.arange(n * n).reshape(n, n)
+    tri = np.concatenate([np.stack([ids[:-1, :-1], ids[1:, :-1], ids[1:, 1:]], -1).reshape(-1, 3),
+                          np.stack([ids[:-1, :-1], ids[1:, 1:], ids[:-1, 1:]], -1).reshape(-1, 3)])
+    path = tmp_path / "surface.ply"
+    trimesh.Trimesh(np.stack([x.ravel(), y.ravel(), z(x, y).ravel()], 1), tri, process=False).export(path)
+    return path
+
+
+def test_principal_net_is_conjugate_and_orthogonal(saddle):
+    from ppfab.surface import SurfaceSpec, remesh
+
+    r = remesh(saddle.samples, SurfaceSpec(path="saddle.3dm", spacing=1500.0, net="principal"))
+    mesh = r.net.mesh
+    assert r.net.planar_family == "none" and r.net.grid_faces.sum() >= 15
+    twist = quad_twist(saddle.samples.points, mesh, 1500.0)             # quadric fits, not the spline
+    naive = plan_grid_twist(saddle.samples.points, mesh, 1500.0)
+    assert np.median(twist) < 0.03 and twist.max() < 0.1 and np.median(naive) > 5 * np.median(twist)
+    angle = _right_angle_error(mesh)
+    assert np.median(angle) < 2.0 and angle.max() < 6.0                 # curvature lines cross at 90°
+    v = np.asarray(mesh.vertices).reshape(-1, 3)
+    assert saddle.distance(v).max() < 0.5                                # on the NURBS, mm
+    assert np.median(r.twist) < 0.03 and len(r.twist) == r.net.grid_faces.sum()
+
+
+def test_principal_net_refuses_an_umbilic_with_its_place(tmp_path, capsys):
+    """A paraboloid of revolution has one umbilic, on its axis, at (1000, -500) mm here."""
+    from fabrication.cli import main
+
+    src = _height_mesh(tmp_path, lambda x, y: 3000.0 - ((x - 1000.0) ** 2 + (y + 500.0) ** 2) / 40000.0)
+    out = tmp_path / "net.obj"
+    code = main(["remesh", str(src), "-o", str(out), "--net", "principal", "--spacing", "1500", "--units", "mm"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code != 0 and not out.exists() and len(err) == 1 and "Traceback" not in err[0]
+    m = re.search(r"umbilic .*at \(x, y\) = \((-?\d+), (-?\d+)\) mm", err[0])
+    assert m is not None, err[0]
+    assert np.hypot(float(m.group(1)) - 1000.0, float(m.group(2)) + 500.0) < 500.0
+    # the sections net of the same surface is built (no umbilic matters to it)
+    assert main(["remesh", str(src), "-o", str(out), "--spacing", "1500", "--units", "mm"]) == 0
+
+
+def test_pp_net_has_both_families_planar(saddle):
+    from ppfab.surface import SurfaceSpec, remesh
+
+    r = remesh(saddle.samples, SurfaceSpec(path="saddle.3dm", spacing=1500.0, net="pp"))
+    worst, count = _polyline_planarity(r.net.mesh)
+    assert count >= 8 and worst <= 1e-9                                  # rows and columns, before optimising
+    assert r.planarity_mm <= 1e-9 and r.net.planar_family == "both"
+    v = np.asarray(r.net.mesh.vertices).reshape(-1, 3)
+    assert saddle.distance(v).max() < 0.5
+    # the twist it reports agrees with the quadric fits (0.01 absolute or 30 %)
+    ref = float(np.median(quad_twist(saddle.samples.points, r.net.mesh, 1500.0)))
+    assert abs(float(np.median(r.twist)) - ref) < max(0.01, 0.3 * ref)
+
+
+def test_pp_net_refused_far_from_conjugate_and_built_along_conjugate_planes(tmp_path):
+    """On ``z = x·y / R`` the planes along the plan axes cut the asymptotic lines (twist 1): refused, with
+    advice. Planes at 45° are the principal (so conjugate) sections: built, twist ≈ 0."""
+    from fabrication.surfacefile import read_surface
+    from ppfab.errors import GeometryError
+    from ppfab.surface import SurfaceSpec, remesh
+
+    sf = read_surface(_height_mesh(tmp_path, lambda x, y: 2000.0 + x * y / 30000.0))
+    with pytest.raises(GeometryError, match=r"far from conjugate.*plane_normal") as exc:
+        remesh(sf.samples, SurfaceSpec(path="s.ply", spacing=1500.0, net="pp", plane_normal=[1.0, 0.0, 0.0]))
+    assert exc.value.value > 0.35
+    r = remesh(sf.samples, SurfaceSpec(path="s.ply", spacing=1500.0, net="pp", plane_normal=[1.0, 1.0, 0.0],
+                                       second_normal=[1.0, -1.0, 0.0]))
+    assert np.median(quad_twist(sf.samples.points, r.net.mesh, 1500.0)) < 0.02
+    assert _polyline_planarity(r.net.mesh)[0] <= 1e-9
+
+
+@pytest.mark.parametrize("normal, what", [([0.0, 0.0, 1.0], "out of the plan"), ([1.0, 0.2, 0.0], "crosses")])
+def test_pp_refuses_a_bad_second_normal(saddle, normal, what):
+    from ppfab.errors import GeometryError
+    from ppfab.surface import SurfaceSpec, remesh
+
+    with pytest.raises(GeometryError, match=what):
+        remesh(saddle.samples, SurfaceSpec(path="s.3dm", spacing=1500.0, net="pp", plane_normal=[1.0, 0, 0],
+                                           second_normal=normal))
+
+
+@pytest.mark.parametrize("net", ["principal", "pp"])
+def test_remesh_command_writes_the_net(tmp_path, capsys, net):
+    import json
+
+    from fabrication.cli import main
+    from ppfab.io import read_mesh
+
+    src = tmp_path / "saddle.3dm"
+    write_nurbs(src, SADDLE, 40.0, 28.0, "Feet", as_brep=True)
+    out = tmp_path / "net.obj"
+    assert main(["remesh", str(src), "-o", str(out), "--net", net, "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    m = read_mesh(out)
+    assert len(m.faces) == summary["faces"] and summary["deviation_mm"] < 0.5
+    assert summary["twist_max"] >= summary["twist_median"] >= 0.0
+    assert out.read_text(encoding="utf-8").splitlines()[0].startswith("# ppfab remesh: " + net)
