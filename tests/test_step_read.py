@@ -47,7 +47,12 @@ def test_reader_gives_the_solids_build123d_gives(built, name):
     ours = read_step_solids(path, colours=(name == "beams.step"))
     assert len(ours) == len(theirs) > 0
     for (above, solid), mine in zip(theirs, ours):
-        assert mine.name == solid.label
+        if "_shape_" in solid.label:
+            # a shape written once and placed per part (glazing.step, panels.step): build123d names the solid by
+            # the shape's product ("SB shape 9"), verify's reader by its occurrence, the part id
+            assert solid.label.startswith(mine.name.split("-")[0] + "_shape_"), (mine.name, solid.label)
+        else:
+            assert mine.name == solid.label
         # build123d folds " .()" of a label into "_"; below the root the labels are part and beam ids
         assert mine.path[1:] == above[1:] and len(mine.path) == len(above)
         assert np.abs(_points(mine.solid) - _points(solid)).max() <= 1e-9
