@@ -147,11 +147,11 @@ def test_parts_json_changed(copy, capsys):
 
 
 def _rewrite_step(folder, name, change):
-    from build123d import Compound, export_step, import_step
+    from build123d import Compound, export_step
 
-    from fabrication.writers.step import named_solids
+    from fabrication.verify._step_read import read_step_solids
 
-    pairs = named_solids(import_step(str(folder / name)))
+    pairs = [(s.name, s.solid) for s in read_step_solids(folder / name)]     # named by occurrence (part id)
     target = next(n for n, _ in pairs if n.startswith("B-W") or n.startswith("P-")) if name == "panels.step" \
         else next(n for n, _ in pairs if n.startswith("B-W"))
     solids = []
@@ -483,12 +483,12 @@ def test_per_type_dimension_text_overridden(copy, capsys):
 
 def _rewrite_named(folder, name, target, change):
     """Rewrite the STEP file ``name`` with the solid ``target`` changed (flat, every solid keeps its name)."""
-    from build123d import Compound, export_step, import_step
+    from build123d import Compound, export_step
 
-    from fabrication.writers.step import named_solids
+    from fabrication.verify._step_read import read_step_solids
 
     solids = []
-    for n, s in named_solids(import_step(str(folder / name))):
+    for n, s in [(r.name, r.solid) for r in read_step_solids(folder / name)]:   # named by occurrence (part id)
         if n == target:
             s = change(s)
         s.label = n
