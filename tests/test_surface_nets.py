@@ -163,3 +163,20 @@ def test_remesh_command_writes_the_net(tmp_path, capsys, net):
     assert len(m.faces) == summary["faces"] and summary["deviation_mm"] < 0.5
     assert summary["twist_max"] >= summary["twist_median"] >= 0.0
     assert out.read_text(encoding="utf-8").splitlines()[0].startswith("# ppfab remesh: " + net)
+
+
+def test_pp_net_refused_when_a_quad_is_warped_more_than_allowed(saddle):
+    """The warp reported is the normal part of each quad's mixed difference, recomputed here from the
+    corners; a max_warp below the largest refuses the net and names the place."""
+    from ppfab.errors import GeometryError
+    from ppfab.surface import SurfaceSpec, remesh
+
+    r = remesh(saddle.samples, SurfaceSpec(path="s.3dm", spacing=1500.0, net="pp"))
+    v = np.asarray(r.net.mesh.vertices).reshape(-1, 3)
+    c = v[_faces(r.net.mesh)]
+    mixed = c[:, 0] - c[:, 1] + c[:, 2] - c[:, 3]
+    n = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
+    warp = np.abs(np.einsum("ij,ij->i", n, mixed)) / np.linalg.norm(n, axis=1)
+    assert r.summary()["warp_mm_max"] == pytest.approx(warp.max(), rel=1e-9) and warp.max() > 5.0
+    with pytest.raises(GeometryError, match=r"warped \d+ mm > \[surface\] max_warp"):
+        remesh(saddle.samples, SurfaceSpec(path="s.3dm", spacing=1500.0, net="pp", max_warp=0.5 * warp.max()))

@@ -32,6 +32,16 @@ MAX_TWIST = 0.35
 to close; beyond it the planar quads it reaches lie far from the surface."""
 
 
+def quad_warp(corners: np.ndarray) -> np.ndarray:
+    """Per quad ``(F, 4, 3)``: ``|n · (c0 − c1 + c2 − c3)|``, mm — the normal part of its mixed difference
+    (``n`` across the diagonals), ≈ ``|II(a, b)|``: what making it planar must move its corners by, in sum."""
+    c = np.asarray(corners, dtype=float)
+    n = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
+    n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    out: np.ndarray = np.abs(np.einsum("ij,ij->i", n, c[:, 0] - c[:, 1] + c[:, 2] - c[:, 3]))
+    return out
+
+
 def column_direction(frame: PlanFrame, second_normal: Sequence[float] | None) -> np.ndarray:
     """``(a, b)``: the unit plan normal of the column planes in the frame (default ``(0, 1)``).
 
@@ -58,18 +68,20 @@ def column_direction(frame: PlanFrame, second_normal: Sequence[float] | None) ->
 
 
 def pp_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
-           min_face: float = 0.25, second_normal: Sequence[float] | None = None) -> tuple[SectionsNet, np.ndarray]:
+           min_face: float = 0.25, second_normal: Sequence[float] | None = None,
+           max_warp: float = float("inf")) -> tuple[SectionsNet, np.ndarray, np.ndarray]:
     """Build the pp net, trimmed to the plan region, and the twist of each kept quad.
 
     Returns
     -------
     net : rows in the planes ``planes``, columns in ``planes_cols`` (``planar_family = "both"``)
     twist : (F,) float — per kept face (row-major), 0 for conjugate directions
+    warp : (F,) float — per kept face, :func:`quad_warp` in mm
 
     Raises
     ------
-    GeometryError : the two families are far from conjugate (median twist above :data:`MAX_TWIST`), with
-        the place of the worst quad
+    GeometryError : the two families are far from conjugate (median twist above :data:`MAX_TWIST`, or a
+        quad warped more than ``max_warp`` mm), with the place of the worst quad
     """
     ab = column_direction(frame, second_normal)
     a, b = float(ab[0]), float(ab[1])
@@ -108,15 +120,24 @@ def pp_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spaci
     i, j = kept[:, 0], kept[:, 1]
     corners = np.stack([local[i, j], local[i + 1, j], local[i + 1, j + 1], local[i, j + 1]], axis=1)
     twist = quad_twist(hf, corners)
+    warp = quad_warp(frame.to_world(corners))
+    advice = ("turn the planes ([surface] plane_normal, second_normal) towards the principal directions, or "
+              "use net = 'sections'")
     if len(twist) and float(np.median(twist)) > MAX_TWIST:
         k = int(np.argmax(twist))
         w = frame.to_world(corners[k].mean(axis=0))
         raise GeometryError(
             f"pp net: the two plane families are far from conjugate on this surface (median twist "
             f"{np.median(twist):.2f} > {MAX_TWIST:g}, worst {twist[k]:.2f} at (x, y) = ({w[0]:.0f}, {w[1]:.0f}) mm): "
-            "planar panels would leave the surface; turn the planes ([surface] plane_normal, second_normal) "
-            "towards the principal directions, or use net = 'sections'", value=float(np.median(twist)))
-    return net, twist
+            f"planar panels would leave the surface; {advice}", value=float(np.median(twist)))
+    if len(warp) and float(warp.max()) > max_warp:
+        k = int(np.argmax(warp))
+        w = frame.to_world(corners[k].mean(axis=0))
+        raise GeometryError(
+            f"pp net: a quad at (x, y) = ({w[0]:.0f}, {w[1]:.0f}) mm is warped {warp[k]:.0f} mm > [surface] "
+            f"max_warp {max_warp:g} mm (median twist {np.median(twist):.2f}): planar panels would leave the "
+            f"surface by about that much; {advice}, or give a smaller spacing", value=float(warp[k]))
+    return net, twist, warp
 
 
 def _row_points(a: float, b: float, x: float, cs: np.ndarray, hf: HeightField) -> np.ndarray:

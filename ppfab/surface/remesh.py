@@ -27,7 +27,7 @@ from ..mesh import QuadGrid
 from .curvature import quad_twist
 from .heightfield import HeightField, fit_height_field
 from .plan import PlanFrame, plan_frame
-from .pp import pp_net
+from .pp import pp_net, quad_warp
 from .principal import principal_net
 from .samples import SurfaceSamples
 from .sections import SectionsNet, sections_net
@@ -60,6 +60,7 @@ class RemeshResult:
     twist : (F,) per kept face, ``|II(a, b)| / (|a||b| max|κ|)`` of its two directions in the fitted
         surface's second fundamental form: 0 for a conjugate net (how far a PP optimisation must move it)
     umbilics : (U, 3) umbilics found near the outline of a principal net (world, mm)
+    warp : (F,) per kept face the normal part of its mixed difference ``c0 − c1 + c2 − c3``, mm (0: planar)
     """
 
     net: SectionsNet
@@ -74,6 +75,7 @@ class RemeshResult:
     fan_out: float = 1.0
     twist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     umbilics: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    warp: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -88,7 +90,8 @@ class RemeshResult:
                 "seconds": self.seconds, "seeding": self.seeding, "fan_out": self.fan_out,
                 "twist_median": float(np.median(self.twist)) if len(self.twist) else 0.0,
                 "twist_max": float(self.twist.max()) if len(self.twist) else 0.0,
-                "umbilics_mm": np.round(self.umbilics, 1).tolist()}
+                "umbilics_mm": np.round(self.umbilics, 1).tolist(),
+                "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0}
 
 
 def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
@@ -114,16 +117,15 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     if spec.net == "principal":
         net, twist, found = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
     elif spec.net == "pp":
-        net, twist = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal)
+        net, twist, _ = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal, spec.max_warp)
     else:
         net, seeding = _balanced_sections(hf, frame, loops, spec)
     if twist is None:
-        kept = np.argwhere(net.grid_faces)
-        twist = np.zeros(0) if not len(kept) else _twist_of(net, frame, hf)
+        twist = _twist_of(net, frame, hf)
     planarity = planarity_mm(net)
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
-                        time.process_time() - t0, seeding, fan_out(net), twist, found)
+                        time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)))
 
 
 def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray],
@@ -150,10 +152,15 @@ def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray
     return net, seeding
 
 
+def _corners(net: SectionsNet) -> np.ndarray:
+    """``(F, 4, 3)`` world corners of the net's faces."""
+    qm = net.mesh.to_quadmesh() if isinstance(net.mesh, QuadGrid) else net.mesh
+    return np.asarray(qm.vertices)[np.asarray(qm.faces)]
+
+
 def _twist_of(net: SectionsNet, frame: PlanFrame, hf: HeightField) -> np.ndarray:
     """Per kept face (row-major) the twist of its two directions in the fitted surface's second form."""
-    qm = net.mesh.to_quadmesh() if isinstance(net.mesh, QuadGrid) else net.mesh
-    return quad_twist(hf, frame.to_local(np.asarray(qm.vertices)[np.asarray(qm.faces)]))
+    return quad_twist(hf, frame.to_local(_corners(net)))
 
 
 def planarity_mm(net: SectionsNet) -> float:

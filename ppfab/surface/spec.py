@@ -42,6 +42,9 @@ class SurfaceSpec:
                                              length=3)
     second_normal: list[float] | None = param(None, doc="pp net: normal of the column planes, horizontal "
                                                         "(default: across plane_normal in plan)", length=3)
+    max_warp: float = param(60.0, doc="pp net: largest warp of a quad before optimising, mm (the normal part "
+                                      "of c0 - c1 + c2 - c3: about how far planar panels move off the surface); "
+                                      "a net warped more is refused", exclusive_min=0.0)
     units: str | None = param(None, doc="units of a mesh file (mm, cm, m, in, ft); a .3dm states its own and "
                                         "this must then be absent or agree", choices=tuple(UNITS))
     smoothing: float = param(1.0, doc="knot spacing of the least-squares spline whose curvature sets the net's "
