@@ -1,11 +1,12 @@
 """Beam plates as flat parts for nesting and DXF cutting sheets.
 
 The flat outline of a plate is its outline in its own 2D frame (slots and end
-cuts included), so placing the part on a sheet and mapping it back into the
+cuts included; raised by ``Δ`` on the top-edge spans it is bevelled on, :mod:`fabrication.beams.bevel_cut`), so placing the part on a sheet and mapping it back into the
 structure use the same coordinates; the frame (origin, x and y directions) is
 recorded in ``meta['frame']``.  Node axes are drawn as marking lines (layer
 ``MARK``), clipped to the material (a half-lap slot removes half of its axis).  The bolt holes of the splices
-at a piece's ends are :attr:`HoledPart.holes` (cut as circles).
+at a piece's ends are :attr:`HoledPart.holes` (cut as circles); the bevels to plane after cutting are
+:attr:`HoledPart.bevels` (drawn on their own layer with their instruction).
 """
 
 from __future__ import annotations
@@ -27,11 +28,48 @@ class HoledPart(FlatPart):
     diameter, mm; the DXF writers cut them as circles on ``CUT``."""
 
     holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    bevels: tuple["BevelMark", ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class BevelMark:
+    """A top-edge span to plane after cutting: the raised edge as cut ``line (2, 2)`` (part frame) and the shop
+    instruction ``text`` (angle, the face that keeps the raised edge by its face mark, ``Δ``)."""
+
+    line: np.ndarray
+    text: str
+
+
+def bevel_marks(plate: BeamPlate) -> tuple[BevelMark, ...]:
+    """One :class:`BevelMark` per bevelled span of ``plate``: the span's edge of the cut outline (the raised
+    edge, the longest edge of the cut outline on the raised line) and ``BEVEL 13.6° U+ +1.45``: planed at the
+    lean to the strip, the face marked ``U+`` keeps the edge, the other face loses ``2Δ`` (``Δ`` in mm)."""
+    from fabrication.marking import face_marks, face_sign
+
+    if not plate.bevels or plate.cut_outline is None:
+        return ()
+    q = plate.cut_outline
+    nxt = np.roll(q, -1, axis=0)
+    marks = face_marks(plate.family, face_sign(plate.frame.normal, plate.plane[:3], False))
+    out = []
+    h = 0.5 * plate.thickness
+    for b in plate.bevels:
+        a, bb, c, w = b.line
+        z = h * b.side                                    # the raised face's line: a·x + b·y = c − w·z
+        off = np.abs(q @ np.array([a, bb]) - (c - w * z))
+        off_n = np.abs(nxt @ np.array([a, bb]) - (c - w * z))
+        on = np.flatnonzero((off <= 1e-6) & (off_n <= 1e-6))
+        if not len(on):
+            continue
+        k = int(max(on, key=lambda i: float(np.linalg.norm(nxt[i] - q[i]))))
+        face = marks[0] if b.side > 0 else marks[1]
+        out.append(BevelMark(np.array([q[k], nxt[k]]), f"BEVEL {b.lean_deg:.1f}\u00b0 {face} +{b.delta:.2f}"))
+    return tuple(out)
 
 
 def axis_marks(plate: BeamPlate, min_length: float = 1.0) -> tuple[np.ndarray, ...]:
     """Node axis lines ``top_k → bottom_k`` (2D) clipped to the outline, each a ``(2, 2)`` array."""
-    poly = Polygon(plate.outline)
+    poly = Polygon(plate.flat_outline)
     out = []
     for c in plate.chain.tolist():
         seg = LineString([plate.top[c], plate.bottom[c]]).intersection(poly)
@@ -76,7 +114,9 @@ def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
     keys: dict[tuple, str] = {}
     out = {}
     for p in plates:
-        k = (congruence_key(p.outline, mirror), len(p.holes))      # a piece with splice holes is its own type
+        # a piece with splice holes is its own type, and so is one with other bevels
+        k = (congruence_key(p.flat_outline, mirror), len(p.holes),
+             tuple(sorted((round(b.delta, 1), b.side) for b in p.bevels)))
         if k not in keys:
             keys[k] = f"BT{len(keys) + 1:03d}"
         out[p.part_id] = keys[k]
@@ -85,8 +125,8 @@ def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
 
 def flat_part(plate: BeamPlate, material: str = "", density: float = 0.0, type_id: str = "") -> FlatPart:
     """One :class:`~fabrication.flatpart.FlatPart` (kind ``"beam"``) for a plate."""
-    area = plate.area
-    mass = area * plate.thickness * density * 1e-9
+    area = float(polygon_area(plate.flat_outline))            # as cut (raised where bevelled)
+    mass = area * plate.thickness * density * 1e-9           # the plate as cut, before its bevels are planed
     meta = {
         "material": material, "thickness_mm": plate.thickness, "depth_mm": plate.depth,
         "mass_kg": mass, "length_mm": plate.length, "area_mm2": area,
@@ -97,8 +137,11 @@ def flat_part(plate: BeamPlate, material: str = "", density: float = 0.0, type_i
     if len(plate.holes):
         meta["holes"] = len(plate.holes)
         meta["hole_mm"] = float(plate.holes[0, 2])
-    return HoledPart(plate.part_id, "beam", plate.outline.copy(), marks=axis_marks(plate), label=plate.part_id,
-                     type_id=type_id, rotations=None, mirror_allowed=True, meta=meta, holes=plate.holes.copy())
+    if plate.bevels:
+        meta["bevels"] = len(plate.bevels)
+    return HoledPart(plate.part_id, "beam", plate.flat_outline.copy(), marks=axis_marks(plate), label=plate.part_id,
+                     type_id=type_id, rotations=None, mirror_allowed=True, meta=meta, holes=plate.holes.copy(),
+                     bevels=bevel_marks(plate))
 
 
 def flat_parts(plates: list[BeamPlate], material: str = "", density: float = 0.0,

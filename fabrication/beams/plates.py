@@ -125,6 +125,10 @@ class BeamPlate:
     plane_deviation : largest distance of the plate's mesh vertices from ``plane``, mm
     holes : (h, 3) bolt holes cut in the plate: centre ``x, y`` in the frame and diameter, mm (the holes of the
         bolted splices at its ends, :func:`fabrication.beams.build.with_splice_holes`)
+    bevels : the top-edge spans raised and bevelled to the glazing strip on them
+        (:class:`fabrication.beams.bevel_cut.TopBevel`, in span order; empty: a square top edge)
+    cut_outline : ``(r, 2)`` what is cut from the sheet when the plate has bevels (the outline raised by ``Δ``
+        on the bevelled spans), else ``None``; ``outline`` stays the plate's section in its mid-plane
     """
 
     part_id: str
@@ -149,6 +153,13 @@ class BeamPlate:
     trims: tuple[tuple[int, float], ...] = ()
     meta: dict = field(default_factory=dict)
     holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    bevels: tuple = ()
+    cut_outline: np.ndarray | None = None
+
+    @property
+    def flat_outline(self) -> np.ndarray:
+        """``(r, 2)`` the outline cut from the sheet: :attr:`cut_outline` when bevelled, else :attr:`outline`."""
+        return self.outline if self.cut_outline is None else self.cut_outline
 
     @property
     def raw_outline(self) -> np.ndarray:

@@ -23,6 +23,7 @@ from ppfab.metrics import Quality
 from ppfab.support.structure import SupportStructure
 
 from ..beams import BeamSet
+from ..beams.bevel_cut import bevelled_beams
 from ..nesting import Nesting
 from ..design import Design
 from .progress import Progress
@@ -57,14 +58,20 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         panels = stage_panels(design, geometry, p, quality)
         beams = stage_beams(design, support, p)
         glazing = stage_glazing(design, support, panels, beams, p)
+        beams = bevelled_beams(beams, glazing)       # top edges raised and bevelled under leaning strips
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)
         summary = stage_summary(geometry, panels, beams, nesting, support, glazing)
     except BaseException:
         p.fail()
         raise
-    return Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
-                 times=p.times)
+    b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
+              times=p.times)
+    from dataclasses import replace
+
+    from ..glazing.retention import retention_mass_kg      # the retention is placed on the built panes and strips
+
+    return replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:

@@ -5,22 +5,152 @@ least-variance direction of its vertices), the plate under it is a beam row of `
 ``beam`` holding both its ``edge_nodes`` (else one of them), with unit plane normal ``n_p`` and thickness ``t``.
 The lean is ``λ = arcsin |u·n_p|``; bevels.csv must state it within :data:`LEAN_TOL`, the overlap
 ``(t/2)·sin λ`` and ``Δ = (t/2)·tan λ`` within 0.01 mm, and a bevel exactly where ``λ`` exceeds
-``glazing.bevel_min_deg`` (:mod:`fabrication.glazing.bevel`).
+``glazing.bevel_min_deg`` (:mod:`fabrication.glazing.bevel`).  Where a row states a bevel, the plate's solid in
+beams.step must have it (:mod:`fabrication.beams.bevel_cut`): corners on both its faces in the strip's underside
+plane (within :data:`FACE_TOL`), their plane within :data:`ANGLE_TOL` of it, ``Δ`` above the mid-plane edge on one
+face and below it on the other.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..contract import BEVEL_COLUMNS
 from . import Verification, check
-from ._shapes import literal, number, solid_points
+from ._shapes import frame_of, literal, number, solid_points, to_frame
+
+FACE_TOL = 0.05
+"""mm: how far a corner of a bevelled plate may lie from its strip's underside plane (the STEP file's decimals;
+a square top edge under a strip leaning 2° stands (t/2)·sin 2° = 0.21 mm off it on a 12 mm plate)."""
+
+ANGLE_TOL = 0.05
+"""Degrees: how far the bevelled face may turn off the strip's underside."""
 
 LEAN_TOL = 0.05
 """Degrees: how far the stated lean may be from the one re-measured (the STEP file's decimals on an 8 mm thick
 strip's vertices)."""
+
+
+def face_rings(solid, normal: np.ndarray) -> list[np.ndarray]:
+    """The outer boundaries ``(k, 3)`` of the planar faces of ``solid`` square to ``normal`` (either sense): a
+    beam plate's two faces, kernel solid or text-level record alike."""
+    n = np.asarray(normal, dtype=float)
+    out = []
+    if hasattr(solid, "face_area"):                          # a record of the text-level reader
+        for f in solid.faces():
+            if f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9:
+                out.append(solid.ring(solid.outer_loop(f)))
+        return out
+    from ._shapes import _chain
+
+    for face in solid.faces():
+        try:
+            fn = np.array(tuple(face.normal_at()), dtype=float)
+        except Exception:  # noqa: BLE001 - a non-planar face
+            continue
+        if abs(float(fn @ n)) < 1.0 - 1e-9:
+            continue
+        ring = _chain([(np.array(tuple(e.start_point())), np.array(tuple(e.end_point())))
+                       for e in face.outer_wire().edges()])
+        if ring is not None:
+            out.append(ring)
+    return out
+
+
+@dataclass(frozen=True)
+class PlateFaces:
+    """A plate solid's two faces in its frame (2D, counter-clockwise): ``front`` at ``z = +t/2``, ``back`` at
+    ``z = −t/2``; ``mid`` its section in the mid-plane (vertex by vertex the mean of the two: a bevelled plate's
+    faces have the same vertices in the same order, :mod:`fabrication.beams.bevel_cut`), ``None`` when they do
+    not correspond; ``cut`` their union, the outline cut from the sheet."""
+
+    front: np.ndarray
+    back: np.ndarray
+    mid: np.ndarray | None
+    cut: np.ndarray
+
+
+def _ccw(q: np.ndarray) -> np.ndarray:
+    from ppfab.metrics import polygon_area
+
+    return q if polygon_area(q) > 0 else q[::-1]
+
+
+def plate_faces(solid, frame: dict[str, np.ndarray]) -> PlateFaces | None:
+    """The :class:`PlateFaces` of a beam plate solid in its ``parts.csv`` frame, ``None`` without two faces."""
+    from shapely.geometry import Polygon
+
+    from ._shapes import to_frame
+
+    rings = [to_frame(r, frame) for r in face_rings(solid, frame["normal"])]
+    if len(rings) < 2:
+        return None
+    rings.sort(key=lambda r: -float(r[:, 2].mean()))
+    front, back = _ccw(rings[0][:, :2]), _ccw(rings[-1][:, :2])
+    mid = None
+    if len(front) == len(back):
+        k = int(np.argmin(np.linalg.norm(back - front[0], axis=1)))
+        aligned = np.roll(back, -k, axis=0)
+        if float(np.linalg.norm(aligned - front, axis=1).max()) < 0.5 * float(np.ptp(front, axis=0).min()):
+            mid = 0.5 * (front + aligned)
+    union = Polygon(front).union(Polygon(back))
+    if union.geom_type != "Polygon":
+        return None
+    cut = np.asarray(union.exterior.coords)[:-1]
+    # the union keeps near-duplicate and collinear vertices of either face: drop them, as the cut outline does
+    cut = cut[np.linalg.norm(cut - np.roll(cut, 1, axis=0), axis=1) > 1e-7]
+    prev, nxt = np.roll(cut, 1, axis=0), np.roll(cut, -1, axis=0)
+    cross = (cut[:, 0] - prev[:, 0]) * (nxt[:, 1] - cut[:, 1]) - (cut[:, 1] - prev[:, 1]) * (nxt[:, 0] - cut[:, 0])
+    keep = np.abs(cross) > 1e-9 * np.maximum(np.linalg.norm(nxt - prev, axis=1), 1.0)
+    return PlateFaces(front, back, mid, _ccw(cut[keep]))
+
+
+def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarray, solid,
+                      frame: dict | None) -> None:
+    """A bevelled row of bevels.csv against beams.step: the plate has a face in the strip's underside plane —
+    corners on both of its faces within :data:`FACE_TOL` of that plane, their plane within :data:`ANGLE_TOL` of
+    it — standing ``Δ`` (``delta_mm``, within 0.01 mm) above the mid-plane edge on one face and below it on the
+    other."""
+    if frame is None:
+        return
+    plate = row.get("plate", "")
+    c = strip_pts.mean(axis=0)
+    axes = np.linalg.svd(strip_pts - c)[2]
+    u, along = axes[2], axes[0]
+    pts = solid_points(solid)
+    s = (strip_pts - c) @ along
+    reach = float(np.ptp(s))
+    a = (pts - c) @ along
+    span = (a >= s.min() - reach) & (a <= s.max() + reach)  # the plate's corners along the strip's span (its
+    if float(u @ frame["y_dir"]) < 0:                       # nodes lie beyond its ends)
+        u = -u                                              # up, as the plate frame's y: away from the plate
+    under = float((strip_pts @ u).min())
+    d = pts @ u - under
+    near = (np.abs(d) <= FACE_TOL) & span
+    z = to_frame(pts[near], frame)[:, 2]
+    front, back = pts[near][z > 0], pts[near][z < 0]
+    if len(front) < 2 or len(back) < 2:
+        lowest = float(np.abs(d[span]).min()) if np.any(span) else float("nan")
+        v.error("beams.step", plate, f"has no bevelled face in the underside plane of {pid} (bevels.csv: "
+                                     f"{row.get('bevel', '')}); its nearest corner along the strip is {lowest:.3f} mm "
+                                     "off that plane")
+        return
+    face = pts[near]
+    normal = np.linalg.svd(face - face.mean(axis=0))[2][2]
+    angle = math.degrees(math.acos(min(1.0, abs(float(normal @ u)))))
+    if angle > ANGLE_TOL:
+        v.error("beams.step", plate, f"its bevel under {pid} turns {angle:.3f}° off the strip's underside (at most "
+                                     f"{ANGLE_TOL:g}°)")
+    m = np.cross(frame["normal"], along - (along @ frame["normal"]) * frame["normal"])
+    m = m / np.linalg.norm(m)
+    rise = 0.5 * abs(float((front @ m).mean() - (back @ m).mean()))
+    want = number(row.get("delta_mm"))
+    if not abs(rise - want) <= 0.01:
+        v.error("beams.step", plate, f"its bevel under {pid} stands {rise:.3f} mm above the mid-plane edge, "
+                                     f"bevels.csv's delta_mm is {row.get('delta_mm')!r}")
 
 
 @check("bevels", 67)
@@ -48,6 +178,8 @@ def check_bevels(v: Verification) -> None:
             plates.setdefault(r.get("beam_id", ""), []).append(({int(k) for k in nodes}, n / np.linalg.norm(n),
                                                                 number(r.get("thickness_mm"))))
     stated = {r.get("strip", ""): r for r in rows}
+    beam_solids = v.data.get("beam_solids") or {}
+    frames = {r["part_id"]: frame_of(r) for r in parts if r.get("kind") == "beam"}
     for pid in sorted(set(strips) - set(stated)):
         v.error(rel, pid, "strip has no row")
     for pid, r in sorted(stated.items()):
@@ -77,6 +209,8 @@ def check_bevels(v: Verification) -> None:
                 v.error(rel, pid, f"{key} {r.get(key)!r} is not the {value:.3f} re-measured from {rel_g} and the "
                                   "plate's plane in parts.csv")
         bevelled = r.get("bevel", "") != "square"
+        if bevelled and r.get("plate", "") in beam_solids:
+            _check_bevel_face(v, pid, r, pts, beam_solids[r["plate"]], frames.get(r["plate"]))
         if lean > threshold + LEAN_TOL and not bevelled:
             v.error(rel, pid, f"leans {lean:.2f}° on its plate, more than glazing.bevel_min_deg = {threshold:g}°, "
                               "but has no bevel")

@@ -195,6 +195,9 @@ def body_of(solid: Any) -> Body:
     c = pts.mean(axis=0)
     axes = np.linalg.svd(pts - c)[2]
     n = axes[2]
+    own = np.asarray(face.normal if text else tuple(face.normal_at()), dtype=float)
+    if abs(float(own @ n)) < 1.0 - 1e-12:               # a bevelled plate's corners tilt the fitted plane
+        n = own / np.linalg.norm(own)
     fo = outer_ring[0]
     off = (pts - fo) @ n
     if abs(off.min()) > abs(off.max()):                 # n from the face into the solid
@@ -208,8 +211,35 @@ def body_of(solid: Any) -> Body:
         return np.stack([(q - fo) @ ex, (q - fo) @ ey], axis=1)
 
     flat = Polygon(to2(outer_ring), [to2(r) for r in inner_rings]).buffer(0)
+    other = _opposite_ring(solid, face, n, text)
+    if other is not None:                               # a bevelled plate's faces differ: the part both hold
+        flat = flat.intersection(Polygon(to2(other)).buffer(0))
     convex = abs(flat.area - MultiPoint(to2(pts)).convex_hull.area) <= 1e-4 * max(flat.area, 1.0)
     return Body(pts, convex, fo, ex, ey, n, thick, flat)
+
+
+def _opposite_ring(solid: Any, face: Any, n: np.ndarray, text: bool) -> np.ndarray | None:
+    """The outer boundary of the solid's other large face parallel to ``face`` (a plate's other side), ``None``
+    when there is none.  A plate whose top edge is bevelled under its strip has two faces of different outline
+    (:mod:`fabrication.beams.bevel_cut`); its body is the prism over what both hold, inside the solid by at most
+    the bevel's wedge, so that a square plate's overlap with its strip is still measured in full."""
+    if text:
+        area = solid.face_area(face)
+        for f in solid.faces():
+            if f is not face and f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9 \
+                    and solid.face_area(f) > 0.5 * area:
+                return solid.ring(solid.outer_loop(f), 16)
+        return None
+    for f in solid.faces():
+        if f.is_same(face) or f.area <= 0.5 * face.area:
+            continue
+        try:
+            fn = np.array(tuple(f.normal_at()), dtype=float)
+        except Exception:  # noqa: BLE001 - a non-planar face
+            continue
+        if abs(float(fn @ n)) >= 1.0 - 1e-9:
+            return _ring(f.outer_wire())
+    return None
 
 
 def depth_of(shape: Any) -> tuple[float, float]:

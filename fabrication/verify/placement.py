@@ -1,6 +1,7 @@
 """The placement rule of parts.csv: ``x, y, rotation_deg, mirrored`` map each part's own outline onto its CUT
 polyline within 1e-6 mm — a panel's own outline is its type's (``glass/types/``), a beam plate's is its
-solid's outline in the frame of parts.csv (``beams.step``)."""
+solid's outline in the frame of parts.csv (``beams.step``; the union of its two faces, which a bevelled top
+edge makes differ)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ TOLERANCE_MM = 1e-6
 def check_placement(v: Verification) -> None:
     cut = v.data.get("cut", {})
     types = v.data.get("type_outlines", {})
-    plates = v.data.get("plate_outlines", {})
+    plates = v.data.get("plate_cut_outlines") or v.data.get("plate_outlines", {})
     for row in v.data.get("parts", []):
         pid = row["part_id"]
         if pid not in cut:

@@ -205,10 +205,34 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     down = np.array([u[1], -u[0]])
     down = down if down @ s > 0 else -down
     clear = float(((q - c) @ down).min())
-    want = float(fab.get("splices", {}).get("top_clear", 0.0))
+    want = float(fab.get("splices", {}).get("top_clear", 0.0)) + _raise_at_cut(v, first, second)
     if abs(clear - want) > PLACE_TOL:
         v.error(rel, pid, f"cover plate is {clear:.4g} mm under the top edge of {first}, splices.top_clear is "
                           f"{want:g} mm")
+
+
+def _raise_at_cut(v: Verification, first: str, second: str) -> float:
+    """How far (mm) the cutting outline's top edge stands above the plate's at the cut between two pieces: the
+    ``delta_mm`` bevels.csv states for the strip over the cut (its ``edge_nodes`` one node of either piece) where
+    it bevels the top edge (:mod:`fabrication.beams.bevel_cut`), else 0."""
+    rel = v.data.get("manifest", {}).get("files", {}).get("bevels_csv")
+    if rel is None or not (v.folder / rel).is_file():
+        return 0.0
+    parts = {r["part_id"]: r for r in v.data.get("parts", [])}
+    try:
+        a, b = ({int(k) for k in ast.literal_eval(parts[p].get("nodes", "[]"))} for p in (first, second))
+    except (KeyError, ValueError, SyntaxError, TypeError):
+        return 0.0
+    over = set()
+    for r in parts.values():
+        if r.get("kind") == "strip":
+            ends = {int(k) for k in r.get("edge_nodes", "").split(";") if k.strip().lstrip("-").isdigit()}
+            if len(ends) == 2 and ends & a and ends & b:
+                over.add(r["part_id"])
+    for row in read_csv(v.folder / rel):
+        if row.get("strip") in over and row.get("bevel", "square") != "square":
+            return number(row.get("delta_mm"), 0.0)
+    return 0.0
 
 
 def _sides(ring: np.ndarray) -> np.ndarray:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import Verification, check
-from ._shapes import solid_points
+from ._shapes import frame_of, solid_points
 from ._step_read import StepSolid
 
 
@@ -39,16 +39,37 @@ def check_step(v: Verification) -> None:
             v.error(rel, name, "solid is not valid (BRepCheck)")
         pts = solid_points(solid)
         c = pts - pts.mean(axis=0)
-        normal = np.linalg.svd(c)[2][2]
+        frame = frame_of(beams[name])
+        normal = frame["normal"] if frame is not None else np.linalg.svd(c)[2][2]
         spread = float(np.ptp(c @ normal))
         if t and abs(spread - t) > 1e-6 * max(1.0, t):
             v.error(rel, name, f"solid is {spread:.6g} mm thick, expected {t:g} mm")
-        area = float(beams[name].get("area_mm2") or 0.0)      # less the splice holes parts.csv lists
-        area -= np.pi / 4.0 * float(beams[name].get("holes") or 0) * float(beams[name].get("hole_mm") or 0.0) ** 2
-        if t and area and abs(solid.volume - area * t) > 1e-4 * area * t:
-            v.error(rel, name, f"volume {solid.volume:.6g} mm³ ≠ outline area × thickness {area * t:.6g} mm³")
+        _check_volume(v, rel, name, beams[name], solid, frame, t)
     _check_tree(v, rel, beams, read)
     v.checked.append("step")
+
+
+def _check_volume(v: Verification, rel: str, name: str, row: dict, solid, frame: dict | None, t: float) -> None:
+    """A plate's volume is ``t`` times the mean area of its two faces less its bolt holes (a bevelled top edge
+    moves the faces' outlines apart, :mod:`fabrication.beams.bevel_cut`; a square plate's faces are one outline),
+    and its ``area_mm2`` the area of the two faces' union, the outline cut from the sheet."""
+    from ppfab.metrics import polygon_area
+
+    from .bevels import plate_faces
+
+    holes = np.pi / 4.0 * float(row.get("holes") or 0) * float(row.get("hole_mm") or 0.0) ** 2
+    area = float(row.get("area_mm2") or 0.0)
+    faces = plate_faces(solid, frame) if frame is not None else None
+    if faces is None:
+        mean = cut = area
+    else:
+        mean = 0.5 * (float(polygon_area(faces.front)) + float(polygon_area(faces.back)))
+        cut = float(polygon_area(faces.cut))
+        if area and abs(cut - area) > 1e-6 * area + 1e-3:
+            v.error(rel, name, f"its faces' outline encloses {cut:.6g} mm², parts.csv's area_mm2 is {area:.6g} mm²")
+    want = (mean - holes) * t
+    if t and area and abs(solid.volume - want) > 1e-4 * want:
+        v.error(rel, name, f"volume {solid.volume:.6g} mm³ ≠ face area × thickness {want:.6g} mm³")
 
 
 def check_header(v: Verification, rel: str) -> None:

@@ -16,7 +16,10 @@ For each beam solid (read by the ``step`` check) and its ``parts.csv`` row:
   parallel to the in-plane node axis at half the slot width; every end cut: an edge on the line parallel to
   the axis at the set-back.
 
-The outline of each plate in its frame is kept in ``data["plate_outlines"]`` for the placement check.
+The outline of each plate in its frame — its section in the mid-plane, the mean of its two faces (which differ
+where its top edge is bevelled, :mod:`fabrication.beams.bevel_cut`) — is kept in ``data["plate_outlines"]``,
+and the union of its faces, the outline cut from the sheet, in ``data["plate_cut_outlines"]`` for the placement
+check.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import Verification, check
+from .bevels import plate_faces
 from ._shapes import boundary_distance, edges_on_line, face_outline, frame_of, literal, number, solid_points, \
     to_frame, torsion_tolerance
 
@@ -96,6 +100,7 @@ def check_step_geometry(v: Verification) -> None:
     axes = {int(r["vertex"]): np.array([number(r[c]) for c in ("axis_x", "axis_y", "axis_z")]) for r in node_rows}
     plates_at = _node_plates(v)
     outlines = v.data.setdefault("plate_outlines", {})
+    cut_outlines = v.data.setdefault("plate_cut_outlines", {})
     neighbours: dict[int, set[int]] = {}
     for i, j in np.asarray(mesh.edges, dtype=int).tolist():
         neighbours.setdefault(i, set()).add(j)
@@ -130,11 +135,21 @@ def check_step_geometry(v: Verification) -> None:
         if tilt > 1e-9 or shift > 1e-6:
             v.error("parts.csv", pid, f"the plate frame is not in the support plane (turned {np.degrees(tilt):.3g}°, "
                                       f"{shift:.3g} mm off)")
-        ring = face_outline(solid, frame["normal"])
-        if ring is None:
-            v.error(rel, pid, "solid has no face in its plate plane")
-            continue
-        poly = to_frame(ring, frame)[:, :2]
+        faces = plate_faces(solid, frame)
+        if faces is None:
+            ring = face_outline(solid, frame["normal"])
+            if ring is None:
+                v.error(rel, pid, "solid has no face in its plate plane")
+                continue
+            poly = to_frame(ring, frame)[:, :2]
+            cut_outlines[pid] = poly
+        else:
+            if faces.mid is None:
+                v.error(rel, pid, "its two faces do not have the same corners in the same order (a plate, or one "
+                                  "bevelled under its strips)")
+                continue
+            poly = faces.mid
+            cut_outlines[pid] = faces.cut
         outlines[pid] = poly
         for k in nodes:
             k = int(k)

@@ -174,7 +174,7 @@ def elements(build: "Build", files: Files) -> list[Element]:
         row["planarity_dev_mm"] = round(float(b.plane_deviation), 4)
         row.setdefault("family", FAMILY_NAMES[b.family])
         t = float(b.thickness)
-        out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.outline, b.frame, -0.5 * t, t,
+        out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.flat_outline, b.frame, -0.5 * t, t,
                            _props(row), np.asarray(b.holes, dtype=float).reshape(-1, 3)))
     return out + _glazing_elements(build, rows)
 

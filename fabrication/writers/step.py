@@ -88,6 +88,59 @@ def _placed_prism(outline: np.ndarray, frame: Frame, z0: float, height: float, l
     return solid
 
 
+def _placed_loft(front: np.ndarray, back: np.ndarray, frame: Frame, t: float, label: str):
+    """The solid between ``front`` at ``z = +t/2`` and ``back`` at ``z = −t/2`` (frame coordinates, CCW, vertex
+    ``k`` of one joined to vertex ``k`` of the other; :func:`fabrication.beams.bevel_cut.face_outlines`), placed by
+    ``frame``: a build123d ``Solid`` labelled ``label``, every face planar — the two faces and one side face per
+    edge, which joins two parallel segments — sewn into a closed shell (no boolean)."""
+    from build123d import Solid
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon, BRepBuilderAPI_Sewing
+    from OCP.BRepLib import BRepLib
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt, gp_Trsf
+    from OCP.TopAbs import TopAbs_SHELL
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS, TopoDS_Solid
+
+    h = 0.5 * float(t)
+    top = [gp_Pnt(float(x), float(y), h) for x, y in np.asarray(front, dtype=float).tolist()]
+    bot = [gp_Pnt(float(x), float(y), -h) for x, y in np.asarray(back, dtype=float).tolist()]
+
+    def face(points: list) -> object:
+        poly = BRepBuilderAPI_MakePolygon()
+        for p in points:
+            poly.Add(p)
+        poly.Close()
+        return BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()       # True: a plane only
+
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    sew.Add(face(top))
+    sew.Add(face(bot[::-1]))
+    m = len(top)
+    for k in range(m):
+        j = (k + 1) % m
+        quad = [top[k], bot[k], bot[j], top[j]]
+        if top[k].Distance(bot[k]) < 1e-9 or top[j].Distance(bot[j]) < 1e-9:  # pragma: no cover - t > 0
+            continue
+        sew.Add(face(quad))
+    sew.Perform()
+    explorer = TopExp_Explorer(sew.SewedShape(), TopAbs_SHELL)
+    if not explorer.More():
+        raise FabricationError(f"{label}: the faces of the bevelled plate do not close into a shell")
+    solid = TopoDS_Solid()
+    builder = BRep_Builder()
+    builder.MakeSolid(solid)
+    builder.Add(solid, TopoDS.Shell(explorer.Current()))
+    BRepLib.OrientClosedSolid_s(solid)
+    to_frame = gp_Trsf()
+    to_frame.SetTransformation(gp_Ax3(gp_Pnt(*map(float, frame.origin)), gp_Dir(*map(float, frame.normal)),
+                                      gp_Dir(*map(float, frame.ex))), gp_Ax3())
+    out = Solid(solid.Moved(TopLoc_Location(to_frame)))
+    out.label = label
+    return out
+
+
 def _colour(layer: str):
     from build123d import Color
 
@@ -95,11 +148,17 @@ def _colour(layer: str):
 
 
 def plate_solid(plate: BeamPlate):
-    """The solid of one plate: its outline extruded once, thickness centred on the support plane, less its bolt
+    """The solid of one plate: its outline extruded once, thickness centred on the support plane (a plate with
+    bevelled top-edge spans: the solid between its two face outlines, :func:`_placed_loft`), less its bolt
     holes (:attr:`~fabrication.beams.plates.BeamPlate.holes`, cylinders cut through it), in the colour of its
     family."""
     t = plate.thickness
-    solid = _placed_prism(plate.outline, plate.frame, -0.5 * t, t, plate.part_id)
+    if plate.bevels:
+        from ..beams.bevel_cut import face_outlines
+
+        solid = _placed_loft(*face_outlines(plate), plate.frame, t, plate.part_id)
+    else:
+        solid = _placed_prism(plate.outline, plate.frame, -0.5 * t, t, plate.part_id)
     if len(plate.holes):
         solid = _drilled(solid, plate, t)
     solid.color = _colour(FAMILY_NAMES[plate.family])
