@@ -7,7 +7,7 @@ construction parameters)::
     [geometry]          method | mesh, scale, translate, rotate_z_deg, flip_orientation, planar_families
     [surface]           instead of method | mesh: a surface (.3dm, triangle mesh) remeshed into a net
     [geometry.params]   the parameters of the chosen construction
-    [optimize]          optional: optimise a mesh input for the P/PP property first
+    [optimize]          optional: optimise the mesh (read or constructed) for the P/PP property first
     [support]           how the node axes / support planes are found
     [beams]             beam plates and joints
     [panels]            glass panels
@@ -137,7 +137,8 @@ SECTION_TEXT: dict[str, str] = {
     "surface": "Instead of `[geometry] method` or `mesh`: a designer's surface (Rhino .3dm, triangle mesh) remeshed "
                "into a quad net whose rows are planar sections (docs/remeshing.md); `[optimize]` then makes the "
                "panels planar, staying close to that surface.",
-    "optimize": "Optional, for `mesh = …`: optimise the mesh for planar faces and planar polylines first (§3.3).",
+    "optimize": "Optional: optimise the mesh (read from `mesh = …` or constructed by `method = …`) for planar faces and "
+                "planar polylines first (§3.3), e.g. a PP construction made conical with `keep_conical`.",
     "support": "How the node axes and support planes are found.",
     "beams": "Planar beam plates along the support planes and their joints.",
     "panels": "Glass panels.",
