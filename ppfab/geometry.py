@@ -105,7 +105,8 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
     Parameters
     ----------
     spec : the ``[geometry]`` record
-    optimize : an :class:`~ppfab.optimize.params.OptimizeParams` record (mesh input only), or ``None``
+    optimize : an :class:`~ppfab.optimize.params.OptimizeParams` record, or ``None``: the mesh as read or as
+        constructed is optimised by it (§3.3)
     base_dir : folder that relative mesh paths are taken from
     allow_large : go on above ``spec.max_vertices``
     note : called with a short progress text before long steps
@@ -120,6 +121,7 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
 
     result = None
     mesh: QuadGrid | QuadMesh
+    optimised = families_of(getattr(optimize, "families", "")) if optimize is not None else ()
     if spec.method is not None:
         construction = get_construction(spec.method)
         record = parse_params(construction.params, spec.params, "geometry.params")
@@ -127,28 +129,27 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
         if expected is not None:
             check_size(int(expected()), spec.max_vertices, allow_large)
         mesh = construction.build(record)
-        families = tuple(spec.planar_families or construction.planar_families)
+        families = tuple(spec.planar_families or optimised or construction.planar_families)
         source = f"method:{spec.method}"
     else:
         path = spec.mesh_path(base_dir)
         assert path is not None
         check_file_size(path, spec.max_vertices, allow_large)
         mesh = load_mesh(path, None if allow_large else lambda n: check_size(n, spec.max_vertices, False))
-        optimised = families_of(getattr(optimize, "families", "")) if optimize is not None else ()
         families = tuple(spec.planar_families or optimised)
         source = f"mesh:{spec.mesh}"
-        if optimize is not None:
-            from .optimize import optimize as run_optimize
+    if optimize is not None:            # a mesh as read, or a construction's mesh (e.g. a PP mesh made conical)
+        from .optimize import optimize as run_optimize
 
-            if before_optimize is not None:
-                before_optimize(mesh, families)
+        if before_optimize is not None:
+            before_optimize(mesh, families)
 
-            if note:
-                note("optimising…")
-            result = run_optimize(mesh, optimize, callback=on_iteration)
-            if not result.targets_met:
-                log.warning("optimisation did not meet its targets: %s", result.message)
-            mesh = result.mesh
+        if note:
+            note("optimising…")
+        result = run_optimize(mesh, optimize, callback=on_iteration)
+        if not result.targets_met:
+            log.warning("optimisation did not meet its targets: %s", result.message)
+        mesh = result.mesh
     check_size(vertex_count(mesh), spec.max_vertices, allow_large)
     mesh = transform(mesh, spec.scale, spec.rotate_z_deg, spec.translate, spec.flip_orientation)
     return Geometry(mesh, families, source, result)
