@@ -54,6 +54,8 @@ DEFAULT_DESIGN = Path(__file__).resolve().parent / "data" / "default.toml"
 class DesignInfo:
     name: str = param("untitled", doc="name shown in the report and manifest")
     description: str = param("", doc="free text")
+    date: str = param("", doc="issue date in the drawings' title blocks (e.g. 2026-12-01); empty: the date of "
+                              "SOURCE_DATE_EPOCH when set, else none")
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,8 @@ class OutputSection:
     rhino: bool = param(True, doc="write model.3dm (Rhino: layers per family, objects named by part id, user text, "
                                   "node axes, the mesh)")
     glb: bool = param(True, doc="write model.glb (glTF binary for viewing; node names are the part ids)")
+    paper: str = param("A1", doc="paper size of the drawings in drawings/ (frame, title block, standard scale)",
+                       choices=("A1", "A3"))
 
 
 def _section_types() -> dict[str, Callable[[], type]]:

@@ -5,16 +5,18 @@ Views are parallel projections of the structure in mm.  A view is given by its v
 ``u = +y``; front elevation: ``d = +y``; side elevation: ``d = +x``; both ``u = +z``).  Panels are drawn back to
 front (painter's order by ``X·d``).
 
-Labels.  Every label is placed with :func:`fabrication.marking.place_label`: reading from the bottom
-or the right edge (rotation in (−45°, 135°]), its box (``LABEL_CHAR_WIDTH`` text heights per character, 1.5 heights deep, larger than the
-monospace glyphs drawn) inside the projected panel shrunk by a margin, clear of the beam labels placed before
-it.  On the key plan beam part ids sit on the middle edge of each piece, along it; a beam label that would overlap
-another is moved to the next edge out from the middle.  Text height scales with the panel (a fraction of the
-short side of its projected outline).  The key plan labels every panel and beam piece — at its place, or, where
-panels overlap in plan and a label finds no room, in a list below the view; an elevation labels the
-beam plates seen broadside (:data:`BROADSIDE`) on their projected faces, nearest first, and the panels facing
-the viewer (:data:`FACING`) whose label fits at the beam labels' height — a roof seen from the side shows its
-panels edge-on, so those are found on the key plan.
+Sheets.  Every drawing is one sheet of paper (:mod:`fabrication.paper`: A1 or A3, frame, title block) with the view
+at a standard scale; texts are one height on paper per class, at least 2.5 mm.
+
+Labels.  Every label is a box (``LABEL_CHAR_WIDTH`` text heights per character, 1.5 heights deep, larger than the
+monospace glyphs drawn) reading from the bottom or the right edge (rotation in (−45°, 135°]), clear of every
+other label and of every drawn line by half a millimetre on paper.  On the key plan a beam plate's id lies beside
+the middle edge of its top line, inside the panel next to it (the next edge out from the middle where there is no
+room); a panel's id inside its projected outline (:func:`fabrication.marking.place_label`).  The key plan labels
+every panel and beam piece — at its place, or, where a label finds no room (panels overlapping in plan, a piece
+shorter than its id), in a list below the view; an elevation labels the beam plates seen broadside
+(:data:`BROADSIDE`) on their projected faces, nearest first, and the panels facing the viewer (:data:`FACING`)
+whose label fits — a roof seen from the side shows its panels edge-on, so those are found on the key plan.
 
 Node sheets: the node's plates seen along its axis (plate traces ``a × n`` with their thickness and part
 ids), the angles between them, a slot detail (width, length, plate depth) and the list of the type's nodes
@@ -33,6 +35,8 @@ import numpy as np
 
 from .contract import one_line
 from .marking import LABEL_CHAR_WIDTH, TextLine, place_label, upright_deg
+from .paper import (DEFAULT_PAPER, GAP, TEXT_MM, PaperSheet, SheetInfo, drawing_area, fitting_scales,
+                    scale_text)
 
 SVG_NS = "http://www.w3.org/2000/svg"
 FONT = "DejaVu Sans Mono, monospace"
@@ -103,6 +107,16 @@ class SvgSheet:
         if bg is not None:
             bg.set("height", _fmt(h + by))
 
+    def extend_right(self, by: float) -> None:
+        """Make the picture ``by`` mm wider on the right."""
+        if by <= 0:
+            return
+        _, _, w, h = (float(x) for x in self.root.get("viewBox", "0 0 1 1").split())
+        self.root.set("viewBox", f"0 0 {_fmt(w + by)} {_fmt(h)}")
+        bg = self.root.find("rect")
+        if bg is not None:
+            bg.set("width", _fmt(w + by))
+
     def xy(self, p: np.ndarray) -> tuple[float, float]:
         return float(p[0] - self.x0), float(self.y1 - p[1])
 
@@ -117,8 +131,9 @@ class SvgSheet:
                                               "stroke-width": _fmt(width), **extra})
 
     def text(self, text: str, centre: np.ndarray, height: float, rotation_deg: float = 0.0, part_id: str = "",
-             fill: str = "#102a43", anchor: str = "middle") -> DrawnText:
-        """A text centred on ``centre`` (``anchor="start"``: starting there), font size ``height``."""
+             fill: str = "#102a43", anchor: str = "middle", kind: str = "") -> DrawnText:
+        """A text centred on ``centre`` (``anchor="start"``: starting there), font size ``height``; ``kind`` its
+        class of text (``data-class``: ``panel``, ``beam``; all of a class are one height on paper)."""
         text = one_line(text)                      # XML 1.0 admits no control characters
         x, y = self.xy(centre)
         attrs = {"x": _fmt(x), "y": _fmt(y), "font-size": _fmt(height), "text-anchor": anchor,
@@ -127,6 +142,8 @@ class SvgSheet:
             attrs["transform"] = f"rotate({_fmt(-rotation_deg)} {_fmt(x)} {_fmt(y)})"
         if part_id:
             attrs["data-part"] = part_id
+        if kind:
+            attrs["data-class"] = kind
         el = ET.SubElement(self.root, "text", attrs)
         el.text = text
         w = LABEL_CHAR_WIDTH * len(text) * height
@@ -148,12 +165,14 @@ class SvgSheet:
 
 @dataclass(frozen=True)
 class ViewResult:
-    """An SVG view and what it shows: ``labelled`` part ids, ``unfit`` ids drawn at the smallest height."""
+    """An SVG sheet of a view and what it shows: ``labelled`` part ids, ``unfit`` ids listed below the view (no
+    room at their place), the view's texts (model mm) and the scale's denominator."""
 
     svg: str
     labelled: tuple[str, ...]
     unfit: tuple[str, ...]
     texts: tuple[DrawnText, ...]
+    scale: int = 0
 
 
 def _short_side(poly) -> float:
@@ -176,8 +195,14 @@ def _beam_label_slots(top3: np.ndarray, view: str) -> list[tuple[np.ndarray, flo
     return out
 
 
-def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px: float = 2400.0) -> ViewResult:
-    """The key plan (``view="plan"``) or an elevation (``"front"``, ``"side"``) as SVG.
+def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, paper: str = DEFAULT_PAPER,
+             sheet: SheetInfo | None = None) -> ViewResult:
+    """The key plan (``view="plan"``) or an elevation (``"front"``, ``"side"``) as one SVG sheet on ``paper``.
+
+    The view is drawn at the first standard scale (:func:`fabrication.paper.fitting_scales`) at which it and the
+    list of parts without room at their place fit the drawing area.  Labels are one height on paper per class
+    (:data:`fabrication.paper.TEXT_MM`) and are placed clear of every drawn line and of each other
+    (:func:`_layout`); ``sheet`` fills the title block (default: sheet 1 of 1 titled ``title``).
 
     Parameters
     ----------
@@ -185,19 +210,92 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
     plates : beam plates (:class:`~fabrication.beams.plates.BeamPlate`: ``part_id``, ``frame``, ``top``,
         ``bottom``, ``family``)
     """
-    from shapely import STRtree
-    from shapely.geometry import Polygon
-
-    d, _ = VIEWS[view]
+    info = sheet or SheetInfo(project="", title=title, paper=paper)
     outl = [np.asarray(p.outline_3d(), dtype=float) for p in panels]
     proj = [project(o, view) for o in outl]
     pts = np.concatenate(proj + [project(p.frame.to3d(p.top), view) for p in plates])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    span = float(max(hi - lo))
-    pad = 0.04 * span
-    head = 0.05 * span
-    bounds = (float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad + 2.0 * head))
-    sheet = SvgSheet(bounds, width_px, title)
+    ax0, ay0, ax1, ay1 = drawing_area(info.paper)
+    size = hi - lo
+    chosen: tuple[int, _Laid, int, int] | None = None
+    for s in fitting_scales(float(size[0]) + 4.0 * _pad_scale(), float(size[1]) + 4.0 * _pad_scale(), info.paper):
+        laid = _layout(view, panels, plates, outl, proj, lo, hi, float(s))
+        rows, per_row = _list_rows(laid.unfit, ax1 - ax0)
+        need = (hi[1] - lo[1]) / s + 4.0 + (GAP + (rows + 1) * LIST_PITCH * TEXT_MM["note"] if rows else 0.0)
+        chosen = (s, laid, rows, per_row)
+        if need <= ay1 - ay0 + 1e-9 and (hi[0] - lo[0]) / s + 4.0 <= ax1 - ax0 + 1e-9:
+            break
+    if chosen is None:                      # fitting_scales always names one
+        raise RuntimeError("no scale for the view")
+    s, laid, rows, per_row = chosen
+    page = PaperSheet(info, s)
+    page.frame()
+    x = ax0 + max(0.0, 0.5 * (ax1 - ax0 - (hi[0] - lo[0]) / s - 2.0 * _pad_scale()))     # centred across the area
+    view_el = page.embed(laid.sheet.root, x, ay0, float(s))
+    view_el.set("data-view", view)
+    bottom = ay0 + float(view_el.get("height", "0"))
+    if laid.unfit:
+        h = TEXT_MM["note"]
+        y = bottom + GAP + 0.5 * LIST_PITCH * h
+        page.text("not labelled at their place (no room in this view):", ax0, y, "note",
+                  attrs={"class": "unfit-heading"})
+        col = _list_column(laid.unfit)
+        for q, pid in enumerate(laid.unfit):
+            r, c = divmod(q, per_row)
+            page.text(pid, ax0 + c * col, y + (r + 1) * LIST_PITCH * h, "note", attrs={"data-listed": pid})
+    sheet_furniture(page, lo, hi, view)
+    return ViewResult(page.tostring(), laid.labelled, laid.unfit, laid.texts, int(s))
+
+
+LIST_PITCH = 1.6
+"""Line pitch of the list below a view, in text heights."""
+
+
+def _pad_scale() -> float:
+    """Paper mm kept round a view (its strokes stay inside the picture)."""
+    return 1.0
+
+
+def _list_column(ids: Sequence[str]) -> float:
+    """Width on paper of a column of the list of ``ids`` below a view."""
+    return LABEL_CHAR_WIDTH * TEXT_MM["note"] * (max(len(i) for i in ids) + 2)
+
+
+def _list_rows(ids: Sequence[str], width: float) -> tuple[int, int]:
+    """``(rows, per row)`` of the list of ``ids`` below a view ``width`` mm wide on paper."""
+    if not ids:
+        return 0, 1
+    per_row = max(1, int(width // _list_column(ids)))
+    return (len(ids) + per_row - 1) // per_row, per_row
+
+
+@dataclass(frozen=True)
+class _Laid:
+    """A view laid out at one scale: the view (model mm), what is labelled, what has no room at its place."""
+
+    sheet: SvgSheet
+    labelled: tuple[str, ...]
+    unfit: tuple[str, ...]
+    texts: tuple[DrawnText, ...]
+
+
+def _layout(view: str, panels: Sequence, plates: Sequence, outl: list[np.ndarray], proj: list[np.ndarray],
+            lo: np.ndarray, hi: np.ndarray, s: float) -> _Laid:
+    """Draw the view in model mm and place its labels for the scale ``1:s``.
+
+    Every label is a box (:func:`fabrication.marking.block_size`) clear of every other label and of every drawn
+    line (panel outlines, plate lines) by half a millimetre on paper.  On the key plan a beam plate's id lies
+    beside the middle edge of its top line (the next edge out from the middle when there is no room), inside the
+    panel next to it; a panel's id inside its outline.  An elevation labels the plates seen broadside on their
+    projected faces, nearest first, and the panels facing the viewer.  A part whose label finds no room is
+    left for the list below the view (on the key plan, which names every part)."""
+    from shapely import STRtree
+    from shapely.geometry import LineString, Polygon
+
+    d, _ = VIEWS[view]
+    pad = _pad_scale() * s
+    bounds = (float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad))
+    sheet = SvgSheet(bounds, 1.0, "view")
     normals = []
     for o in outl:
         c = o - o.mean(axis=0)
@@ -210,102 +308,91 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, width_px
         show &= np.array([float(n @ d) < 0 for n in normals])
     depth = np.array([float(o.mean(axis=0) @ d) for o in outl])
     for k in np.argsort(-depth):
-        sheet.polygon(proj[k], "#dbe9f6" if show[k] else "#f1f4f7", "#4a6fa5", 0.0015 * span)
-    for p in plates:
-        colour = "#b5541c" if p.family == 0 else "#1f5f9e"
-        sheet.line(project(p.frame.to3d(p.top), view), colour, 0.002 * span)
-    edge = [float(np.median(np.linalg.norm(np.diff(q, axis=0), axis=1))) for q in outl]
-    beam_h = (0.07 if plan else 0.045) * float(np.median(edge)) if edge else 0.01 * span
-    if plates and not plan:
-        beam_h = min(beam_h, 0.25 * float(np.median([p.depth for p in plates])))
-    placed: list[np.ndarray] = []
+        sheet.polygon(proj[k], "#dbe9f6" if show[k] else "#f1f4f7", "#4a6fa5", 0.18 * s)
+    tops = [project(p.frame.to3d(p.top), view) for p in plates]
+    for p, top in zip(plates, tops):
+        sheet.line(top, "#b5541c" if p.family == 0 else "#1f5f9e", 0.35 * s)
+    lines = [LineString(np.r_[q, q[:1]]) for q in proj] + [LineString(t) for t in tops if len(t) >= 2]
+    line_tree = STRtree(lines)
+    margin = 0.5 * s
+    beam_h, panel_h = TEXT_MM["beam"] * s, TEXT_MM["panel"] * s
+    label_polys: list = []
     labelled: list[str] = []
     unfit: list[str] = []
-    tree_polys: list = []
 
-    def clear(box: np.ndarray) -> bool:
-        b = Polygon(box)
-        return not any(b.intersects(q) for q in tree_polys)
+    def near_lines(zone) -> tuple[np.ndarray, ...]:
+        return tuple(np.asarray(lines[int(i)].coords) for i in line_tree.query(zone))
+
+    def near_labels(zone) -> tuple[np.ndarray, ...]:
+        return tuple(np.asarray(q.exterior.coords)[:4] for q in label_polys if q.intersects(zone))
+
+    def free(box: np.ndarray) -> bool:
+        b = Polygon(box).buffer(0.9 * margin, join_style="mitre")
+        return not len(line_tree.query(b, predicate="intersects")) and not any(b.intersects(q) for q in label_polys)
+
+    def put(pid: str, centre: np.ndarray, height: float, angle: float, kind: str, fill: str = "#102a43") -> None:
+        drawn = sheet.text(pid, centre, height, angle, pid, fill=fill, kind=kind)
+        label_polys.append(Polygon(drawn.box))
+        labelled.append(pid)
 
     if plan:
-        for p in plates:
-            for centre, angle, _ in _beam_label_slots(p.frame.to3d(p.top), view):
-                w = LABEL_CHAR_WIDTH * len(p.part_id) * beam_h
-                a = np.radians(angle)
-                u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
-                box = np.array([centre - 0.5 * w * u - 0.75 * beam_h * v, centre + 0.5 * w * u - 0.75 * beam_h * v,
-                                centre + 0.5 * w * u + 0.75 * beam_h * v, centre - 0.5 * w * u + 0.75 * beam_h * v])
-                if clear(box):
-                    sheet.text(p.part_id, centre, beam_h, angle, p.part_id,
-                               fill="#5a2a0a" if p.family == 0 else "#0b3a66")
-                    tree_polys.append(Polygon(box))
-                    placed.append(box)
-                    labelled.append(p.part_id)
-                    break
-            else:
+        for p, top3 in zip(plates, (p.frame.to3d(p.top) for p in plates)):
+            fill = "#5a2a0a" if p.family == 0 else "#0b3a66"
+            spot = _beam_spot(top3, view, p.part_id, beam_h, margin, free)
+            if spot is None:
                 unfit.append(p.part_id)          # listed below the view
+            else:
+                put(p.part_id, spot[0], beam_h, spot[1], "beam", fill)
     else:
         # plates seen broadside (|n·d| >= BROADSIDE), nearest first, labelled on their projected face
-        near_first = sorted(plates, key=lambda p: float(p.frame.origin @ d))
-        for p in near_first:
+        for p in sorted(plates, key=lambda p: float(p.frame.origin @ d)):
             if abs(float(p.plane[:3] @ d)) < BROADSIDE:
                 continue
             face = project(p.frame.to3d(p.raw_outline), view)
             fpoly = Polygon(face)
             if not fpoly.is_valid or fpoly.area <= 0:
                 continue
-            short = _short_side(fpoly)
-            where = place_label(face, [TextLine(p.part_id, "LABEL")], margin=0.04 * short,
-                                max_height=min(0.3 * short, 2.0 * beam_h), min_height=0.8 * beam_h,
-                                keep_out_areas=tuple(placed))
+            where = place_label(face, [TextLine(p.part_id, "LABEL")], margin=margin, max_height=beam_h,
+                                min_height=beam_h, keep_out=near_lines(fpoly), keep_out_areas=near_labels(fpoly))
             if where.fits:
                 pl = where.lines[0]
-                sheet.text(p.part_id, pl.centre, pl.height, pl.rotation_deg, p.part_id,
-                           fill="#5a2a0a" if p.family == 0 else "#0b3a66")
-                tree_polys.append(Polygon(where.box))
-                placed.append(where.box)
-                labelled.append(p.part_id)
-    import shapely
-
-    beam_boxes = tuple(placed)
-    index = STRtree([Polygon(b) for b in beam_boxes]) if beam_boxes else None
-    label_polys: list = []                       # panel labels placed so far (projected panels may overlap)
+                put(p.part_id, pl.centre, beam_h, pl.rotation_deg, "beam",
+                    "#5a2a0a" if p.family == 0 else "#0b3a66")
     for k, p in enumerate(panels):
         if not show[k]:
             continue
         poly = Polygon(proj[k])
-        short = _short_side(poly)
-        zone = poly.buffer(0.1 * short)
-        near = tuple(beam_boxes[int(i)] for i in index.query(zone)) if index is not None else ()
-        if label_polys:
-            hit = shapely.intersects(np.array(label_polys, dtype=object), zone)
-            near += tuple(np.asarray(label_polys[int(i)].exterior.coords)[:4] for i in np.flatnonzero(hit))
-        where = place_label(proj[k], [TextLine(p.part_id, "LABEL")], margin=0.04 * short,
-                            max_height=0.16 * short, min_height=0.04 * short if plan else 0.8 * beam_h,
-                            keep_out_areas=near, prefer_deg=0.0)
-        if not where.fits:
+        if not poly.is_valid:
+            poly = poly.buffer(0)
+        own = proj[k]
+        keep = tuple(q for q in near_lines(poly) if not (len(q) == len(own) + 1 and np.allclose(q[:-1], own)))
+        where = place_label(proj[k], [TextLine(p.part_id, "LABEL")], margin=margin, max_height=panel_h,
+                            min_height=panel_h, keep_out=keep, keep_out_areas=near_labels(poly), prefer_deg=0.0)
+        if not where.fits or not free(where.box):
             if plan:
                 unfit.append(p.part_id)
             continue
         pl = where.lines[0]
-        sheet.text(p.part_id, pl.centre, pl.height, pl.rotation_deg, p.part_id)
-        label_polys.append(Polygon(where.box))
-        labelled.append(p.part_id)
-    sheet.text(title, np.array([lo[0], hi[1] + pad + 1.5 * head]), 0.4 * head, 0.0, anchor="start")
-    sheet_furniture(sheet, lo, hi, pad, head, view)
-    if unfit:
-        # parts whose label has no room at its place (panels overlapping in this view): listed below the view
-        step = 1.6 * beam_h
-        per_row = max(1, int((hi[0] - lo[0]) // (LABEL_CHAR_WIDTH * 12 * beam_h)))
-        sheet.text("not labelled at their place (no room in this view):", np.array([lo[0], lo[1] - pad - step]),
-                   beam_h, 0.0, anchor="start")
-        for q, pid in enumerate(unfit):
-            r, c = divmod(q, per_row)
-            at = np.array([lo[0] + c * LABEL_CHAR_WIDTH * 12 * beam_h, lo[1] - pad - (r + 2) * step])
-            sheet.text(pid, at, beam_h, 0.0, anchor="start")
-        rows = (len(unfit) + per_row - 1) // per_row
-        sheet.extend_down(pad + (rows + 2.5) * step)
-    return ViewResult(sheet.tostring(), tuple(labelled), tuple(unfit), tuple(sheet.texts))
+        put(p.part_id, pl.centre, panel_h, pl.rotation_deg, "panel")
+    return _Laid(sheet, tuple(labelled), tuple(unfit), tuple(sheet.texts))
+
+
+def _beam_spot(top3: np.ndarray, view: str, text: str, height: float, margin: float,
+               free) -> tuple[np.ndarray, float] | None:
+    """Where a beam plate's label goes on the key plan: beside an edge of its top line (the middle edge first),
+    on either side, a little further out each try, the first box ``free`` accepts; ``(centre, angle)``."""
+    w = LABEL_CHAR_WIDTH * len(text) * height
+    for centre, angle, _ in _beam_label_slots(top3, view):
+        a = np.radians(angle)
+        u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+        for off in (1.5, 3.0, 5.0):
+            for side in (1.0, -1.0):
+                c = centre + side * (0.75 * height + off * margin) * v
+                box = np.array([c - 0.5 * w * u - 0.75 * height * v, c + 0.5 * w * u - 0.75 * height * v,
+                                c + 0.5 * w * u + 0.75 * height * v, c - 0.5 * w * u + 0.75 * height * v])
+                if free(box):
+                    return c, angle
+    return None
 
 
 def scale_bar_length(width: float) -> float:
@@ -319,36 +406,37 @@ def scale_bar_length(width: float) -> float:
     return float(max(m * 10.0 ** k for m in (1.0, 2.0, 5.0) if m * 10.0 ** k <= top))
 
 
-def sheet_furniture(sheet: SvgSheet, lo: np.ndarray, hi: np.ndarray, pad: float, head: float, view: str) -> None:
-    """The row above a view's title: a scale bar (four alternating segments, ``data-length-mm``), the extent of
-    the view in mm with its axes, and on the key plan a north arrow (``+y`` is north, as the elevations' titles
-    say).  Each is placed after the one before, so no text overlaps."""
-    y = float(hi[1] + pad + 0.5 * head)
+def sheet_furniture(page: PaperSheet, lo: np.ndarray, hi: np.ndarray, view: str) -> None:
+    """The band left of the title block: a scale bar (four alternating segments, ``data-length-mm`` the model
+    length it stands for) with its length, the extent of the view in mm with its axes, and on the key plan a
+    north arrow (``+y`` is north, as the elevations' titles say), each on paper beside the one before."""
+    s = float(page.scale)
+    bx0, by0, bx1, _ = page.band_left()
+    h = TEXT_MM["note"]
     width = float(hi[0] - lo[0])
     length = scale_bar_length(width)
     label = f"{length / 1000:g} m" if length >= 1000 else f"{length:g} mm"
     axes = {"plan": ("x", "y"), "front": ("x", "z"), "side": ("y", "z")}[view]
     extent = (f"extent {hi[0] - lo[0]:,.0f} mm ({axes[0]}) x {hi[1] - lo[1]:,.0f} mm ({axes[1]})"
               .replace(",", " "))
-    # the text height: 0.3 of the header, less where the row would not fit the view's width (a tall, narrow view)
-    h = min(0.3 * head, (width - length) / (LABEL_CHAR_WIDTH * (len(label) + len(extent)) + 5.0))
-    x = float(lo[0])
-    group = ET.SubElement(sheet.root, "g", {"class": "scale-bar", "data-length-mm": _fmt(length)})
-    for s in range(4):
-        a, b = x + s * length / 4, x + (s + 1) * length / 4
-        q = " ".join("{:.1f},{:.1f}".format(*sheet.xy(np.array(p))) for p in
-                     ((a, y - 0.25 * h), (b, y - 0.25 * h), (b, y + 0.25 * h), (a, y + 0.25 * h)))
-        ET.SubElement(group, "polygon", {"points": q, "fill": "#102a43" if s % 2 == 0 else "white",
-                                         "stroke": "#102a43", "stroke-width": _fmt(0.02 * h)})
-    x += length + 0.5 * h
-    sheet.text(label, np.array([x, y]), h, 0.0, anchor="start")
-    x += LABEL_CHAR_WIDTH * len(label) * h + 2.0 * h
-    sheet.text(extent, np.array([x, y]), h, 0.0, anchor="start")
+    x, y = bx0 + GAP, by0 + 9.0
+    group = ET.SubElement(page.root, "g", {"class": "scale-bar", "data-length-mm": _fmt(length)})
+    for k in range(4):
+        a, b = x + k * length / s / 4, x + (k + 1) * length / s / 4
+        q = " ".join(f"{_fmt(px)},{_fmt(py)}" for px, py in ((a, y - 1.0), (b, y - 1.0), (b, y + 1.0), (a, y + 1.0)))
+        ET.SubElement(group, "polygon", {"points": q, "fill": "#102a43" if k % 2 == 0 else "white",
+                                         "stroke": "#102a43", "stroke-width": "0.1"})
+    page.text(label, x + length / s + 2.0, y, "note")
+    page.text(extent, x, by0 + 19.0, "note")
+    page.text(f"scale {scale_text(int(s))} on {page.info.paper}", x, by0 + 29.0, "note")
     if view == "plan":
-        tip = np.array([float(hi[0]) - 0.5 * h, y + 0.45 * head])
-        arrow = np.array([tip, tip + [0.35 * h, -0.8 * head], tip + [0.0, -0.6 * head], tip + [-0.35 * h, -0.8 * head]])
-        sheet.polygon(arrow, "#102a43", "#102a43", 0.02 * h, **{"class": "north-arrow"})
-        sheet.text("N", np.array([float(hi[0]) - 1.6 * h, y]), h, 0.0)
+        ax = bx1 - GAP - 6.0
+        tip = (ax, by0 + 5.0)
+        q = " ".join(f"{_fmt(px)},{_fmt(py)}" for px, py in
+                     (tip, (ax + 3.0, by0 + 25.0), (ax, by0 + 20.0), (ax - 3.0, by0 + 25.0)))
+        ET.SubElement(page.root, "polygon", {"points": q, "fill": "#102a43", "stroke": "#102a43",
+                                             "stroke-width": "0.1", "class": "north-arrow"})
+        page.text("N", ax - 7.0, by0 + 15.0, "note", anchor="middle")
 
 
 # -- node sheets ----------------------------------------------------------------------------------
@@ -362,40 +450,107 @@ NODE_BAND = 50.0
 """Half the length of a plate's band in a node sheet's view along the axis (picture units)."""
 
 
-def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.0,
-                   ends: dict[str, np.ndarray] | None = None) -> str:
-    """One node type (:class:`~fabrication.nodetypes.NodeType`) as an SVG sheet (see module docstring).
+NODE_UNIT_MM = 0.36
+"""Paper mm per picture unit of a node sheet's diagram: its smallest text (7 units) is 2.52 mm high on paper."""
 
-    ``ends``: for a plate that ends at the type's representative node, the direction ``(3,)`` from the node into
-    the plate — it is drawn on that side only (a corner's two plates meet in an L, not cross in an X); a plate
-    running through is drawn on both sides.  Each label lies beyond its band's end, reading from the bottom or the
-    right edge (:func:`~fabrication.marking.upright_deg`), inside the view's square, clear of the lines above and
-    below it."""
-    rep = ntype.nodes[0]
-    axis = np.asarray(rep["axis"], dtype=float)
+
+def node_rows(ntype) -> list[str]:
+    """The rows of a node type's node list (node, beams, dihedral angles, slot width)."""
     rows = []
     for r in ntype.nodes:
         beams = " x ".join(b["part_id"] for b in r["beams"])
         dih = ", ".join(f"{p['dihedral_deg']:.2f}" for p in r.get("pairs", []) if p.get("dihedral_deg") is not None)
         sw = f"{r['slot_width_mm']:.2f}" if r.get("slot_width_mm") is not None else "-"
         rows.append(f"{r['node_id']:<7} {beams:<34} {dih:>14} {sw:>8}")
-    line_h = 14.0
-    table_h = line_h * (len(rows) + 1)
-    height = table_h + 30.0 + 330.0 + 12.0 * max(len(rep.get("pairs", [])) - 1, 0)
-    sheet = SvgSheet((0.0, 0.0, 600.0, height), width_px, f"node type {ntype.type_id}")
+    return rows
+
+
+NODE_TABLE_HEAD = f"{'node':<7} {'beams':<34} {'dihedral deg':>14} {'slot mm':>8}"
+
+
+def _diagram_height(ntype) -> float:
+    return 360.0 + 12.0 * max(len(ntype.nodes[0].get("pairs", [])) - 1, 0)
+
+
+def _table_slots(ntype, paper: str, diagram_w: float) -> list[tuple[float, float, int]]:
+    """The columns of the node list on paper beside and below the diagram: ``(x, y_top, rows)`` each."""
+    ax0, ay0, ax1, ay1 = drawing_area(paper)
+    h = TEXT_MM["note"]
+    pitch = LIST_PITCH * h
+    width = LABEL_CHAR_WIDTH * h * (max([len(NODE_TABLE_HEAD)] + [len(r) for r in node_rows(ntype)]) + 2)
+    dw, dh = diagram_w * NODE_UNIT_MM, _diagram_height(ntype) * NODE_UNIT_MM
+    out = []
+    for x0, y0, x1 in ((ax0 + dw + GAP, ay0, ax1), (ax0, ay0 + dh + GAP, ax0 + max(dw, width))):
+        n = int((ay1 - y0) // pitch) - 1
+        x = x0
+        while x + width <= x1 + 1e-9 and n > 0:
+            out.append((x, y0, n))
+            x += width
+    return out
+
+
+def node_pages(ntype, depth: float, thickness: float, paper: str = DEFAULT_PAPER) -> list[range]:
+    """The node list of a type split into sheets: the row indices each sheet holds (each sheet shows the
+    diagram, the list in columns beside and below it)."""
+    n = len(ntype.nodes)
+    cap = sum(k for _, _, k in _table_slots(ntype, paper, _node_picture(ntype, depth, thickness, None)[1]))
+    if cap <= 0:
+        raise ValueError(f"paper {paper} has no room for the node list of {ntype.type_id}: use paper = \"A1\"")
+    return [range(a, min(a + cap, n)) for a in range(0, max(n, 1), cap)]
+
+
+def node_sheet_svg(ntype, depth: float, thickness: float, ends: dict[str, np.ndarray] | None = None,
+                   paper: str = DEFAULT_PAPER, sheet: SheetInfo | None = None, rows: range | None = None) -> str:
+    """One node type (:class:`~fabrication.nodetypes.NodeType`) as an SVG sheet (see module docstring): the
+    diagram (not to scale, :data:`NODE_UNIT_MM`) at the top left of the drawing area, the node list (``rows``,
+    default all, :func:`node_pages`) in columns beside and below it.
+
+    ``ends``: for a plate that ends at the type's representative node, the direction ``(3,)`` from the node into
+    the plate — it is drawn on that side only (a corner's two plates meet in an L, not cross in an X); a plate
+    running through is drawn on both sides.  Each label lies beyond its band's end, reading from the bottom or the
+    right edge (:func:`~fabrication.marking.upright_deg`), inside the view's square, clear of the lines above and
+    below it."""
+    info = sheet or SheetInfo(project="", title=f"node type {ntype.type_id}", paper=paper)
+    pic, right = _node_picture(ntype, depth, thickness, ends)
+    page = PaperSheet(info, 0)
+    page.frame()
+    ax0, ay0, _, _ = drawing_area(info.paper)
+    page.embed(pic.root, ax0, ay0, 1.0 / NODE_UNIT_MM).set("data-view", "node")
+    table = node_rows(ntype)
+    wanted = list(rows if rows is not None else range(len(table)))
+    pitch = LIST_PITCH * TEXT_MM["note"]
+    for x, y, n in _table_slots(ntype, info.paper, right):
+        if not wanted:
+            break
+        page.text(NODE_TABLE_HEAD, x, y + 0.5 * pitch, "note", attrs={"class": "node-table-head"})
+        for k in range(min(n, len(wanted))):
+            page.text(table[wanted[k]], x, y + (k + 1.5) * pitch, "note", attrs={"data-node-row": "1"})
+        wanted = wanted[n:]
+    if wanted:
+        raise ValueError(f"the node list of {ntype.type_id} does not fit its sheet: split it with node_pages()")
+    return page.tostring()
+
+
+def _node_picture(ntype, depth: float, thickness: float,
+                  ends: dict[str, np.ndarray] | None) -> tuple[SvgSheet, float]:
+    """The diagram of a node sheet (picture units, :data:`NODE_UNIT_MM`) and its width."""
+    rep = ntype.nodes[0]
+    axis = np.asarray(rep["axis"], dtype=float)
+    height = _diagram_height(ntype)
+    pic = SvgSheet((0.0, 0.0, 600.0, height), 1.0, f"node type {ntype.type_id}")
     top = height - 20.0
     ang_txt = ", ".join(f"{a:g}" for a in ntype.angles_deg) or "-"
-    sheet.text(f"Node type {ntype.type_id}: {ntype.joint}, {len(rep['beams'])} plates, dihedral {ang_txt} deg, "
-               f"{len(ntype.nodes)} nodes", np.array([10.0, top]), 11.0, anchor="start")
-    sheet.text(f"axis of {rep['node_id']}: ({axis[0]:.4f}, {axis[1]:.4f}, {axis[2]:.4f}), pointing into the "
-               "structure", np.array([10.0, top - 18.0]), 9.0, anchor="start")
+    pic.text(f"Node type {ntype.type_id}: {ntype.joint}, {len(rep['beams'])} plates, dihedral {ang_txt} deg, "
+             f"{len(ntype.nodes)} nodes", np.array([10.0, top]), 11.0, anchor="start")
+    pic.text(f"axis of {rep['node_id']}: ({axis[0]:.4f}, {axis[1]:.4f}, {axis[2]:.4f}), pointing into the "
+             "structure", np.array([10.0, top - 18.0]), 9.0, anchor="start")
     # plates seen along the axis: the view's square spans top − 50 … top − 290 (caption above, pairs below)
     c = np.array([150.0, top - 170.0])
     ex = np.cross(axis, [0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.cross(axis, [1.0, 0.0, 0.0])
     ex /= np.linalg.norm(ex)
     ey = np.cross(axis, ex)
-    sheet.line(np.array([c - [6, 0], c + [6, 0]]), "#000", 0.8, **{"class": "node-centre"})
-    sheet.line(np.array([c - [0, 6], c + [0, 6]]), "#000", 0.8, **{"class": "node-centre"})
+    pic.line(np.array([c - [6, 0], c + [6, 0]]), "#000", 0.8, **{"class": "node-centre"})
+    pic.line(np.array([c - [0, 6], c + [0, 6]]), "#000", 0.8, **{"class": "node-centre"})
     ends = ends or {}
     for b in rep["beams"]:
         n = np.asarray(b["plane"][:3], dtype=float)
@@ -412,8 +567,8 @@ def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.
         nrm = np.array([-t2[1], t2[0]])
         band = np.array([a - half * nrm, z - half * nrm, z + half * nrm, a + half * nrm])
         colour = "#b5541c" if b["part_id"].startswith("B-U") else "#1f5f9e"
-        sheet.polygon(band, "#f4e3d7" if colour == "#b5541c" else "#d7e6f4", colour, 0.8,
-                      **{"data-part": b["part_id"], "data-role": str(b.get("role", ""))})
+        pic.polygon(band, "#f4e3d7" if colour == "#b5541c" else "#d7e6f4", colour, 0.8,
+                    **{"data-part": b["part_id"], "data-role": str(b.get("role", ""))})
         # the label beyond the band's end; on a through plate the end whose direction reads from the bottom or the
         # right edge, so it reads outwards from the node
         if side is not None:
@@ -422,14 +577,14 @@ def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.
             out = t2 if abs(upright_deg(direction_deg(t2)) - direction_deg(t2)) < 1e-9 else -t2
         ang = direction_deg(out)
         shown = upright_deg(ang)
-        sheet.text(b["part_id"], c + (NODE_BAND + 6.0) * out, 8.0, shown, b["part_id"],
-                   anchor="start" if abs(shown - ang) < 1e-6 else "end")
+        pic.text(b["part_id"], c + (NODE_BAND + 6.0) * out, 8.0, shown, b["part_id"],
+                 anchor="start" if abs(shown - ang) < 1e-6 else "end")
     for k, p in enumerate(rep.get("pairs", [])):
         if p.get("dihedral_deg") is None:
             continue
-        sheet.text(f"{p['a']} / {p['b']}: {p['dihedral_deg']:.2f} deg", np.array([10.0, top - 300.0 - 12 * k]),
-                   8.0, anchor="start")
-    sheet.text("plates seen along the node axis", np.array([10.0, top - 34.0]), 8.0, anchor="start")
+        pic.text(f"{p['a']} / {p['b']}: {p['dihedral_deg']:.2f} deg", np.array([10.0, top - 300.0 - 12 * k]),
+                 8.0, anchor="start")
+    pic.text("plates seen along the node axis", np.array([10.0, top - 34.0]), 8.0, anchor="start")
     # slot detail
     sx, sy = 330.0, top - 260.0
     scale = 180.0 / max(depth, 1e-9)
@@ -437,26 +592,23 @@ def node_sheet_svg(ntype, depth: float, thickness: float, width_px: float = 900.
     if width is not None:
         w = width[1] * scale
         body = np.array([[sx, sy], [sx + 220, sy], [sx + 220, sy + depth * scale], [sx, sy + depth * scale]])
-        sheet.polygon(body, "#eef2f6", "#333", 0.8)
+        pic.polygon(body, "#eef2f6", "#333", 0.8)
         slot = np.array([[sx + 110 - w / 2, sy + depth * scale], [sx + 110 - w / 2, sy + 0.5 * depth * scale],
                          [sx + 110 + w / 2, sy + 0.5 * depth * scale], [sx + 110 + w / 2, sy + depth * scale]])
-        sheet.polygon(slot, "white", "#c00", 0.8)
-        sheet.text("half-lap slot: row plate from the top, column from below",
-                   np.array([sx - 10, sy + depth * scale + 30]), 7.0, anchor="start")
-        sheet.text(f"width {width[0]:.2f}-{width[1]:.2f} mm", np.array([sx + 110 + w / 2 + 6, sy + 0.75 * depth * scale]),
-                   8.0, anchor="start")
-        sheet.text(f"length {0.5 * depth:g} mm", np.array([sx + 110 + w / 2 + 6, sy + 0.75 * depth * scale - 14]),
-                   8.0, anchor="start")
-        sheet.text(f"plate depth {depth:g} mm, thickness {thickness:g} mm", np.array([sx, sy - 12]), 8.0,
-                   anchor="start")
+        pic.polygon(slot, "white", "#c00", 0.8)
+        pic.text("half-lap slot: row plate from the top, column from below",
+                 np.array([sx - 10, sy + depth * scale + 30]), 7.0, anchor="start")
+        # the slot's width and length beside the body (clear of its outline), at the slot's height
+        pic.text(f"slot width {width[0]:.2f}-{width[1]:.2f} mm", np.array([sx + 226, sy + 0.75 * depth * scale]),
+                 8.0, anchor="start")
+        pic.text(f"slot length {0.5 * depth:g} mm", np.array([sx + 226, sy + 0.75 * depth * scale - 14]),
+                 8.0, anchor="start")
+        pic.text(f"plate depth {depth:g} mm, thickness {thickness:g} mm", np.array([sx, sy - 12]), 8.0,
+                 anchor="start")
     else:
-        sheet.text(f"{ntype.joint} joint: no slots", np.array([sx, sy + 60]), 8.0, anchor="start")
-        sheet.text(f"plate depth {depth:g} mm, thickness {thickness:g} mm", np.array([sx, sy + 46]), 8.0,
-                   anchor="start")
-    # node list
-    y = table_h + 4.0
-    sheet.text(f"{'node':<7} {'beams':<34} {'dihedral deg':>14} {'slot mm':>8}", np.array([10.0, y]), 9.0,
-               anchor="start")
-    for k, row in enumerate(rows):
-        sheet.text(row, np.array([10.0, y - line_h * (k + 1)]), 9.0, anchor="start")
-    return sheet.tostring()
+        pic.text(f"{ntype.joint} joint: no slots", np.array([sx, sy + 60]), 8.0, anchor="start")
+        pic.text(f"plate depth {depth:g} mm, thickness {thickness:g} mm", np.array([sx, sy + 46]), 8.0,
+                 anchor="start")
+    right = max([600.0] + [float(t.box[:, 0].max()) + 6.0 for t in pic.texts])
+    pic.extend_right(right - 600.0)
+    return pic, right

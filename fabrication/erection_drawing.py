@@ -3,12 +3,14 @@ later steps drawn over earlier ones, and a legend naming each step (:mod:`fabric
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from .contract import gasket_id
 from .drawings import SvgSheet
+from .paper import GAP, TEXT_MM, PaperSheet, SheetInfo, drawing_area, fitting_scales, scale_text
 from .erection import STEP_TITLES, ErectionPlan
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -37,15 +39,25 @@ def plan_outlines(plates: "Sequence[BeamPlate]", glazing: "Glazing | None", pane
     return out
 
 
-def erection_svg(plan: ErectionPlan, outlines: dict[str, np.ndarray], title: str, width_px: float = 2400.0) -> str:
-    """The SVG text of the plan coloured by step (``outlines`` from :func:`plan_outlines`)."""
+def erection_svg(plan: ErectionPlan, outlines: dict[str, np.ndarray], title: str,
+                 sheet: SheetInfo | None = None) -> str:
+    """The SVG text of the plan coloured by step (``outlines`` from :func:`plan_outlines`), on a sheet of paper
+    (``sheet``: title block; default A1, sheet 1 of 1) at the first standard scale at which the plan and the
+    legend below it fit the drawing area."""
+    info = sheet or SheetInfo(project="", title=title)
     rings = [outlines[p.part_id][:, :2] for p in plan.insertions if p.part_id in outlines]
     pts = np.vstack(rings) if rings else np.zeros((1, 2))
     lo, hi = pts.min(axis=0), pts.max(axis=0)
-    pad = 0.04 * float(max(hi - lo)) + 1.0
-    sheet = SvgSheet((lo[0] - pad, lo[1] - pad, hi[0] + pad, hi[1] + pad), width_px, title)
-    size = float(max(hi - lo)) + 2 * pad
-    stroke = 0.0008 * size
+    ax0, ay0, ax1, ay1 = drawing_area(info.paper)
+    h = TEXT_MM["note"]
+    line = 2.0 * h                                  # legend pitch on paper
+    legend = GAP + line * (len(plan.steps) + 0.5)
+    size = hi - lo
+    s = next((k for k in fitting_scales(float(size[0]) + 2.0, float(size[1]) + 2.0, info.paper)
+              if size[1] / k + 2.0 + legend <= ay1 - ay0), fitting_scales(1e12, 1e12, info.paper)[-1])
+    pad = 1.0 * s
+    view = SvgSheet((lo[0] - pad, lo[1] - pad, hi[0] + pad, hi[1] + pad), 1.0, title)
+    stroke = 0.1 * s
     for p in plan.insertions:
         ring = outlines.get(p.part_id)
         if ring is None:
@@ -55,16 +67,20 @@ def erection_svg(plan: ErectionPlan, outlines: dict[str, np.ndarray], title: str
         if p.kind == "panel":
             extra["fill-opacity"] = "0.35"
         if p.kind == "gasket":                      # over its strip: outlined only, so the strip shows
-            sheet.polygon(ring[:, :2], "none", colour, 2 * stroke, **extra)
+            view.polygon(ring[:, :2], "none", colour, 2 * stroke, **extra)
         else:
-            sheet.polygon(ring[:, :2], colour, "#102a43", stroke, **extra)
-    line = 0.03 * size
-    sheet.extend_down(line * (len(plan.steps) + 1.5))
-    y = lo[1] - pad - line
+            view.polygon(ring[:, :2], colour, "#102a43", stroke, **extra)
+    page = PaperSheet(info, s)
+    page.frame()
+    el = page.embed(view.root, ax0, ay0, float(s))
+    el.set("data-view", "erection")
+    y = ay0 + float(el.get("height", "0")) + GAP + 0.5 * line
+    legend_group = ET.SubElement(page.root, "g", {"class": "legend"})
     for k, kind in enumerate(plan.steps, start=1):
-        box = np.array([[lo[0], y - 0.35 * line], [lo[0] + line, y - 0.35 * line], [lo[0] + line, y + 0.35 * line],
-                        [lo[0], y + 0.35 * line]])
-        sheet.polygon(box, STEP_COLOURS.get(kind, "#000000"), "#102a43", stroke)
-        sheet.text(f"step {k}: {STEP_TITLES[kind]}", np.array([lo[0] + 1.5 * line, y]), 0.6 * line, anchor="start")
-        y -= line
-    return sheet.tostring()
+        page.rect(ax0, y - 0.35 * line, ax0 + line, y + 0.35 * line, 0.1, parent=legend_group,
+                  fill=STEP_COLOURS.get(kind, "#000000"))
+        page.text(f"step {k}: {STEP_TITLES[kind]}", ax0 + 1.5 * line, y, "note")
+        y += line
+    bx0, by0, _, _ = page.band_left()
+    page.text(f"scale {scale_text(s)} on {info.paper}", bx0 + GAP, by0 + 9.0, "note")
+    return page.tostring()

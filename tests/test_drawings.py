@@ -1,6 +1,7 @@
 """The installers' drawings, read back as SVG (xml.etree): the key plan names every panel and beam plate once
 (glazing strips and splice plates lie on their beams), each panel label lies in its face as seen from above, no
-two labels of a view overlap (text measured with matplotlib's font metrics, not with the writer's estimate),
+two texts of a sheet overlap and no text crosses a drawn line (text measured with matplotlib's font metrics, not
+with the writer's estimate, :mod:`sheet_geometry`), every sheet is on its paper with a frame and a title block,
 and every node with plates is on the sheet of its type."""
 
 import csv
@@ -14,6 +15,7 @@ import pytest
 from ppfab.io import load_mesh
 
 from conftest import built_folder, small_vault
+from sheet_geometry import crossings, overlaps, svg_sheet
 
 NS = "{http://www.w3.org/2000/svg}"
 SMALL = small_vault("drawings")
@@ -54,40 +56,76 @@ def test_key_plan_names_every_part_once_inside_its_face(built):
     parts = _rows(built / "parts.csv")
     root, texts = _texts(built / "drawings" / "key_plan.svg")
     labels = [t for t in texts if t.get("data-part")]
-    names = [t.text for t in labels]
+    names = [t.text for t in labels] + [t.text for t in texts if t.get("data-listed")]   # at their place or listed
     # every panel and beam plate, once (glazing strips and splice plates lie on their beams, named on them)
     assert sorted(names) == sorted(r["part_id"] for r in parts if r["kind"] in ("panel", "beam"))
     # panel labels inside their face seen from above (the OBJ face, y flipped into SVG's frame)
     mesh = load_mesh(built / "mesh.obj")
     polys = [Polygon(mesh.vertices[f][:, :2]) for f in mesh.faces]
     face_of = {r["part_id"]: int(r["face"]) for r in parts if r["kind"] == "panel"}
-    fx0, fy1 = map(float, root.get("data-frame").split())           # picture (x, y) -> (x - x0, y1 - y)
+    [view] = [el for el in root if el.get("data-frame")]                # the view nested in the sheet
+    fx0, fy1 = map(float, view.get("data-frame").split())           # picture (x, y) -> (x - x0, y1 - y)
     inside = 0
     for pid, f in face_of.items():
         q = np.asarray(polys[f].exterior.coords)
         face_svg = Polygon(np.c_[q[:, 0] - fx0, fy1 - q[:, 1]])
-        t = [x for x in labels if x.text == pid][0]
-        assert face_svg.contains(_measured_box(t)), pid
-        inside += 1
-    assert inside == len(face_of) > 0
+        t = [x for x in labels if x.text == pid]
+        if t:
+            assert face_svg.contains(_measured_box(t[0])), pid
+            inside += 1
+    assert inside >= 0.75 * len(face_of) > 0
 
 
-@pytest.mark.parametrize("view", ["key_plan", "elevation_front", "elevation_side"])
-def test_labels_do_not_overlap(built, view):
-    from shapely import STRtree
+def test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(built):
+    """Every text of every sheet (views, node sheets, erection drawing; title blocks, lists and scale bars
+    included), measured with the font's metrics in paper mm: no two overlap, none is crossed by a drawn line
+    (panel outlines, plate lines, bands, frame and title-block rules), all read from the bottom or the right edge,
+    all at least 2.5 mm high on paper and every panel (beam) label as high as every other."""
+    sheets = sorted((built / "drawings").rglob("*.svg"))
+    assert len(sheets) >= 5
+    counted = 0
+    for path in sheets:
+        root, texts, lines = svg_sheet(path)
+        assert texts and lines, path.name
+        assert not overlaps(texts), (path.name, overlaps(texts)[:5])
+        assert not crossings(texts, lines), (path.name, crossings(texts, lines)[:5])
+        for t in texts:
+            rot = re.findall(r"rotate\(([-0-9.e]+)", t.element.get("transform", ""))
+            assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0, (path.name, t.text)
+            assert t.height >= 2.5 - 1e-6, (path.name, t.text, t.height)
+        for kind in ("panel", "beam"):
+            hs = {round(t.height, 6) for t in texts if t.element.get("data-class") == kind}
+            assert len(hs) <= 1, (path.name, kind, hs)
+        counted += len(texts)
+    assert counted > 100
 
-    _, texts = _texts(built / "drawings" / f"{view}.svg")
-    labels = [t for t in texts if t.get("data-part")]
-    assert labels
-    labels += [t for t in texts if not t.get("data-part")]          # the title, scale, extent, north: all text
-    boxes = [_measured_box(t) for t in labels]
-    tree = STRtree(boxes)
-    for i, b in enumerate(boxes):
-        hits = [int(j) for j in tree.query(b, predicate="intersects") if j != i]
-        assert not hits, (view, labels[i].text, [labels[j].text for j in hits])
-    for t in labels:
-        rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
-        assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0         # reads from the bottom or the right edge
+
+def test_sheets_are_on_a1_with_a_title_block_numbered_within_the_set(built):
+    """Every sheet is A1 (841 x 594 mm) with a frame inside the paper; its title block names the project, the
+    sheet, its number of the total (1..N once each, N the number of sheets) and the scale; a view's picture is its
+    model extent divided by a standard scale's denominator."""
+    design_name = "drawings"
+    sheets = sorted((built / "drawings").rglob("*.svg"))
+    numbers = []
+    for path in sheets:
+        root = ET.parse(path).getroot()
+        assert (root.get("width"), root.get("height"), root.get("viewBox")) == ("841mm", "594mm", "0 0 841 594")
+        [frame] = [r for r in root.iter(f"{NS}rect") if r.get("class") == "frame"]
+        x, y, w, h = (float(frame.get(k)) for k in ("x", "y", "width", "height"))
+        assert x >= 20.0 - 1e-9 and y >= 10.0 - 1e-9 and x + w <= 831.0 + 1e-9 and y + h <= 584.0 + 1e-9
+        fields = {t.get("data-field"): t.text for t in root.iter(f"{NS}text") if t.get("data-field")}
+        assert fields["project"] == design_name, path.name
+        m = re.fullmatch(r"sheet (\d+) of (\d+)", fields["sheet"])
+        assert m and int(m.group(2)) == len(sheets), (path.name, fields["sheet"])
+        numbers.append(int(m.group(1)))
+        for view in (el for el in root if el.get("data-frame")):
+            s = float(view.get("data-scale"))
+            if view.get("data-view") in ("plan", "front", "side", "erection"):
+                assert int(s) in (1, 2, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000), path.name
+                assert fields["scale"] == f"scale 1:{int(s)}"
+            vb = [float(c) for c in view.get("viewBox").split()]
+            assert float(view.get("width")) == pytest.approx(vb[2] / s, rel=1e-5)
+    assert sorted(numbers) == list(range(1, len(sheets) + 1))
 
 
 @pytest.mark.parametrize("view", ["key_plan", "elevation_front", "elevation_side"])
@@ -98,11 +136,12 @@ def test_views_carry_a_true_scale_bar_and_their_extent(built, view):
     root, texts = _texts(built / "drawings" / f"{view}.svg")
     [bar] = [g for g in root.iter(f"{NS}g") if g.get("class") == "scale-bar"]
     xs = [float(v.split(",")[0]) for p in bar.iter(f"{NS}polygon") for v in p.get("points").split()]
-    drawn = max(xs) - min(xs)
+    drawn = (max(xs) - min(xs)) * float(root.get("data-scale"))      # paper mm times the scale's denominator
     said = [t.text for t in texts if re.fullmatch(r"[0-9.]+ (m|mm)", t.text or "")]
     assert len(said) == 1
     value, unit = said[0].split()
-    assert drawn == pytest.approx(float(value) * (1000.0 if unit == "m" else 1.0), abs=0.2)
+    scale = float(root.get("data-scale"))
+    assert drawn == pytest.approx(float(value) * (1000.0 if unit == "m" else 1.0), abs=0.01 * scale)
     v = load_mesh(built / "mesh.obj").vertices
     axes = {"key_plan": (0, 1), "elevation_front": (0, 2), "elevation_side": (1, 2)}[view]
     [extent] = [t.text for t in texts if (t.text or "").startswith("extent ")]
@@ -136,21 +175,15 @@ def test_node_sheets_hold_every_node_once_with_angles_within_the_type(built):
 
 
 def test_node_sheets_have_no_overlapping_text_and_corners_meet_in_an_l(built):
-    """On every node sheet no two texts overlap (measured with the font's metrics) and every label reads from
-    the bottom or the right edge; a plate that ends at the node is drawn on one side of it only (a corner's two
-    plates meet in an L), a plate running through on both sides."""
-    from shapely import STRtree
-
+    """On every node sheet no two texts overlap (measured with the font's metrics, in paper mm) and every label
+    reads from the bottom or the right edge; a plate that ends at the node is drawn on one side of it only (a
+    corner's two plates meet in an L), a plate running through on both sides."""
     sheets = sorted((built / "drawings" / "nodes").glob("node_type_*.svg"))
     assert sheets
     roles = set()
     for path in sheets:
         root, texts = _texts(path)
-        boxes = [_measured_box(t) for t in texts]
-        tree = STRtree(boxes)
-        for i, b in enumerate(boxes):
-            hits = [int(j) for j in tree.query(b, predicate="intersects") if j != i]
-            assert not hits, (path.name, texts[i].text, [texts[j].text for j in hits])
+        assert not overlaps(svg_sheet(path)[1]), path.name
         for t in texts:
             rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
             assert -45.0 < -float(rot[0] if rot else 0.0) <= 135.0, (path.name, t.text)
@@ -183,8 +216,8 @@ def test_verify_names_a_part_missing_from_the_key_plan(built, tmp_path):
 
 
 def test_panels_overlapping_in_plan_keep_their_labels_apart():
-    """Eight panes stacked above one another (a wall or an overhang seen from above): no two labels overlap,
-    and the ids without room at their place are listed below the view."""
+    """Eight panes stacked above one another (a wall or an overhang seen from above), each with room for one
+    label on paper: no two labels overlap, and the ids without room at their place are listed below the view."""
     from shapely import STRtree
 
     from fabrication.drawings import view_svg
@@ -192,8 +225,8 @@ def test_panels_overlapping_in_plan_keep_their_labels_apart():
     class Pane:
         def __init__(self, k):
             self.part_id = f"P-STACKED-{k:02d}"
-            self._pts = np.array([[0, 0, 100.0 * k], [1000, 0, 100.0 * k], [1000, 400, 100.0 * k],
-                                  [0, 400, 100.0 * k]])
+            self._pts = np.array([[0, 0, 100.0 * k], [30, 0, 100.0 * k], [30, 6, 100.0 * k],
+                                  [0, 6, 100.0 * k]])                 # 30 x 6 mm at 1:1: room for one id
 
         def outline_3d(self):
             return self._pts
@@ -207,3 +240,112 @@ def test_panels_overlapping_in_plan_keep_their_labels_apart():
     boxes = [_measured_box(t) for t in placed]
     tree = STRtree(boxes)
     assert all(len([j for j in tree.query(b, predicate="intersects") if j != i]) == 0 for i, b in enumerate(boxes))
+
+
+def test_no_text_overlaps_or_crosses_a_line_on_any_dxf(built):
+    """Every DXF of the build (cutting sheets, per-type panes with their dimensions, cover plates), texts
+    measured with ezdxf's text size tools: on each face of a sheet no two texts overlap and no drawn line crosses a
+    text except a dimension's own lines; a cover plate's label lies inside its plate, off its skewed ends."""
+    import ezdxf
+    from shapely.geometry import Polygon
+
+    from sheet_geometry import dxf_problems, dxf_sheet
+
+    files = [p for p in sorted(built.rglob("*.dxf")) if "dxf_r" not in p.parent.name]
+    assert len(files) >= 5
+    for path in files:
+        over, cross = dxf_problems(path)
+        assert not over, (path.name, over[:5])
+        assert not cross, (path.name, cross[:5])
+    splices = sorted((built / "splices").glob("*.dxf"))
+    assert splices
+    for path in splices:
+        doc = ezdxf.readfile(path)
+        [plate] = [Polygon([p[:2] for p in e.get_points()])
+                   for e in doc.modelspace().query("LWPOLYLINE[layer=='CUT']")]
+        texts, _ = dxf_sheet(path)
+        [label] = [t for t in texts if re.fullmatch(rf"{re.escape(path.stem)} x\d+", t.text)]
+        assert plate.buffer(-2.9).contains(label.box), (path.name, label.box.bounds, plate.bounds)
+        assert label.height >= 3.0
+
+
+def test_verify_finds_a_sheet_off_its_paper(built, tmp_path):
+    """A label shrunk under 2.5 mm on paper, a frame removed and a paper size that does not exist are each
+    reported, naming the file."""
+    from fabrication.verify import verify
+
+    bad = tmp_path / "bad"
+    shutil.copytree(built, bad)
+    plan = bad / "drawings" / "key_plan.svg"
+    text = plan.read_text()
+    m = re.search(r'font-size="([0-9.]+)"([^>]*data-class="panel")', text)
+    small = float(m.group(1)) * 0.5
+    plan.write_text(text[:m.start()] + f'font-size="{small:g}"{m.group(2)}' + text[m.end():])
+    side = bad / "drawings" / "elevation_side.svg"
+    side.write_text(side.read_text().replace('class="frame"', 'class="border"'))
+    node = sorted((bad / "drawings" / "nodes").glob("*.svg"))[0]
+    node.write_text(node.read_text().replace('data-paper="A1"', 'data-paper="A2"'))
+    found = [str(f) for f in verify(bad).findings]
+    assert any("key_plan.svg" in f and "under 2.5 mm" in f for f in found), found
+    assert any("key_plan.svg" in f and "panel labels are 2 heights" in f for f in found), found
+    assert any("elevation_side.svg" in f and "no frame" in f for f in found), found
+    assert any(node.name in f and "'A2' is not a paper size" in f for f in found), found
+    clean = [str(f) for f in verify(built).findings if "drawings/" in str(f)]
+    assert not clean, clean
+
+
+def test_drawings_pdf_has_a_page_per_sheet_at_its_paper_size_and_is_reproducible(built, tmp_path):
+    """``drawings/drawings.pdf`` (listed in the manifest) has one page per SVG sheet, each 841 x 594 mm (its
+    MediaBox in points), and drawing the same sheets again gives the same bytes (no creation date)."""
+    import json
+
+    from fabrication.writers.drawings import sheet_register  # noqa: F401  (the order the PDF follows)
+    from fabrication.writers.drawings_pdf import write_pdf
+
+    manifest = json.loads((built / "manifest.json").read_text())
+    assert manifest["files"]["drawings_pdf"] == "drawings/drawings.pdf"
+    data = (built / "drawings" / "drawings.pdf").read_bytes()
+    sheets = sorted((built / "drawings").rglob("*.svg"))
+    boxes = re.findall(rb"/MediaBox \[\s*0 0 ([0-9.]+) ([0-9.]+)\s*\]", data)
+    assert len(boxes) == len(sheets)
+    for w, h in boxes:
+        assert (float(w), float(h)) == pytest.approx((841 / 25.4 * 72, 594 / 25.4 * 72), abs=0.01)
+    assert b"CreationDate" not in data
+    one, two = tmp_path / "a.pdf", tmp_path / "b.pdf"
+    write_pdf(sheets[:2], one)
+    write_pdf(sheets[:2], two)
+    assert one.read_bytes() == two.read_bytes()
+    assert len(re.findall(rb"/Type /Page\b", one.read_bytes())) == 2
+
+
+def test_a3_sheet_scales_the_view_down_and_keeps_text_at_2_5_mm(tmp_path):
+    """The same panes on A3: the sheet is 420 x 297 mm, the view at a standard scale no larger than on A1, every
+    text at least 2.5 mm on paper; a paper that does not exist is refused naming the ones that do."""
+    from fabrication.design import load_design
+    from fabrication.drawings import view_svg
+    from ppfab.errors import DesignError
+
+    class Pane:
+        def __init__(self, i, j):
+            self.part_id = f"P-{i:02d}-{j:02d}"
+            self._pts = np.array([[1500.0 * i, 1200.0 * j, 0], [1500.0 * (i + 1), 1200.0 * j, 0],
+                                  [1500.0 * (i + 1), 1200.0 * (j + 1), 0], [1500.0 * i, 1200.0 * (j + 1), 0]])
+
+        def outline_3d(self):
+            return self._pts
+
+    panes = [Pane(i, j) for i in range(24) for j in range(2)]            # 36 m x 2.4 m
+    a1 = view_svg("plan", panes, [], "grid")
+    a3 = view_svg("plan", panes, [], "grid", paper="A3")
+    assert (a1.scale, a3.scale) == (50, 100)            # 36 m: 720 mm at 1:50 fits A1's 803 mm, not A3's 382 mm
+    path = tmp_path / "a3.svg"
+    path.write_text(a3.svg)
+    root, texts, lines = svg_sheet(path)
+    assert root.get("viewBox") == "0 0 420 297"
+    assert min(t.height for t in texts) >= 2.5 - 1e-9
+    assert not overlaps(texts) and not crossings(texts, lines)
+    assert sorted(a3.labelled + a3.unfit) == sorted(p.part_id for p in panes)
+    design = tmp_path / "d.toml"
+    design.write_text(small_vault("paper").replace("[panels]", '[output]\npaper = "A2"\n[panels]'))
+    with pytest.raises(DesignError, match="'A1', 'A3'"):
+        load_design(design)

@@ -225,3 +225,31 @@ def test_reals_are_written_exactly():
         text = real(x)
         assert "." in text and "e" not in text
         assert float(text) == x
+
+
+def test_panes_of_a_real_surface_of_revolution_are_instanced_and_read_back_on_their_faces(tmp_path):
+    """DOI__rot4_def1_sparse_rot.obj (WWmore/DOI, objs/obj_rot/rot4_def1_sparse_rot.obj): the faces of one ring
+    are rotated copies, so their panes share B-reps; every pane read back (text reader; kernel on the tree and
+    one solid per kind; the kernel on every solid) lies on its face's least-squares plane (numpy's SVD here) and
+    10 mm outside it."""
+    from conftest import shared_file
+    from fabrication.writers.step import export_panels_step
+    from ppfab.io import load_mesh
+
+    corners = np.asarray(load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).face_corners, dtype=float)[:400]
+    ids = [f"P-{k:04d}" for k in range(len(corners))]
+    path = export_panels_step(corners, tmp_path / "panels.step", thickness=10.0, ids=ids, name="rot4")
+    breps = path.read_bytes().count(b"= MANIFOLD_SOLID_BREP(")
+    assert breps < len(corners) // 3                                  # of 400 panes
+    text = read_text_solids(path)
+    assert [s.name for s in text] == ids and all(s.problems() == [] for s in text)
+    assert kernel_sample(path, text) == []
+    kernel = {s.name: np.array([tuple(v) for v in s.solid.vertices()]) for s in read_step_solids(path)}
+    for k, s in enumerate(text):
+        c = corners[k]
+        n = np.linalg.svd(c - c.mean(axis=0))[2][2]
+        n = n if n @ np.cross(c[2] - c[0], c[3] - c[1]) > 0 else -n
+        for pts in (s.points, kernel[s.name]):
+            d = np.sort((pts - c.mean(axis=0)) @ n)
+            assert len(d) == 8
+            assert np.abs(d[:4]).max() <= 1e-6 and np.abs(d[4:] - 10.0).max() <= 1e-6, (s.name, d)

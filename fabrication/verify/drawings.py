@@ -2,6 +2,12 @@
 part of ``parts.csv`` in its text, every node with plates is on exactly one node sheet, and no two labels of a
 view overlap (their ``data-part`` texts' boxes, :data:`fabrication.marking.LABEL_CHAR_WIDTH` per character).
 
+Every sheet (views, node sheets, the erection drawing) is on a named paper (:mod:`fabrication.paper`): its size
+and viewBox are the paper's in mm, it has a frame and a title block naming the project, the sheet, its number of
+the total and the scale; every text is at least :data:`fabrication.paper.MIN_TEXT_MM` high on paper, every
+label of one class (``data-class``: panel, beam) as high as the others, inside the frame, and no two texts of a
+sheet overlap on paper.
+
 Every panel polygon of a view (key plan, elevations) is where the source puts it: each pane's outline (its mesh
 face inset by half the gap, :func:`._solids.reference_outline`) projected into the view
 (:func:`fabrication.drawings.project`) and drawn in the picture frame the root's ``data-frame`` records, within
@@ -88,6 +94,10 @@ def check_drawings(v: Verification) -> None:
         missing = sorted(parts - named)
         if missing:
             v.error(plan, missing[0], f"{len(missing)} part id(s) are not on the key plan: {', '.join(missing[:5])}")
+    for rel in list(views or []) + list(sheets or []) + ([files["erection_drawing"]]
+                                                          if files.get("erection_drawing") else []):
+        if rel in texts or rel == files.get("erection_drawing"):
+            check_sheet(v, rel)
     for rel in views or []:
         bad: list[str] = []
         boxes = label_boxes(texts.get(rel, []), bad)
@@ -118,6 +128,105 @@ def check_drawings(v: Verification) -> None:
 
 
 
+def view_element(root: ET.Element) -> ET.Element:
+    """The view of a sheet: the nested ``<svg>`` holding the picture frame (``data-frame``), else the root."""
+    if root.get("data-frame") is not None:
+        return root
+    return next((el for el in root if el.tag == f"{_SVG}svg" and el.get("data-frame") is not None), root)
+
+
+def paper_texts(root: ET.Element) -> list[tuple[ET.Element, float, object]]:
+    """``(text element, height on paper mm, box polygon on paper)`` of every text of a sheet (nested views mapped
+    by their ``x``, ``y`` and the ratio of ``width`` to the viewBox's); ``ValueError`` on a non-number."""
+    from shapely.geometry import Polygon
+
+    from ..marking import LABEL_CHAR_WIDTH
+
+    out: list[tuple[ET.Element, float, object]] = []
+
+    def walk(el: ET.Element, origin: np.ndarray, scale: float) -> None:
+        for child in el:
+            if child.tag == f"{_SVG}svg":
+                _, _, w, _ = (float(t) for t in child.get("viewBox", "").split())
+                s = float(child.get("width", "").removesuffix("mm")) / w
+                at = origin + scale * np.array([float(child.get("x", 0)), float(child.get("y", 0))])
+                walk(child, at, scale * s)
+            elif child.tag == f"{_SVG}g":
+                walk(child, origin, scale)
+            elif child.tag == f"{_SVG}text":
+                x, y, h = float(child.get("x", 0)), float(child.get("y", 0)), float(child.get("font-size", 0))
+                rot = re.findall(r"rotate\(([-0-9.e]+)", child.get("transform", ""))
+                a = np.radians(float(rot[0])) if rot else 0.0
+                w = LABEL_CHAR_WIDTH * len(child.text or "") * h
+                x0 = {"start": 0.0, "end": -w}.get(child.get("text-anchor", "start"), -0.5 * w)
+                local = np.array([[x0, -0.5 * h], [x0 + w, -0.5 * h], [x0 + w, 0.5 * h], [x0, 0.5 * h]])
+                r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+                pts = origin + scale * (local @ r.T + [x, y])
+                if not np.isfinite(pts).all() or not np.isfinite(h):
+                    raise ValueError(f"text {child.text!r} has a position or size that is not a number")
+                out.append((child, h * scale, Polygon(pts)))
+
+    walk(root, np.zeros(2), 1.0)
+    return out
+
+
+def check_sheet(v: Verification, rel: str) -> None:
+    """The sheet ``rel`` on its paper: size, frame, title block, text heights, texts inside the frame and apart
+    (module docstring)."""
+    from shapely import STRtree
+    from shapely.geometry import box
+
+    from ..paper import MIN_TEXT_MM, PAPER_SIZES, frame_box
+
+    try:
+        root = ET.parse(v.folder / rel).getroot()
+    except (OSError, ET.ParseError) as exc:
+        v.error(rel, "", f"cannot be read as SVG: {exc}")
+        return
+    paper = root.get("data-paper", "")
+    if paper not in PAPER_SIZES:
+        v.error(rel, "svg data-paper", f"{paper!r} is not a paper size ({', '.join(PAPER_SIZES)})")
+        return
+    w, h = PAPER_SIZES[paper]
+    size = (root.get("width", ""), root.get("height", ""), root.get("viewBox", ""))
+    want = (f"{w:g}mm", f"{h:g}mm", f"0 0 {w:g} {h:g}")
+    if size != want:
+        v.error(rel, "svg", f"width, height, viewBox {size} are not {paper} paper {want}")
+    if not any(el.get("class") == "frame" for el in root.iter(f"{_SVG}rect")):
+        v.error(rel, "frame", "sheet has no frame")
+    fields = {t.get("data-field"): t.text or "" for g in root.iter(f"{_SVG}g") if g.get("class") == "title-block"
+              for t in g.iter(f"{_SVG}text")}
+    for name in ("project", "title", "sheet", "scale"):
+        if not fields.get(name):
+            v.error(rel, "title block", f"title block has no {name}")
+    if fields.get("sheet") and not re.fullmatch(r"sheet \d+ of \d+", fields["sheet"]):
+        v.error(rel, "title block", f"sheet field {fields['sheet']!r} is not 'sheet N of M'")
+    try:
+        texts = paper_texts(root)
+    except ValueError as exc:
+        v.error(rel, "text", str(exc))
+        return
+    inside = box(*frame_box(paper))
+    heights: dict[str, set[float]] = {}
+    for el, ph, b in texts:
+        name = (el.text or "")[:40]
+        if ph < MIN_TEXT_MM - 0.005:                  # the sheet writes sizes to 6 digits
+            v.error(rel, name, f"text is {ph:.2f} mm high on paper, under {MIN_TEXT_MM:g} mm")
+        if not inside.contains(b):
+            v.error(rel, name, "text leaves the frame")
+        if el.get("data-class") in ("panel", "beam"):
+            heights.setdefault(el.get("data-class", ""), set()).add(round(ph, 2))
+    for kind, hs in sorted(heights.items()):
+        if len(hs) > 1:
+            v.error(rel, f"{kind} labels", f"{kind} labels are {len(hs)} heights on paper "
+                                          f"({', '.join(f'{x:g}' for x in sorted(hs))} mm), not one")
+    tree = STRtree([b for _, _, b in texts])
+    for i, (el, _, b) in enumerate(texts):
+        for j in tree.query(b, predicate="intersects"):
+            if j > i:
+                v.error(rel, (el.text or "")[:40], f"text overlaps {(texts[int(j)][0].text or '')[:40]!r} on paper")
+
+
 def _points(text: str) -> np.ndarray:
     """The ``points`` attribute of a polygon as ``(k, 2)``; ``ValueError`` when it is not pairs of numbers."""
     pts = np.array([[float(c) for c in pair.split(",")] for pair in text.split()], dtype=float)
@@ -134,7 +243,7 @@ def _check_view_polygons(v: Verification, rel: str, view: str) -> None:
     from ._shapes import cyclic_distance
     from ._solids import reference_outline
 
-    root = ET.parse(v.folder / rel).getroot()
+    root = view_element(ET.parse(v.folder / rel).getroot())
     try:
         x0, y1 = (float(t) for t in root.get("data-frame", "").split())
     except ValueError:

@@ -27,7 +27,10 @@ def write_erection(build: "Build", out: Path, files: Files) -> str:
     svg = out / ERECTION_SVG
     svg.parent.mkdir(parents=True, exist_ok=True)
     outlines = plan_outlines(build.beams.plates, build.glazing, build.panels.panels)
-    svg.write_text(erection_svg(plan, outlines, f"{build.design.info.name}: erection sequence"), encoding="utf-8")
+    from .drawings import sheet_register
+
+    sheet = sheet_register(build)[ERECTION_SVG].info
+    svg.write_text(erection_svg(plan, outlines, sheet.title, sheet=sheet), encoding="utf-8")
     files["erection_drawing"] = ERECTION_SVG
     for b in plan.blocked:
         logging.getLogger("ppfab").warning("erection: %s", b)

@@ -159,7 +159,11 @@ def splice_solids(glazing) -> list:
 def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     """One flat DXF per cover plate type: outline and bolt holes on ``CUT`` (XDATA ``part_id`` = type,
     ``quantity``, ``material``, ``thickness_mm``), the type id on ``LABEL`` and a title under the plate naming
-    the material and thickness (also the header custom properties ``PPFAB_MATERIAL``, ``PPFAB_THICKNESS_MM``)."""
+    the material and thickness (also the header custom properties ``PPFAB_MATERIAL``, ``PPFAB_THICKNESS_MM``).
+
+    The type label lies inside the plate, clear of its outline (the skewed ends included) and of every bolt hole
+    by :data:`SPLICE_LABEL_MARGIN`, upright along the plate's long side (:func:`~fabrication.marking.place_label`,
+    at most 20 mm high); on a plate with no room for it at :data:`SPLICE_LABEL_MIN` mm it goes above the plate."""
     from ..contract import XDATA_APPID, stock_xdata, thickness_text
     from ..glazing.rows import splice_types
     from .dxf import _fixed_metadata, _new_doc, add_stock, save_doc
@@ -182,13 +186,16 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
         material = glazing.splice_params.material
         pl.set_xdata(XDATA_APPID, [(1000, f"part_id={t}"), (1000, f"quantity={count[t]}")]
                      + stock_xdata(material, s.thickness))                    # type: ignore[attr-defined]
-        for x, y in s.flat_holes:                                  # type: ignore[attr-defined]
-            msp.add_circle((float(x), float(y)), 0.5 * s.hole, dxfattribs={"layer": "CUT"})  # type: ignore[attr-defined]
-        w, h = np.ptp(outline, axis=0)
-        msp.add_text(f"{t} x{count[t]}", height=min(20.0, 0.1 * float(h)),
-                     dxfattribs={"layer": "LABEL", "insert": (0.5 * float(w) - 40.0, 0.5 * float(h))})
-        add_stock(doc, msp, (material, thickness_text(s.thickness)), f"{t} x{count[t]}",  # type: ignore[attr-defined]
-                  height=min(10.0, 0.05 * float(h)), insert=(0.0, -15.0))
+        holes = [(float(x), float(y)) for x, y in s.flat_holes]   # type: ignore[attr-defined]
+        for x, y in holes:
+            msp.add_circle((x, y), 0.5 * s.hole, dxfattribs={"layer": "CUT"})  # type: ignore[attr-defined]
+        label = f"{t} x{count[t]}"
+        insert, height, angle = splice_label_place(np.asarray(outline, dtype=float), holes,
+                                                   0.5 * float(s.hole), label)  # type: ignore[attr-defined]
+        msp.add_text(label, height=height, rotation=angle, dxfattribs={"layer": "LABEL", "insert": insert})
+        h = float(np.ptp(np.asarray(outline, dtype=float), axis=0)[1])
+        add_stock(doc, msp, (material, thickness_text(s.thickness)), label,  # type: ignore[attr-defined]
+                  height=min(10.0, 0.05 * h), insert=(0.0, -15.0))
         name = f"{SPLICE_DIR}/{t}.dxf"
         save_doc(doc, folder.parent / name)
         names.append(name)
@@ -205,6 +212,34 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
     """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
     from ._step_text import step_label
     from .step import export_step
+SPLICE_LABEL_MARGIN, SPLICE_LABEL_MIN, SPLICE_LABEL_MAX = 3.0, 3.0, 20.0
+"""Clearance of a cover plate's label from its outline and holes, and its smallest and largest height, mm."""
+
+
+def splice_label_place(outline: np.ndarray, holes: list[tuple[float, float]], radius: float,
+                       label: str) -> tuple[tuple[float, float], float, float]:
+    """``(insert, height, rotation_deg)`` of a cover plate's label (left baseline insertion, as the DXF ``TEXT``
+    is written): its box (:func:`~fabrication.marking.place_label`) inside ``outline (k, 2)`` and off the
+    ``holes`` (circles of ``radius``); the text's baseline 0.45 heights under the box's middle, so cap height and
+    descenders stay inside the box.  Without room, above the plate, horizontal."""
+    from ..marking import LABEL_CHAR_WIDTH, TextLine, place_label
+
+    ring = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    circles = tuple(np.c_[x + 1.02 * radius * np.cos(ring), y + 1.02 * radius * np.sin(ring)] for x, y in holes)
+    where = place_label(outline, [TextLine(label, "LABEL")], margin=SPLICE_LABEL_MARGIN,
+                        max_height=SPLICE_LABEL_MAX, min_height=SPLICE_LABEL_MIN, keep_out_areas=circles)
+    line = where.lines[0]
+    h, angle = float(line.height), float(line.rotation_deg)
+    if not where.fits:
+        h, angle = SPLICE_LABEL_MIN * 2, 0.0
+        top = float(outline[:, 1].max())
+        return (float(outline[:, 0].min()), top + SPLICE_LABEL_MARGIN + 0.3 * h), h, angle
+    a = np.radians(angle)
+    u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    start = line.centre - 0.5 * LABEL_CHAR_WIDTH * len(label) * h * u - 0.45 * h * v
+    return (float(start[0]), float(start[1])), h, angle
+
+
     from .step_template import Assembly, grouped, write_step
 
     g = build.glazing
