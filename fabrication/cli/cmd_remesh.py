@@ -75,4 +75,7 @@ def run(args: argparse.Namespace) -> int:
               f"; largest distance to the surface {deviation:.2f} mm; edges {result.panel_size_min:.2f}–"
               f"{result.panel_size_max:.2f} × spacing; twist median {summary['twist_median']:.3f}, max "
               f"{summary['twist_max']:.3f} (0: conjugate)", file=sys.stderr)
+        for u in result.umbilics:
+            print(f"ppfab: note: an umbilic near the outline at (x, y) = ({u[0]:.0f}, {u[1]:.0f}) mm: the "
+                  "curvature lines turn around it", file=sys.stderr)
     return 0

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import DesignError
 from ..mesh import QuadGrid
+from ..metrics import conjugacy_defect
 from .curvature import quad_twist
 from .heightfield import HeightField, fit_height_field
 from .plan import PlanFrame, plan_frame
@@ -91,7 +92,8 @@ class RemeshResult:
                 "twist_median": float(np.median(self.twist)) if len(self.twist) else 0.0,
                 "twist_max": float(self.twist.max()) if len(self.twist) else 0.0,
                 "umbilics_mm": np.round(self.umbilics, 1).tolist(),
-                "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0}
+                "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0,
+                "conjugacy_defect": conjugacy_defect(n.mesh)}
 
 
 def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
