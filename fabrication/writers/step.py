@@ -14,7 +14,9 @@ without p-curves; a reader sees the product tree (names survive every level)
           B-U03-S00 …      one solid per plate      P-U07-V12 … one solid per pane, on its gaskets
 
 with every solid coloured by its family (:data:`fabrication.contract.COLOURS`) and a header naming ppfab, its
-version and the design (:mod:`fabrication.writers._step_text`).
+version and the design (:mod:`fabrication.writers._step_text`).  ``panels.step`` (like ``glazing.step``) is
+written as text from :mod:`fabrication.writers.step_template`, not through the kernel: panes of one shape are
+one product placed once per pane, each occurrence named by the pane's part id.
 
 build123d is imported inside the functions (≈3.5 s).
 """
