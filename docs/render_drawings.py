@@ -20,17 +20,20 @@ def main() -> None:
     import fabrication
     from fabrication.drawings import node_sheet_svg, view_svg
     from fabrication.nodetypes import node_types
+    from fabrication.paper import SheetInfo
 
     images = Path(__file__).resolve().parent / "images"
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "d.toml"
         path.write_text(DESIGN)
         build = fabrication.build(fabrication.load_design(path))
-    plan = view_svg("plan", build.panels.panels, build.beams.plates, "Key plan (view from above)", 1200.0)
+    plan = view_svg("plan", build.panels.panels, build.beams.plates, "Key plan (view from above)", paper="A3",
+                    sheet=SheetInfo("6 x 4 PP vault", "Key plan (view from above)", 1, 2, "A3"))
     (images / "drawings_key_plan.svg").write_text(plan.svg, encoding="utf-8")
     types = node_types(build.nodes.records)
     halflap = next(t for t in types if t.joint == "halflap")
-    sheet = node_sheet_svg(halflap, build.beams.params.depth, build.beams.params.thickness, 700.0)
+    sheet = node_sheet_svg(halflap, build.beams.params.depth, build.beams.params.thickness,
+                           sheet=SheetInfo("6 x 4 PP vault", f"Node type {halflap.type_id}", 2, 2, "A3"))
     (images / "drawings_node_sheet.svg").write_text(sheet, encoding="utf-8")
 
 
