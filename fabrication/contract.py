@@ -81,7 +81,7 @@ DXF_OLDEST = "AC1015"
 
 DXF_INSUNITS_MM = 4
 
-LAYERS = {"SHEET": 8, "TRIM": 3, "CUT": 1, "LABEL": 5, "MARK": 6, "MARK_BACK": 4}
+LAYERS = {"SHEET": 8, "TRIM": 3, "CUT": 1, "LABEL": 5, "MARK": 6, "MARK_BACK": 4, "BEVEL": 2}
 """Layer name → ACI colour.  SHEET stock outline, TRIM usable area, CUT part outlines (one closed LWPOLYLINE
 per part), LABEL part id text (never machined), MARK scribe/marking lines and engraved text on the face that
 looks up from the sheet (node axes, the part id and, on a beam plate, its face mark), MARK_BACK the marks of
@@ -90,6 +90,12 @@ when the plate is turned over)."""
 
 REQUIRED_LAYERS = ("SHEET", "TRIM", "CUT", "LABEL", "MARK")
 """The layers every cutting file must have (DESIGN.md); ``MARK_BACK`` is written as well but not required."""
+
+BEVEL_LAYER = "BEVEL"
+"""The layer of a beam plate's bevelled top-edge spans: the raised edge as cut (an open polyline, XDATA
+``part_id=…``, ``bevel=…``) and the instruction as TEXT (``BEVEL 13.6° U+ +1.45``: plane at 13.6° to the strip,
+the face marked ``U+`` keeps the edge, ``Δ`` mm; :mod:`fabrication.beams.bevel_cut`); never cut, read by the shop
+that planes the bevel."""
 
 MARK_LAYERS = ("MARK", "MARK_BACK")
 """The layers a CAM engraves or inks; TEXT on them carries XDATA ``part_id=…`` and ``mark=id|face``."""

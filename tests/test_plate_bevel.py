@@ -95,3 +95,218 @@ def test_a_bevel_is_specified_exactly_above_the_threshold(staged):
         assert b.text() == (f"top edge +{b.delta_mm:.2f} mm, bevel {b.lean_deg:.1f}° to the strip" if b.bevelled
                             else "square")
     assert not any(b.bevelled for b in strip_bevels(glazing.strips, beams.plates, 45.0))
+
+
+# -- the bevel modelled: beams/bevel_cut.py, the plate solid of beams.step, the DXF, the bevels check ----------
+
+@pytest.fixture(scope="module")
+def bevelled(staged):
+    from fabrication.beams.bevel_cut import bevelled_beams
+
+    beams, glazing = staged
+    return beams, bevelled_beams(beams, glazing), glazing
+
+
+@pytest.fixture(scope="module")
+def real_patch(tmp_path_factory):
+    """A 8 × 7-face patch of a real conical PP mesh (DOI__rot4_def1_sparse_rot.obj, surface of revolution), 3 m
+    scale: its plates lean up to 29° off their strips."""
+    from conftest import shared_file
+
+    from ppfab.io import load_mesh, write_obj
+    from ppfab.mesh import QuadGrid
+
+    from fabrication.beams.bevel_cut import bevelled_beams
+    from fabrication.design import load_design
+    from fabrication.pipeline import stages as st
+    from fabrication.pipeline.progress import Progress
+
+    root = tmp_path_factory.mktemp("bevel_real")
+    grid = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).to_grid()
+    # columns reversed: the file's faces turn their normals towards the node axes, which puts this patch's strips
+    # on the plates' lower side (the glazing stage takes the panes' normals for up); reversed, they face out
+    write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 7::-1])), root / "patch.obj")
+    (root / "d.toml").write_text(f'[design]\nname = "rot4 patch"\n[geometry]\nmesh = "{(root / "patch.obj").as_posix()}"\n'
+                                 'scale = 3000.0\n[beams]\nfallback = "segmented"\n')
+    d = load_design(root / "d.toml")
+    p = Progress(quiet=True)
+    g = st.stage_geometry(d, p, False)
+    q = st.stage_quality(g, p)
+    s = st.stage_support(d, g, p)
+    panels = st.stage_panels(d, g, p, q)
+    beams = st.stage_beams(d, s, p)
+    glazing = st.stage_glazing(d, s, panels, beams, p)
+    return beams, bevelled_beams(beams, glazing), glazing
+
+
+def strip_solid(strip):
+    """The strip as the kernel's box over its rectangle (frame and thickness only: none of the bevel code)."""
+    from fabrication.writers.step import _placed_prism
+
+    return _placed_prism(strip.outline(), strip.frame, 0.0, strip.thickness, strip.part_id)
+
+
+def kernel_depth(a, b, u: np.ndarray) -> float:
+    """Depth (mm, along ``u``) of the kernel's common part of two solids, 0 when it has no volume."""
+    from build123d import Solid
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common
+
+    common = Solid(BRepAlgoAPI_Common(a.wrapped, b.wrapped).Shape())
+    if common.volume < 1e-6:
+        return 0.0
+    z = np.array([tuple(p) for p in common.vertices()], dtype=float) @ u
+    return float(z.max() - z.min())
+
+
+def pairs(beams, glazing):
+    """(strip, plate) of every strip and every piece of its beam whose box meets the strip's."""
+    out = []
+    for s in glazing.strips:
+        corners = s.frame.to3d(s.outline())
+        lo, hi = corners.min(axis=0) - s.thickness, corners.max(axis=0) + s.thickness
+        for p in beams.plates:
+            if p.beam_id != s.beam_id:
+                continue
+            q = p.frame.to3d(p.flat_outline)
+            if np.all(q.max(axis=0) >= lo) and np.all(q.min(axis=0) <= hi):
+                out.append((s, p))
+    return out
+
+
+@pytest.mark.parametrize("which", ["smallest_roof", "real"])
+def test_bevelled_plates_and_their_strips_do_not_overlap(which, bevelled, request):
+    """The kernel's common part of each strip's box and each plate solid of its beam (as beams.step holds it) is
+    under 0.05 mm deep along the strip's up where the span is bevelled, under (t/2)·sin(bevel_min_deg) where it
+    is square; the same plates without the bevel overlap their steep strips by (t/2)·sin λ."""
+    from fabrication.glazing.bevel import strip_bevel
+    from fabrication.writers.step import plate_solid
+
+    square, bevel, glazing = bevelled if which == "smallest_roof" else request.getfixturevalue("real_patch")
+    by_id = bevel.by_id
+    limit = 0.5 * max(p.thickness for p in bevel.plates) * math.sin(math.radians(glazing.params.bevel_min_deg))
+    solids: dict = {}
+    worst_bevelled, worst_square, before = 0.0, 0.0, 0.0
+    checked = 0
+    for s, p in pairs(square, glazing):
+        fit = strip_bevel(s, p, glazing.params.bevel_min_deg)
+        plate = by_id[p.part_id]
+        if plate.part_id not in solids:
+            solids[plate.part_id] = plate_solid(plate)
+        depth = kernel_depth(strip_solid(s), solids[plate.part_id], s.frame.normal)
+        if fit.bevelled and any(b.strip == s.part_id for b in plate.bevels):
+            worst_bevelled = max(worst_bevelled, depth)
+            before = max(before, kernel_depth(strip_solid(s), plate_solid(p), s.frame.normal))
+            checked += 1
+        else:
+            worst_square = max(worst_square, depth)
+    assert checked >= 20
+    assert worst_bevelled < 0.05
+    assert worst_square <= limit + 0.01
+    assert before > 1.0                              # the square plates ran into their steep strips
+
+
+@pytest.mark.parametrize("which", ["smallest_roof", "real"])
+def test_the_bevelled_face_is_the_strip_underside(which, bevelled, request):
+    """Every bevelled span's plate solid has a planar face within 0.05° of its strip's underside and all its
+    corners within 1e-6 mm of that plane; the solid is valid, its volume t × the mid-plane section, its cut
+    outline raised by Δ along the span."""
+    from fabrication.writers.step import _is_valid, plate_solid
+    from ppfab.metrics import polygon_area
+
+    _, bevel, glazing = bevelled if which == "smallest_roof" else request.getfixturevalue("real_patch")
+    strips = {s.part_id: s for s in glazing.strips}
+    n_faces = 0
+    for plate in bevel.plates:
+        if not plate.bevels:
+            continue
+        solid = plate_solid(plate)
+        assert _is_valid(solid), plate.part_id
+        holes = float(np.pi / 4.0 * np.sum(plate.holes[:, 2] ** 2))
+        assert solid.volume == pytest.approx(plate.thickness * (polygon_area(plate.outline) - holes), rel=1e-5)
+        for b in plate.bevels:
+            s = strips[b.strip]
+            u, o = s.frame.normal, s.frame.origin
+            found = []
+            for f in solid.faces():
+                if "PLANE" not in str(f.geom_type).upper():
+                    continue
+                normal = np.array(tuple(f.normal_at()), dtype=float)
+                corners = np.array([tuple(v) for v in f.vertices()], dtype=float)
+                if abs(float(normal @ u)) >= math.cos(math.radians(0.05)) \
+                        and np.abs((corners - o) @ u).max() < 1e-6:
+                    found.append(f)
+            assert found, (plate.part_id, b.strip)
+            n_faces += 1
+            # the cut outline has an edge on the span's line moved Δ up in the plate (square to the edge)
+            p0, p1 = plate.top[b.span], plate.top[b.span + 1]
+            e = (p1 - p0) / np.linalg.norm(p1 - p0)
+            m = np.array([-e[1], e[0]])
+            m = m if m @ plate.frame.vec2d(u[None])[0] > 0 else -m
+            q = plate.cut_outline
+            off = (q - p0) @ m
+            along = np.abs((q - p0) @ np.array([e[1], -e[0]]))
+            assert np.any(np.abs(off - b.delta) < 1e-6), (plate.part_id, b.span)
+            assert b.delta == pytest.approx(0.5 * plate.thickness * math.tan(math.radians(b.lean_deg)), rel=1e-9)
+            assert along.size
+    assert n_faces >= 20
+
+
+def test_flat_part_dxf_carries_the_bevel(bevelled, tmp_path):
+    """The flat part of a bevelled plate is its cut outline (area up by about Σ Δ·span); its per-part DXF has the
+    raised edge of every bevelled span on layer BEVEL with its instruction, and reads back clean."""
+    from fabrication.beams.flat import flat_part
+    from fabrication.writers.dxf import check_sheet_dxf, write_part_dxf
+    from ppfab.metrics import polygon_area
+
+    _, bevel, _ = bevelled
+    plate = max((p for p in bevel.plates if p.bevels), key=lambda p: len(p.bevels))
+    part = flat_part(plate)
+    raised = sum(b.delta * float(np.linalg.norm(plate.top[b.span + 1] - plate.top[b.span])) for b in plate.bevels)
+    assert part.area - polygon_area(plate.outline) == pytest.approx(raised, rel=0.05)
+    assert len(part.bevels) == len(plate.bevels)
+    path = write_part_dxf(part, tmp_path / "part.dxf")
+    read = check_sheet_dxf(path, require_sheet=False)
+    assert len(read.bevels) == len(plate.bevels)
+    assert all(pid == plate.part_id for pid, _ in read.bevels)
+    texts = [t.text for t in read.bevel_texts]
+    assert not [t for t in read.texts if t.layer == "BEVEL"]
+    assert sorted(texts) == sorted(bm.text for bm in part.bevels)
+    assert all(t.startswith("BEVEL ") and (" U+ " in t or " U- " in t or " W+ " in t or " W- " in t) for t in texts)
+
+
+class _Findings:
+    def __init__(self) -> None:
+        self.errors: list[str] = []
+
+    def error(self, rel: str, where: str, what: str) -> None:
+        self.errors.append(f"{rel}: {where}: {what}")
+
+
+def test_the_bevels_check_names_a_square_plate_and_a_strip_moved_into_it(bevelled):
+    """verify's bevels check on one bevelled strip: the plate as built passes; the plate without its bevel, and the
+    strip moved 2 mm down into the plate, are each named."""
+    from dataclasses import replace
+
+    from fabrication.verify.bevels import _check_bevel_face
+    from fabrication.writers.step import plate_solid
+
+    _, bevel, glazing = bevelled
+    plate = max((p for p in bevel.plates if p.bevels), key=lambda p: max(b.delta for b in p.bevels))
+    b = max(plate.bevels, key=lambda b: b.delta)
+    strip = next(s for s in glazing.strips if s.part_id == b.strip)
+    rect = strip.frame.to3d(strip.outline())
+    pts = np.vstack([rect, rect + strip.thickness * strip.frame.normal])
+    f = plate.frame
+    frame = {"origin": f.origin, "x_dir": f.ex, "y_dir": f.ey, "normal": f.normal}
+    row = {"plate": plate.part_id, "delta_mm": f"{b.delta:.3f}", "bevel": "top edge"}
+
+    def findings(strip_pts, solid) -> list[str]:
+        v = _Findings()
+        _check_bevel_face(v, strip.part_id, row, strip_pts, solid, frame)  # type: ignore[arg-type]
+        return v.errors
+
+    assert findings(pts, plate_solid(plate)) == []
+    square = findings(pts, plate_solid(replace(plate, bevels=(), cut_outline=None)))
+    assert len(square) == 1 and plate.part_id in square[0] and "no bevelled face" in square[0]
+    moved = findings(pts - 2.0 * strip.frame.normal, plate_solid(plate))
+    assert len(moved) == 1 and "no bevelled face" in moved[0]

@@ -155,7 +155,7 @@ def _split_at_nodes(plate: BeamPlate, outline: np.ndarray) -> np.ndarray:
             if L < 1e-9:
                 continue
             s = float((t - a) @ e) / (L * L)
-            if ON_SPAN_MM / L < s < 1.0 - ON_SPAN_MM / L and abs(float(np.cross(e, t - a))) / L <= ON_SPAN_MM:
+            if ON_SPAN_MM / L < s < 1.0 - ON_SPAN_MM / L and abs(float(e[0] * (t - a)[1] - e[1] * (t - a)[0])) / L <= ON_SPAN_MM:
                 q.insert(k + 1, np.asarray(t, dtype=float))
                 break
     return np.array(q)

@@ -41,7 +41,7 @@ from ppfab.errors import VerificationError
 
 from . import Files, writer
 
-from ..contract import (DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
+from ..contract import (BEVEL_LAYER, DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
                         GLASS_SHEET_PREFIX, KERF_NOTES, LAYERS, MARK_LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
                         REQUIRED_LAYERS, STOCK_HEADER_VARS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text, xdata_fields,
                         sheet_file, stock_title, stock_xdata, thickness_text, type_file, xdata_strings)
@@ -115,6 +115,10 @@ def add_stock(doc, msp, stock: tuple[str, str], title: str, height: float = 40.0
 
 PLATE_TEXT_MAX, PANEL_TEXT_MAX = 25.0, 60.0
 """Largest text height of a label on a beam plate (engraved) and on a glass pane, mm."""
+
+
+BEVEL_TEXT_MAX = 8.0
+"""Largest text height of a bevel instruction on a beam plate, mm."""
 
 
 def _short_side(points: np.ndarray) -> float:
@@ -222,12 +226,14 @@ class CuttingSheet:
             if len(pts) >= 2:
                 self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
                                         dxfattribs={"layer": "MARK"})
+        bevels = self._add_bevels(part, to_sheet, outline)
         lines, back = _label_lines(part, tag, placement.mirrored if placement is not None else False)
         short = _short_side(outline)
         cap = PLATE_TEXT_MAX if part.kind == "beam" else PANEL_TEXT_MAX
         where = place_label(outline, lines, margin=float(np.clip(0.05 * short, 2.0, 40.0)),
                             max_height=float(np.clip(0.15 * short, 2.0, cap)), min_height=2.0,
-                            keep_out=(tuple(marks) + tuple(circles) if part.kind == "beam" else ()) + tuple(keep_out))
+                            keep_out=(tuple(marks) + tuple(circles) + tuple(bevels) if part.kind == "beam" else ())
+                            + tuple(keep_out))
         from ezdxf.enums import TextEntityAlignment
 
         for pl in where.lines:
@@ -248,6 +254,45 @@ class CuttingSheet:
                 if len(pts) >= 2:
                     self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
                                             dxfattribs={"layer": "MARK_BACK"})
+
+    def _add_bevels(self, part: FlatPart, to_sheet, outline: np.ndarray) -> list[np.ndarray]:
+        """A beam plate's bevelled top-edge spans on layer ``BEVEL``: the raised edge as cut (an open polyline,
+        XDATA ``part_id=…``, ``bevel=…``) and its instruction as TEXT along it, inside the plate
+        (:class:`fabrication.beams.flat.BevelMark`); the polylines and text boxes for the label to keep clear of."""
+        from ezdxf.enums import TextEntityAlignment
+
+        from shapely.geometry import Point, Polygon
+
+        from ..marking import upright_deg
+
+        body = Polygon(outline)
+        out = []
+        for bm in getattr(part, "bevels", ()):
+            pts = to_sheet(bm.line)
+            edge = self.msp.add_lwpolyline([tuple(map(float, p)) for p in pts], close=False,
+                                           dxfattribs={"layer": BEVEL_LAYER})
+            edge.set_xdata(XDATA_APPID, [(1000, f"part_id={part.part_id}"), (1000, f"bevel={bm.text}")])
+            d = pts[1] - pts[0]
+            length = float(np.linalg.norm(d))
+            if length <= 0:
+                continue
+            d = d / length
+            inward = np.array([-d[1], d[0]])
+            if not body.contains(Point(0.5 * (pts[0] + pts[1]) + 0.5 * inward)):
+                inward = -inward                              # towards the plate's body
+            height = float(np.clip(length / (len(bm.text) * 1.2), 2.0, BEVEL_TEXT_MAX))
+            at = 0.5 * (pts[0] + pts[1]) + 1.2 * height * inward
+            text = self.msp.add_text(dxf_text(bm.text), height=height,
+                                     dxfattribs={"layer": BEVEL_LAYER,
+                                                 "rotation": upright_deg(float(np.degrees(np.arctan2(d[1], d[0]))))})
+            text.set_placement(tuple(map(float, at)), align=TextEntityAlignment.MIDDLE_CENTER)
+            text.set_xdata(XDATA_APPID, [(1000, f"part_id={part.part_id}"), (1000, "mark=bevel")])
+            half = 0.5 * len(bm.text) * 0.8 * height * d
+            across = 0.6 * height * inward
+            out.append(pts)
+            out.append(np.array([at - half - across, at + half - across, at + half + across, at - half + across,
+                                 at - half - across]))
+        return out
 
     def write(self, path: str | os.PathLike) -> Path:
         """Save (deterministic bytes)."""
@@ -364,6 +409,10 @@ class DXFContent:
     mark_lines: list[tuple[str, np.ndarray]] = field(default_factory=list)
     dimension_texts: list[DXFDimension] = field(default_factory=list)
     holes: list[DXFHole] = field(default_factory=list)
+    bevels: list[tuple[str, np.ndarray]] = field(default_factory=list)
+    """The bevelled edges on layer ``BEVEL``: part id and the polyline ``(2, 2)``."""
+    bevel_texts: list[DXFText] = field(default_factory=list)
+    """The bevel instructions on layer ``BEVEL`` (not part labels)."""
 
 
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
@@ -380,6 +429,8 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     mark_lines: list[tuple[str, np.ndarray]] = []
     dim_texts: list[DXFDimension] = []
     holes: list[DXFHole] = []
+    bevel_lines: list[tuple[str, np.ndarray]] = []
+    bevel_texts: list[DXFText] = []
     back = 0
     sheet = trim = None
     e: Any
@@ -407,8 +458,15 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             elif layer == "MARK_BACK":
                 back += 1
                 mark_lines.append((layer, pts))
+            elif layer == BEVEL_LAYER:
+                bevel_lines.append((xdata_fields(e).get("part_id", ""), pts))
             else:
                 other.append(f"LWPOLYLINE on {layer}")
+        elif kind == "TEXT" and layer == BEVEL_LAYER:
+            align = e.dxf.get("align_point") if e.dxf.get("halign", 0) or e.dxf.get("valign", 0) else None
+            where = align if align is not None else e.dxf.insert
+            bevel_texts.append(DXFText(layer, e.dxf.text, np.array([where[0], where[1]], dtype=float),
+                                       float(e.dxf.height), float(e.dxf.get("rotation", 0.0)), False, xdata_fields(e)))
         elif kind == "TEXT" and layer in ("LABEL",) + MARK_LAYERS:
             if layer == "LABEL":
                 labels.append(e.dxf.text)
@@ -429,7 +487,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             other.append(f"{kind} on {layer}")
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
                       parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts,
-                      holes)
+                      holes, bevel_lines, bevel_texts)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
