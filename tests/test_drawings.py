@@ -269,13 +269,26 @@ def test_no_text_overlaps_or_crosses_a_line_on_any_dxf(built):
         assert label.height >= 3.0
 
 
-def test_verify_finds_a_sheet_off_its_paper(built, tmp_path):
-    """A label shrunk under 2.5 mm on paper, a frame removed and a paper size that does not exist are each
-    reported, naming the file."""
-    from fabrication.verify import verify
+def test_verify_finds_a_sheet_off_its_paper_and_a_cover_plate_label_off_its_plate(built, tmp_path):
+    """A label shrunk under 2.5 mm on paper, a frame removed, a paper size that does not exist and a cover plate's
+    label moved over the plate's end are each reported, naming the file; the build's own files give no finding."""
+    import ezdxf
 
+    from fabrication.verify import Verification
+    from fabrication.verify.drawings import check_sheet
+    from fabrication.verify.dxf import check_splice_label
+
+    sheets = [p.relative_to(built).as_posix() for p in sorted((built / "drawings").rglob("*.svg"))]
+    splices = [p.relative_to(built).as_posix() for p in sorted((built / "splices").glob("*.dxf"))]
+    clean = Verification(built)
+    for rel in sheets:
+        check_sheet(clean, rel)
+    for rel in splices:
+        check_splice_label(clean, rel)
+    assert not clean.findings, [str(f) for f in clean.findings]
     bad = tmp_path / "bad"
-    shutil.copytree(built, bad)
+    shutil.copytree(built / "drawings", bad / "drawings")
+    shutil.copytree(built / "splices", bad / "splices")
     plan = bad / "drawings" / "key_plan.svg"
     text = plan.read_text()
     m = re.search(r'font-size="([0-9.]+)"([^>]*data-class="panel")', text)
@@ -285,13 +298,23 @@ def test_verify_finds_a_sheet_off_its_paper(built, tmp_path):
     side.write_text(side.read_text().replace('class="frame"', 'class="border"'))
     node = sorted((bad / "drawings" / "nodes").glob("*.svg"))[0]
     node.write_text(node.read_text().replace('data-paper="A1"', 'data-paper="A2"'))
-    found = [str(f) for f in verify(bad).findings]
+    doc = ezdxf.readfile(bad / splices[0])
+    [label] = [t for t in doc.modelspace().query("TEXT[layer=='LABEL']") if " - " not in t.dxf.text]
+    right = max(p[0] for p in doc.modelspace().query("LWPOLYLINE[layer=='CUT']")[0].get_points())
+    label.dxf.insert = (right - 10.0, label.dxf.insert[1])              # over the plate's right end
+    doc.saveas(bad / splices[0])
+    v = Verification(bad)
+    for rel in sheets:
+        check_sheet(v, rel)
+    for rel in splices:
+        check_splice_label(v, rel)
+    found = [str(f) for f in v.findings]
     assert any("key_plan.svg" in f and "under 2.5 mm" in f for f in found), found
     assert any("key_plan.svg" in f and "panel labels are 2 heights" in f for f in found), found
     assert any("elevation_side.svg" in f and "no frame" in f for f in found), found
     assert any(node.name in f and "'A2' is not a paper size" in f for f in found), found
-    clean = [str(f) for f in verify(built).findings if "drawings/" in str(f)]
-    assert not clean, clean
+    assert [f for f in found if splices[0] in f] == [f"{splices[0]}: {label.dxf.text}: type label runs over the "
+                                                     "plate's outline"]
 
 
 def test_drawings_pdf_has_a_page_per_sheet_at_its_paper_size_and_is_reproducible(built, tmp_path):

@@ -83,7 +83,48 @@ def check_dxf(v: Verification) -> None:
                         d = poly.distance(polys[j][1])
                         what = "overlaps" if d == 0 else f"is {d:.3g} mm from"
                         v.error(rel, pid, f"{what} {polys[j][0]} (spacing {spacing:g} mm)")
+    for rel in file_list(files, "splice_dxfs"):
+        check_splice_label(v, rel)
     for pid, row in parts.items():
         if pid not in seen and row["kind"] in SHEET_KINDS and (files.get("glass_sheets") or files.get("beam_sheets")):
             v.error("parts.csv", pid, "part is on no cutting sheet")
     v.checked.append("dxf")
+
+
+def check_splice_label(v: Verification, rel: str) -> None:
+    """A cover plate DXF's type label (the ``LABEL`` text ``<type> x<count>``) lies inside its ``CUT`` outline and
+    off its bolt holes: its box (:data:`fabrication.marking.LABEL_CHAR_WIDTH` per character, from the cap height
+    down to the descenders, about its insertion point and rotation) within the outline, crossing no hole."""
+    import re
+
+    import ezdxf
+    import numpy as np
+    from shapely.geometry import Point, Polygon
+
+    from ..marking import LABEL_CHAR_WIDTH
+
+    try:
+        msp = ezdxf.readfile(v.folder / rel).modelspace()
+    except (OSError, ezdxf.DXFError) as exc:
+        v.error(rel, "", f"cannot be read as DXF: {exc}")
+        return
+    outlines = [Polygon([p[:2] for p in e.get_points()])                   # type: ignore[attr-defined]
+                for e in msp.query("LWPOLYLINE[layer=='CUT']")]
+    if len(outlines) != 1 or not outlines[0].is_valid:
+        return                                  # the splice check reports the outline itself
+    plate = outlines[0]
+    holes = [Point(tuple(c.dxf.center)[:2]).buffer(float(c.dxf.radius), 24)
+             for c in msp.query("CIRCLE[layer=='CUT']")]
+    stem = rel.rsplit("/", 1)[-1].removesuffix(".dxf")
+    for t in msp.query("TEXT[layer=='LABEL']"):
+        if not re.fullmatch(rf"{re.escape(stem)} x\d+", t.dxf.text):
+            continue
+        h, a = float(t.dxf.height), np.radians(float(t.dxf.rotation))
+        w = LABEL_CHAR_WIDTH * len(t.dxf.text) * h
+        u, n = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+        p = np.array([float(t.dxf.insert[0]), float(t.dxf.insert[1])])
+        box = Polygon([p - 0.3 * h * n, p + w * u - 0.3 * h * n, p + w * u + h * n, p + h * n])
+        if not plate.contains(box):
+            v.error(rel, t.dxf.text, "type label runs over the plate's outline")
+        elif any(box.intersects(c) for c in holes):
+            v.error(rel, t.dxf.text, "type label runs over a bolt hole")

@@ -3,7 +3,8 @@ the sheet register (key plan, elevations, erection drawing, node sheets); manife
 
 Each page is drawn with matplotlib's PDF backend from the SVG sheet written before it (the subset of SVG the
 drawings use: nested ``<svg>`` views, ``rect``, ``polygon``, ``polyline`` and ``text``), so the PDF shows what
-the SVG files say.  The file is reproducible: no creation date, fonts embedded as subsets in a fixed order."""
+the SVG files say; text stays text (TrueType subsets, ``pdf.fonttype`` 42), so it can be searched.  The file is
+reproducible: no creation date, fonts embedded as subsets in a fixed order."""
 
 from __future__ import annotations
 
@@ -79,7 +80,8 @@ def write_pdf(sheets: list[Path], path: Path) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.backends.backend_pdf import PdfPages
 
-    with PdfPages(path, metadata={"Creator": "ppfab", "CreationDate": None, "ModDate": None}) as pdf:
+    with matplotlib.rc_context({"pdf.fonttype": 42}), \
+            PdfPages(path, metadata={"Creator": "ppfab", "CreationDate": None, "ModDate": None}) as pdf:
         for sheet in sheets:
             root = ET.parse(sheet).getroot()
             _, _, w, h = (float(t) for t in root.get("viewBox", "0 0 1 1").split())
