@@ -14,7 +14,8 @@ import re
 import numpy as np
 import pytest
 
-from surface_cases import write_nurbs
+from conftest import shared_file
+from surface_cases import resample_quad_mesh, write_nurbs
 from test_surface_sections import SADDLE, plan_grid_twist, quad_twist
 
 
@@ -206,3 +207,49 @@ def test_surface_design_with_the_net_builds_a_verified_package(tmp_path, net, fa
     out = tmp_path / "out"
     b.write(out)
     assert b.verify().ok
+
+
+@pytest.fixture(scope="module")
+def enneper(tmp_path_factory):
+    """The middle 10 × 10 quads (5 × 5 m) of the Enneper surface of WWmore/DOS (objs/obj_anet/enneper2.obj,
+    the shared data), whose net is a net of curvature lines, and that patch resampled into a triangle mesh
+    (random plan points, Delaunay: no edge follows the net)."""
+    from fabrication.surfacefile import read_surface
+    from ppfab.io import read_mesh
+    from ppfab.io.meshfile import write_obj
+    from ppfab.mesh import QuadGrid
+
+    grid = np.asarray(read_mesh(shared_file("DOS__enneper2.obj")).to_grid().vertices)[10:21, 10:21]
+    folder = tmp_path_factory.mktemp("enneper")
+    write_obj(QuadGrid(grid), folder / "patch.obj", "the middle of enneper2.obj")
+    resample_quad_mesh(folder / "patch.obj", 1500, 3).export(folder / "patch.ply")
+    return grid * 1000.0, read_surface(folder / "patch.ply", units="m")
+
+
+def test_principal_net_follows_the_curvature_lines_of_a_real_surface(enneper):
+    """The principal net of the resampled Enneper patch runs along the original net (its curvature lines:
+    twist 0.01 by the quadric fits) within 8° at every quad, and is as conjugate as that net."""
+    from scipy.spatial import cKDTree
+
+    from ppfab.mesh import QuadGrid
+    from ppfab.surface import SurfaceSpec, remesh
+
+    original, sf = enneper
+    assert np.median(quad_twist(sf.samples.points, QuadGrid(original), 1000.0)) < 0.02
+    r = remesh(sf.samples, SurfaceSpec(path="patch.ply", spacing=1000.0, net="principal"))
+    v = np.asarray(r.net.mesh.vertices).reshape(-1, 3)
+    c = v[_faces(r.net.mesh)]
+    assert len(c) >= 8
+    a = 0.5 * ((c[:, 3] - c[:, 0]) + (c[:, 2] - c[:, 1]))
+    b = 0.5 * ((c[:, 1] - c[:, 0]) + (c[:, 2] - c[:, 3]))
+    du = (original[2:, 1:-1] - original[:-2, 1:-1]).reshape(-1, 3)       # the original net's directions
+    dv = (original[1:-1, 2:] - original[1:-1, :-2]).reshape(-1, 3)
+    _, k = cKDTree(original[1:-1, 1:-1].reshape(-1, 3)).query(c.mean(axis=1))
+
+    def angle(p, q):
+        cos = np.abs(np.einsum("ij,ij->i", p, q)) / (np.linalg.norm(p, axis=1) * np.linalg.norm(q, axis=1))
+        return np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
+
+    off = np.minimum(np.maximum(angle(a, du[k]), angle(b, dv[k])), np.maximum(angle(a, dv[k]), angle(b, du[k])))
+    assert off.max() < 8.0
+    assert np.median(quad_twist(sf.samples.points, r.net.mesh, 1000.0)) < 0.02

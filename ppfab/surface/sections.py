@@ -260,8 +260,8 @@ def trim_grid(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: n
     quads = np.stack([ids[:-1, :-1], ids[1:, :-1], ids[1:, 1:], ids[:-1, 1:]], axis=-1).reshape(-1, 4)
     ok = valid.ravel()[quads].all(axis=1)
     plan = local[..., :2].reshape(-1, 2)[quads]
-    if loops:
-        ok &= faces_inside(plan, loops)
+    if loops and ok.any():
+        ok[ok] = faces_inside(plan[ok], loops)
     dropped_outside = int(quads.shape[0] - ok.sum())
     v = world.reshape(-1, 3)
     c = v[quads]

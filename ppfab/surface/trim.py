@@ -38,9 +38,9 @@ def _crossings(p: np.ndarray, segs: np.ndarray) -> np.ndarray:
     for s in range(0, len(p), step):
         q = p[s:s + step, None, :]
         straddle = (a[None, :, 1] > q[..., 1]) != (b[None, :, 1] > q[..., 1])
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore"):       # a level segment never straddles
             t = (q[..., 1] - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1])
-        xc = a[None, :, 0] + t * (b[None, :, 0] - a[None, :, 0])
+            xc = a[None, :, 0] + t * (b[None, :, 0] - a[None, :, 0])
         out[s:s + step] = (np.count_nonzero(straddle & (xc > q[..., 0]), axis=1) % 2).astype(bool)
     return out
 
