@@ -253,3 +253,17 @@ def test_principal_net_follows_the_curvature_lines_of_a_real_surface(enneper):
     off = np.minimum(np.maximum(angle(a, du[k]), angle(b, dv[k])), np.maximum(angle(a, dv[k]), angle(b, du[k])))
     assert off.max() < 8.0
     assert np.median(quad_twist(sf.samples.points, r.net.mesh, 1000.0)) < 0.02
+
+
+def test_a_principal_design_without_optimize_is_refused(tmp_path):
+    """Curvature lines are not planar: a design that would build beams along them unoptimised is refused,
+    naming [optimize], before anything is written."""
+    from fabrication import build, load_design
+    from ppfab.errors import DesignError
+
+    write_nurbs(tmp_path / "roof.3dm", SADDLE, 40.0, 28.0, "Feet", as_brep=True)
+    (tmp_path / "roof.toml").write_text('[design]\nname = "p"\n\n[surface]\npath = "roof.3dm"\nnet = "principal"\n',
+                                        encoding="utf-8")
+    with pytest.raises(DesignError, match=r"optimize: the principal net has no planar polylines"):
+        build(load_design(tmp_path / "roof.toml"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["roof.3dm", "roof.toml"]

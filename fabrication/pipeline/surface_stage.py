@@ -38,6 +38,12 @@ def surface_geometry(design: Design, progress: Progress, allow_large: bool,
     mesh: QuadGrid | QuadMesh = r.net.mesh
     check_size(vertex_count(mesh), geo.max_vertices, allow_large)
     families: tuple[str, ...] = tuple(geo.planar_families or families_of(r.net.planar_family))
+    if design.optimize is None and r.net.planar_family == "none":
+        from ppfab.errors import DesignError
+
+        raise DesignError("optimize", f"the {spec.net} net has no planar polylines before optimising: add "
+                                      "[optimize] with families = \"rows\" (or \"both\") so its beams can be "
+                                      "planar")
     result = None
     if design.optimize is not None:
         from ppfab.optimize import optimize
