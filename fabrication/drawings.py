@@ -468,8 +468,21 @@ def node_rows(ntype) -> list[str]:
 NODE_TABLE_HEAD = f"{'node':<7} {'beams':<34} {'dihedral deg':>14} {'slot mm':>8}"
 
 
+NODE_LABEL_HEIGHT = 8.0
+"""Text height of a plate's id in a node sheet's diagram (picture units)."""
+
+
+def _label_reach(ntype) -> float:
+    """How far from the node centre a node sheet's plate ids reach (picture units, at least 130): the band, the
+    gap, the longest id's box and its half depth."""
+    longest = max([len(b["part_id"]) for b in ntype.nodes[0]["beams"]] + [1])
+    return max(130.0, NODE_BAND + 6.0 + LABEL_CHAR_WIDTH * NODE_LABEL_HEIGHT * longest + 0.75 * NODE_LABEL_HEIGHT)
+
+
 def _diagram_height(ntype) -> float:
-    return 360.0 + 12.0 * max(len(ntype.nodes[0].get("pairs", [])) - 1, 0)
+    """Height of a node sheet's diagram (picture units): captions, the plates' square (twice the ids' reach) and
+    the list of angle pairs under it."""
+    return 100.0 + 2.0 * _label_reach(ntype) + 12.0 * max(len(ntype.nodes[0].get("pairs", [])) - 1, 0)
 
 
 def _table_slots(ntype, paper: str, diagram_w: float) -> list[tuple[float, float, int]]:
@@ -544,8 +557,9 @@ def _node_picture(ntype, depth: float, thickness: float,
              f"{len(ntype.nodes)} nodes", np.array([10.0, top]), 11.0, anchor="start")
     pic.text(f"axis of {rep['node_id']}: ({axis[0]:.4f}, {axis[1]:.4f}, {axis[2]:.4f}), pointing into the "
              "structure", np.array([10.0, top - 18.0]), 9.0, anchor="start")
-    # plates seen along the axis: the view's square spans top − 50 … top − 290 (caption above, pairs below)
-    c = np.array([150.0, top - 170.0])
+    # plates seen along the axis: the square of side 2 reach round c (caption above, pairs below)
+    reach = _label_reach(ntype)                # the ids' boxes stay inside the square of side 2 reach round c
+    c = np.array([max(150.0, reach + 10.0), top - 40.0 - reach])
     ex = np.cross(axis, [0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.cross(axis, [1.0, 0.0, 0.0])
     ex /= np.linalg.norm(ex)
     ey = np.cross(axis, ex)
@@ -577,16 +591,16 @@ def _node_picture(ntype, depth: float, thickness: float,
             out = t2 if abs(upright_deg(direction_deg(t2)) - direction_deg(t2)) < 1e-9 else -t2
         ang = direction_deg(out)
         shown = upright_deg(ang)
-        pic.text(b["part_id"], c + (NODE_BAND + 6.0) * out, 8.0, shown, b["part_id"],
+        pic.text(b["part_id"], c + (NODE_BAND + 6.0) * out, NODE_LABEL_HEIGHT, shown, b["part_id"],
                  anchor="start" if abs(shown - ang) < 1e-6 else "end")
     for k, p in enumerate(rep.get("pairs", [])):
         if p.get("dihedral_deg") is None:
             continue
-        pic.text(f"{p['a']} / {p['b']}: {p['dihedral_deg']:.2f} deg", np.array([10.0, top - 300.0 - 12 * k]),
+        pic.text(f"{p['a']} / {p['b']}: {p['dihedral_deg']:.2f} deg", np.array([10.0, c[1] - reach - 14.0 - 12 * k]),
                  8.0, anchor="start")
     pic.text("plates seen along the node axis", np.array([10.0, top - 34.0]), 8.0, anchor="start")
     # slot detail
-    sx, sy = 330.0, top - 260.0
+    sx, sy = max(330.0, c[0] + reach + 40.0), top - 260.0
     scale = 180.0 / max(depth, 1e-9)
     width = ntype.slot_width_range
     if width is not None:

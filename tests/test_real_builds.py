@@ -507,6 +507,5 @@ def test_marking_and_drawings_on_a_real_mesh(dome_build):
     test_marking.test_labels_are_upright_inside_their_part_and_clear_of_slots(dome_build)
     test_marking.test_face_mark_is_on_the_side_the_3d_model_puts_up(dome_build)
     test_drawings.test_key_plan_names_every_part_once_inside_its_face(dome_build)
-    for view in ("key_plan", "elevation_front", "elevation_side"):
-        test_drawings.test_labels_do_not_overlap(dome_build, view)
+    test_drawings.test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(dome_build)
     test_drawings.test_node_sheets_hold_every_node_once_with_angles_within_the_type(dome_build)
