@@ -25,7 +25,11 @@ from .heightfield import HeightField
 from .plan import PlanFrame
 from .sections import EDGE_MARGIN, FLAT, SUBSTEPS_PER_SPACING, SectionsNet, _arc_positions, _densify, region_box, \
     trim_grid
+from .balance import strip_positions
 from .trim import inside
+
+BALANCED = 0.25
+"""Edges within ``±BALANCED`` of the spacing need no re-seeding."""
 
 UMBILIC = 0.1
 """``|κ1 − κ2|`` below this fraction of the surface's typical ``max |κ|`` counts as umbilic."""
@@ -145,27 +149,39 @@ def trace(hf: HeightField, start: np.ndarray, family: int, h: float, length: flo
     return np.concatenate([back[:, :0:-1], fwd], axis=1)
 
 
-def _crossing(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-    """The first crossing of plan polylines ``a (p, 2)`` and ``b (q, 2)`` (NaN points break them), or None."""
+def _crossings(a: np.ndarray, curves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first crossing of the plan polyline ``a (p, 2)`` with each of ``curves (C, q, 2)`` (NaN points
+    break them): ``(C, 2)`` points and ``(C,)`` whether there is one."""
+    C, q = curves.shape[0], curves.shape[1]
+    out, found = np.zeros((C, 2)), np.zeros(C, dtype=bool)
     pa, qa = a[:-1], a[1:]
-    pb, qb = b[:-1], b[1:]
     ok_a = np.isfinite(pa).all(1) & np.isfinite(qa).all(1)
+    pa, qa = pa[ok_a], qa[ok_a]
+    pb, qb = curves[:, :-1].reshape(-1, 2), curves[:, 1:].reshape(-1, 2)
+    owner = np.repeat(np.arange(C), q - 1)
     ok_b = np.isfinite(pb).all(1) & np.isfinite(qb).all(1)
-    pa, qa, pb, qb = pa[ok_a], qa[ok_a], pb[ok_b], qb[ok_b]
+    pb, qb, owner = pb[ok_b], qb[ok_b], owner[ok_b]
     if not len(pa) or not len(pb):
-        return None
-    r, s = qa - pa, qb - pb
-    den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
-    w = pb[None, :, :] - pa[:, None, :]
+        return out, found
+    # only segment pairs whose boxes overlap
+    lo_a, hi_a = np.minimum(pa, qa), np.maximum(pa, qa)
+    lo_b, hi_b = np.minimum(pb, qb), np.maximum(pb, qb)
+    ia, ib = np.nonzero((lo_a[:, None, 0] <= hi_b[None, :, 0]) & (lo_b[None, :, 0] <= hi_a[:, None, 0]) &
+                        (lo_a[:, None, 1] <= hi_b[None, :, 1]) & (lo_b[None, :, 1] <= hi_a[:, None, 1]))
+    r, s = qa[ia] - pa[ia], qb[ib] - pb[ib]
+    den = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
+    w = pb[ib] - pa[ia]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / den
-        u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / den
-    hit = np.argwhere((t >= 0) & (t <= 1) & (u >= 0) & (u <= 1) & (den != 0))
-    if not len(hit):
-        return None
-    i, j = hit[0]
-    out: np.ndarray = pa[i] + t[i, j] * r[i]
-    return out
+        t = (w[:, 0] * s[:, 1] - w[:, 1] * s[:, 0]) / den
+        u = (w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]) / den
+    hit = np.flatnonzero((t >= 0) & (t <= 1) & (u >= 0) & (u <= 1) & (den != 0))
+    # the first crossing along ``a`` for each curve: hits sorted by the segment of ``a``, first per owner
+    hit = hit[np.lexsort((t[hit], ia[hit]))]
+    _, first = np.unique(owner[ib[hit]], return_index=True)
+    k = hit[first]
+    out[owner[ib[k]]] = pa[ia[k]] + t[k, None] * r[k]
+    found[owner[ib[k]]] = True
+    return out, found
 
 
 def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
@@ -196,39 +212,93 @@ def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
     centre = np.array([[0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)]])
     h = spacing / SUBSTEPS_PER_SPACING
     length = float(np.hypot(hf.x[-1] - hf.x[0], hf.y[-1] - hf.y[0]))
-    seeds = []
+    middles = []
     for fam in (2, 1):          # seeds of family 1 lie on the middle curve of family 2, and vice versa
         mid = trace(hf, centre, fam, h, length)[0]
         ok = np.isfinite(mid).all(axis=1)
         centre_t = float(np.count_nonzero(ok[:len(ok) // 2]))      # the start is the middle point
         mid = mid[ok]
         t = np.arange(len(mid), dtype=float)
-        pts = np.column_stack([mid, hf.f(mid[:, 0], mid[:, 1])])
-        at = _arc_positions(t, pts, centre_t, spacing)
-        seeds.append(np.stack([np.interp(at, t, mid[:, 0]), np.interp(at, t, mid[:, 1])], axis=1))
-    if len(seeds[0]) < 2 or len(seeds[1]) < 2:
-        raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
-                            "direction; give a smaller [surface] spacing", value=spacing)
-    rows = trace(hf, seeds[0], 1, h, length)
-    cols = trace(hf, seeds[1], 2, h, length)
-    P = np.zeros((len(rows), len(cols), 2))
-    valid = np.zeros((len(rows), len(cols)), dtype=bool)
-    for i in range(len(rows)):
-        for j in range(len(cols)):
-            x = _crossing(rows[i], cols[j])
-            if x is not None:
-                P[i, j], valid[i, j] = x, True
-    local = np.concatenate([P, hf.f(P[..., 0], P[..., 1])[..., None]], axis=-1)
-    # faces turn counter-clockwise seen from above (as the sections net's)
-    i0, j0 = np.unravel_index(int(np.argmax(valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:])),
-                              (len(rows) - 1, len(cols) - 1))
-    e1, e2 = P[i0 + 1, j0] - P[i0, j0], P[i0, j0 + 1] - P[i0, j0]
-    if e1[0] * e2[1] - e1[1] * e2[0] < 0:
-        local, valid = local[:, ::-1], valid[:, ::-1]
-    local = np.ascontiguousarray(local)
-    world = frame.to_world(local)
-    net = trim_grid(world, local, valid, None, loops, spacing, min_face, None, "none", "principal")
+        middles.append((t, mid, np.column_stack([mid, hf.f(mid[:, 0], mid[:, 1])]), centre_t))
+
+    def seeds_at(k: int, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """Parameters on middle curve ``k`` ``step`` apart in arc length, and the plan points there."""
+        t, mid, pts, centre_t = middles[k]
+        at = _arc_positions(t, pts, centre_t, step)
+        return at, np.stack([np.interp(at, t, mid[:, 0]), np.interp(at, t, mid[:, 1])], axis=1)
+
+    def build(rows_seeds: np.ndarray, cols_seeds: np.ndarray) -> tuple[SectionsNet, np.ndarray]:
+        if len(rows_seeds) < 2 or len(cols_seeds) < 2:
+            raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
+                                "direction; give a smaller [surface] spacing", value=spacing)
+        local, valid, _ = _grid(hf, rows_seeds, cols_seeds, h, length)
+        world = frame.to_world(local)
+        return trim_grid(world, local, valid, None, loops, spacing, min_face, None, "none", "principal"), local
+
+    net, local = build(seeds_at(0, spacing)[1], seeds_at(1, spacing)[1])
+    if _worst(net, spacing) > np.log(1.0 / (1.0 - BALANCED)):
+        # seeds chosen strip by strip on a net twice as dense (:mod:`.balance`), kept when it narrows the range
+        (ta, sa), (tb, sb) = seeds_at(0, spacing / 2), seeds_at(1, spacing / 2)
+        d_local, d_valid, flip = _grid(hf, sa, sb, h, length)
+        d_world = frame.to_world(d_local)
+        ins = d_valid.copy()
+        if loops:
+            ins &= inside(d_local[..., :2].reshape(-1, 2), loops).reshape(ins.shape)
+        along_cols = np.linalg.norm(np.diff(d_world, axis=0), axis=-1)          # between neighbouring rows
+        along_rows = np.linalg.norm(np.diff(d_world, axis=1), axis=-1).T
+        pos_r = strip_positions(along_cols, ins[1:] & ins[:-1], float(np.interp(middles[0][3], ta, np.arange(len(ta)))),
+                                spacing)
+        ib = np.arange(len(tb))
+        start_c = float(np.interp(middles[1][3], tb, ib))
+        ins_c = (ins[:, 1:] & ins[:, :-1]).T
+        if flip:                                   # _grid turned the columns round: back to the seeds' order
+            along_rows, ins_c, start_c = along_rows[::-1], ins_c[::-1], float(len(tb) - 1 - start_c)
+        pos_c = strip_positions(along_rows, ins_c, start_c, spacing)
+        if flip:
+            pos_c = len(tb) - 1 - pos_c[::-1]
+        new_a = np.interp(pos_r, np.arange(len(ta)), ta)
+        new_b = np.interp(pos_c, ib, tb)
+        (t0, m0, _, _), (t1, m1, _, _) = middles
+        other, o_local = build(np.stack([np.interp(new_a, t0, m0[:, 0]), np.interp(new_a, t0, m0[:, 1])], axis=1),
+                               np.stack([np.interp(new_b, t1, m1[:, 0]), np.interp(new_b, t1, m1[:, 1])], axis=1))
+        if _worst(other, spacing) < _worst(net, spacing) and other.grid_faces.sum() >= 0.8 * net.grid_faces.sum():
+            net, local = other, o_local
     kept = np.argwhere(net.grid_faces)
     fi, fj = kept[:, 0], kept[:, 1]
     corners = np.stack([local[fi, fj], local[fi + 1, fj], local[fi + 1, fj + 1], local[fi, fj + 1]], axis=1)
     return net, quad_twist(hf, corners), found
+
+
+def _grid(hf: HeightField, rows_seeds: np.ndarray, cols_seeds: np.ndarray, h: float,
+          length: float) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The crossings of the family-1 curves through ``rows_seeds (R, 2)`` with the family-2 curves through
+    ``cols_seeds (C, 2)``: plan-frame points ``(R, C, 3)`` on the surface and whether each exists, the columns
+    in the order that turns the faces counter-clockwise seen from above (as the sections net's), and whether
+    that reversed them."""
+    rows = trace(hf, rows_seeds, 1, h, length)
+    cols = trace(hf, cols_seeds, 2, h, length)
+    P = np.zeros((len(rows), len(cols), 2))
+    valid = np.zeros((len(rows), len(cols)), dtype=bool)
+    for i in range(len(rows)):
+        P[i], valid[i] = _crossings(rows[i], cols)
+    local = np.concatenate([P, hf.f(P[..., 0], P[..., 1])[..., None]], axis=-1)
+    flip = _turns_clockwise(P, valid)
+    if flip:
+        local, valid = local[:, ::-1], valid[:, ::-1]
+    return np.ascontiguousarray(local), np.ascontiguousarray(valid), flip
+
+
+def _turns_clockwise(P: np.ndarray, valid: np.ndarray) -> bool:
+    """Whether the first complete face of the plan grid ``P (R, C, 2)`` turns clockwise."""
+    if P.shape[0] < 2 or P.shape[1] < 2:
+        return False
+    i0, j0 = np.unravel_index(int(np.argmax(valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:])),
+                              (P.shape[0] - 1, P.shape[1] - 1))
+    e1, e2 = P[i0 + 1, j0] - P[i0, j0], P[i0, j0 + 1] - P[i0, j0]
+    return bool(e1[0] * e2[1] - e1[1] * e2[0] < 0)
+
+
+def _worst(net: SectionsNet, spacing: float) -> float:
+    """The largest ``|log(edge / spacing)|`` over the kept edges."""
+    e = np.concatenate([net.edge_lengths_rows.ravel(), net.edge_lengths_cols.ravel()]) / spacing
+    return float(np.abs(np.log(e)).max())
