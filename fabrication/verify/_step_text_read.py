@@ -382,6 +382,7 @@ class StepModel:
         self.raw = entities
         self.cache: dict[int, list] = {}
         self.topology: dict[int, tuple[np.ndarray, list]] = {}
+        self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.by_kind: dict[str, list[int]] = {}
         for i, (k, _) in entities.items():
             self.by_kind.setdefault(k, []).append(i)
@@ -418,7 +419,14 @@ class StepModel:
         return np.array(a[1], dtype=float)
 
     def axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0)."""
+        """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0).
+        Kept per entity (a face plane of a shared B-rep is met once per solid placing it)."""
+        got = self.axes.get(i)
+        if got is None:
+            got = self.axes[i] = self._axis2(i)
+        return got
+
+    def _axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if self.kind(i) != "AXIS2_PLACEMENT_3D":
             raise StepTextError(f"#{i} is a {self.kind(i)}, not an AXIS2_PLACEMENT_3D")
         a = self.args(i)
@@ -429,6 +437,8 @@ class StepModel:
                                                              else np.array([0.0, 1.0, 0.0]))
         x = x - (x @ z) * z
         x = x / np.linalg.norm(x)
+        for a in (o, z, x):
+            a.flags.writeable = False                  # shared by every caller (kept per entity)
         return o, z, x
 
     def matrix(self, i: int) -> np.ndarray:
