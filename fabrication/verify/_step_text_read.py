@@ -437,8 +437,8 @@ class StepModel:
                                                              else np.array([0.0, 1.0, 0.0]))
         x = x - (x @ z) * z
         x = x / np.linalg.norm(x)
-        for a in (o, z, x):
-            a.flags.writeable = False                  # shared by every caller (kept per entity)
+        for vec in (o, z, x):
+            vec.flags.writeable = False                  # shared by every caller (kept per entity)
         return o, z, x
 
     def matrix(self, i: int) -> np.ndarray:
