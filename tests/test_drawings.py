@@ -372,3 +372,25 @@ def test_a3_sheet_scales_the_view_down_and_keeps_text_at_2_5_mm(tmp_path):
     design.write_text(small_vault("paper").replace("[panels]", '[output]\npaper = "A2"\n[panels]'))
     with pytest.raises(DesignError, match="'A1', 'A3'"):
         load_design(design)
+
+
+@pytest.mark.slow
+def test_every_text_of_an_example_build_is_clear(tmp_path):
+    """Every text of every sheet and every DXF of a full example build is clear (the sheet-wide and DXF-wide
+    tests above), the key plan names every panel and beam plate, at its place or in the list below the view.
+    With ``PPFAB_FULL`` the bundled default (30 A1 sheets, key plan and elevations at 1:50, 272 DXF files);
+    in the small form the ``smallest_roof`` example."""
+    from fabrication.cli import main
+
+    from conftest import FULL
+
+    out = tmp_path / "out"
+    assert main(["build", "-o", str(out), "--quiet"] + ([] if FULL else ["--example", "smallest_roof"])) == 0
+    test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(out)
+    test_no_text_overlaps_or_crosses_a_line_on_any_dxf(out)
+    _, texts = _texts(out / "drawings" / "key_plan.svg")
+    named = sorted(t.text for t in texts if t.get("data-part") or t.get("data-listed"))
+    assert named == sorted(r["part_id"] for r in _rows(out / "parts.csv") if r["kind"] in ("panel", "beam"))
+    if FULL:
+        root = ET.parse(out / "drawings" / "key_plan.svg").getroot()
+        assert root.get("data-scale") == "50"
