@@ -207,11 +207,6 @@ def _plain(value: float, digits: int = 3) -> float:
     return 0.0 if v == 0 else v
 
 
-@writer("glazing", order=25, enabled=lambda design: True)
-def write_glazing(build: "Build", out: Path, files: Files) -> str:
-    """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
-    from ._step_text import step_label
-    from .step import export_step
 SPLICE_LABEL_MARGIN, SPLICE_LABEL_MIN, SPLICE_LABEL_MAX = 3.0, 3.0, 20.0
 """Clearance of a cover plate's label from its outline and holes, and its smallest and largest height, mm."""
 
@@ -240,6 +235,11 @@ def splice_label_place(outline: np.ndarray, holes: list[tuple[float, float]], ra
     return (float(start[0]), float(start[1])), h, angle
 
 
+@writer("glazing", order=25, enabled=lambda design: True)
+def write_glazing(build: "Build", out: Path, files: Files) -> str:
+    """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
+    from ._step_text import step_label
+    from .step import export_step
     from .step_template import Assembly, grouped, write_step
 
     g = build.glazing
