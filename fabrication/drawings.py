@@ -218,19 +218,20 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, paper: s
     ax0, ay0, ax1, ay1 = drawing_area(info.paper)
     size = hi - lo
     chosen: tuple[int, _Laid, int, int] | None = None
-    for s in fitting_scales(float(size[0]) + 4.0 * _pad_scale(), float(size[1]) + 4.0 * _pad_scale(), info.paper):
+    pad = 2.0 * VIEW_PAD_MM
+    for s in fitting_scales(float(size[0]) + pad, float(size[1]) + pad, info.paper):
         laid = _layout(view, panels, plates, outl, proj, lo, hi, float(s))
         rows, per_row = _list_rows(laid.unfit, ax1 - ax0)
-        need = (hi[1] - lo[1]) / s + 4.0 + (GAP + (rows + 1) * LIST_PITCH * TEXT_MM["note"] if rows else 0.0)
+        need = (hi[1] - lo[1]) / s + pad + (GAP + (rows + 1) * LIST_PITCH * TEXT_MM["note"] if rows else 0.0)
         chosen = (s, laid, rows, per_row)
-        if need <= ay1 - ay0 + 1e-9 and (hi[0] - lo[0]) / s + 4.0 <= ax1 - ax0 + 1e-9:
+        if need <= ay1 - ay0 + 1e-9 and (hi[0] - lo[0]) / s + pad <= ax1 - ax0 + 1e-9:
             break
     if chosen is None:                      # fitting_scales always names one
         raise RuntimeError("no scale for the view")
     s, laid, rows, per_row = chosen
     page = PaperSheet(info, s)
     page.frame()
-    x = ax0 + max(0.0, 0.5 * (ax1 - ax0 - (hi[0] - lo[0]) / s - 2.0 * _pad_scale()))     # centred across the area
+    x = ax0 + max(0.0, 0.5 * (ax1 - ax0 - (hi[0] - lo[0]) / s - pad))     # centred across the drawing area
     view_el = page.embed(laid.sheet.root, x, ay0, float(s))
     view_el.set("data-view", view)
     bottom = ay0 + float(view_el.get("height", "0"))
@@ -251,9 +252,9 @@ LIST_PITCH = 1.6
 """Line pitch of the list below a view, in text heights."""
 
 
-def _pad_scale() -> float:
-    """Paper mm kept round a view (its strokes stay inside the picture)."""
-    return 1.0
+VIEW_PAD_MM = 5.0
+"""Paper mm kept round a view's geometry: a beam label beside an outer plate line (at most 0.75 mm off the line
+and 3.75 mm deep) stays inside the picture."""
 
 
 def _list_column(ids: Sequence[str]) -> float:
@@ -293,7 +294,7 @@ def _layout(view: str, panels: Sequence, plates: Sequence, outl: list[np.ndarray
     from shapely.geometry import LineString, Polygon
 
     d, _ = VIEWS[view]
-    pad = _pad_scale() * s
+    pad = VIEW_PAD_MM * s
     bounds = (float(lo[0] - pad), float(lo[1] - pad), float(hi[0] + pad), float(hi[1] + pad))
     sheet = SvgSheet(bounds, 1.0, "view")
     normals = []

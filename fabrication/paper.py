@@ -246,6 +246,7 @@ class PaperSheet:
         view.set("width", f"{w / scale:.6g}")
         view.set("height", f"{h / scale:.6g}")
         view.set("class", "view")
+        view.set("overflow", "visible")          # a nested svg clips to its box otherwise
         view.set("data-scale", f"{scale:.6g}")
         self.root.append(view)
         return view
