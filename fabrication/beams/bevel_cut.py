@@ -46,6 +46,9 @@ ON_STRIP_MM = 0.5
 """How far (mm) a span's ends may lie from a strip's line for the strip to be the span's (the strip lies in its
 edge's support plane, the plate in its polyline's: the same plane within ``beams.plane_tolerance``)."""
 
+STRAIGHT_MM = 1e-6
+"""A corner of the cut outline closer than this (mm) to the line through its neighbours is dropped."""
+
 PARALLEL = 1e-9
 """``|sin|`` of the angle below which two consecutive edge lines are taken as parallel."""
 
@@ -224,7 +227,12 @@ def cut_outline(front: np.ndarray, back: np.ndarray) -> np.ndarray:
     union = Polygon(front).union(Polygon(back))
     if union.geom_type != "Polygon" or len(union.interiors):       # pragma: no cover - faces overlap by design
         raise BevelError("the two faces of a bevelled plate do not overlap into one outline")
-    return _clean(np.asarray(union.exterior.coords))
+    q = _clean(np.asarray(union.exterior.coords))
+    # a corner where the two faces cross on (nearly) one line is no corner of the cut: its distance from the line
+    # through its neighbours is under STRAIGHT_MM (as the step file's decimals leave it)
+    prev, nxt = np.roll(q, 1, axis=0), np.roll(q, -1, axis=0)
+    cross = (q[:, 0] - prev[:, 0]) * (nxt[:, 1] - q[:, 1]) - (q[:, 1] - prev[:, 1]) * (nxt[:, 0] - q[:, 0])
+    return q[np.abs(cross) > STRAIGHT_MM * np.linalg.norm(nxt - prev, axis=1)]
 
 
 def bevel_plate(plate: BeamPlate, strips: Sequence["Strip"], min_deg: float) -> BeamPlate:
