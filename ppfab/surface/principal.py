@@ -185,7 +185,7 @@ def _crossings(a: np.ndarray, curves: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
-                  min_face: float = 0.25) -> tuple[SectionsNet, np.ndarray, np.ndarray]:
+                  min_face: float = 0.25) -> tuple[SectionsNet, np.ndarray, np.ndarray, str]:
     """Build the principal net, trimmed to the plan region.
 
     Returns
@@ -194,6 +194,7 @@ def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
     twist : (F,) float — per kept face (row-major), ``|II(a, b)| / (|a||b| max|κ|)``, about 0
     found : (U, 3) float — umbilics inside the region nearer than ``EDGE_MARGIN × spacing`` to its edge
         (empty: none; farther inside the net is refused)
+    seeding : ``"uniform"`` (``spacing`` along the middle curves) or ``"strips"`` (:mod:`.balance`)
 
     Raises
     ------
@@ -236,6 +237,7 @@ def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
         return trim_grid(world, local, valid, None, loops, spacing, min_face, None, "none", "principal"), local
 
     net, local = build(seeds_at(0, spacing)[1], seeds_at(1, spacing)[1])
+    seeding = "uniform"
     if _worst(net, spacing) > np.log(1.0 / (1.0 - BALANCED)):
         # seeds chosen strip by strip on a net twice as dense (:mod:`.balance`), kept when it narrows the range
         (ta, sa), (tb, sb) = seeds_at(0, spacing / 2), seeds_at(1, spacing / 2)
@@ -262,11 +264,11 @@ def principal_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
         other, o_local = build(np.stack([np.interp(new_a, t0, m0[:, 0]), np.interp(new_a, t0, m0[:, 1])], axis=1),
                                np.stack([np.interp(new_b, t1, m1[:, 0]), np.interp(new_b, t1, m1[:, 1])], axis=1))
         if _worst(other, spacing) < _worst(net, spacing) and other.grid_faces.sum() >= 0.8 * net.grid_faces.sum():
-            net, local = other, o_local
+            net, local, seeding = other, o_local, "strips"
     kept = np.argwhere(net.grid_faces)
     fi, fj = kept[:, 0], kept[:, 1]
     corners = np.stack([local[fi, fj], local[fi + 1, fj], local[fi + 1, fj + 1], local[fi, fj + 1]], axis=1)
-    return net, quad_twist(hf, corners), found
+    return net, quad_twist(hf, corners), found, seeding
 
 
 def _grid(hf: HeightField, rows_seeds: np.ndarray, cols_seeds: np.ndarray, h: float,

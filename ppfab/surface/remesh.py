@@ -54,7 +54,7 @@ class RemeshResult:
     seconds : CPU time of the fit and the net
     seeding : how the seeds and planes were placed: ``"uniform"`` (spacing along the middle lines),
         ``"scaled"`` (both steps scaled so the extremes straddle the spacing), ``"strips"`` (each strip on
-        its own, :mod:`.balance`)
+        its own, :mod:`.balance`; sections and principal nets)
     fan_out : the largest ratio of the longest to the shortest section edge within one strip between two
         neighbouring conjugate curves: no choice of seeds narrows a strip's range below it (a quad net has
         no T-junctions to end or start a curve)
@@ -117,7 +117,7 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     loops = [frame.to_local(b)[:, :2] for b in samples.boundary]
     seeding, twist, found = "uniform", None, np.zeros((0, 3))
     if spec.net == "principal":
-        net, twist, found = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
+        net, twist, found, seeding = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
     elif spec.net == "pp":
         net, twist, _ = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal, spec.max_warp)
     else:
