@@ -268,3 +268,27 @@ def test_a_principal_design_without_optimize_is_refused(tmp_path):
     with pytest.raises(DesignError, match=r"optimize: the principal net has no planar polylines"):
         build(load_design(tmp_path / "roof.toml"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["roof.3dm", "roof.toml"]
+
+
+def test_principal_net_reseeded_where_its_curves_fan(tmp_path, monkeypatch):
+    """On the NURBS dome (12 × 9 m) the curvature lines spread: with the seeds spacing apart along the middle
+    curves an edge is 0.58 × or 1.72 × the spacing; re-seeded strip by strip every edge of the mesh
+    (measured here from its vertices) is within 0.7–1.3 ×."""
+    import ppfab.surface.principal as principal
+    from fabrication.surfacefile import read_surface
+    from ppfab.surface import SurfaceSpec, remesh
+    from test_surface_sections import DOME
+
+    write_nurbs(tmp_path / "dome.3dm", DOME, 12.0, 9.0, "Meters")
+    sf = read_surface(tmp_path / "dome.3dm")
+
+    def edges(r) -> np.ndarray:
+        qm = r.net.mesh.to_quadmesh() if hasattr(r.net.mesh, "to_quadmesh") else r.net.mesh
+        return np.asarray(qm.edge_lengths()) / 1500.0
+
+    r = remesh(sf.samples, SurfaceSpec(path="dome.3dm", spacing=1500.0, net="principal"))
+    e = edges(r)
+    assert r.seeding == "strips" and e.min() >= 0.7 and e.max() <= 1.3
+    monkeypatch.setattr(principal, "BALANCED", 0.99)                      # uniform seeds only
+    u = edges(remesh(sf.samples, SurfaceSpec(path="dome.3dm", spacing=1500.0, net="principal")))
+    assert u.min() < 0.65 and u.max() > 1.6
