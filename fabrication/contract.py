@@ -51,11 +51,26 @@ corner (1 = the reference corner) and face (``inside``) of the safety-glass stam
 ORDER_ALL_COLUMNS = ORDER_COLUMNS + ORDER_SHAPE_COLUMNS + ORDER_MAKEUP_COLUMNS
 """Every column of ``glass_order.csv``, in order."""
 
-PART_KINDS = ("panel", "beam", "strip", "splice")
+RETENTION_KINDS = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap", "screw")
+"""The ``kind`` of a retention row of ``parts.csv`` (:mod:`fabrication.glazing.retention`): the prisms of
+``glazing.step`` (setting blocks, stops, pressure gaskets, pressure plates, cover caps), one row each, and the
+clamping screws of a pressure plate, one row per plate with their ``quantity`` (:func:`screw_set_id`)."""
+
+PART_KINDS = ("panel", "beam", "strip", "splice") + RETENTION_KINDS
 """The ``kind`` of a ``parts.csv`` row: a glass ``panel``, a ``beam`` plate (or a piece or segment of one), a
 glazing ``strip`` (flat bar on a beam's top edge, cut from stock bars: no ``sheet``, ``bar``/``bar_start_mm``
-and ``strip_cuts.csv`` say where) and a ``splice`` cover plate (cut to its type's DXF in ``splices/``: no
-``sheet``; ``joins`` names the two beam pieces it joins)."""
+and ``strip_cuts.csv`` say where), a ``splice`` cover plate (cut to its type's DXF in ``splices/``: no
+``sheet``; ``joins`` names the two beam pieces it joins) and the retention parts (:data:`RETENTION_KINDS`)."""
+
+RETENTION_PART_COLUMNS = ["owner", "strip", "beam", "length_mm", "width_mm", "height_mm", "quantity", "mass_kg",
+                          "frame", "screw_stations_mm", "diameter_mm"]
+"""The columns of a retention row of ``parts.csv`` beyond the common ones (``material``, ``thickness_mm`` = the
+height): the pane (blocks, stops) or strip (plates, their gaskets and caps) it belongs to and the strip and beam
+under it, its size (length along ``frame``'s ``x_dir``, width along ``y_dir``, height along ``normal``, from the
+frame's ``origin`` at the part's underside corner), ``quantity`` (1; a screw row: the screws of its plate) and
+``mass_kg`` of the row (all its pieces); a screw row's ``frame`` is the strip's at the plate's start on the strip's
+top face, its screws at ``x`` = each of ``screw_stations_mm`` on the centre line ``y = 0``, each a cylinder of
+``diameter_mm`` and ``length_mm`` along ``normal``."""
 
 SHEET_KINDS = ("panel", "beam")
 """The kinds nested on the cutting sheets (``sheet``, ``x``, ``y``, ``rotation_deg`` set, one CUT outline on
@@ -249,6 +264,12 @@ def setting_block_id(panel: str, k: int) -> str:
     return f"SB{panel[1:]}-{k}"
 
 
+def screw_set_id(strip: str) -> str:
+    """``SC-U03-07``: the clamping screws of the pressure plate over strip ``GS-U03-07`` (one ``parts.csv`` row
+    with their quantity, a bill of materials' line)."""
+    return "SC" + strip[2:]
+
+
 def stop_id(panel: str, k: int) -> str:
     """``ST-U07-V12-1``: the steel stop behind setting block ``k`` of pane ``P-U07-V12``."""
     return f"ST{panel[1:]}-{k}"
@@ -256,7 +277,7 @@ def stop_id(panel: str, k: int) -> str:
 
 RETENTION_PREFIXES = ("CP-", "CG-", "CC-", "SB-", "ST-")
 """The part id prefixes of the retention solids of ``glazing.step`` (pressure plates, their gaskets and caps,
-setting blocks, stops): rows of ``retention.csv``, not of ``parts.csv``."""
+setting blocks, stops): rows of ``retention.csv`` and of ``parts.csv`` (:data:`RETENTION_KINDS`)."""
 
 
 def splice_plate_ids(beam: str, piece: int) -> tuple[str, str]:
@@ -288,12 +309,17 @@ BEVELS_CSV = "bevels.csv"
 BEVEL_COLUMNS = ["strip", "plate", "lean_deg", "overlap_mm", "delta_mm", "bevel"]
 RETENTION_CSV, RESTRAINT_CSV = "retention.csv", "restraint.csv"
 """The retention parts of ``glazing.step`` (one row each: :data:`RETENTION_COLUMNS`) and the restraint check of
-every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``."""
+every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``.  A pressure plate's row carries its bending
+between the screws (:class:`fabrication.glazing.retention.PlateBending`: design line load, largest span and end
+overhang, stress and its limit ``f/γ``, deflection under the characteristic load and its limit); a pane's
+``plate_utilisation`` is the largest of the plates over it."""
 RETENTION_COLUMNS = ["part_id", "kind", "owner", "strip", "beam", "length_mm", "width_mm", "height_mm", "material",
-                     "screw", "screws", "screw_stations_mm"]
+                     "screw", "screws", "screw_stations_mm", "plate_load_N_mm", "plate_span_mm", "plate_end_mm",
+                     "plate_stress_N_mm2", "plate_stress_limit_N_mm2", "plate_deflection_mm",
+                     "plate_deflection_limit_mm"]
 RESTRAINT_COLUMNS = ["panel", "slope_deg", "weight_kg", "down_edge", "strip", "setting_blocks", "block_load_N",
                      "block_pressure_N_mm2", "block_contact_mm", "stops", "uplift_kN", "screws", "resistance_kN", "clamp_bite_mm",
-                     "max_screw_spacing_mm", "silicone_bite_mm", "ok"]
+                     "max_screw_spacing_mm", "plate_utilisation", "silicone_bite_mm", "ok"]
 """The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
 the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the welds
 (``node, part, to, dihedral_deg, weld_length_mm, preparation, throat_mm, joint``): ``joint = "T"`` a plate
@@ -348,19 +374,31 @@ IFC_PSET = "PPFAB_Part"
 """The property set on every IFC element; its properties are :data:`EXCHANGE_PROPERTIES` (the ``parts.csv``
 columns of the same name; ``weight_kg`` is ``mass_kg`` for beam plates)."""
 
-IFC_CLASSES = {"panel": ("IfcPlate", "CURTAIN_PANEL"), "beam": ("IfcMember", "MEMBER")}
-"""Part kind → IFC class and predefined type; a part of any other kind becomes an ``IfcMember``."""
+IFC_CLASSES = {"panel": ("IfcPlate", "CURTAIN_PANEL"), "beam": ("IfcMember", "MEMBER"),
+               "setting_block": ("IfcDiscreteAccessory", "USERDEFINED"),
+               "stop": ("IfcDiscreteAccessory", "BRACKET"),
+               "pressure_gasket": ("IfcDiscreteAccessory", "USERDEFINED"),
+               "pressure_plate": ("IfcPlate", "SHEET"), "cover_cap": ("IfcCovering", "CLADDING"),
+               "screw": ("IfcMechanicalFastener", "BOLT")}
+"""Part kind → IFC class and predefined type; a part of any other kind becomes an ``IfcMember``.  Setting blocks,
+stops and pressure gaskets are discrete accessories of the glazing (``USERDEFINED``: ``ObjectType`` the kind), a
+pressure plate a sheet plate, a cover cap cladding, and the screws of a plate one mechanical fastener holding
+one extruded circle per screw."""
 
 EXCHANGE_PROPERTIES = ("part_id", "kind", "nest_tag", "type_id", "sheet", "sheet_file", "material", "thickness_mm",
-                       "area_mm2", "weight_kg", "planarity_dev_mm", "beam_id", "family", "piece", "length_mm")
+                       "area_mm2", "weight_kg", "planarity_dev_mm", "beam_id", "family", "piece", "length_mm",
+                       "owner", "quantity")
 """Keys of the IFC property set and the Rhino user text of a part (those that apply to it)."""
 
-RHINO_LAYERS = ("glass", "beams", "beams::rows", "beams::cols", "nodes", "mesh")
+RHINO_LAYERS = ("glass", "beams", "beams::rows", "beams::cols", "nodes", "mesh", "retention",
+                "retention::setting_block", "retention::stop", "retention::pressure_gasket",
+                "retention::pressure_plate", "retention::screw", "retention::cover_cap")
 """Layers of ``model.3dm`` (full paths): panels on ``glass``, beam plates on ``beams::<family>``, node axes on
-``nodes``, the quad mesh on ``mesh``."""
+``nodes``, the quad mesh on ``mesh``, the retention parts on ``retention::<kind>``."""
 
 COLOURS = {"glass": (0.55, 0.75, 0.90, 0.35), "rows": (0.80, 0.36, 0.12, 1.0), "cols": (0.16, 0.42, 0.68, 1.0),
-           "nodes": (0.15, 0.15, 0.15, 1.0), "mesh": (0.45, 0.45, 0.45, 1.0)}
+           "nodes": (0.15, 0.15, 0.15, 1.0), "mesh": (0.45, 0.45, 0.45, 1.0),
+           "retention": (0.62, 0.64, 0.66, 1.0)}
 """RGBA (0–1) of the glass, each beam family, the node axes and the mesh in STEP, IFC, Rhino and glTF."""
 
 STEP_GLASS_GROUP = "glass"

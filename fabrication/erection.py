@@ -16,11 +16,19 @@ step  kind          insertion direction (the part moves along it from far away i
                     direction (pushed on along the normal from far away they would pass through the next beam)
 5     ``strip``     the glazing strips, lowered onto the plates' top edges along the strip's down (−up)
 6     ``gasket``    the gaskets, lowered onto their strips along the same direction
-7     ``panel``     the panes, lowered onto their gaskets along their inside normal (−N)
+7     ``setting_block``  the setting blocks, lowered onto the gasket under each pane's down-slope edge along
+                    the pane's inside normal (−N): the pane comes down against them
+8     ``stop``      the stops behind the blocks (steep panes), the same way
+9     ``panel``     the panes, lowered onto their gaskets along their inside normal (−N)
+10    ``pressure_gasket``  the EPDM gaskets of the pressure plates, lowered onto the panes along the strip's down
+11    ``pressure_plate``   the pressure plates, the same way
+12    ``screw``     the clamping screws of each plate (one row per plate, all its screws), down along the strip's
+                    down through the plate's, gasket's and strip gasket's holes into the strip
+13    ``cover_cap`` the cover caps, clipped on from above along the strip's down
 ====  ============  =====================================================================================
 
-Empty steps are left out and the rest numbered 1, 2, …; setting blocks are not modelled as solids and have no
-step.  A plate's common slot direction is the bisector of its extreme slot directions (as
+Empty steps are left out and the rest numbered 1, 2, …; the retention parts are those of
+:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).  A plate's common slot direction is the bisector of its extreme slot directions (as
 :func:`fabrication.beams.joints.assembly_check`); where the slots' directions spread so far that sliding through
 them moves the mating plate sideways by more than the joint clearance, the plate cannot be put in along any
 single direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming
@@ -43,6 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .beams import BeamSet
     from .beams.plates import BeamPlate
     from .glazing import Glazing
+    from .glazing.retention import Retention
     from .panels import Panel
 
 ERECTION_CSV = "erection.csv"
@@ -56,15 +65,21 @@ ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "di
 """``blocked_spread_deg``: for a plate that no single direction puts through its slots (:class:`Blocked`), the angle
 spread of its slot directions; empty otherwise."""
 
-STEP_KINDS: tuple[str, ...] = ("row", "column", "weld", "splice", "strip", "gasket", "panel")
+STEP_KINDS: tuple[str, ...] = ("row", "column", "weld", "splice", "strip", "gasket", "setting_block", "stop",
+                               "panel", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
 """The kinds in erection order (one step each when present)."""
 
 STEP_TITLES = {"row": "row plates (family 0)", "column": "column plates (family 1), lowered through the slots",
                "weld": "welds at the crossings and joints", "splice": "splice cover plates",
-               "strip": "glazing strips, welded on", "gasket": "gaskets", "panel": "panes on their gaskets"}
+               "strip": "glazing strips, welded on", "gasket": "gaskets", "setting_block": "setting blocks",
+               "stop": "stops behind the setting blocks", "panel": "panes on their gaskets",
+               "pressure_gasket": "pressure gaskets on the panes", "pressure_plate": "pressure plates",
+               "screw": "clamping screws through the plates", "cover_cap": "cover caps"}
 
 NEEDS = {"row": (), "column": ("row",), "weld": ("column",), "splice": ("column",), "strip": ("weld",),
-         "gasket": ("strip",), "panel": ("gasket",)}
+         "gasket": ("strip",), "setting_block": ("gasket",), "stop": ("setting_block",),
+         "panel": ("gasket", "setting_block", "stop"), "pressure_gasket": ("panel",),
+         "pressure_plate": ("pressure_gasket",), "screw": ("pressure_plate",), "cover_cap": ("screw",)}
 """The kinds a step needs done before it (``after`` is the latest step among them, 0 for none)."""
 
 
@@ -169,9 +184,10 @@ def weld_id(part: str, to: str, vertex: int) -> str:
     return f"weld:{part}/{to}" + (f"@{node_id(vertex)}" if vertex >= 0 else "")
 
 
-def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Panel, ...] | list[Panel]") -> \
-        ErectionPlan:
-    """The erection sequence of a build's beam plates, glazing and panes (see the module doc)."""
+def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Panel, ...] | list[Panel]",
+                  retention: "Retention | None" = None) -> ErectionPlan:
+    """The erection sequence of a build's beam plates, glazing, panes and the ``retention`` parts holding them
+    (see the module doc)."""
     by_kind: dict[str, list[tuple[str, tuple[float, float, float]]]] = {k: [] for k in STEP_KINDS}
     plates = {p.part_id: p for p in beams.plates}
     clearance = float(beams.params.clearance_mm)   # a square slot's width beyond the nominal plate thickness
@@ -197,6 +213,11 @@ def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Pa
             by_kind["gasket"].append((gasket_id(st.part_id), down))
     for pane in panels:
         by_kind["panel"].append((pane.part_id, _unit(-pane.frame.normal)))
+    if retention is not None:
+        for part in retention.parts:
+            by_kind[part.kind].append((part.part_id, _unit(-part.frame.normal)))
+        for sc in retention.screws:
+            by_kind["screw"].append((sc.part_id, _unit(-sc.frame.normal)))
     steps = tuple(k for k in STEP_KINDS if by_kind[k])
     number = {k: i + 1 for i, k in enumerate(steps)}
 

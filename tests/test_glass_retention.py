@@ -259,8 +259,10 @@ def test_more_wind_than_the_screws_hold_is_stated_per_pane(vault):
     worst = max(p.uplift_kN / p.resistance_kN for p in r.panes)
     storm = replace(g.params, wind_suction=1.2 / worst)       # 20 % above what the weakest pane's screws hold
     r2 = make_retention(b.panels.panels, build_seats(b), g.strips, pes, storm, float(b.design.panels.gap))
-    failing = [p for p in r2.panes if p.failures(storm)]
-    assert failing and all("wind uplift" in p.failures(storm)[0] for p in failing)
+    failing = [p for p in r2.panes if any("wind uplift" in f for f in p.failures(storm))]
+    # the rest of the panes fail, if at all, only by the plates bending under the storm between their screws
+    assert failing and all(all("wind uplift" in f or "pressure plate" in f for f in p.failures(storm))
+                           for p in r2.panes)
     weakest = max(r.panes, key=lambda p: p.uplift_kN / p.resistance_kN).panel
     assert weakest in {p.panel for p in failing}
 
@@ -301,10 +303,12 @@ def test_verify_retention_finds_nothing_as_written_and_names_a_block_moved_off_t
         out.append(solid)
     export_step(out, copy / "glazing.step", "moved block")
     found = retention_findings(copy)
-    assert len(found) == 2, found
+    assert len(found) == 3, found
+    # parts.csv still places the block where it was
+    assert found[0] == f"parts.csv: {target}: its row places it 2 mm from its solid in glazing.step"
     assert f"glazing.step: {target}: setting block of {pane_id} is not against its down-slope edge: 2.00 mm off the " \
-        "edge face" in found[0]
-    assert found[1] == f"glazing.step: ST{target[2:]}: stop is 2.00 mm into its setting block {target}"
+        "edge face" in found[1]
+    assert found[2] == f"glazing.step: ST{target[2:]}: stop is 2.00 mm into its setting block {target}"
 
 
 @pytest.mark.slow

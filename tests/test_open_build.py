@@ -133,21 +133,22 @@ def test_every_kind_of_the_parts_table_is_read_with_its_geometry(vault):
 
 
 def test_unknown_kinds_and_columns_are_kept(vault, tmp_path):
-    """A kind and a column added later (glass-retention parts, say) come through in ``extra``, nothing dropped."""
+    """A kind and a column added later (a bracket under a pane's edge, say) come through in ``extra``, nothing
+    dropped."""
     _, out = vault
     folder = _copy(out, tmp_path / "b")
     doc = json.loads((folder / "parts.json").read_text())
     doc["parts"][0]["edge_seal"] = "silicone"
-    doc["parts"].append({"part_id": "SB-0001", "kind": "setting_block", "type_id": "SB100", "material": "EPDM",
+    doc["parts"].append({"part_id": "BR-0001", "kind": "bracket", "type_id": "BR100", "material": "S355",
                          "thickness_mm": 4.0, "area_mm2": 400.0, "sheet": "", "block_length_mm": 100.0,
                          "panel": "P-U00-V00"})
     (folder / "parts.json").write_text(json.dumps(doc))
     package = open_build(folder)
     block = package.parts[-1]
-    assert block.kind == "setting_block" and block.details is None and block.outline is None
+    assert block.kind == "bracket" and block.details is None and block.outline is None
     assert block.extra == {"block_length_mm": 100.0, "panel": "P-U00-V00"} and block.thickness_mm == 4.0
     assert package.parts[0].extra == {"edge_seal": "silicone"}
-    assert package.kinds["setting_block"] == 1
+    assert package.kinds["bracket"] == 1
 
 
 def test_an_older_build_reads_as_the_current_one(vault, tmp_path):

@@ -33,6 +33,8 @@ The plate is clamped by screws on the joint's centre line at most ``bolt_pitch``
 plate's ends, shifted out of the setting blocks and stops.  Each pane's wind suction ``γ_Q · q · A`` is shared
 by its edges in proportion to their length; a plate carries the shares of the panes on its strip and its screws
 resist ``F_t,Rd = k₂ · f_ub · A_s / γ_M2`` each (EN 1993-1-8 Table 3.4, ``k₂ = 0.9``, ``γ_M2 = 1.25``).
+Between its screws the plate bends under the same line load (:class:`PlateBending`: stress against ``f/γ``,
+deflection against span/200).  The screws of a plate are one :class:`ScrewSet` (one parts-list row).
 
 With ``retention = "silicone"`` there are no plates: the structural silicone's bite must be at least
 ``h_c = γ_Q · q · a / (2 · σ_des)`` (ETAG 002 §5.1.4.2.1, ``a`` the pane's shorter side, taken as the smallest
@@ -54,7 +56,8 @@ import numpy as np
 from ppfab.errors import DesignError
 from ppfab.frame import Frame
 
-from ..contract import cover_cap_id, pressure_gasket_id, pressure_plate_id, setting_block_id, stop_id
+from ..contract import (cover_cap_id, pressure_gasket_id, pressure_plate_id, screw_set_id, setting_block_id,
+                        stop_id)
 from .params import GlazingParams
 from .seat import PaneSeat
 from .slope import pane_slope_deg
@@ -81,6 +84,100 @@ ULTIMATE = {"A2-70": 700.0, "A4-70": 700.0, "A4-80": 800.0, "8.8": 800.0}
 """Ultimate tensile strength ``f_ub`` of the screw's grade, N/mm² (ISO 3506-1, ISO 898-1)."""
 K2, GAMMA_M2 = 0.9, 1.25
 """EN 1993-1-8 Table 3.4 and Table 2.1: tension resistance factor and partial factor of a bolt."""
+NUT_HEIGHT = 0.8
+"""A clamping screw's length above the plate, in diameters: the nut (ISO 4032: ``m ≈ 0.8·d``)."""
+DENSITY = {"setting_block": 1300.0, "stop": 7850.0, "pressure_gasket": 1200.0, "pressure_plate": 2700.0,
+           "cover_cap": 2700.0, "screw": 8000.0}
+"""kg/m³ of each retention kind: silicone 80 Shore A, S355, EPDM, aluminium (EN 1999-1-1 3.2.5), stainless steel
+(EN 10088-1, A2/A4)."""
+CAP_WALL = 2.0
+"""mm: the wall of a cover cap, an extruded channel over the plate: its mass is ``(width + 2·height)·wall``
+per mm of length (the model draws the cap as the prism it fills)."""
+PLATE_MATERIALS = {"EN AW-6060 T66": (150.0, 1.1, 70000.0), "EN AW-6063 T6": (170.0, 1.1, 70000.0),
+                   "EN AW-6082 T6": (260.0, 1.1, 70000.0), "S235": (235.0, 1.0, 210000.0),
+                   "S355": (355.0, 1.0, 210000.0), "1.4401": (220.0, 1.1, 200000.0),
+                   "1.4404": (220.0, 1.1, 200000.0), "1.4301": (210.0, 1.1, 200000.0)}
+"""A pressure plate's material → (``f_y`` or ``f_o`` N/mm², partial factor, ``E`` N/mm²): steel EN 1993-1-1
+(``γ_M0`` 1.0), stainless steel EN 1993-1-4 (``γ_M0`` 1.1), aluminium EN 1999-1-1 Table 3.2b (``f_o`` for 5–25 mm
+extrusions, ``γ_M1`` 1.1)."""
+PLATE_DEFLECTION_RATIO = 200.0
+"""A pressure plate may bend between its screws by at most span/200 under the characteristic wind suction (the
+gasket under it must stay compressed; a cantilever end counts at twice its length)."""
+
+
+def material_of(kind: str, p: GlazingParams) -> str:
+    """The material cell (retention.csv, parts.csv) of a retention part of ``kind``."""
+    return {"setting_block": p.setting_block_material, "stop": "S355", "pressure_gasket": "EPDM 70 Shore A",
+            "screw": f"stainless steel {p.retention_bolt}"}.get(kind, p.pressure_plate_material)
+
+
+def plate_material(text: str) -> tuple[float, float, float]:
+    """``(strength, partial factor, E)`` of the pressure plate material ``text`` (:data:`PLATE_MATERIALS`, the
+    first key the text contains); raises :class:`~ppfab.errors.DesignError` naming the key for any other."""
+    for key, value in PLATE_MATERIALS.items():
+        if key.lower() in text.lower():
+            return value
+    raise DesignError("pressure_plate_material", f"{text!r} is not a plate material ppfab can check for bending: "
+                                                 f"name one of {', '.join(PLATE_MATERIALS)}")
+
+
+@dataclass(frozen=True)
+class PlateBending:
+    """A pressure plate between its screws under the wind suction of the panes it clamps.
+
+    ``load`` is the design line load (N/mm): each pane's ``γ_Q·q·A`` over its perimeter (its edges share it by
+    length), summed over the panes on the strip; ``span`` the largest distance between screws and ``end`` the
+    longer overhang past the end screws (mm).  The moment is the larger of a simply supported span's
+    ``w·s²/8`` and a cantilever's ``w·a²/2``; the stress ``M / (b·t²/6)`` is checked against ``f/γ``
+    (:data:`PLATE_MATERIALS`) and the deflection under the characteristic load ``w/γ_Q`` —
+    ``5·w·s⁴/(384·E·I)`` over a span, ``w·a⁴/(8·E·I)`` at an end, ``I = b·t³/12`` — against
+    :data:`PLATE_DEFLECTION_RATIO` (the governing of the two is reported)."""
+
+    plate: str
+    load: float
+    span: float
+    end: float
+    stress: float
+    stress_limit: float
+    deflection: float
+    deflection_limit: float
+
+    @property
+    def utilisation(self) -> float:
+        """The larger of stress over its limit and deflection over its limit."""
+        return max(self.stress / self.stress_limit, self.deflection / max(self.deflection_limit, 1e-12))
+
+    def failures(self) -> list[str]:
+        out = []
+        if self.stress > self.stress_limit + 1e-9:
+            out.append(f"pressure plate {self.plate} bends to {self.stress:.0f} N/mm² between its screws, above "
+                       f"f/γ = {self.stress_limit:.0f} N/mm²")
+        if self.deflection > self.deflection_limit + 1e-9:
+            out.append(f"pressure plate {self.plate} deflects {self.deflection:.2f} mm between its screws, above "
+                       f"span/{PLATE_DEFLECTION_RATIO:g} = {self.deflection_limit:.2f} mm")
+        return out
+
+
+def plate_bending(plate: str, load: float, stations: Sequence[float], length: float, width: float,
+                  thickness: float, material: tuple[float, float, float], load_factor: float) -> PlateBending:
+    """The :class:`PlateBending` of a plate ``length`` long with screws at ``stations`` (mm from its start).
+
+    >>> b = plate_bending("CP", 1.0, (125.0, 375.0), 500.0, 50.0, 8.0, (150.0, 1.1, 70000.0), 1.5)
+    >>> round(b.stress, 3), b.span, b.end
+    (14.648, 250.0, 125.0)
+    """
+    f, gamma, e = material
+    xs = sorted(stations)
+    span = max([b - a for a, b in zip(xs, xs[1:])], default=0.0) if xs else length
+    end = max(xs[0], length - xs[-1]) if xs else 0.0
+    moment = max(load * span ** 2 / 8.0, load * end ** 2 / 2.0)
+    stress = moment / (width * thickness ** 2 / 6.0)
+    inertia = width * thickness ** 3 / 12.0
+    wk = load / load_factor
+    d_span, l_span = 5.0 * wk * span ** 4 / (384.0 * e * inertia), span / PLATE_DEFLECTION_RATIO
+    d_end, l_end = wk * end ** 4 / (8.0 * e * inertia), 2.0 * end / PLATE_DEFLECTION_RATIO
+    d, lim = (d_span, l_span) if d_span * max(l_end, 1e-12) >= d_end * max(l_span, 1e-12) else (d_end, l_end)
+    return PlateBending(plate, load, span, end, stress, f / gamma, d, lim)
 
 
 @dataclass(frozen=True)
@@ -143,6 +240,56 @@ class Prism:
     def width(self) -> float:
         return float(np.linalg.norm(self.outline[2] - self.outline[1]))
 
+    @property
+    def mass_kg(self) -> float:
+        """kg: the prism's volume at its kind's :data:`DENSITY`; a cover cap as a channel of :data:`CAP_WALL`."""
+        if self.kind == "cover_cap":
+            section = min((self.width + 2.0 * self.height) * CAP_WALL, self.width * self.height)
+        else:
+            section = self.width * self.height
+        return section * self.length * DENSITY[self.kind] * 1e-9
+
+    def box_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(origin, x_dir, y_dir, normal)`` of the prism as a box: the origin a corner of its underside, the
+        prism ``[0, length] × [0, width] × [0, height]`` along the three (right-handed) axes."""
+        c = self.corners()
+        n = self.frame.normal
+        x, y = c[1] - c[0], c[3] - c[0]
+        origin = c[0]
+        if float(np.cross(x, y) @ n) < 0:
+            origin, x, y = c[1], c[0] - c[1], c[2] - c[1]
+        return origin, x / np.linalg.norm(x), y / np.linalg.norm(y), np.asarray(n, dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class ScrewSet:
+    """The clamping screws of one pressure plate: studs welded on the strip's top face in the joint's centre
+    line, through gasket and plate, each ``length`` from the strip's top (``z0`` along the strip frame's normal)
+    to a nut's height above the plate.  ``stations`` are mm along the strip's ``x`` from ``x0`` (the plate's
+    start), as retention.csv lists them."""
+
+    part_id: str
+    plate: str
+    strip: str
+    beam: str
+    frame: Frame
+    x0: float
+    z0: float
+    length: float
+    diameter: float
+    stations: tuple[float, ...]
+
+    def axes(self) -> np.ndarray:
+        """``(n, 2, 3)``: every screw's axis, from its foot on the strip to its top."""
+        n = self.frame.normal
+        foot = self.frame.to3d(np.array([[self.x0 + x, 0.0] for x in self.stations]).reshape(-1, 2)) + self.z0 * n
+        return np.stack([foot, foot + self.length * n], axis=1)
+
+    @property
+    def mass_kg(self) -> float:
+        """kg of all the screws: cylinders of the nominal diameter at :data:`DENSITY` ``["screw"]``."""
+        return len(self.stations) * math.pi * 0.25 * self.diameter ** 2 * self.length * DENSITY["screw"] * 1e-9
+
 
 @dataclass(frozen=True)
 class PaneRestraint:
@@ -150,7 +297,7 @@ class PaneRestraint:
     the load on each setting block (N) and its bearing pressure (N/mm²), whether it has stops, its wind uplift
     (design, kN), the screws of the plates on its edges that carry it (their share, may be fractional), the
     uplift those screws resist (kN), the smallest clamp bite (mm; NaN without plates) and the largest screw
-    spacing (mm) on its edges."""
+    spacing (mm) on its edges, and the largest :attr:`PlateBending.utilisation` of the plates over it."""
 
     panel: str
     slope_deg: float
@@ -168,6 +315,7 @@ class PaneRestraint:
     silicone_bite_mm: float
     strip_bite_mm: float = math.nan
     block_contact_mm: float = math.nan
+    plate_utilisation: float = math.nan
 
     def failures(self, p: GlazingParams) -> list[str]:
         """What this pane's restraint does not satisfy, in words (empty: it holds)."""
@@ -184,6 +332,9 @@ class PaneRestraint:
             if not self.clamp_bite_mm >= p.min_clamp_bite - 1e-9:
                 out.append(f"clamp bite {self.clamp_bite_mm:.1f} mm below glazing.min_clamp_bite = "
                            f"{p.min_clamp_bite:g} mm")
+            if self.plate_utilisation > 1.0 + 1e-9:
+                out.append(f"a pressure plate over it bends beyond its limit between the screws (utilisation "
+                           f"{self.plate_utilisation:.2f}, retention.csv)")
             if self.max_spacing_mm > p.bolt_pitch + 1e-6:
                 out.append(f"screws {self.max_spacing_mm:.0f} mm apart, more than glazing.bolt_pitch = "
                            f"{p.bolt_pitch:g} mm")
@@ -200,6 +351,8 @@ class Retention:
     parts: tuple[Prism, ...]
     stations: dict[str, tuple[float, ...]]
     panes: tuple[PaneRestraint, ...]
+    screws: tuple[ScrewSet, ...] = ()
+    bending: dict[str, PlateBending] | None = None
 
 
 def down_edge(panel: "Panel") -> int:
@@ -391,7 +544,11 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
     bites: dict[str, list[float]] = {}
     spacing: dict[str, list[float]] = {}
     screws: dict[str, float] = {}
+    screw_sets: list[ScrewSet] = []
+    bending: dict[str, PlateBending] = {}
+    plate_use: dict[str, float] = {}
     if p.retention == "pressure_plate":
+        material = plate_material(p.pressure_plate_material)
         by_id = {s.part_id: s for s in strips}
         for sid, on in sorted(by_strip.items()):
             s = by_id[sid]
@@ -413,11 +570,25 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             layers = (("pressure_gasket", pressure_gasket_id(sid), p.pressure_gasket_thickness),
                       ("pressure_plate", pressure_plate_id(sid), p.pressure_plate_thickness),
                       ("cover_cap", cover_cap_id(sid), p.cover_cap_height))
+            plate_top = z
             for kind, pid, t in layers:
                 parts.append(Prism(pid, kind, sid, sid, s.beam_id, s.frame, rect, z, t))
                 z += t
+                if kind == "pressure_plate":
+                    plate_top = z
             xs = screw_stations(x1 - x0, p.bolt_pitch, [(lo - x0, hi - x0) for lo, hi in blocks_on.get(sid, [])])
             stations[pressure_plate_id(sid)] = xs
+            assert bolt is not None
+            screw_sets.append(ScrewSet(screw_set_id(sid), pressure_plate_id(sid), sid, s.beam_id, s.frame, x0,
+                                       s.thickness, plate_top - s.thickness + NUT_HEIGHT * bolt.diameter,
+                                       bolt.diameter, xs))
+            line = sum(p.load_factor * p.wind_suction * 1e-3 * panel.area_mm2 / _perimeter(panel) for panel, _ in on)
+            bending[pressure_plate_id(sid)] = plate_bending(
+                pressure_plate_id(sid), line, xs, x1 - x0, p.pressure_plate_width, p.pressure_plate_thickness,
+                material, p.load_factor)
+            for panel, _ in on:
+                plate_use[panel.part_id] = max(plate_use.get(panel.part_id, 0.0),
+                                               bending[pressure_plate_id(sid)].utilisation)
             for panel, _ in on:
                 u = under[panel.part_id]
                 bites.setdefault(panel.part_id, []).append(u[1] if u is not None else 0.0)
@@ -441,13 +612,20 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                                  load / (lb * max(contact[panel.part_id], 1.0)), slope > p.stop_min_slope_deg,
                                  uplift, n, res, min(bites.get(panel.part_id, [math.nan])),
                                  max(spacing.get(panel.part_id, [0.0])), sil,
-                                 (strip_bites or {}).get(panel.part_id, math.nan), contact[panel.part_id]))
+                                 (strip_bites or {}).get(panel.part_id, math.nan), contact[panel.part_id],
+                                 plate_use.get(panel.part_id, math.nan)))
     low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
     if low:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
                     "the joint over the block: %s; widen [panels] gap there or give them a bracket under the edge",
                     len(low), ", ".join(f"{x.part_id} ({c:.1f} of {x.thickness_mm:g} mm)" for x, c in low[:8]))
-    return Retention(p, bolt, tuple(parts), stations, tuple(out))
+    return Retention(p, bolt, tuple(parts), stations, tuple(out), tuple(screw_sets), bending)
+
+
+def _perimeter(panel: "Panel") -> float:
+    """mm: the length of a pane's outline."""
+    q = np.asarray(panel.outline, dtype=float)
+    return float(np.linalg.norm(np.roll(q, -1, axis=0) - q, axis=1).sum())
 
 
 def _shortest_width(outline: np.ndarray) -> float:
@@ -483,3 +661,12 @@ def build_retention(build: "Build") -> Retention | None:
                            float(build.design.panels.gap), bites)
         _CACHE[g] = r
     return r
+
+
+def retention_mass_kg(build: "Build") -> float:
+    """kg: every retention part of a build (its prisms and screws, as their ``parts.csv`` rows give them); 0
+    without retention."""
+    r = build_retention(build)
+    if r is None:
+        return 0.0
+    return float(sum(p.mass_kg for p in r.parts) + sum(s.mass_kg for s in r.screws))

@@ -1,9 +1,17 @@
-"""The parts-list rows of the glazing strips and the splice cover plates, and what each beam piece joins.
+"""The parts-list rows of the glazing strips, the splice cover plates and the retention parts, and what each beam
+piece joins.
 
 Strips (``kind = "strip"``) are cut from flat bar (:mod:`.cutlist`): no sheet, their nest tag names the bar and
 the cut (``F03-07``).  Cover plates (``kind = "splice"``) are cut from plate to the per-type DXF
 ``splices/<type>.dxf`` (outline and bolt holes): nest tag ``J<splice>-A|B``.  ``area_mm2`` of a cover plate
 is its outline's (before holes); ``mass_kg`` is net of the holes.
+
+Retention parts (:func:`retention_part_rows`, kinds :data:`~fabrication.contract.RETENTION_KINDS`): one row per
+setting block, stop, pressure gasket, pressure plate and cover cap, placed as a box by its ``frame`` (columns
+:data:`~fabrication.contract.RETENTION_PART_COLUMNS`), and one row per pressure plate for its clamping screws with
+their ``quantity`` — a bill of materials lists fasteners as one line per assembly and size, and the screws of a
+plate go in together; where each one stands is ``screw_stations_mm``.  No sheet; the nest tag is the part id (the
+label on the bag or the part).
 """
 
 from __future__ import annotations
@@ -96,3 +104,41 @@ def beam_joins(glazing) -> dict[str, dict[str, str]]:
             rec["joins"].append(other)
             rec["splices"].extend(plates)
     return {k: {"joins": ";".join(v["joins"]), "splices": ";".join(v["splices"])} for k, v in out.items()}
+
+
+def _frame_cell(origin, x_dir, y_dir, normal) -> dict[str, list[float]]:
+    return {k: [float(c) + 0.0 for c in vec] for k, vec in (("origin", origin), ("x_dir", x_dir), ("y_dir", y_dir),
+                                                       ("normal", normal))}
+
+
+def retention_part_rows(retention) -> list[dict]:
+    """The parts-list rows of a :class:`~fabrication.glazing.retention.Retention`: its prisms in their order, then
+    one screw row per pressure plate (module docstring)."""
+    from .retention import material_of
+
+    p = retention.params
+    rows = []
+    for part in retention.parts:
+        origin, x, y, n = part.box_frame()
+        rows.append({
+            "part_id": part.part_id, "kind": part.kind, "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "nest_tag": part.part_id, "area_mm2": _r(part.length * part.width, 6), "mirrored": "",
+            "sheet_file": "", "type_id": "", "material": material_of(part.kind, p), "thickness_mm": _r(part.height, 6),
+            "owner": part.owner, "strip": part.strip, "beam": part.beam, "length_mm": _r(part.length, 6),
+            "width_mm": _r(part.width, 6), "height_mm": _r(part.height, 6), "quantity": 1,
+            "mass_kg": _r(part.mass_kg, 4),
+            "frame": _frame_cell(origin, x, y, n),
+        })
+    for sc in retention.screws:
+        f = sc.frame
+        origin = f.to3d(np.array([[sc.x0, 0.0]]))[0] + sc.z0 * f.normal
+        rows.append({
+            "part_id": sc.part_id, "kind": "screw", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "nest_tag": sc.part_id, "area_mm2": "", "mirrored": "", "sheet_file": "", "type_id": "",
+            "material": material_of("screw", p), "thickness_mm": "", "owner": sc.plate, "strip": sc.strip,
+            "beam": sc.beam, "length_mm": _r(sc.length, 6), "diameter_mm": _r(sc.diameter, 6),
+            "quantity": len(sc.stations),
+            "mass_kg": _r(sc.mass_kg, 4), "frame": _frame_cell(origin, f.ex, f.ey, f.normal),
+            "screw_stations_mm": ";".join(str(_r(x, 3)) for x in sc.stations),
+        })
+    return rows

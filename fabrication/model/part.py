@@ -175,10 +175,33 @@ class SpliceData:
     mass_kg: float | None = column("mass_kg", v.opt_float)
 
 
-KIND_DATA: dict[str, type] = {"panel": PanelData, "beam": BeamData, "strip": StripData, "splice": SpliceData}
+@dataclass(frozen=True)
+class RetentionData:
+    """The columns of a retention part (setting block, stop, pressure gasket, pressure plate, cover cap, or the
+    screws of one plate): the pane or strip it belongs to, the strip and beam under it, its box (length along the
+    frame's ``x_dir``, width along ``y_dir``, height along ``normal``), how many (screws: the plate's), the mass of
+    the row, and a screw row's stations along the strip (mm from the frame's origin) and diameter."""
+
+    owner: str = column("owner", v.text, "")
+    strip: str = column("strip", v.text, "")
+    beam: str = column("beam", v.text, "")
+    length_mm: float | None = column("length_mm", v.opt_float)
+    width_mm: float | None = column("width_mm", v.opt_float)
+    height_mm: float | None = column("height_mm", v.opt_float)
+    quantity: int | None = column("quantity", v.opt_int)
+    mass_kg: float | None = column("mass_kg", v.opt_float)
+    diameter_mm: float | None = column("diameter_mm", v.opt_float)
+    screw_stations_mm: tuple[float, ...] = column("screw_stations_mm", v.float_list, ())
+
+
+RETENTION_KIND_NAMES = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap", "screw")
+"""The retention kinds (the contract's ``RETENTION_KINDS``; the model imports nothing of the project)."""
+
+KIND_DATA: dict[str, type] = {"panel": PanelData, "beam": BeamData, "strip": StripData, "splice": SpliceData,
+                              **{k: RetentionData for k in RETENTION_KIND_NAMES}}
 """The typed record of each known kind; a part of another kind keeps all its own columns in ``extra``."""
 
-Details = PanelData | BeamData | StripData | SpliceData
+Details = PanelData | BeamData | StripData | SpliceData | RetentionData
 
 _COMMON = {"part_id", "kind", "type_id", "material", "thickness_mm", "area_mm2", "nest_tag", "sheet", "sheet_file",
            "x", "y", "rotation_deg", "mirrored", "frame", "plane"}

@@ -86,6 +86,24 @@ def whole_numbers(value: Any) -> tuple[int, ...]:
     return tuple(out)
 
 
+def float_list(value: Any) -> tuple[float, ...]:
+    """Numbers separated by ``;`` (``"125;375.5"``), a JSON list, or one number; ``()`` for an empty cell."""
+    if empty(value):
+        return ()
+    if isinstance(value, bool):
+        raise ValueError(f"expected numbers separated by ';', got {value!r}")
+    if isinstance(value, (int, float)):
+        return (float(value),)
+    items = value if isinstance(value, (list, tuple)) else words(value)
+    out = []
+    for x in items:
+        n = opt_float(x)
+        if n is None:
+            raise ValueError(f"expected numbers separated by ';', got {value!r}")
+        out.append(n)
+    return tuple(out)
+
+
 def numbers(value: Any, count: int | None = None) -> tuple[float, ...] | None:
     """A list of numbers (``count`` of them when given), or ``None`` for an empty cell."""
     if empty(value):

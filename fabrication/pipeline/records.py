@@ -67,7 +67,8 @@ class NodeTable:
 class Summary:
     """Totals for the manifest, the report and ``ppfab build --json`` (mm, m, m², kg).  ``beam_mass_kg`` is the
     beam plates alone; ``steel_mass_kg`` the whole steel take-off (beam plates, glazing strips, splice cover
-    plates); ``weld_length_m`` every weld of ``welds.csv``."""
+    plates); ``weld_length_m`` every weld of ``welds.csv``; ``retention_mass_kg`` the glass retention (setting
+    blocks, stops, pressure gaskets and plates, cover caps, screws: their ``parts.csv`` masses)."""
 
     extent_mm: list[float]
     panels: int
@@ -90,6 +91,7 @@ class Summary:
     torsion_max_deg: float
     steel_mass_kg: float = 0.0
     weld_length_m: float = 0.0
+    retention_mass_kg: float = 0.0
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values in field order (the manifest's ``summary``)."""

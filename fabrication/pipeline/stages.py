@@ -65,8 +65,13 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     except BaseException:
         p.fail()
         raise
-    return Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
-                 times=p.times)
+    b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
+              times=p.times)
+    from dataclasses import replace
+
+    from ..glazing.retention import retention_mass_kg      # the retention is placed on the built panes and strips
+
+    return replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:

@@ -2,7 +2,8 @@
 
 The parts come from ``parts.json`` (``parts.csv`` when the JSON is absent); the flat outline and holes of a part
 nested on a cutting sheet from its CUT outline on ``sheet_file`` mapped back through its placement, of a splice
-cover plate from its type's DXF ``splices/<type_id>.dxf``, of a glazing strip from its length and width; the
+cover plate from its type's DXF ``splices/<type_id>.dxf``, of a glazing strip or a retention box (setting block,
+stop, pressure gasket, plate, cover cap: on its ``frame``) from its length and width; the
 nodes from ``nodes.json``, the welds from ``welds.csv``, the sheets from the cutting DXFs the manifest lists and
 the mesh from ``mesh.obj`` (``mesh.json`` for the grid).  A part of a kind added later keeps its columns and gets
 an outline when it is on a cutting sheet.
@@ -23,7 +24,7 @@ from ..contract import SPLICE_DIR
 from ..model import ColumnError, Package, Part, Sheet
 from .dxf import DxfCuts, box, read_cuts
 from .errors import BuildReadError, bad
-from .geometry import Points, strip_outline, unplace, unplace_outline
+from .geometry import BOX_KINDS, Points, strip_outline, unplace, unplace_outline
 from .mesh import read_mesh
 from .tables import read_manifest, read_nodes, read_parts, read_welds
 
@@ -79,8 +80,8 @@ def open_build(folder: str | os.PathLike) -> Package:
                 raise bad(dxf.path, f"no CUT outline with part_id {plain.type_id}")
             outline = dxf.outlines[plain.type_id]
             holes = [h for key in ("", plain.type_id) for h in dxf.holes.get(key, [])]
-        elif plain.kind == "strip":
-            d = plain.details
+        elif plain.kind == "strip" or (plain.kind in BOX_KINDS and plain.frame is not None):
+            d = plain.details            # a strip, or a retention box on its frame: length × width from the origin
             outline = strip_outline(getattr(d, "length_mm", None), getattr(d, "width_mm", None))
         part = Part.from_columns(cols, outline, holes) if outline is not None else plain
         parts.append(part if pl is plain.placement else replace(part, placement=pl))

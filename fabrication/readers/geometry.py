@@ -35,6 +35,10 @@ def unplace_outline(points: Sequence[Sequence[float]], placement: Placement) -> 
     return pts[::-1] if placement.mirrored else pts
 
 
+BOX_KINDS = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap")
+"""The retention kinds drawn as a box on their ``frame``: outline ``length × width`` from its origin, as a strip's."""
+
+
 def strip_outline(length: float | None, width: float | None) -> Points | None:
     """A glazing strip is a flat bar cut square: the rectangle ``length × width`` from the origin (``None``
     without both)."""

@@ -44,6 +44,11 @@ def _geometry(build: "Build") -> dict[str, tuple[Any, Any]]:
                 out[pid] = (rep.flat_outline, holes)
         for st in g.strips:
             out[st.part_id] = (strip_outline(st.length, st.width), ())
+        from ..glazing.retention import build_retention
+
+        retention = build_retention(build) if g.strips else None
+        for prism in retention.parts if retention is not None else ():
+            out[prism.part_id] = (strip_outline(round(prism.length, 6), round(prism.width, 6)), ())
     return out
 
 

@@ -10,7 +10,9 @@ A solid read back from a file is compared with the part's ``parts.csv`` row and 
   ``±t/2`` on both sides; the mesh vertices of its nodes (the row's ``nodes``) on that plane within the beam
   plane tolerance; its volume is ``area_mm2 × thickness_mm``;
 * and in its plane, its base polygon has the corners of the face inset by half the gap (a panel) or of its DXF
-  cutting outline mapped back through its placement and frame (a plate): :func:`check_outline_place`.
+  cutting outline mapped back through its placement and frame (a plate): :func:`check_outline_place`;
+* a retention box (setting block, stop, pressure gasket, plate, cover cap) has the corners its row's frame and
+  size give (:func:`check_box_place`), the screws of a plate a round prism at each station (:func:`check_screw_points`).
 """
 
 from __future__ import annotations
@@ -138,6 +140,8 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
         if abs(d.max() - d.min() - t) > tol or not lo - tol <= d.min() <= hi + tol:
             v.error(rel, pid, f"solid spans {d.min():.4g} … {d.max():.4g} mm from face {row['face']}'s plane, "
                               f"expected z … z + {t:g} mm with its seat z in {lo:.4g} … {hi:.4g} mm")
+    elif row["kind"] in BOX_KINDS:
+        check_box_place(v, rel, row, pts, max(eps, 1e-3))
     elif row["kind"] == "beam":
         plane = parse_list(row.get("plane", ""))
         if len(plane) != 4:
@@ -179,3 +183,82 @@ def same_value(text: str, value: object) -> bool:
             return False
         return abs(a - float(value)) <= 1e-9 * max(1.0, abs(a))
     return str(value) == text
+
+
+BOX_KINDS = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap")
+"""The retention kinds drawn as a box on their ``parts.csv`` frame."""
+
+
+def _row_frame(row: dict[str, str]) -> tuple[np.ndarray, ...] | None:
+    frame = literal(row.get("frame", ""))
+    if not isinstance(frame, dict):
+        return None
+    try:
+        return tuple(np.asarray(frame[k], dtype=float) for k in ("origin", "x_dir", "y_dir", "normal"))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def box_corners(row: dict[str, str]) -> np.ndarray | None:
+    """``(8, 3)``: the corners of a retention box from its ``parts.csv`` row — ``origin + a·L·x_dir + b·W·y_dir +
+    c·H·normal`` for ``a, b, c ∈ {0, 1}`` — or ``None`` when a cell is missing."""
+    f = _row_frame(row)
+    try:
+        size = [float(row[k]) for k in ("length_mm", "width_mm", "height_mm")]
+    except (KeyError, TypeError, ValueError):
+        return None
+    if f is None:
+        return None
+    o, x, y, n = f
+    return np.array([o + a * size[0] * x + b * size[1] * y + c * size[2] * n
+                     for c in (0, 1) for b in (0, 1) for a in (0, 1)])
+
+
+def check_box_place(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, eps: float = 1e-3) -> None:
+    """A retention box's solid (vertices ``points``) has the eight corners of :func:`box_corners`: each corner
+    within ``eps`` of a vertex and each vertex within ``eps`` of a corner."""
+    ref = box_corners(row)
+    if ref is None:
+        v.error(rel, row["part_id"], "parts.csv row has no frame and size to place it by")
+        return
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    d = np.linalg.norm(ref[:, None, :] - pts[None, :, :], axis=2) if len(pts) else np.full((8, 1), np.inf)
+    gap = max(float(d.min(axis=1).max()), float(d.min(axis=0).max()))
+    if gap > eps:
+        v.error(rel, row["part_id"], f"solid is {gap:.3g} mm from the box its parts.csv row places")
+
+
+def check_screw_points(v: Verification, rel: str, row: dict[str, str], points: np.ndarray,
+                       eps: float = 1e-3) -> None:
+    """The screws of a plate (vertices ``points`` of all of them): one round prism at each of the row's
+    ``screw_stations_mm`` along its frame's ``x_dir``, ``diameter_mm`` across (corners on the circle) and
+    ``length_mm`` along ``normal`` from the origin's height; as many as ``quantity``."""
+    pid = row["part_id"]
+    f = _row_frame(row)
+    try:
+        xs = [float(x) for x in str(row.get("screw_stations_mm", "")).split(";") if x]
+        r, length, qty = 0.5 * float(row["diameter_mm"]), float(row["length_mm"]), int(float(row["quantity"]))
+    except (KeyError, TypeError, ValueError):
+        f = None
+    if f is None:
+        v.error(rel, pid, "parts.csv row has no frame, stations, diameter, length and quantity to place it by")
+        return
+    if len(xs) != qty:
+        v.error("parts.csv", pid, f"lists {len(xs)} screw stations for a quantity of {qty}")
+    o, ex, ey, n = f
+    d = np.asarray(points, dtype=float).reshape(-1, 3) - o
+    u, w, h = d @ ex, d @ ey, d @ n
+    near = np.abs(u[:, None] - np.asarray(xs)[None, :]).argmin(axis=1) if xs else np.zeros(len(d), dtype=int)
+    found = 0
+    for k, x in enumerate(xs):
+        mine = near == k
+        if not mine.any():
+            continue
+        found += 1
+        radial = np.hypot(u[mine] - x, w[mine])
+        if np.abs(radial - r).max() > eps + 1e-3 * r or abs(float(h[mine].min())) > eps \
+                or abs(float(h[mine].max()) - length) > eps:
+            v.error(rel, pid, f"screw {k + 1} is not the {2 * r:g} mm × {length:g} mm round prism at {x:g} mm "
+                              f"along its strip that parts.csv places")
+    if found != len(xs):
+        v.error(rel, pid, f"{found} screws drawn, parts.csv places {len(xs)}")

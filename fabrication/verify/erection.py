@@ -1,5 +1,6 @@
 """erection.csv: every part once, in an order in which each goes into its place along its direction from far away
-without passing through a part of an earlier step, measured on the written solids with manifold3d.
+without passing through a part of an earlier step, measured on the written solids with manifold3d (the clamping
+screws, which no STEP file draws, rebuilt from their parts.csv row: :func:`screw_bodies`).
 
 The rows are read as written: a step (1, 2, …), a kind, a unit insertion direction (none for a weld) and
 ``after`` below the step.  Every part of ``parts.csv`` and every gasket of a strip appears exactly once.
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 import logging
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -38,7 +39,12 @@ TOLERANCE = 0.25
 (:data:`fabrication.glazing.seat.SEAT_TOLERANCE`), parts touch along faces, and the STEP decimals and the
 sampled arcs add their numerics."""
 
-KINDS = {"row", "column", "weld", "splice", "strip", "gasket", "panel"}
+KINDS = {"row", "column", "weld", "splice", "strip", "gasket", "panel", "setting_block", "stop", "pressure_gasket",
+         "pressure_plate", "screw", "cover_cap"}
+RETENTION = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
+"""The retention kinds: lowered like the panes, past leaning steel as they are (a warning, not a finding)."""
+SCREW_SIDES = 16
+"""A clamping screw is rebuilt as the hull of two 16-gons of its diameter (its foot and its top)."""
 
 
 @dataclass(frozen=True)
@@ -289,6 +295,45 @@ def welded_on(part: str, other: str) -> bool:
     return other == beam or other.startswith(beam + "-")
 
 
+def drilled_through(part: str, other: str) -> bool:
+    """A clamping screw of a plate (``SC-U03-07#2``, the second screw of ``SC-U03-07``) and the parts of its own
+    strip it stands in by design: the strip's gasket, the pressure gasket and plate (drilled for it: the holes are
+    not modelled) and the cover cap (its nut inside the cap's channel, drawn as the prism it fills).
+
+    >>> drilled_through("SC-U03-07#2", "CP-U03-07"), drilled_through("CC-U03-07", "SC-U03-07#1")
+    (True, True)
+    >>> drilled_through("SC-U03-07#2", "CP-U03-08"), drilled_through("SC-U03-07#2", "P-U01-V02")
+    (False, False)
+    """
+    a, b = (part, other) if part.startswith("SC-") else (other, part)
+    if not a.startswith("SC-") or not b.startswith(("GK-", "CG-", "CP-", "CC-")):
+        return False
+    return a.split("#")[0][3:] == b[3:]
+
+
+def screw_bodies(row: dict[str, Any]) -> dict[str, Body]:
+    """The screws of one ``kind = "screw"`` row of parts.csv, each a :class:`Body` named ``<part_id>#<k>``
+    (1-based), from the row's ``frame``, ``screw_stations_mm``, ``diameter_mm`` and ``length_mm``; none when a
+    cell is missing or malformed (the parts check names it)."""
+    import json
+
+    try:
+        cell = row.get("frame")
+        f = json.loads(cell) if isinstance(cell, str) else cell
+        o, ex, ey, n = (np.asarray(f[k], dtype=np.float64) for k in ("origin", "x_dir", "y_dir", "normal"))  # type: ignore[index]
+        xs = [float(x) for x in str(row.get("screw_stations_mm", "")).split(";") if x]
+        r, length = 0.5 * float(row["diameter_mm"]), float(row["length_mm"])
+    except (TypeError, ValueError, KeyError):
+        return {}
+    t = np.linspace(0.0, 2.0 * np.pi, SCREW_SIDES, endpoint=False)
+    out = {}
+    for k, x in enumerate(xs, start=1):
+        foot = o + np.multiply(x, ex) + r * (np.outer(np.cos(t), ex) + np.outer(np.sin(t), ey))
+        pts = np.vstack([foot, foot + np.multiply(length, n)])
+        out[f"{row['part_id']}#{k}"] = Body(pts, True, o + np.multiply(x, ex), ex, ey, n, length, None)
+    return out
+
+
 def _perp(d: np.ndarray) -> np.ndarray:
     a = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(d, a)
@@ -325,7 +370,7 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             & np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE, axis=1)
         shape = None
         for k in np.flatnonzero(near):
-            if welded_on(pid, names[k]):
+            if welded_on(pid, names[k]) or drilled_through(pid, names[k]):
                 continue
             b = bodies[names[k]]
             if shape is None:
@@ -414,9 +459,14 @@ def check_erection(v: Verification) -> None:
             v.error(rel, pid, "is not a part of parts.csv nor the gasket of a strip")
     order = [(pid, step, d) for pid, kind, step, d, _ in rows if kind != "weld" and pid in known]
     bodies = _bodies(v, files, {pid for pid, _, _ in order})
+    screws = {r["part_id"]: screw_bodies(r) for r in parts if r.get("kind") == "screw"}
+    for one in screws.values():
+        bodies.update(one)
+    order = [(name, step, d) for pid, step, d in order for name in (list(screws[pid]) if pid in screws else [pid])]
     blocked = {pid: spread for pid, _, _, _, spread in rows if spread}
     beams = {r["part_id"] for r in parts if r.get("kind") == "beam"}
-    passes = sweep_passes(order, bodies)
+    passes = [replace(p, part=p.part.split("#")[0], through=p.through.split("#")[0])
+              for p in sweep_passes(order, bodies)]             # a screw's pass named by its row of parts.csv
     deep = [p for p in passes if p.excess > TOLERANCE]
     v.data["erection_passes"] = passes
     kinds = {pid: kind for pid, kind, *_ in rows}
@@ -432,12 +482,14 @@ def check_erection(v: Verification) -> None:
     # rows (they go in first, into nothing) and the glazing and glass among themselves stay findings
     steel = beams | {pid for pid, kind, *_ in rows if kind == "splice"}
     glazing = {pid for pid, kind, *_ in rows if kind in ("strip", "gasket")}
-    onto_steel = sorted({p.part for p in deep if (kinds.get(p.part) in ("column", "splice", "strip", "gasket", "panel")
+    onto_steel = sorted({p.part for p in deep if (kinds.get(p.part) in ("column", "splice", "strip", "gasket", "panel",
+                                                                        *RETENTION)
                                                   and p.through in steel)
                          or (kinds.get(p.part) == "panel" and p.through in glazing)})
     if onto_steel:
         logging.getLogger("ppfab").warning(
-            "erection: %d column plate(s), cover plate(s), strip(s), gasket(s) or pane(s) pass a beam or cover plate "
+            "erection: %d column plate(s), cover plate(s), strip(s), gasket(s), pane(s) or retention part(s) pass a beam "
+            "or cover plate "
             "on their way in (%s): no single straight way in past leaning steel; fit them before that plate, from the "
             "side, or split them", len(onto_steel), ", ".join(onto_steel[:6]))
     shown = 0

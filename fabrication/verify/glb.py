@@ -9,7 +9,7 @@ import numpy as np
 
 from ..contract import GLB_HOLE_SEGMENTS
 from . import Verification, check
-from ._solids import check_names, check_part_solid
+from ._solids import check_names, check_part_solid, check_screw_points
 
 
 @check("glb", 74)
@@ -41,6 +41,9 @@ def check_glb(v: Verification) -> None:
             v.error(rel, name, "mesh is not closed")
             continue
         pts = trimesh.transform_points(mesh.vertices, transform) @ back.T
+        if row["kind"] == "screw":                 # a prism per screw of the plate, at its stations
+            check_screw_points(v, rel, row, pts, eps=2e-7 * float(np.abs(pts).max()) + 1e-3)
+            continue
         # float32 vertices: about 1e-7 of the structure's size
         eps = 2e-7 * float(np.abs(pts).max()) + 1e-6
         volume = abs(float(mesh.volume)) * abs(np.linalg.det(transform[:3, :3])) * 1e9

@@ -11,7 +11,7 @@ from ppfab.metrics import polygon_area
 
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
-from ._solids import check_names, check_part_solid, same_value
+from ._solids import check_screw_points, check_names, check_part_solid, same_value
 
 
 def extruded_prism(product) -> tuple[np.ndarray, float] | None:
@@ -48,6 +48,31 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
             area -= abs(float(polygon_area(np.array([p.Coordinates for p in inner.Points], dtype=float))))
     height = s.Depth * abs(float(direction[2]))
     return world[:, :3], area * height
+
+
+def circle_items(product, sides: int = 16) -> np.ndarray:
+    """``(m·2·sides, 3)`` mm, world: points on the bottom and top circles of every ``IfcExtrudedAreaSolid`` of an
+    ``IfcCircleProfileDef`` in the product's body (the screws of a plate), from its placement."""
+    import ifcopenshell.util.placement as up
+
+    rep = product.Representation
+    if rep is None:
+        return np.zeros((0, 3))
+    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
+    t = 2.0 * np.pi * np.arange(sides) / sides
+    out = []
+    for s in (it for r in rep.Representations for it in r.Items if it.is_a("IfcExtrudedAreaSolid")):
+        if not s.SweptArea.is_a("IfcCircleProfileDef"):
+            continue
+        r = float(s.SweptArea.Radius)
+        pos = np.asarray(up.get_axis2placement(s.Position), dtype=float)
+        direction = np.asarray(s.ExtrudedDirection.DirectionRatios, dtype=float)
+        direction = direction / np.linalg.norm(direction)
+        ring = np.c_[r * np.cos(t), r * np.sin(t), np.zeros(sides), np.ones(sides)] @ pos.T
+        top = ring.copy()
+        top[:, :3] += s.Depth * (pos[:3, :3] @ direction)
+        out.append((np.concatenate([ring, top]) @ m.T)[:, :3])
+    return np.concatenate(out) if out else np.zeros((0, 3))
 
 
 @check("ifc", 70)
@@ -103,6 +128,9 @@ def check_ifc(v: Verification) -> None:
         if ue.get_container(p) is None:
             v.error(rel, p.Name, "is not in the spatial structure (site, building, storey)")
         _check_material_and_type(v, rel, p, row)
+        if row["kind"] == "screw":
+            check_screw_points(v, rel, row, circle_items(p))
+            continue
         prism = extruded_prism(p)
         if prism is None:
             v.error(rel, p.Name, "has no single extruded solid of a polyline profile")

@@ -158,6 +158,8 @@ SUMMARY_ROWS: dict[str, Callable[[dict[str, Figure]], tuple[list[float], list[fl
     "steel take-off (plates, strips, cover plates)": lambda s: ([s["steel_mass_kg"].value / 1000],
                                                                 [s["steel_mass_kg"].tolerance / 1000]),
     "weld length": lambda s: ([s["weld_length_m"].value], [s["weld_length_m"].tolerance]),
+    "glass retention (blocks, stops, gaskets, plates, caps, screws)":
+        lambda s: ([s["retention_mass_kg"].value], [s["retention_mass_kg"].tolerance]),
 }
 """Summary rows of the report: label → (the figures it shows, each one's rounding in the files)."""
 

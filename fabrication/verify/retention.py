@@ -21,6 +21,12 @@ parallel to the pane.  Then:
   the plates over its edges (``screws`` of ``retention.csv`` over the number of panes a plate covers), and no two
   screws of a plate farther apart than ``glazing.bolt_pitch`` (an end counting at twice its distance).
 
+* **parts.csv**: every retention part has its row, the box the row's frame and size give on its solid's vertices
+  (1e-3 mm), and every pressure plate the row of its screws (``SC-…``: quantity and stations as retention.csv);
+* **plate bending**: each pressure plate between its screws under the suction of the panes its gasket covers
+  (area over perimeter of each, parts.csv), stress against ``f/γ`` and deflection against span/200 recomputed
+  (:class:`fabrication.glazing.retention.PlateBending`), a finding where either is exceeded.
+
 That no retention solid enters the glass is the clash check's (it measures every solid of glazing.step).
 """
 
@@ -111,6 +117,7 @@ def check_retention(v: Verification) -> None:
     if rows is None or checks is None or glass is None or support is None:
         return
     solids = {s.name: solid_points(s.solid) for s in support}
+    _check_parts_rows(v, files.get("parts_csv", "parts.csv"), rel_r, rel_g, rows, solids)
     panes = {s.name: s.solid for s in glass if s.name.startswith("P-")}
     parts = {r["part_id"]: r for r in v.data.get("parts", []) if r.get("kind") == "panel"}
     by_owner: dict[str, dict[str, list[dict[str, str]]]] = {}
@@ -237,6 +244,8 @@ def check_retention(v: Verification) -> None:
         if max(gaps) > pitch + 0.5:
             v.error(rel_r, pid, f"screws are {max(gaps):.0f} mm apart, more than glazing.bolt_pitch = {pitch:g} mm")
     suction = float(gl.get("wind_suction", 0.0)) * float(gl.get("load_factor", 1.0))
+    _check_plate_bending(v, rel_r, screws, covers, parts, suction, float(gl.get("load_factor", 1.0)),
+                         str(gl.get("pressure_plate_material", "")))
     for pane_id in sorted(panes):
         area = number(parts.get(pane_id, {}).get("area_mm2"))
         n_screws = 0.0
@@ -249,3 +258,89 @@ def check_retention(v: Verification) -> None:
             v.error(rel_x, pane_id, f"wind uplift {uplift:.2f} kN is above the {n_screws:.1f} screws' "
                                     f"{n_screws * bolt.tension_resistance_kN:.2f} kN holding it")
     v.checked.append("retention")
+
+
+def _check_parts_rows(v: Verification, rel_parts: str, rel_r: str, rel_g: str, rows: list[dict[str, str]],
+                      solids: dict[str, np.ndarray]) -> None:
+    """Every retention part of retention.csv has its row in parts.csv, placed where glazing.step has its solid
+    (the eight corners of the row's box, :func:`~._solids.box_corners`, on the solid's vertices within 1e-3 mm),
+    and every pressure plate the row of its screws with their number; no retention row of parts.csv without
+    its part."""
+    from ..contract import RETENTION_KINDS, screw_set_id
+    from ._solids import box_corners
+
+    parts = {r["part_id"]: r for r in v.data.get("parts", []) if r.get("kind") in RETENTION_KINDS}
+    if not v.data.get("parts"):
+        return
+    wanted = {r["part_id"] for r in rows}
+    for r in rows:
+        row = parts.get(r["part_id"])
+        if row is None or row.get("kind") != r.get("kind"):
+            v.error(rel_parts, r["part_id"], f"{r.get('kind')} of {rel_r} has no row of its kind in parts.csv")
+            continue
+        pts, box = solids.get(r["part_id"]), box_corners(row)
+        if pts is None or box is None:
+            continue
+        gap = float(np.linalg.norm(box[:, None, :] - pts[None, :, :], axis=2).min(axis=1).max())
+        if gap > 1e-3:
+            v.error(rel_parts, r["part_id"], f"its row places it {gap:.3g} mm from its solid in {rel_g}")
+        if r.get("kind") == "pressure_plate":
+            sid = screw_set_id("GS" + r["part_id"][2:])
+            wanted.add(sid)
+            sc = parts.get(sid)
+            if sc is None:
+                v.error(rel_parts, sid, f"the screws of {r['part_id']} have no row")
+            elif sc.get("quantity") != r.get("screws") or not _same_stations(sc.get("screw_stations_mm", ""),
+                                                                               r.get("screw_stations_mm", "")):
+                v.error(rel_parts, sid, f"{sc.get('quantity')} screws at {sc.get('screw_stations_mm')} mm, "
+                                        f"{rel_r} has {r.get('screws')} at {r.get('screw_stations_mm')} mm")
+    for pid in sorted(set(parts) - wanted):
+        v.error(rel_parts, pid, f"retention part is not in {rel_r}")
+
+
+def _same_stations(a: str, b: str) -> bool:
+    """Two ``;``-separated station lists agree to retention.csv's 0.1 mm."""
+    try:
+        xa, xb = ([float(x) for x in t.split(";") if x] for t in (a, b))
+    except ValueError:
+        return False
+    return len(xa) == len(xb) and all(abs(p - q) <= 0.051 for p, q in zip(xa, xb))
+
+
+def _check_plate_bending(v: Verification, rel_r: str, plates: dict[str, dict[str, str]],
+                         covers: dict[str, set[str]], panels: dict[str, dict[str, str]], suction: float,
+                         load_factor: float, material: str) -> None:
+    """Each pressure plate bent between its screws (:class:`~fabrication.glazing.retention.PlateBending`)
+    recomputed: its line load from the panes its gasket covers (measured on the STEP files above), each pane's
+    design suction times its ``area_mm2`` over its ``perimeter_mm`` (parts.csv); the span and end overhang from
+    its stations; stress ``M/(b·t²/6)`` against ``f/γ`` of its material and the deflection against span/200.
+    A finding where either is exceeded, or where retention.csv states other figures (beyond 1 %)."""
+    from ppfab.errors import DesignError
+
+    from ..glazing.retention import plate_bending, plate_material
+
+    if not plates:
+        return
+    try:
+        strength = plate_material(material)
+    except DesignError as exc:
+        v.error("manifest.json", "glazing.pressure_plate_material", str(exc))
+        return
+    for pid, r in sorted(plates.items()):
+        xs = [float(x) for x in r.get("screw_stations_mm", "").split(";") if x]
+        try:
+            length, width, thick = (float(r[k]) for k in ("length_mm", "width_mm", "height_mm"))
+        except (KeyError, ValueError):
+            continue
+        over = covers.get("CG" + pid[2:], set())
+        line = sum(suction * 1e-3 * number(panels.get(p, {}).get("area_mm2"))
+                   / number(panels.get(p, {}).get("perimeter_mm")) for p in over)
+        if not math.isfinite(line):
+            continue
+        b = plate_bending(pid, line, xs, length, width, thick, strength, load_factor)
+        for text in b.failures():
+            v.error(rel_r, pid, text)
+        stated = number(r.get("plate_stress_N_mm2"))
+        if math.isfinite(stated) and abs(stated - b.stress) > 0.01 * max(b.stress, 1.0):
+            v.error(rel_r, pid, f"plate_stress_N_mm2 {stated:g} but its screws and the panes it clamps give "
+                                f"{b.stress:.2f} N/mm²")

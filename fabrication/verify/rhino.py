@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import EXCHANGE_PROPERTIES, RHINO_LAYERS, csv_value
+from ..contract import EXCHANGE_PROPERTIES, RETENTION_KINDS, RHINO_LAYERS, csv_value
 from . import Verification, check, read_csv
-from ._solids import check_names, check_part_solid, polygon_area_3d
+from ._solids import check_names, check_screw_points, check_part_solid, polygon_area_3d
 
 
 def _points(curve) -> np.ndarray:
@@ -63,7 +63,12 @@ def check_rhino(v: Verification) -> None:
         row = rows.get(name)
         if row is None:
             continue
-        want = "glass" if row["kind"] == "panel" else f"beams::{row.get('family', '')}"
+        if row["kind"] == "panel":
+            want = "glass"
+        elif row["kind"] in RETENTION_KINDS:
+            want = f"retention::{row['kind']}"
+        else:
+            want = f"beams::{row.get('family', '')}"
         if layer != want:
             v.error(rel, name, f"is on layer {layer}, expected {want}")
         text = dict(obj.Attributes.GetUserStrings())
@@ -72,6 +77,14 @@ def check_rhino(v: Verification) -> None:
             if cell and text.get(key) != cell:
                 v.error(rel, name, f"user text {key} is {text.get(key)!r}, parts.csv has {cell!r}")
         g = obj.Geometry
+        if row["kind"] == "screw":                 # the screws of a plate: one closed mesh of a prism per screw
+            if not isinstance(g, rhino3dm.Mesh) or not g.IsClosed:
+                v.error(rel, name, "is not a closed mesh")
+                continue
+            pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+            # rhino3dm reads a mesh's vertices back in single precision: about 1e-7 of the coordinates
+            check_screw_points(v, rel, row, pts, eps=2e-7 * float(np.abs(pts).max(initial=0.0)) + 1e-3)
+            continue
         if not isinstance(g, rhino3dm.Extrusion) or not g.IsSolid:
             v.error(rel, name, "is not a closed extrusion")
             continue

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import csv_value
+from ..contract import RETENTION_KINDS, csv_value
 from . import Verification, check, read_csv
 from ._cells import file_list, is_number
 
@@ -63,6 +63,8 @@ def recompute_summary(v: Verification) -> dict[str, Figure]:
                    plate_area_m2=Figure(steel / 1e6, 5e-8 * k + 1e-9))
         metal = [r for r in parts if r["kind"] in ("beam", "strip", "splice")]
         out["steel_mass_kg"] = Figure(sum(_num(r["mass_kg"]) for r in metal), 5e-4 * len(metal) + 1e-9)
+        held = [r for r in parts if r["kind"] in RETENTION_KINDS]
+        out["retention_mass_kg"] = Figure(sum(_num(r["mass_kg"]) for r in held), 5e-5 * len(held) + 1e-9)
     if files.get("welds_csv") or parts:
         welds = _rows(v, files["welds_csv"]) if files.get("welds_csv") else []
         out["weld_length_m"] = Figure(sum(_num(r.get("weld_length_mm", "")) for r in welds) / 1e3,

@@ -12,7 +12,9 @@ Every part is a flat outline extruded once, so one record describes it for every
   ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane — with the bolt holes of its splices
   (``holes``: centre and diameter in the frame; IFC and Rhino cut them as circles, the glTF mesh as polygons of
   the same area, :data:`fabrication.contract.GLB_HOLE_SEGMENTS`);
-* a splice cover plate: its outline and bolt holes in the splice frame, on either face of the beam plate.
+* a splice cover plate: its outline and bolt holes in the splice frame, on either face of the beam plate;
+* a retention part (:func:`retention_elements`): the box of its ``parts.csv`` row; the screws of a pressure plate
+  one element with a prism per screw (:attr:`Element.copies`).
 
 The data of an element (:data:`fabrication.contract.EXCHANGE_PROPERTIES`) are the values of its ``parts.csv``
 row, so the IFC property sets and the Rhino user text agree with the parts list by construction; for a beam plate
@@ -23,7 +25,7 @@ the support plane.
 from __future__ import annotations
 
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -75,6 +77,15 @@ class Element:
     height: float
     props: dict[str, Value] = field(default_factory=dict)
     holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    copies: np.ndarray | None = None
+
+    def copy_frames(self) -> list[Frame]:
+        """The frame of each copy of the prism: ``[frame]``, or one per ``copies (m, 2)`` offset in the frame (the
+        clamping screws of a plate: one element, a prism per screw)."""
+        if self.copies is None:
+            return [self.frame]
+        f = self.frame
+        return [Frame(f.origin + f.vec3d(np.asarray(c, dtype=float)), f.ex, f.ey) for c in self.copies]
 
     @property
     def net_area(self) -> float:
@@ -102,7 +113,13 @@ class Element:
     def prism_mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """The closed triangle mesh of the prism: vertices ``(2n, 3)`` (the bottom rings — the outline's ``k``
         corners, then each hole's — then the top rings in the same order) and faces oriented outwards (caps by a
-        constrained Delaunay triangulation, a side quad per ring edge)."""
+        constrained Delaunay triangulation, a side quad per ring edge); with ``copies``, the meshes of every copy
+        one after the other."""
+        if self.copies is not None:
+            meshes = [replace(self, frame=f, copies=None).prism_mesh() for f in self.copy_frames()]
+            offsets = np.cumsum([0] + [len(v) for v, _ in meshes[:-1]])
+            return (np.concatenate([v for v, _ in meshes]),
+                    np.concatenate([f + o for (_, f), o in zip(meshes, offsets)]))
         rings = [np.asarray(self.outline, dtype=float)] + self.hole_rings()
         flat = np.concatenate(rings)
         n = len(flat)
@@ -198,6 +215,42 @@ def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
             holes = np.c_[np.asarray(sp.holes, dtype=float).reshape(-1, 2), np.full(len(sp.holes), float(sp.hole))]
             out.append(Element(pid, "splice", str(row.get("family") or "rows"), "", sp.outline, sp.frame, z0,
                                float(sp.thickness), _props(row), holes))
+    return out + retention_elements(build, rows)
+
+
+SCREW_SIDES = 12
+"""Corners of the polygon a clamping screw is drawn as in the exchange models (its circle's inscribed 12-gon;
+IFC draws the circle itself)."""
+
+
+def retention_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
+    """The retention parts (:mod:`fabrication.glazing.retention`) on layer ``retention``: each setting block, stop,
+    pressure gasket, pressure plate and cover cap the box of its ``parts.csv`` row (the prism of glazing.step,
+    from a corner of its underside along the row's ``frame``), and the screws of a plate one element with a
+    prism per screw (``copies`` at its stations along the strip)."""
+    from ..glazing.retention import build_retention
+
+    g = build.glazing
+    retention = build_retention(build) if g is not None and g.strips else None
+    if retention is None:
+        return []
+    out = []
+    for part in retention.parts:
+        origin, x, y, _ = part.box_frame()
+        row = dict(rows[part.part_id])
+        row["weight_kg"] = row.get("mass_kg", "")
+        box = np.array([[0.0, 0.0], [part.length, 0.0], [part.length, part.width], [0.0, part.width]])
+        out.append(Element(part.part_id, part.kind, "retention", "", box, Frame(origin, x, y), 0.0,
+                           float(part.height), _props(row)))
+    t = 2.0 * np.pi * np.arange(SCREW_SIDES) / SCREW_SIDES
+    for sc in retention.screws:
+        row = dict(rows[sc.part_id])
+        row["weight_kg"] = row.get("mass_kg", "")
+        f = sc.frame
+        origin = f.to3d(np.array([sc.x0, 0.0])) + sc.z0 * f.normal
+        circle = 0.5 * sc.diameter * np.c_[np.cos(t), np.sin(t)]
+        out.append(Element(sc.part_id, "screw", "retention", "", circle, Frame(origin, f.ex, f.ey), 0.0,
+                           float(sc.length), _props(row), copies=np.array([[x, 0.0] for x in sc.stations])))
     return out
 
 

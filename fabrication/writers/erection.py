@@ -21,7 +21,9 @@ def write_erection(build: "Build", out: Path, files: Files) -> str:
     from ..erection_drawing import erection_svg, plan_outlines
     from ..parts import csv_text
 
-    plan = erection_plan(build.beams, build.glazing, build.panels.panels)
+    from ..glazing.retention import build_retention
+
+    plan = erection_plan(build.beams, build.glazing, build.panels.panels, build_retention(build))
     (out / ERECTION_CSV).write_text(csv_text(plan.rows(), ERECTION_COLUMNS), encoding="utf-8")
     files["erection_csv"] = ERECTION_CSV
     svg = out / ERECTION_SVG

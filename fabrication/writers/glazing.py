@@ -98,8 +98,9 @@ def retention_solids(retention) -> list:
 
 def retention_material(part, params) -> str:
     """The material cell of a retention part."""
-    return {"setting_block": params.setting_block_material, "stop": "S355",
-            "pressure_gasket": "EPDM 70 Shore A"}.get(part.kind, params.pressure_plate_material)
+    from ..glazing.retention import material_of
+
+    return material_of(part.kind, params)
 
 
 def retention_rows(retention) -> list[dict[str, object]]:
@@ -116,6 +117,13 @@ def retention_rows(retention) -> list[dict[str, object]]:
                      "height_mm": _plain(part.height), "material": retention_material(part, p), "screw": screw,
                      "screws": len(xs) if xs is not None else "",
                      "screw_stations_mm": ";".join(f"{_plain(x, 1):g}" for x in xs) if xs is not None else ""})
+        bend = (retention.bending or {}).get(part.part_id)
+        if bend is not None:
+            rows[-1].update({"plate_load_N_mm": _plain(bend.load, 4), "plate_span_mm": _plain(bend.span, 1),
+                             "plate_end_mm": _plain(bend.end, 1), "plate_stress_N_mm2": _plain(bend.stress, 2),
+                             "plate_stress_limit_N_mm2": _plain(bend.stress_limit, 2),
+                             "plate_deflection_mm": _plain(bend.deflection, 4),
+                             "plate_deflection_limit_mm": _plain(bend.deflection_limit, 3)})
     return rows
 
 
@@ -131,6 +139,8 @@ def restraint_rows(retention) -> list[dict[str, object]]:
                      "screws": _plain(r.screws, 2), "resistance_kN": _plain(r.resistance_kN, 2),
                      "clamp_bite_mm": "" if r.clamp_bite_mm != r.clamp_bite_mm else _plain(r.clamp_bite_mm, 2),
                      "max_screw_spacing_mm": _plain(r.max_spacing_mm, 1) if retention.stations else "",
+                     "plate_utilisation": "" if r.plate_utilisation != r.plate_utilisation
+                     else _plain(r.plate_utilisation, 3),
                      "silicone_bite_mm": _plain(r.silicone_bite_mm, 1),
                      "ok": "yes" if not r.failures(retention.params) else "; ".join(r.failures(retention.params))})
     return rows
@@ -202,11 +212,6 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     return names
 
 
-def _plain(value: float, digits: int = 3) -> float:
-    v = round(float(value), digits)
-    return 0.0 if v == 0 else v
-
-
 SPLICE_LABEL_MARGIN, SPLICE_LABEL_MIN, SPLICE_LABEL_MAX = 3.0, 3.0, 20.0
 """Clearance of a cover plate's label from its outline and holes, and its smallest and largest height, mm."""
 
@@ -233,6 +238,11 @@ def splice_label_place(outline: np.ndarray, holes: list[tuple[float, float]], ra
     u, v = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
     start = line.centre - 0.5 * LABEL_CHAR_WIDTH * len(label) * h * u - 0.45 * h * v
     return (float(start[0]), float(start[1])), h, angle
+
+
+def _plain(value: float, digits: int = 3) -> float:
+    v = round(float(value), digits)
+    return 0.0 if v == 0 else v
 
 
 @writer("glazing", order=25, enabled=lambda design: True)

@@ -1,4 +1,8 @@
-"""``model.ifc``: the structure as IFC4 for BIM tools — an ``IfcPlate`` per pane, an ``IfcMember`` per beam plate.
+"""``model.ifc``: the structure as IFC4 for BIM tools — an ``IfcPlate`` per pane, an ``IfcMember`` per beam plate,
+and the glass retention (:data:`~fabrication.contract.IFC_CLASSES`): setting blocks, stops and pressure gaskets as
+``IfcDiscreteAccessory``, pressure plates as ``IfcPlate`` SHEET, cover caps as ``IfcCovering`` CLADDING, the screws
+of each plate as one ``IfcMechanicalFastener`` BOLT (one shared ``IfcCircleProfileDef``, an extruded solid per
+screw: the plate's row of parts.csv with its quantity).
 
 Spatial structure and decomposition (``IfcRelAggregates`` unless noted)::
 
@@ -110,6 +114,7 @@ class IfcModel:
         self._associations: dict[str, tuple[Any, list[Any]]] = {}
         self._types: dict[tuple[str, str], tuple[str, list[Any]]] = {}
         self._styles: dict[str, Any] = {}
+        self._profiles: dict[str, Any] = {}
 
     # -- small entities ------------------------------------------------------------------------------
     def guid(self, key: str) -> str:
@@ -170,6 +175,8 @@ class IfcModel:
         if el.kind == "beam" and el.group:
             parent = self._assembly(el).ObjectPlacement
         placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
+        if el.copies is not None:
+            return self._add_copies(el, material, category, placement)
         pts = [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y))) for x, y in el.outline]
         outer = f.create_entity("IfcPolyline", Points=pts + pts[:1])
         if len(el.holes):                        # bolt holes: circular voids of the profile
@@ -184,10 +191,36 @@ class IfcModel:
                                 Position=self._placement3d((0.0, 0.0, el.z0)),
                                 ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
         f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
+        return self._product(el, material, category, placement, [solid])
+
+    def _add_copies(self, el: Element, material: str, category: str | None, placement) -> Any:
+        """An element of many equal round prisms (the screws of a plate): one shared ``IfcCircleProfileDef``
+        and an ``IfcExtrudedAreaSolid`` per copy at its offset, all in the one product's representation."""
+        f = self.f
+        radius = round(float(np.linalg.norm(np.asarray(el.outline, dtype=float), axis=1).max()), 6)
+        key = f"circle/{radius!r}"
+        if key not in self._profiles:
+            self._profiles[key] = f.create_entity("IfcCircleProfileDef", ProfileType="AREA", Radius=radius)
+        solids = []
+        for x, y in np.asarray(el.copies, dtype=float).tolist():
+            solid = f.create_entity("IfcExtrudedAreaSolid", SweptArea=self._profiles[key],
+                                    Position=self._placement3d((float(x), float(y), el.z0)),
+                                    ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
+            f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
+            solids.append(solid)
+        extra = {"NominalDiameter": 2.0 * radius, "NominalLength": float(el.height)} \
+            if IFC_CLASSES.get(el.kind, ("",))[0] == "IfcMechanicalFastener" else {}
+        return self._product(el, material, category, placement, solids, **extra)
+
+    def _product(self, el: Element, material: str, category: str | None, placement, solids: list,
+                 **extra: Any) -> Any:
+        """The product of ``el`` with its body ``solids``, property sets, quantities, material and place."""
+        f = self.f
         shape = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
-                                RepresentationType="SweptSolid", Items=[solid])
+                                RepresentationType="SweptSolid", Items=solids)
         cls, predefined = IFC_CLASSES.get(el.kind, ("IfcMember", "USERDEFINED"))
-        extra = {"ObjectType": el.kind} if predefined == "USERDEFINED" else {}
+        if predefined == "USERDEFINED":
+            extra["ObjectType"] = el.kind
         product = f.create_entity(cls, GlobalId=self.guid(el.part_id), Name=el.part_id,
                                   Description=str(el.props.get("type_id", "")) or None, ObjectPlacement=placement,
                                   Representation=f.create_entity("IfcProductDefinitionShape", Representations=[shape]),
@@ -255,10 +288,13 @@ class IfcModel:
         return out
 
     def _common_pset(self, el: Element, product) -> None:
-        """``Pset_PlateCommon`` (panes) or ``Pset_MemberCommon`` (plates, strips, cover plates) with the standard
-        properties BIM tools read: Reference (the type id, else the part id), IsExternal, LoadBearing."""
+        """``Pset_PlateCommon`` (panes) or the common set of the element's class (``Pset_MemberCommon`` of plates,
+        strips, cover plates; ``Pset_DiscreteAccessoryCommon``, ``Pset_MechanicalFastenerCommon``, … of the
+        retention parts) with the standard properties BIM tools read: Reference (the type id, else the part id),
+        IsExternal, LoadBearing."""
         f = self.f
-        name = "Pset_PlateCommon" if el.kind == "panel" else "Pset_MemberCommon"
+        cls = IFC_CLASSES.get(el.kind, ("IfcMember", ""))[0]
+        name = "Pset_PlateCommon" if el.kind == "panel" else f"Pset_{cls[3:]}Common"
         reference = str(el.props.get("type_id", "") or el.part_id)
         props = [f.create_entity("IfcPropertySingleValue", Name="Reference",
                                  NominalValue=f.create_entity("IfcIdentifier", reference)),
@@ -283,6 +319,9 @@ class IfcModel:
             d = np.asarray(el.holes, dtype=float)[:, 2]
             area -= float(np.pi / 4.0 * (d * d).sum())
         weight = el.props.get("weight_kg")
+        if el.copies is not None:                # the screws of a plate: their circles' area, every copy
+            r = float(np.linalg.norm(np.asarray(el.outline, dtype=float), axis=1).max())
+            area = len(el.copies) * np.pi * r * r
         q = [f.create_entity("IfcQuantityArea", Name="NetArea", AreaValue=area * 1e-6),
              f.create_entity("IfcQuantityVolume", Name="NetVolume", VolumeValue=area * el.height * 1e-9)]
         if isinstance(weight, float):

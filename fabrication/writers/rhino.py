@@ -5,6 +5,8 @@ Layers (:data:`fabrication.contract.RHINO_LAYERS`, colours :data:`~fabrication.c
     glass          one closed extrusion per pane (its inset outline parallel to the face, on its gaskets)
     beams::rows    one closed extrusion per beam plate of the row family (centred on its support plane)
     beams::cols    … of the column family
+    retention::<kind>  one closed extrusion per setting block, stop, pressure gasket, pressure plate, cover cap;
+                   one closed mesh per plate's screws (a prism per screw)
     nodes          one line per node: from the node along its unit axis by the beam depth
     mesh           the quad mesh
 
@@ -136,6 +138,9 @@ class RhinoModel:
         (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side),
         its bolt holes as inner profiles (circles, in the extrusion's profile plane)."""
         r = self.r
+        if el.copies is not None:
+            self._add_mesh_part(el, material)
+            return
         base = el.base()
         ring = r.Point3dList()                   # (a list of Point3d is not accepted by rhino3dm 8.0)
         for p in list(base) + [base[0]]:
@@ -157,11 +162,33 @@ class RhinoModel:
             for x, y, d in np.asarray(el.holes, dtype=float).tolist():
                 u, v = axes @ (el.frame.to3d(np.array([[x, y]]))[0] + el.z0 * el.frame.normal - origin)
                 ext.AddInnerProfile(r.ArcCurve.CreateFromCircle(r.Circle(r.Point3d(float(u), float(v), 0.0), 0.5 * d)))
-        layer = "glass" if el.kind == "panel" else f"beams::{el.layer}"
+        self.f.Objects.AddExtrusion(ext, self._part_attributes(el, material))
+
+    def _part_attributes(self, el: Element, material: str) -> Any:
+        """Name, layer (``glass``, ``beams::<family>``, ``retention::<kind>``), user text and material of a part."""
+        if el.kind == "panel":
+            layer = "glass"
+        elif el.layer == "retention":
+            layer = f"retention::{el.kind}"
+        else:
+            layer = f"beams::{el.layer}"
         attrs = self._attributes(el.part_id, layer, el.props, el.part_id)
         attrs.MaterialIndex = self.material(material, "glass" if el.kind == "panel" else el.layer)
-        attrs.MaterialSource = r.ObjectMaterialSource.MaterialFromObject
-        self.f.Objects.AddExtrusion(ext, attrs)
+        attrs.MaterialSource = self.r.ObjectMaterialSource.MaterialFromObject
+        return attrs
+
+    def _add_mesh_part(self, el: Element, material: str) -> None:
+        """A part of many prisms (the screws of a plate) as one closed mesh of them all (light: an extrusion per
+        screw would be an object per screw)."""
+        v, faces = el.prism_mesh()
+        mesh = self.r.Mesh()
+        mesh.Vertices.UseDoublePrecisionVertices = True
+        for p in v:
+            mesh.Vertices.Add(*map(float, p))
+        for a, b, c in faces.tolist():
+            mesh.Faces.AddFace(int(a), int(b), int(c))
+        mesh.Normals.ComputeNormals()
+        self.f.Objects.AddMesh(mesh, self._part_attributes(el, material))
 
     def add_axis(self, node_id: str, start, end, props: dict[str, Any]) -> None:
         r = self.r

@@ -17,7 +17,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def parts_table(build: "Build", files: Files) -> list[dict]:
-    """The rows of ``parts.csv``: glass panels, then beam plates, with their sheet files from ``files``."""
+    """The rows of ``parts.csv``: glass panels, then beam plates, with their sheet files from ``files``; then the
+    glazing strips, splice cover plates and retention parts (:mod:`fabrication.glazing.rows`)."""
     nest = build.nesting
     glass_sheets = files.get("glass_sheets", [])
     beam_sheets = files.get("beam_sheets", [])
@@ -39,7 +40,12 @@ def parts_table(build: "Build", files: Files) -> list[dict]:
         elif row["kind"] == "panel" and row["part_id"] in bite:
             row["bite_min_mm"] = round(bite[row["part_id"]], 3)
             row["setting_blocks"] = f"2 x {g.params.setting_block_length:g} mm"
-    return rows + strip_rows(g, build.beams) + splice_rows(g, build.beams)
+    from ..glazing.retention import build_retention
+    from ..glazing.rows import retention_part_rows
+
+    retention = build_retention(build) if g.strips else None
+    extra = retention_part_rows(retention) if retention is not None else []
+    return rows + strip_rows(g, build.beams) + splice_rows(g, build.beams) + extra
 
 
 @writer("tables", order=50)
