@@ -132,6 +132,14 @@ def test_pp_net_refused_far_from_conjugate_and_built_along_conjugate_planes(tmp_
     with pytest.raises(GeometryError, match=r"far from conjugate.*plane_normal") as exc:
         remesh(sf.samples, SurfaceSpec(path="s.ply", spacing=1500.0, net="pp", plane_normal=[1.0, 0.0, 0.0]))
     assert exc.value.value > 0.35
+    # the advice names the principal planes at the middle: the diagonals of the plan
+    m = re.search(r"plane_normal = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\], second_normal = \[([-\d.]+), ([-\d.]+), "
+                  r"([-\d.]+)\]", str(exc.value))
+    assert m is not None, str(exc.value)
+    n1, n2 = np.array([float(g) for g in m.groups()[:3]]), np.array([float(g) for g in m.groups()[3:]])
+    for n in (n1, n2):
+        assert abs(abs(n[0]) - np.sqrt(0.5)) < 0.02 and abs(abs(n[1]) - np.sqrt(0.5)) < 0.02 and n[2] == 0.0
+    assert abs(n1 @ n2) < 0.03
     r = remesh(sf.samples, SurfaceSpec(path="s.ply", spacing=1500.0, net="pp", plane_normal=[1.0, 1.0, 0.0],
                                        second_normal=[1.0, -1.0, 0.0]))
     assert np.median(quad_twist(sf.samples.points, r.net.mesh, 1500.0)) < 0.02

@@ -67,6 +67,21 @@ def column_direction(frame: PlanFrame, second_normal: Sequence[float] | None) ->
     return ab if ab[1] > 0 else -ab
 
 
+def suggested_normals(hf: HeightField, frame: PlanFrame, x: float, y: float) -> tuple[np.ndarray, np.ndarray]:
+    """World normals of two vertical plane families whose sections run along the principal directions at the
+    plan point ``(x, y)`` (frame coordinates): each plane's normal is across the other family's direction."""
+    from .curvature import forms, principal
+
+    _, _, d1, d2 = principal(*forms(hf, np.array([x]), np.array([y])))
+    out = []
+    for d in (d2[0], d1[0]):            # planes along d2 have the normal across it, and vice versa
+        n = np.array([-d[1], d[0], 0.0]) @ frame.axes
+        n = n / np.linalg.norm(n)
+        k = int(np.argmax(np.abs(n)))
+        out.append(np.round(n if n[k] > 0 else -n, 3) + 0.0)       # + 0.0: no "-0.000" in the advice
+    return out[0], out[1]
+
+
 def pp_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
            min_face: float = 0.25, second_normal: Sequence[float] | None = None,
            max_warp: float = float("inf")) -> tuple[SectionsNet, np.ndarray, np.ndarray]:
@@ -121,8 +136,10 @@ def pp_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spaci
     corners = np.stack([local[i, j], local[i + 1, j], local[i + 1, j + 1], local[i, j + 1]], axis=1)
     twist = quad_twist(hf, corners)
     warp = quad_warp(frame.to_world(corners))
-    advice = ("turn the planes ([surface] plane_normal, second_normal) towards the principal directions, or "
-              "use net = 'sections'")
+    n1, n2 = suggested_normals(hf, frame, xc, yc)
+    advice = (f"turn the planes towards the principal directions (at the middle: [surface] plane_normal = "
+              f"[{n1[0]:.3f}, {n1[1]:.3f}, {n1[2]:.3f}], second_normal = [{n2[0]:.3f}, {n2[1]:.3f}, {n2[2]:.3f}]), "
+              "or use net = 'sections'")
     if len(twist) and float(np.median(twist)) > MAX_TWIST:
         k = int(np.argmax(twist))
         w = frame.to_world(corners[k].mean(axis=0))
