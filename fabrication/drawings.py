@@ -222,12 +222,19 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, paper: s
     for s in fitting_scales(float(size[0]) + pad, float(size[1]) + pad, info.paper):
         laid = _layout(view, panels, plates, outl, proj, lo, hi, float(s))
         rows, per_row = _list_rows(laid.unfit, ax1 - ax0)
-        need = (hi[1] - lo[1]) / s + pad + (GAP + (rows + 1) * LIST_PITCH * TEXT_MM["note"] if rows else 0.0)
-        chosen = (s, laid, rows, per_row)
+        listed = GAP + (rows + 1) * LIST_PITCH * TEXT_MM["note"] if rows else 0.0
+        need = (hi[1] - lo[1]) / s + pad + listed
         if need <= ay1 - ay0 + 1e-9 and (hi[0] - lo[0]) / s + pad <= ax1 - ax0 + 1e-9:
+            chosen = (s, laid, rows, per_row)
             break
-    if chosen is None:                      # fitting_scales always names one
-        raise RuntimeError("no scale for the view")
+        if listed + pad > ay1 - ay0:     # the list alone overfills the area; a smaller picture only lengthens it
+            break
+    if chosen is None:
+        from ppfab.errors import DesignError
+
+        raise DesignError("output.paper", f"{VIEW_TITLES[view]}: the view and the ids without room at their place "
+                                          f"do not fit {info.paper} paper at any standard scale: use a larger paper "
+                                          "([output] paper = \"A1\")")
     s, laid, rows, per_row = chosen
     page = PaperSheet(info, s)
     page.frame()
@@ -509,7 +516,10 @@ def node_pages(ntype, depth: float, thickness: float, paper: str = DEFAULT_PAPER
     n = len(ntype.nodes)
     cap = sum(k for _, _, k in _table_slots(ntype, paper, _node_picture(ntype, depth, thickness, None)[1]))
     if cap <= 0:
-        raise ValueError(f"paper {paper} has no room for the node list of {ntype.type_id}: use paper = \"A1\"")
+        from ppfab.errors import DesignError
+
+        raise DesignError("output.paper", f"{paper} paper has no room for the node list of {ntype.type_id}: use "
+                                          "[output] paper = \"A1\"")
     return [range(a, min(a + cap, n)) for a in range(0, max(n, 1), cap)]
 
 

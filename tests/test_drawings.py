@@ -394,3 +394,20 @@ def test_every_text_of_an_example_build_is_clear(tmp_path):
     if FULL:
         root = ET.parse(out / "drawings" / "key_plan.svg").getroot()
         assert root.get("data-scale") == "50"
+
+
+def test_a_list_that_fits_no_scale_is_refused_naming_the_paper():
+    """A hundred panes stacked in plan whose ids (120 characters) list one per row: no standard scale leaves
+    room for the list on A3, and the refusal names the view, the paper and the key that gives a larger one."""
+    from fabrication.drawings import view_svg
+
+    class Pane:
+        def __init__(self, k):
+            self.part_id = f"P-{k:03d}-" + "X" * 115
+            self._pts = np.array([[0, 0, 10.0 * k], [30, 0, 10.0 * k], [30, 6, 10.0 * k], [0, 6, 10.0 * k]])
+
+        def outline_3d(self):
+            return self._pts
+
+    with pytest.raises(ValueError, match=r'Key plan .*do not fit A3 paper .*\[output\] paper = "A1"'):
+        view_svg("plan", [Pane(k) for k in range(100)], [], "stack", paper="A3")
