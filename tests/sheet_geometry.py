@@ -4,6 +4,7 @@ elements, all in one frame (paper mm for an SVG sheet, drawing units for a DXF).
 
 from __future__ import annotations
 
+import functools
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -23,21 +24,27 @@ class Text:
     element: object
 
 
-def glyph_extent(text: str, height: float) -> tuple[float, float, float]:
-    """``(advance, descent, ascent)`` of ``text`` in DejaVu Sans Mono at ``height`` (font size), from matplotlib."""
+@functools.lru_cache(maxsize=None)
+def _advance(height: float) -> float:
+    """The advance of one glyph of DejaVu Sans Mono at ``height`` (font size): matplotlib's layout of 100 M's."""
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath
 
+    return float(TextPath((0, 0), "M" * 100, size=height,
+                          prop=FontProperties(family="DejaVu Sans Mono")).get_extents().x1) / 100.0
+
+
+def glyph_extent(text: str, height: float) -> float:
+    """The advance of ``text`` in DejaVu Sans Mono (monospaced: every glyph advances alike) at ``height``."""
     assert text.strip(), "a drawing holds an empty text"
-    ext = TextPath((0, 0), text, size=height, prop=FontProperties(family="DejaVu Sans Mono")).get_extents()
-    return float(ext.x1), float(ext.y0), float(ext.y1)
+    return len(text) * _advance(round(height, 6))
 
 
 def _svg_text_box(t: ET.Element, to_paper) -> Text:
     from shapely.geometry import Polygon
 
     h = float(t.get("font-size"))
-    w = glyph_extent(t.text or "", h)[0]
+    w = glyph_extent(t.text or "", h)
     x0 = {"start": 0.0, "end": -w}.get(t.get("text-anchor", "start"), -0.5 * w)
     local = np.array([[x0, -0.6 * h], [x0 + w, -0.6 * h], [x0 + w, 0.6 * h], [x0, 0.6 * h]])
     rot = re.findall(r"rotate\(([-0-9.e]+)", t.get("transform", ""))
