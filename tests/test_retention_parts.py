@@ -317,3 +317,16 @@ def test_a_real_mesh_patch_lists_models_and_erects_its_retention(tmp_path):
     assert {r["part_id"] for r in retention} | {r["part_id"] for r in screws} <= named
     erected = {r["part_id"] for r in rows(out / "erection.csv")}
     assert set(parts) <= erected
+
+
+def test_a_plate_material_without_a_strength_is_refused_naming_the_key():
+    from ppfab.errors import DesignError
+
+    from fabrication.glazing.retention import plate_material
+
+    assert plate_material("EN AW-6060 T66 anodised") == (150.0, 1.1, 70000.0)
+    assert plate_material("S355J2") == (355.0, 1.0, 210000.0)
+    with pytest.raises(DesignError) as exc:
+        plate_material("oak")
+    text = str(exc.value)
+    assert "pressure_plate_material" in text and "'oak'" in text and "\n" not in text
