@@ -180,6 +180,14 @@ def _axis(folder):
     return _cell(folder, "nodes.csv", lambda r: r["vertex"] == "3", "axis_y", "abc")
 
 
+def _order_angle(folder):
+    return _cell(folder, "glass_order.csv", lambda r: True, "angle_3_deg", "abc")
+
+
+def _order_quantity(folder):
+    return _cell(folder, "glass_order.csv", lambda r: True, "quantity", "")
+
+
 def _glass_sheets(folder):
     edit_manifest(folder, lambda m: m["files"].update(glass_sheets=5))
     return "manifest.json: files.glass_sheets: must be a file name or a list of file names, got 5"
@@ -198,9 +206,10 @@ def _json_node(folder):
     return "nodes.json: nodes[3]: is not a node record"
 
 
-@pytest.mark.parametrize("tamper", [_frame, _face, _vertex, _axis, _glass_sheets, _gap_text, _json_node],
-                         ids=["parts-frame", "parts-face", "nodes-vertex", "nodes-axis", "files-glass_sheets",
-                              "fabrication-gap", "nodes-json-node"])
+@pytest.mark.parametrize("tamper", [_frame, _face, _vertex, _axis, _order_angle, _order_quantity, _glass_sheets,
+                                    _gap_text, _json_node],
+                         ids=["parts-frame", "parts-face", "nodes-vertex", "nodes-axis", "order-angle",
+                              "order-quantity", "files-glass_sheets", "fabrication-gap", "nodes-json-node"])
 def test_malformed_value_is_one_finding_not_a_traceback(copy, tamper):
     expected = tamper(copy)
     run = subprocess.run([sys.executable, "-m", "fabrication.cli", "verify", str(copy), "--quiet"],

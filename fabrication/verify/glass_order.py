@@ -12,6 +12,7 @@ from ppfab.metrics import polygon_area
 from ..contract import ORDER_ALL_COLUMNS, ORDER_CORNERS, ORDER_MAKEUP_COLUMNS, csv_value
 from ..glassorder import makeup_columns, reference_frame
 from . import Verification, check, read_csv
+from ._cells import CellReader
 from ._shapes import number
 from .congruence import congruence_error, inset_face_2d
 from .types import type_dxf
@@ -77,10 +78,15 @@ def check_glass_order(v: Verification) -> None:
     gap = float(m.get("fabrication", {}).get("panel_gap", 0.0))
     dimensioned = bool(m.get("fabrication", {}).get("output", {}).get("type_dimensions", False))
     n = ORDER_CORNERS
-    for row in rows:
+    cells = CellReader(v, rel)
+    numeric = ([f"c{k}_{xy}_mm" for k in range(1, n + 1) for xy in "xy"] +
+               [f"edge_{k}{k % n + 1}_mm" for k in range(1, n + 1)] + ["diag_13_mm", "diag_24_mm"] +
+               [f"angle_{k}_deg" for k in range(1, n + 1)] + ["area_mm2"])
+    for row_no, row in enumerate(rows, 1):
         tid = row["type_id"]
         members = [p for p in row["parts"].split(";") if p]
-        if len(members) != int(row["quantity"]):
+        quantity = cells.integer(row_no, row, "quantity", low=0)
+        if quantity is not None and len(members) != quantity:
             v.error(rel, tid, f"quantity {row['quantity']} but {len(members)} position ids")
         for pid in members:
             if pid in ordered:
@@ -88,17 +94,20 @@ def check_glass_order(v: Verification) -> None:
             ordered[pid] = tid
             if pid in parts and parts[pid].get("type_id") != tid:
                 v.error(rel, pid, f"is type {parts[pid].get('type_id')} in parts.csv, ordered as {tid}")
-        c = np.array([[float(row[f"c{k}_{xy}_mm"]) for xy in "xy"] for k in range(1, n + 1)])
-        edges = np.array([float(row[f"edge_{k}{k % n + 1}_mm"]) for k in range(1, n + 1)])
-        diags = np.array([float(row["diag_13_mm"]), float(row["diag_24_mm"])])
-        angles = np.array([float(row[f"angle_{k}_deg"]) for k in range(1, n + 1)])
+        read = {col: cells.number(row_no, row, col) for col in numeric}     # a bad cell is a finding
+        if any(x is None for x in read.values()):
+            continue
+        c = np.array([[read[f"c{k}_{xy}_mm"] for xy in "xy"] for k in range(1, n + 1)], dtype=float)
+        edges = np.array([read[f"edge_{k}{k % n + 1}_mm"] for k in range(1, n + 1)], dtype=float)
+        diags = np.array([read["diag_13_mm"], read["diag_24_mm"]], dtype=float)
+        angles = np.array([read[f"angle_{k}_deg"] for k in range(1, n + 1)], dtype=float)
         if np.abs(np.hypot(*(np.roll(c, -1, axis=0) - c).T) - edges).max() > 0.02 or np.abs(
                 np.hypot(*(c[[2, 3]] - c[[0, 1]]).T) - diags).max() > 0.02:
             v.error(rel, tid, "edge lengths or diagonals do not match the corners")
         if abs(angles.sum() - 180.0 * (n - 2)) > 0.01:
             v.error(rel, tid, f"corner angles sum to {angles.sum():.4f}°, not {180 * (n - 2)}°")
         area = float(polygon_area(c))
-        if abs(area - float(row["area_mm2"])) > 1e-4 * abs(area) + 1.0:
+        if abs(area - float(read["area_mm2"] or 0.0)) > 1e-4 * abs(area) + 1.0:
             v.error(rel, tid, f"corners enclose {area:.1f} mm², area_mm2 is {row['area_mm2']}")
         first = parts.get(members[0]) if members else None
         if mesh is not None and first is not None and first.get("face", "") != "":
