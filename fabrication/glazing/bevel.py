@@ -16,7 +16,8 @@ as far below it, a gap under the weld.  Measured along the plate (square to its 
 The fabricator's answer where ``λ`` exceeds ``glazing.bevel_min_deg``: the span's top edge is cut ``Δ`` higher
 in the plate's flat outline and bevelled (planed) at ``λ`` to the strip's underside plane, so that the strip
 bears on the whole bevelled face — no overlap and no gap.  :func:`strip_bevels` states it per strip and plate
-(``bevels.csv``); below the threshold the overlap and gap (at most ``(t/2)·tan(bevel_min_deg)``) are taken up
+(``bevels.csv``), and :mod:`fabrication.beams.bevel_cut` makes it the plates' geometry (the cut outline, the DXF's
+``BEVEL`` layer, the solid of ``beams.step``) with the same decision (:func:`strip_bevel`); below the threshold the overlap and gap (at most ``(t/2)·tan(bevel_min_deg)``) are taken up
 by the fillet weld's fit-up.
 """
 
