@@ -139,7 +139,8 @@ SECTION_TEXT: dict[str, str] = {
     "geometry": "What to build: a construction (`method` + `[geometry.params]`) or a quad mesh file (`mesh`), "
                 "and its placement in millimetres.",
     "surface": "Instead of `[geometry] method` or `mesh`: a designer's surface (Rhino .3dm, triangle mesh) remeshed "
-               "into a quad net whose rows are planar sections (docs/remeshing.md); `[optimize]` then makes the "
+               "into a quad net (`net`: planar sections and their conjugate curves, curvature lines, or two families "
+               "of planar sections; docs/remeshing.md); `[optimize]` then makes the "
                "panels planar, staying close to that surface.",
     "optimize": "Optional: optimise the mesh (read from `mesh = …` or constructed by `method = …`) for planar faces and "
                 "planar polylines first (§3.3), e.g. a PP construction made conical with `keep_conical`.",
