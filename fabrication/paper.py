@@ -41,10 +41,14 @@ DEFAULT_PAPER = "A1"
 STANDARD_SCALES = (1, 2, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000, 20000, 50000)
 """Denominators of the scales a view is drawn at (ISO 5455: 1, 2 and 5 × 10^k, and the common 1:25, 1:250)."""
 
+GRID_FIELDS = {"A1": (16, 12), "A3": (8, 6)}
+"""Fields of the grid reference system (ISO 5457) per paper: numbered along the top and bottom margins, lettered
+along the left and right ones, so a part is found as "D7"."""
+
 MIN_TEXT_MM = 2.5
 """The smallest text height on paper, mm (ISO 3098)."""
 
-TEXT_MM = {"panel": 2.5, "beam": 2.5, "note": 2.5, "block": 2.5, "block_title": 3.5, "project": 5.0}
+TEXT_MM = {"panel": 2.5, "beam": 2.5, "note": 2.5, "block": 2.5, "block_title": 3.5, "project": 5.0, "grid": 2.5}
 """Text height on paper (mm) of each class of text."""
 
 FRAME_MARGINS = (20.0, 10.0, 10.0, 10.0)
@@ -202,6 +206,7 @@ class PaperSheet:
         """The frame (0.7 mm) and the title block (bottom right), filled from :attr:`info`."""
         x0, y0, x1, y1 = frame_box(self.info.paper)
         self.rect(x0, y0, x1, y1, 0.7, attrs={"class": "frame"})
+        self.grid_reference()
         by = y1 - BAND_HEIGHT
         self.line([(x0, by), (x1, by)], 0.35)
         bx = x1 - TITLE_BLOCK_WIDTH
@@ -229,6 +234,31 @@ class PaperSheet:
             y = (rows[1] + rows[2]) / 2 if r == 0 else (rows[2] + y1) / 2
             self.text(fit_text(value, TEXT_MM["block"], cw - 2 * pad), bx + c * cw + pad, y, "block", parent=block,
                       attrs={"data-field": field})
+
+    def grid_reference(self) -> None:
+        """The grid reference system in the margins (ISO 5457, :data:`GRID_FIELDS`): a tick from the frame to the
+        paper's edge between two fields, the field's number (along the top and bottom) or letter (along the left
+        and right) midway between its ticks."""
+        cols, rows = GRID_FIELDS.get(self.info.paper, (8, 6))
+        x0, y0, x1, y1 = frame_box(self.info.paper)
+        group = ET.SubElement(self.root, "g", {"class": "grid-reference"})
+        dx, dy = (x1 - x0) / cols, (y1 - y0) / rows
+        for k in range(1, cols):
+            x = x0 + k * dx
+            self.line([(x, 0.0), (x, y0)], 0.25, parent=group)
+            self.line([(x, y1), (x, self.height)], 0.25, parent=group)
+        for k in range(1, rows):
+            y = y0 + k * dy
+            self.line([(0.0, y), (x0, y)], 0.25, parent=group)
+            self.line([(x1, y), (self.width, y)], 0.25, parent=group)
+        for k in range(cols):
+            x = x0 + (k + 0.5) * dx
+            for y in (0.5 * y0, 0.5 * (y1 + self.height)):
+                self.text(str(k + 1), x, y, "grid", anchor="middle", parent=group)
+        for k in range(rows):
+            y = y0 + (k + 0.5) * dy
+            for x in (0.5 * x0, 0.5 * (x1 + self.width)):
+                self.text("ABCDEFGHJKLMNPRSTUVWXYZ"[k], x, y, "grid", anchor="middle", parent=group)
 
     def band_left(self) -> tuple[float, float, float, float]:
         """The part of the bottom band left of the title block ``(x0, y0, x1, y1)`` (scale bar, extent, north)."""

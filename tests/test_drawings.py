@@ -101,9 +101,10 @@ def test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(built):
 
 
 def test_sheets_are_on_a1_with_a_title_block_numbered_within_the_set(built):
-    """Every sheet is A1 (841 x 594 mm) with a frame inside the paper; its title block names the project, the
-    sheet, its number of the total (1..N once each, N the number of sheets) and the scale; a view's picture is its
-    model extent divided by a standard scale's denominator."""
+    """Every sheet is A1 (841 x 594 mm) with a frame inside the paper and the grid reference of ISO 5457 in its
+    margins (fields 1-16 along the top and bottom, A-M without I along the sides); its title block names the
+    project, the sheet, its number of the total (1..N once each, N the number of sheets) and the scale; a view's
+    picture is its model extent divided by a standard scale's denominator."""
     design_name = "drawings"
     sheets = sorted((built / "drawings").rglob("*.svg"))
     numbers = []
@@ -125,6 +126,8 @@ def test_sheets_are_on_a1_with_a_title_block_numbered_within_the_set(built):
                 assert fields["scale"] == f"scale 1:{int(s)}"
             vb = [float(c) for c in view.get("viewBox").split()]
             assert float(view.get("width")) == pytest.approx(vb[2] / s, rel=1e-5)
+        grid = [t.text for g in root.iter(f"{NS}g") if g.get("class") == "grid-reference" for t in g.iter(f"{NS}text")]
+        assert sorted(grid) == sorted([str(k) for k in range(1, 17)] * 2 + list("ABCDEFGHJKLM") * 2), path.name
     assert sorted(numbers) == list(range(1, len(sheets) + 1))
 
 

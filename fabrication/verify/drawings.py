@@ -206,13 +206,16 @@ def check_sheet(v: Verification, rel: str) -> None:
     except ValueError as exc:
         v.error(rel, "text", str(exc))
         return
-    inside = box(*frame_box(paper))
+    inside, paper_box = box(*frame_box(paper)), box(0.0, 0.0, w, h)
     heights: dict[str, set[float]] = {}
     for el, ph, b in texts:
         name = (el.text or "")[:40]
         if ph < MIN_TEXT_MM - 0.005:                  # the sheet writes sizes to 6 digits
             v.error(rel, name, f"text is {ph:.2f} mm high on paper, under {MIN_TEXT_MM:g} mm")
-        if not inside.contains(b):
+        if el.get("data-class") == "grid":         # the grid reference lies in the margins
+            if not paper_box.contains(b):
+                v.error(rel, name, "grid reference leaves the paper")
+        elif not inside.contains(b):
             v.error(rel, name, "text leaves the frame")
         if el.get("data-class") in ("panel", "beam"):
             heights.setdefault(el.get("data-class", ""), set()).add(round(ph, 2))
