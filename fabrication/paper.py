@@ -2,7 +2,8 @@
 
 Every drawing of ``drawings/`` is one sheet of a named paper size (:data:`PAPER_SIZES`, landscape; ``[output]
 paper``), drawn in paper millimetres: the root ``<svg>`` is ``width="841mm" height="594mm"`` with a viewBox of the
-same numbers.  Inside an ISO 5457 frame (20 mm filing margin on the left, 10 mm elsewhere) a band at the bottom
+same numbers.  Inside an ISO 5457 frame (20 mm filing margin on the left, 10 mm elsewhere; the grid reference of
+:data:`GRID_FIELDS` in the margins) a band at the bottom
 holds the title block (ISO 7200: project, sheet title, sheet number of total, scale, paper, units, date, the
 ppfab version) on the right and the scale bar, the view's extent and the north arrow on the left; the drawing
 area is the frame's inside above the band.

@@ -414,3 +414,21 @@ def test_a_list_that_fits_no_scale_is_refused_naming_the_paper():
 
     with pytest.raises(ValueError, match=r'Key plan .*do not fit A3 paper .*\[output\] paper = "A1"'):
         view_svg("plan", [Pane(k) for k in range(100)], [], "stack", paper="A3")
+
+
+def test_title_block_dates_and_fits_long_names(monkeypatch):
+    """The issue date is SOURCE_DATE_EPOCH's day when set and "-" otherwise (never the clock); a design name
+    longer than the title block's row is cut to fit it, ending in "~"."""
+    from fabrication.paper import TEXT_MM, TITLE_BLOCK_WIDTH, PaperSheet, SheetInfo, issue_date
+
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    assert issue_date() == "-"
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1764547200")              # 2025-12-01 00:00 UTC
+    assert issue_date() == "2025-12-01"
+    page = PaperSheet(SheetInfo("a very long project name " * 5, "Key plan", 3, 7, "A3", issue_date()), 100)
+    page.frame()
+    fields = {t.get("data-field"): t.text for t in page.root.iter("text") if t.get("data-field")}
+    assert fields["date"] == "date 2025-12-01" and fields["sheet"] == "sheet 3 of 7"
+    assert fields["scale"] == "scale 1:100"
+    assert fields["project"].endswith("~")
+    assert 0.8 * TEXT_MM["project"] * len(fields["project"]) <= TITLE_BLOCK_WIDTH - 4.0
