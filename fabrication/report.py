@@ -11,6 +11,7 @@ the parts and node tables with nest tags.
 from __future__ import annotations
 
 import logging
+from pathlib import PurePosixPath
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
@@ -120,7 +121,7 @@ def _svg_img(svg: str, alt: str) -> str:
 def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], drawings: dict[str, str]) -> None:
     """The installers' drawings (key plan, elevations, node sheets, :mod:`fabrication.drawings`) embedded, the
     node types, and the kerf notes per cutting process."""
-    from .contract import KERF_NOTES
+    from .contract import KERF_NOTES, node_sheet_file
     from .nodetypes import node_types
 
     rep.heading("Drawings for installers")
@@ -131,11 +132,19 @@ def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], dra
         if rel in drawings:
             rep.raw(f"<figure>{_svg_img(drawings[rel], rel)}<figcaption>{esc(rel)}</figcaption></figure>")
     types = node_types(build.nodes.records)
+    node_sheets = [str(rel) for rel in files.get("node_sheets", [])]
+
+    def sheets_of(type_id: str) -> str:
+        """The sheets of one node type: ``node_type_<id>.svg`` and its continuations ``…-2.svg`` …"""
+        stem = node_sheet_file(type_id).removesuffix(".svg")
+        return ", ".join(rel for rel in node_sheets
+                         if PurePosixPath(rel).name == f"{stem}.svg" or PurePosixPath(rel).name.startswith(f"{stem}-"))
+
     rep.heading("Node types", 3)
     rep.table(["type", "joint", "plates", "dihedral [°]", "nodes", "slot width [mm]", "sheet"],
               [(t.type_id, t.joint, len(t.roles), ", ".join(f"{a:g}" for a in t.angles_deg), len(t.nodes),
                 "" if t.slot_width_range is None else f"{t.slot_width_range[0]:.2f}–{t.slot_width_range[1]:.2f}",
-                rel) for t, rel in zip(types, files.get("node_sheets", []))], left=(0, 1, 6))
+                sheets_of(t.type_id)) for t in types], left=(0, 1, 6))
     sheets = [rel for rel in files.get("node_sheets", []) if rel in drawings][:2]
     if sheets:
         rep.raw('<div class="figs">' + "".join(f"<figure>{_svg_img(drawings[rel], rel)}<figcaption>{esc(rel)}"

@@ -432,3 +432,15 @@ def test_title_block_dates_and_fits_long_names(monkeypatch):
     assert fields["scale"] == "scale 1:100"
     assert fields["project"].endswith("~")
     assert 0.8 * TEXT_MM["project"] * len(fields["project"]) <= TITLE_BLOCK_WIDTH - 4.0
+
+
+def test_report_lists_each_node_type_with_all_its_sheets(built):
+    """The report's node-type table names, in a type's row, its sheet and every continuation sheet of it."""
+    html = (built / "report.html").read_text(encoding="utf-8")
+    rows = [re.findall(r"<t[dh][^>]*>(.*?)</t[dh]>", tr, flags=re.S) for tr in re.findall(r"<tr>(.*?)</tr>", html, re.S)]
+    sheet_cell = {r[0]: r[-1] for r in rows if r and re.fullmatch(r"NT\d+", r[0])}
+    files = sorted((built / "drawings" / "nodes").glob("node_type_*.svg"))
+    assert files and len(sheet_cell) == len({re.sub(r"-\d+$", "", f.stem) for f in files})
+    for f in files:
+        type_id = re.sub(r"-\d+$", "", f.stem).removeprefix("node_type_")
+        assert f"nodes/{f.name}" in sheet_cell[type_id], (f.name, sheet_cell[type_id])
