@@ -125,11 +125,13 @@ def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarra
     reach = float(np.ptp(s))
     a = (pts - c) @ along
     span = (a >= s.min() - reach) & (a <= s.max() + reach)  # the plate's corners along the strip's span (its
-    if float(u @ frame["y_dir"]) < 0:                       # nodes lie beyond its ends)
-        u = -u                                              # up, as the plate frame's y: away from the plate
-    under = float((strip_pts @ u).min())
-    d = pts @ u - under
-    near = (np.abs(d) <= FACE_TOL) & span
+    # nodes lie beyond its ends); the strip's face the bevel bears on: of its two faces the one the plate's
+    # corners lie on (the strip's underside, on the plate's top edge)
+    faces = []
+    for under in ((strip_pts @ u).min(), (strip_pts @ u).max()):
+        d = pts @ u - float(under)
+        faces.append((d, (np.abs(d) <= FACE_TOL) & span))
+    d, near = max(faces, key=lambda f: int(f[1].sum()))
     z = to_frame(pts[near], frame)[:, 2]
     front, back = pts[near][z > 0], pts[near][z < 0]
     if len(front) < 2 or len(back) < 2:
