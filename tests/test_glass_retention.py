@@ -200,20 +200,20 @@ def test_screws_are_at_most_a_pitch_apart_and_clear_of_the_blocks(built):
         assert gaps[1:-1].max(initial=0.0) <= g["bolt_pitch"] + 0.5
         assert max(gaps[0], gaps[-1]) <= 0.5 * g["bolt_pitch"] + 0.5
     # a screw's shank (M8 on the joint's centre line) meets no setting block or stop: the kernel's distance from
-    # the screw axis of every station (through the plate, along its normal) to their solids is at least 4 mm
+    # the screw axis of every station (placed by its parts.csv row: along the frame's x_dir from its origin, on
+    # the joint's centre line, along its normal) to their solids is at least 4 mm
     from build123d import Edge
 
+    screws = {r["part_id"]: r for r in rows(built / "parts.csv") if r["part_id"].startswith("SC-")}
     blocks = {k: v for k, v in glazing.items() if k.startswith(("SB-", "ST-"))}
     centres = {k: np.array([tuple(p) for p in v.vertices()], dtype=float).mean(axis=0) for k, v in blocks.items()}
     near_screws = 0
     for r in plates:
-        pts = np.array([tuple(p) for p in glazing[r["part_id"]].vertices()], dtype=float)
-        c = pts.mean(axis=0)
-        _, _, vt = np.linalg.svd(pts - c)
-        ex, n = vt[0], vt[2]
-        lo = float(((pts - c) @ ex).min())
-        for x in (float(s) for s in r["screw_stations_mm"].split(";")):
-            p = c + (lo + x) * ex
+        sc = screws["SC-" + r["part_id"].removeprefix("CP-")]
+        frame = json.loads(sc["frame"])
+        o, ex, n = (np.array(frame[k], dtype=float) for k in ("origin", "x_dir", "normal"))
+        for x in (float(s) for s in sc["screw_stations_mm"].split(";")):
+            p = o + x * ex
             axis = Edge.make_line(tuple(p - 60.0 * n), tuple(p + 60.0 * n))
             for k, blk in blocks.items():
                 if float(np.linalg.norm(centres[k] - p)) < 120.0:
