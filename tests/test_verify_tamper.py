@@ -175,8 +175,10 @@ def test_step_beam_solid_moved_or_rotated(copy, capsys, change):
         c = s.center()
         return s.rotate(Axis((c.X, c.Y, c.Z), (0.3, 0.2, 1.0)), 3.0)
 
+    from fabrication.verify import verify
+
     pid = _rewrite_step(copy, "beams.step", move)
-    err = findings(copy, capsys)
+    err = findings(copy, capsys) + "\n".join(str(f) for f in verify(copy).findings)   # all, not the first few
     assert f"beams.step: {pid}: solid is not the plate of its frame" in err or f"beams.step: {pid} at N" in err
 
 

@@ -60,6 +60,27 @@ def face_rings(solid, normal: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+def largest_face_normal(solid) -> np.ndarray | None:
+    """The unit normal of the solid's largest planar face (a plate's face: square to its thickness, whether or
+    not its top edge is bevelled), ``None`` without a planar face."""
+    best: tuple[float, np.ndarray] | None = None
+    if hasattr(solid, "face_area"):                          # a record of the text-level reader
+        for f in solid.faces():
+            if f.surface == "plane":
+                a = float(solid.face_area(f))
+                if best is None or a > best[0]:
+                    best = (a, np.asarray(f.normal, dtype=float))
+    else:
+        for face in solid.faces():
+            try:
+                n = np.array(tuple(face.normal_at()), dtype=float)
+            except Exception:  # noqa: BLE001 - a non-planar face
+                continue
+            if "PLANE" in str(face.geom_type).upper() and (best is None or face.area > best[0]):
+                best = (float(face.area), n)
+    return None if best is None else best[1] / np.linalg.norm(best[1])
+
+
 @dataclass(frozen=True)
 class PlateFaces:
     """A plate solid's two faces in its frame (2D, counter-clockwise): ``front`` at ``z = +t/2``, ``back`` at

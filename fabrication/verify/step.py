@@ -8,6 +8,7 @@ import numpy as np
 from . import Verification, check
 from ._shapes import frame_of, solid_points
 from ._step_read import StepSolid
+from .bevels import largest_face_normal
 
 
 @check("step", 60)
@@ -40,8 +41,10 @@ def check_step(v: Verification) -> None:
         pts = solid_points(solid)
         c = pts - pts.mean(axis=0)
         frame = frame_of(beams[name])
-        normal = frame["normal"] if frame is not None else np.linalg.svd(c)[2][2]
-        spread = float(np.ptp(c @ normal))
+        # across its largest face (a bevelled plate's corners would tilt a fitted plane); where the plate lies is
+        # the step_geometry check's
+        normal = largest_face_normal(solid)
+        spread = float(np.ptp(c @ (normal if normal is not None else np.linalg.svd(c)[2][2])))
         if t and abs(spread - t) > 1e-6 * max(1.0, t):
             v.error(rel, name, f"solid is {spread:.6g} mm thick, expected {t:g} mm")
         _check_volume(v, rel, name, beams[name], solid, frame, t)
