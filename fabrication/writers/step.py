@@ -4,7 +4,8 @@ Each plate is one face built from its 2D outline (slots and end cuts already
 drawn in, see :mod:`fabrication.beams.joints`) at ``z = −t/2`` in the plate's own frame,
 extruded once by ``t`` and placed with ``Location(Plane(origin, x_dir, z_dir))``
 — no boolean cuts, and the polygon is exactly planar (a kernel rejects a face
-whose polygon is 1e-4 mm off its plane).  The STEP file is an assembly written
+whose polygon is 1e-4 mm off its plane); a plate whose top edge is bevelled under its strips is the solid
+between its two face outlines (:func:`_placed_loft`, :mod:`fabrication.beams.bevel_cut`).  The STEP file is an assembly written
 without p-curves; a reader sees the product tree (names survive every level)
 
     beams.step                                panels.step
