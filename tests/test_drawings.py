@@ -444,3 +444,29 @@ def test_report_lists_each_node_type_with_all_its_sheets(built):
     for f in files:
         type_id = re.sub(r"-\d+$", "", f.stem).removeprefix("node_type_")
         assert f"nodes/{f.name}" in sheet_cell[type_id], (f.name, sheet_cell[type_id])
+
+
+def test_verify_counts_the_pdf_pages_and_their_paper(built, tmp_path):
+    """verify reads drawings.pdf: a page per sheet, each the size of its sheet's paper; a page dropped from the
+    list and a page turned to A3 are each a finding naming the file."""
+    import shutil
+
+    from fabrication.verify import Verification
+    from fabrication.verify.drawings import check_pdf
+
+    sheets = [p.relative_to(built).as_posix() for p in sorted((built / "drawings").rglob("*.svg"))]
+    clean = Verification(built)
+    check_pdf(clean, "drawings/drawings.pdf", sheets)
+    assert not clean.findings, clean.findings
+    short = Verification(built)
+    check_pdf(short, "drawings/drawings.pdf", sheets + ["drawings/key_plan.svg"])
+    assert [f.file for f in short.findings] == ["drawings/drawings.pdf"] and "page(s) for" in short.findings[0].message
+    copy = tmp_path / "copy"
+    shutil.copytree(built / "drawings", copy / "drawings")
+    pdf = copy / "drawings" / "drawings.pdf"
+    data = pdf.read_bytes()
+    a1 = re.search(rb"/MediaBox \[\s*0 0 [0-9.]+ [0-9.]+\s*\]", data).group(0)
+    pdf.write_bytes(data.replace(a1, b"/MediaBox [ 0 0 1190.55 841.89 ]", 1))       # one page of A3
+    turned = Verification(copy)
+    check_pdf(turned, "drawings/drawings.pdf", sheets)
+    assert len(turned.findings) == 1 and "paper sizes" in turned.findings[0].message

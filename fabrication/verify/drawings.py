@@ -114,6 +114,10 @@ def check_drawings(v: Verification) -> None:
             _check_view_polygons(v, rel, view)
     if files.get("erection_drawing"):
         _check_erection_drawing(v, files["erection_drawing"], files.get("erection_csv"))
+    if files.get("drawings_pdf"):
+        sheets_all = list(views or []) + ([files["erection_drawing"]] if files.get("erection_drawing") else []) + \
+            list(sheets or [])
+        check_pdf(v, files["drawings_pdf"], sheets_all)
     wanted = {r["node_id"] for r in v.data.get("nodes", []) if r.get("beams")}
     count: dict[str, int] = {}
     for rel in sheets or []:
@@ -126,6 +130,36 @@ def check_drawings(v: Verification) -> None:
         v.error("drawings/nodes", bad[0], f"{len(bad)} node(s) are not on exactly one node sheet: "
                                           f"{', '.join(bad[:5])}")
 
+
+PDF_PAGE = re.compile(rb"/Type\s*/Page\b(?!s)")
+PDF_MEDIA_BOX = re.compile(rb"/MediaBox\s*\[\s*([-0-9.]+)\s+([-0-9.]+)\s+([-0-9.]+)\s+([-0-9.]+)\s*\]")
+
+
+def check_pdf(v: Verification, rel: str, sheets: list[str]) -> None:
+    """``drawings.pdf`` read as bytes (its page objects are not compressed): a page per sheet of the set, and the
+    pages' sizes (``MediaBox``, points) those of the sheets' paper (their ``viewBox`` in mm), as a multiset."""
+    try:
+        data = (v.folder / rel).read_bytes()
+    except OSError as exc:
+        v.error(rel, "", f"cannot be read: {exc}")
+        return
+    if not data.startswith(b"%PDF-"):
+        v.error(rel, "", "is not a PDF file (no %PDF- header)")
+        return
+    pages = len(PDF_PAGE.findall(data))
+    boxes = sorted((round((float(x1) - float(x0)) * 25.4 / 72.0), round((float(y1) - float(y0)) * 25.4 / 72.0))
+                   for x0, y0, x1, y1 in PDF_MEDIA_BOX.findall(data))
+    want = []
+    for sheet in sheets:
+        try:
+            _, _, w, h = (float(t) for t in ET.parse(v.folder / sheet).getroot().get("viewBox", "").split())
+        except (OSError, ET.ParseError, ValueError):
+            continue                                        # reported by the sheet's own check
+        want.append((round(w), round(h)))
+    if pages != len(sheets):
+        v.error(rel, "pages", f"{pages} page(s) for {len(sheets)} sheet(s) of the drawing set")
+    elif boxes != sorted(want):
+        v.error(rel, "pages", f"page sizes {boxes[:3]} … (mm) are not the sheets' paper sizes {sorted(want)[:3]} …")
 
 
 def view_element(root: ET.Element) -> ET.Element:
