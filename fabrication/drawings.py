@@ -323,6 +323,8 @@ def _layout(view: str, panels: Sequence, plates: Sequence, outl: list[np.ndarray
     lines = [LineString(np.r_[q, q[:1]]) for q in proj] + [LineString(t) for t in tops if len(t) >= 2]
     line_tree = STRtree(lines)
     margin = 0.5 * s
+    picture = Polygon([(bounds[0], bounds[1]), (bounds[2], bounds[1]), (bounds[2], bounds[3]),
+                       (bounds[0], bounds[3])]).buffer(-margin, join_style="mitre")
     beam_h, panel_h = TEXT_MM["beam"] * s, TEXT_MM["panel"] * s
     label_polys: list = []
     labelled: list[str] = []
@@ -362,7 +364,7 @@ def _layout(view: str, panels: Sequence, plates: Sequence, outl: list[np.ndarray
                 continue
             where = place_label(face, [TextLine(p.part_id, "LABEL")], margin=margin, max_height=beam_h,
                                 min_height=beam_h, keep_out=near_lines(fpoly), keep_out_areas=near_labels(fpoly))
-            if where.fits:
+            if where.fits and picture.contains(Polygon(where.box)):   # a plate's face may reach past the view
                 pl = where.lines[0]
                 put(p.part_id, pl.centre, beam_h, pl.rotation_deg, "beam",
                     "#5a2a0a" if p.family == 0 else "#0b3a66")
