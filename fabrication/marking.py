@@ -214,7 +214,13 @@ def _fit(region, inner, width: float, depth: float, angle: float, centroid: np.n
     ok = np.flatnonzero(shapely.within(boxes, region))
     if not len(ok):
         return None
-    room = shapely.distance(boxes[ok], region.boundary)
+    # clearance to the region's edge: the rings of its polygonal parts (the boundary of a geometry collection —
+    # what a difference can leave — is not defined and would measure NaN everywhere)
+    rings = [r for g in shapely.get_parts(region) if g.geom_type == "Polygon"
+             for r in (g.exterior, *g.interiors)]
+    if not rings:
+        return pts[ok[int(np.argmin(np.linalg.norm(pts[ok] - centroid, axis=1)))]]
+    room = np.nan_to_num(shapely.distance(boxes[ok], shapely.multilinestrings(rings)), nan=0.0)
     good = ok[room >= 0.9 * room.max()]
     return pts[good[int(np.argmin(np.linalg.norm(pts[good] - centroid, axis=1)))]]
 

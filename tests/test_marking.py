@@ -187,3 +187,21 @@ def test_verify_names_a_wrong_face_mark_and_an_upside_down_label(built, tmp_path
     assert any(pid in f and "face marks" in f for f in found), found
     assert any("turned 180.0°" in f and "upside down" in f for f in found), found
     assert any("turned -87.0°" in f and "reads from the top or the left edge" in f for f in found), found
+
+def test_a_label_fits_a_region_left_as_a_geometry_collection():
+    """A difference can leave a geometry collection (a polygon and a stray line), whose boundary shapely does not
+    define: the search still measures the clearance to the polygon's edge and places the box inside it, off
+    the centroid (the first box tried, at the centroid of an L, does not fit)."""
+    import shapely
+    from shapely.geometry import GeometryCollection, LineString, Polygon
+
+    from fabrication.marking import _fit
+
+    ell = Polygon([(0, 0), (400, 0), (400, 60), (60, 60), (60, 400), (0, 400)])
+    region = GeometryCollection([ell, LineString([(500, 0), (600, 0)])])
+    assert region.boundary is None                  # the case: no boundary to measure against
+    centre = _fit(region, ell.buffer(-10.0), 120.0, 20.0, 0.0, np.array([120.0, 120.0]))
+    assert centre is not None
+    a, b = centre - [60.0, 10.0], centre + [60.0, 10.0]
+    box = shapely.box(a[0], a[1], b[0], b[1])
+    assert ell.contains(box)
