@@ -140,6 +140,18 @@ def _outside_signs(corners: np.ndarray, planes: np.ndarray, mode: str) -> np.nda
     return np.full(F, 1.0 if away >= 0 else -1.0)
 
 
+def outside_sign(mesh: QuadMesh | QuadGrid, mode: str = "auto") -> float:
+    """``+1`` when the glass's outside is the side the mesh's face normals point to, ``−1`` when it is the other
+    side — the one choice :func:`make_panels` makes for ``[panels] outside = mode``.  The support structure takes
+    it too, so that the beams hang on the other side of the glass (a mesh whose faces point inwards would
+    otherwise get its glazing strips inside its plates)."""
+    corners = _face_layout(mesh)[0]
+    if len(corners) == 0:
+        return 1.0
+    planes, _ = geo.oriented_planes(corners)
+    return float(_outside_signs(corners, planes, mode)[0])
+
+
 def _face_layout(mesh: QuadMesh | QuadGrid) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, list[str]]:
     """Corners ``(F, 4, 3)``, grid indices ``(F, 2)`` or None, input-mesh face index ``(F,)``, part ids."""
     grid: QuadGrid | None

@@ -12,6 +12,7 @@ module.
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -67,7 +68,6 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         raise
     b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
               times=p.times)
-    from dataclasses import replace
 
     from ..glazing.retention import retention_mass_kg      # the retention is placed on the built panes and strips
 
@@ -143,9 +143,14 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
     from ppfab.support.quality import check_axis_angles
     from ppfab.support.select import support_structure
 
+    from ..panels.panel import outside_sign
+
     progress.start("support")
     beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
-    support = support_structure(geometry.mesh, design.support, planar_families=geometry.planar_families or None,
+    params = design.support
+    if outside_sign(geometry.mesh, design.panels.outside) < 0:      # the glass is on the faces' back: the beams
+        params = replace(params, flip=not params.flip)               # hang on their front (axes turned with it)
+    support = support_structure(geometry.mesh, params, planar_families=geometry.planar_families or None,
                                 beams=beams)
     check_axis_angles(support, design.support.max_axis_angle_deg)
     s = support.summary()
