@@ -155,3 +155,22 @@ def test_plates_with_no_single_direction_are_named_with_their_spread():
     assert blocked["B-W02"].play_mm > blocked["B-W02"].clearance_mm
     assert "B-W02" in str(blocked["B-W02"]) and "spread" in str(blocked["B-W02"])
     assert all(x.part_id.startswith("B-W") for x in plan.blocked)   # rows go in first, into nothing
+
+
+def test_strips_hung_inside_the_plates_are_named(tmp_path, monkeypatch):
+    """The support turned to the glass's side (what a mesh with inward faces did before the support took the
+    glass's outside): the glazing strips lie inside the plates. A leaning plate's corner rises into a strip by
+    (t/2)·sin λ < t/2; these overlap by more, and the check names each strip with its plate and the depth."""
+    import fabrication.panels.panel as panel
+
+    real = panel.outside_sign
+    monkeypatch.setattr(panel, "outside_sign", lambda mesh, mode="auto": -real(mesh, mode))
+    folder = _write(tmp_path / "out", small_vault("strips inside"))
+    v = _check(folder)
+    inside = [f for f in v.findings if "deeper than half the plate's thickness" in f.message]
+    assert inside, [str(f) for f in v.findings[:5]]
+    depths = [float(re.search(r"by ([0-9.]+) mm", f.message).group(1)) for f in inside]
+    assert min(depths) > 0.5 * 12.0             # the small vault's plates are 12 mm thick
+    assert all(re.search(r"overlaps B-[UW]\d\d-S\d\d ", f.message) for f in inside)     # inside a beam plate
+    more = [f for f in v.findings if "more parts inside a beam plate" in f.message]
+    assert len(inside) == 20 and more and int(more[0].message.split()[0]) > 50      # strips, caps, screws ...
