@@ -53,6 +53,29 @@ def to_frame(points: np.ndarray, frame: dict[str, np.ndarray]) -> np.ndarray:
     return np.stack([d @ frame["x_dir"], d @ frame["y_dir"], d @ frame["normal"]], axis=1)
 
 
+def faces_union(front: np.ndarray, back: np.ndarray, grid: float | None = None) -> np.ndarray | None:
+    """The outline cut from the sheet for a plate with two faces ``(k, 2)`` each (frame coordinates): their
+    union's corners, near-duplicate and collinear points (1 µm off the line through their neighbours) dropped as
+    the cut outline drops them; ``None`` when the two do not overlap into one polygon.  ``grid`` (mm): the
+    union is taken on that precision grid (points read in single precision: the two faces share their end cuts,
+    segments on one line that rounding would otherwise make cross)."""
+    import shapely
+    from shapely.geometry import Polygon
+
+    union = shapely.union(Polygon(front), Polygon(back), grid_size=grid)
+    if union.geom_type != "Polygon" and grid:             # slivers and lines the grid left beside the outline
+        parts = sorted((g for g in shapely.get_parts(union) if g.geom_type == "Polygon"), key=lambda g: -g.area)
+        if parts and all(g.area <= 2.0 * grid * g.length for g in parts[1:]):
+            union = parts[0]
+    if union.geom_type != "Polygon":
+        return None
+    cut = np.asarray(union.exterior.coords)[:-1]
+    cut = cut[np.linalg.norm(cut - np.roll(cut, 1, axis=0), axis=1) > 1e-7]
+    prev, nxt = np.roll(cut, 1, axis=0), np.roll(cut, -1, axis=0)
+    cross = (cut[:, 0] - prev[:, 0]) * (nxt[:, 1] - cut[:, 1]) - (cut[:, 1] - prev[:, 1]) * (nxt[:, 0] - cut[:, 0])
+    return cut[np.abs(cross) > 1e-6 * np.linalg.norm(nxt - prev, axis=1)]
+
+
 def torsion_tolerance(manifest: dict[str, Any]) -> tuple[float, str]:
     """The torsion a build may have, mm at beam depth, and the key it comes from: ``beams.max_torsion_mm``
     when the design has it, else ``beams.plane_tolerance`` (how far a vertex may be off its beam's plane)."""

@@ -104,22 +104,72 @@ def check_outline_place(v: Verification, rel: str, row: dict[str, str], ring: np
                                      f"({len(ring)} corners, expected {len(ref)})")
 
 
+def two_face_outline(row: dict[str, str], bottom: np.ndarray, top: np.ndarray,
+                     eps: float = 0.0) -> tuple[np.ndarray, float] | None:
+    """For a beam plate modelled between two different faces (bevelled under its strips), the faces' rings
+    ``bottom, top (k, 3)`` mm, world: the outline cut from the sheet (their union seen along the plate's
+    ``parts.csv`` frame normal, ``(r, 3)`` on its mid-plane) and the mean of the two faces' areas (mm²), by which
+    its volume goes (:mod:`fabrication.verify.step`); ``None`` without a frame or an overlap of the faces.
+    Where the faces cross on nearly one line the union has corners that are none; with ``eps`` (the precision
+    of the points read, mm) a corner within ``4 eps`` of the line through its neighbours is dropped."""
+    from shapely.geometry import Polygon
+
+    from ppfab.metrics import polygon_area
+
+    from ._shapes import faces_union, frame_of, to_frame
+
+    frame = frame_of(row)
+    if frame is None:
+        return None
+    b2, t2 = to_frame(bottom, frame)[:, :2], to_frame(top, frame)[:, :2]
+    cut = faces_union(b2, t2, grid=eps if eps > 0 else None)
+    if cut is None:
+        return None
+    if eps > 0:
+        cut = np.asarray(Polygon(cut).simplify(4.0 * eps, preserve_topology=True).exterior.coords)[:-1]
+    ring = frame["origin"] + cut[:, :1] * frame["x_dir"] + cut[:, 1:] * frame["y_dir"]
+    return ring, 0.5 * (abs(float(polygon_area(b2))) + abs(float(polygon_area(t2))))
+
+
+def _faces_differ(row: dict[str, str], bottom: np.ndarray, top: np.ndarray, eps: float) -> bool:
+    """Whether two rings of one plate differ seen along its frame normal by more than ``eps`` mm (a prism's are
+    one outline; a ring count that differs is a difference too)."""
+    from ._shapes import frame_of, to_frame
+
+    b, t = np.asarray(bottom, dtype=float), np.asarray(top, dtype=float)
+    frame = frame_of(row)
+    if frame is None or b.shape != t.shape:
+        return frame is not None
+    return float(np.abs(to_frame(b, frame)[:, :2] - to_frame(t, frame)[:, :2]).max(initial=0.0)) > eps
+
+
 def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, volume: float,
                      eps: float = 1e-6, volume_tol: float = 1e-6, ring: np.ndarray | None = None,
-                     holes: bool = False) -> None:
+                     holes: bool = False, top_ring: np.ndarray | None = None) -> None:
     """The placement and volume of one part's solid (vertices ``points (n, 3)`` mm, ``volume`` mm³; with
     ``ring``, its base polygon, also where it lies in its plane; with ``holes``, the solid has the bolt holes
-    ``parts.csv`` lists (``holes`` × ``hole_mm``), so its volume is the area less theirs times the thickness)."""
+    ``parts.csv`` lists (``holes`` × ``hole_mm``), so its volume is the area less theirs times the thickness).
+
+    ``top_ring`` (a beam plate whose top face is not its base, bevelled under its strips): the union of the two
+    rings is the outline placed, and the volume is ``t`` times their mean area less the holes, within 1e-4."""
     pid = row["part_id"]
+    mean_area = None
+    if ring is not None and top_ring is not None and row["kind"] == "beam" and _faces_differ(row, ring, top_ring,
+                                                                                            max(eps, 1e-4)):
+        two = two_face_outline(row, np.asarray(ring, dtype=float), np.asarray(top_ring, dtype=float), eps)
+        if two is None:
+            v.error(rel, pid, "its two faces do not overlap into one outline in its parts.csv frame")
+            return
+        ring, mean_area = two
     if ring is not None:
         check_outline_place(v, rel, row, ring, max(eps, 1e-4))
     fab = v.data.get("manifest", {}).get("fabrication", {})
     t = float(row.get("thickness_mm") or 0.0)
-    area = float(row.get("area_mm2") or 0.0)
+    area = float(row.get("area_mm2") or 0.0) if mean_area is None else mean_area
     if holes and row["kind"] in ("beam", "splice"):
         area -= np.pi / 4.0 * float(row.get("holes") or 0) * float(row.get("hole_mm") or 0.0) ** 2
     pts = np.asarray(points, dtype=float)
-    allowed = volume_tol * area * t
+    allowed = volume_tol * area * t if mean_area is None else max(volume_tol, 1e-4) * area * t
     if row["kind"] == "panel":
         # a pane is modelled on its own face while its area_mm2 is that of its type's outline, which is cut:
         # congruent within congruence_tolerance, so the two areas differ by at most perimeter × tolerance

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..contract import BEVEL_COLUMNS
 from . import Verification, check
-from ._shapes import frame_of, literal, number, solid_points, to_frame
+from ._shapes import faces_union, frame_of, literal, number, solid_points, to_frame
 
 FACE_TOL = 0.05
 """mm: how far a corner of a bevelled plate may lie from its strip's underside plane (the STEP file's decimals;
@@ -117,16 +117,10 @@ def plate_faces(solid, frame: dict[str, np.ndarray]) -> PlateFaces | None:
         aligned = np.roll(back, -k, axis=0)
         if float(np.linalg.norm(aligned - front, axis=1).max()) < 0.5 * float(np.ptp(front, axis=0).min()):
             mid = 0.5 * (front + aligned)
-    union = Polygon(front).union(Polygon(back))
-    if union.geom_type != "Polygon":
+    cut = faces_union(front, back)
+    if cut is None:
         return None
-    cut = np.asarray(union.exterior.coords)[:-1]
-    # the union keeps near-duplicate and collinear vertices of either face: drop them, as the cut outline does
-    cut = cut[np.linalg.norm(cut - np.roll(cut, 1, axis=0), axis=1) > 1e-7]
-    prev, nxt = np.roll(cut, 1, axis=0), np.roll(cut, -1, axis=0)
-    cross = (cut[:, 0] - prev[:, 0]) * (nxt[:, 1] - cut[:, 1]) - (cut[:, 1] - prev[:, 1]) * (nxt[:, 0] - cut[:, 0])
-    keep = np.abs(cross) > 1e-6 * np.linalg.norm(nxt - prev, axis=1)   # 1 µm off the line: a corner
-    return PlateFaces(front, back, mid, _ccw(cut[keep]))
+    return PlateFaces(front, back, mid, _ccw(cut))
 
 
 def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarray, solid,

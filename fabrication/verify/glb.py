@@ -50,6 +50,9 @@ def check_glb(v: Verification) -> None:
         # the writer's vertex order: the base rings (the outline's, then each bolt hole's), then the top rings;
         # a hole is a polygon of its circle's area, so the volume is the area less the holes times the thickness
         holes = int(float(row.get("holes") or 0)) if row["kind"] in ("beam", "splice") else 0
-        k = len(pts) // 2 - holes * GLB_HOLE_SEGMENTS
-        check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:max(k, 0)], holes=True)
+        half = len(pts) // 2
+        k = half - holes * GLB_HOLE_SEGMENTS
+        # the top outline ring: a plate bevelled under its strips has two different faces (as in beams.step)
+        check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:max(k, 0)], holes=True,
+                         top_ring=pts[half:half + max(k, 0)])
     v.checked.append("glb")

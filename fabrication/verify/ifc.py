@@ -50,6 +50,46 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
     return world[:, :3], area * height
 
 
+def faceted_plate(product) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] | None:
+    """A product's single ``IfcFacetedBrep`` (a plate bevelled under its strips): its vertices ``(n, 3)`` (mm,
+    world), its volume (mm³, the divergence theorem over its faces: each face's vector area from its loops, the
+    inner bounds running against the outer), and the outer rings of its two largest faces (the plate's faces,
+    world); ``None`` for any other body."""
+    import ifcopenshell.util.placement as up
+
+    rep = product.Representation
+    if rep is None:
+        return None
+    breps = [it for r in rep.Representations for it in r.Items if it.is_a("IfcFacetedBrep")]
+    if len(breps) != 1:
+        return None
+    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
+    faces: list[list[np.ndarray]] = []
+    for face in breps[0].Outer.CfsFaces:
+        loops = []
+        for bound in face.Bounds:
+            if not bound.Bound.is_a("IfcPolyLoop"):
+                return None
+            q = np.array([pt.Coordinates for pt in bound.Bound.Polygon], dtype=float)
+            q = (np.c_[q, np.ones(len(q))] @ m.T)[:, :3]
+            loops.append((q if bound.Orientation else q[::-1], bound.is_a("IfcFaceOuterBound")))
+        loops.sort(key=lambda x: not x[1])                 # the outer bound first
+        faces.append([q for q, _ in loops])
+    if not faces:
+        return None
+    pts = np.concatenate([q for f in faces for q in f])
+    c0 = pts.mean(axis=0)
+    volume, areas = 0.0, []
+    for f in faces:
+        vec = sum((0.5 * np.cross(q - c0, np.roll(q, -1, axis=0) - c0).sum(axis=0) for q in f), np.zeros(3))
+        volume += float((f[0][0] - c0) @ vec) / 3.0
+        areas.append(float(np.linalg.norm(vec)))
+    big = np.argsort(areas)[::-1][:2]
+    if len(big) < 2:
+        return None
+    return pts, abs(volume), faces[int(big[0])][0], faces[int(big[1])][0]
+
+
 def circle_items(product, sides: int = 16) -> np.ndarray:
     """``(m·2·sides, 3)`` mm, world: points on the bottom and top circles of every ``IfcExtrudedAreaSolid`` of an
     ``IfcCircleProfileDef`` in the product's body (the screws of a plate), from its placement."""
@@ -132,6 +172,11 @@ def check_ifc(v: Verification) -> None:
             check_screw_points(v, rel, row, circle_items(p))
             continue
         prism = extruded_prism(p)
+        brep = faceted_plate(p) if prism is None and row["kind"] == "beam" else None
+        if brep is not None:                     # a plate bevelled under its strips: the solid between its faces
+            check_part_solid(v, rel, row, brep[0], brep[1], volume_tol=1e-4, ring=brep[2], holes=True,
+                             top_ring=brep[3])
+            continue
         if prism is None:
             v.error(rel, p.Name, "has no single extruded solid of a polyline profile")
             continue

@@ -17,6 +17,28 @@ def _points(curve) -> np.ndarray:
     return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
 
 
+def _check_two_face_mesh(v: Verification, rel: str, row: dict[str, str], g) -> None:
+    """A beam plate written as a closed mesh (its two faces differ: bevelled under its strips): the writer's vertex
+    order — the base rings (the outline's, then each bolt hole's), then the top rings — gives its two outline
+    rings; its volume by the divergence theorem over the mesh's triangles (numpy, not the writer's mesh)."""
+    from ..contract import GLB_HOLE_SEGMENTS
+
+    if not g.IsClosed:
+        v.error(rel, row["part_id"], "is not a closed mesh")
+        return
+    pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+    tri = np.array([[g.Faces[i][0], g.Faces[i][1], g.Faces[i][2]] for i in range(g.Faces.Count)], dtype=int)
+    c0 = pts.mean(axis=0)                         # about the centre: no cancellation of large coordinates
+    a, b, c = pts[tri[:, 0]] - c0, pts[tri[:, 1]] - c0, pts[tri[:, 2]] - c0
+    volume = abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0)
+    half = len(pts) // 2
+    k = half - int(float(row.get("holes") or 0)) * GLB_HOLE_SEGMENTS
+    # rhino3dm reads a mesh's vertices back in single precision: about 1e-7 of the coordinates
+    eps = 2e-7 * float(np.abs(pts).max(initial=0.0)) + 1e-4
+    check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:max(k, 0)], holes=True,
+                     top_ring=pts[half:half + max(k, 0)])
+
+
 def _curve_area(curve, samples: int = 720) -> float:
     """The area inside a closed planar curve (an inner profile): ``π r²`` of a complete circle (a bolt hole),
     else from ``samples`` points along it."""
@@ -84,6 +106,9 @@ def check_rhino(v: Verification) -> None:
             pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
             # rhino3dm reads a mesh's vertices back in single precision: about 1e-7 of the coordinates
             check_screw_points(v, rel, row, pts, eps=2e-7 * float(np.abs(pts).max(initial=0.0)) + 1e-3)
+            continue
+        if row["kind"] == "beam" and isinstance(g, rhino3dm.Mesh):     # a plate bevelled under its strips
+            _check_two_face_mesh(v, rel, row, g)
             continue
         if not isinstance(g, rhino3dm.Extrusion) or not g.IsSolid:
             v.error(rel, name, "is not a closed extrusion")

@@ -9,7 +9,10 @@ Every part is a flat outline extruded once, so one record describes it for every
   from its seat ``z0`` (:func:`fabrication.glazing.seat.pane_offsets`: the underside on the gaskets, about
   strip + gasket above the mesh face) to ``z0`` + the glass thickness;
 * a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
-  ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane — with the bolt holes of its splices
+  ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane; a plate bevelled under its glazing strips
+  is the solid between its two faces (``outline`` on ``z = −t/2``, ``outline_top`` on ``z = +t/2``, the same
+  corners in the same order, :func:`fabrication.beams.bevel_cut.face_outlines`), as in ``beams.step`` — with the
+  bolt holes of its splices
   (``holes``: centre and diameter in the frame; IFC and Rhino cut them as circles, the glTF mesh as polygons of
   the same area, :data:`fabrication.contract.GLB_HOLE_SEGMENTS`);
 * a splice cover plate: its outline and bolt holes in the splice frame, on either face of the beam plate;
@@ -64,7 +67,9 @@ class Element:
 
     ``layer`` is ``"glass"`` or the beam family (``"rows"``, ``"cols"``), ``group`` the beam id of a plate
     (``""`` for a panel), ``props`` the part's data (the keys of ``EXCHANGE_PROPERTIES`` that apply), ``holes``
-    ``(h, 3)`` the through holes: centre ``x, y`` in the frame and diameter, mm.
+    ``(h, 3)`` the through holes: centre ``x, y`` in the frame and diameter, mm.  ``outline_top (k, 2)``, when
+    given, is the outline on the top face ``z0 + height`` (a bevelled plate: its corners correspond to
+    ``outline``'s, each side face joins two parallel edges and is planar); otherwise the top is ``outline``.
     """
 
     part_id: str
@@ -78,6 +83,16 @@ class Element:
     props: dict[str, Value] = field(default_factory=dict)
     holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     copies: np.ndarray | None = None
+    outline_top: np.ndarray | None = None
+
+    @property
+    def two_faces(self) -> bool:
+        """Whether the top face differs from the bottom one (a bevelled plate: not a prism)."""
+        return self.outline_top is not None
+
+    def top_outline(self) -> np.ndarray:
+        """``(k, 2)`` the outline on the top face."""
+        return np.asarray(self.outline if self.outline_top is None else self.outline_top, dtype=float)
 
     def copy_frames(self) -> list[Frame]:
         """The frame of each copy of the prism: ``[frame]``, or one per ``copies (m, 2)`` offset in the frame (the
@@ -89,11 +104,14 @@ class Element:
 
     @property
     def net_area(self) -> float:
-        """The outline's area less its holes, mm²."""
+        """The outline's area less its holes, mm² (of two faces, their mean: the volume is ``net_area × height``
+        to the bevel's second order, as :mod:`fabrication.verify.step` takes it)."""
         from ppfab.metrics import polygon_area
 
         d = np.asarray(self.holes, dtype=float).reshape(-1, 3)[:, 2]
-        return abs(float(polygon_area(np.asarray(self.outline, dtype=float)))) - float(np.pi / 4.0 * (d * d).sum())
+        area = 0.5 * (abs(float(polygon_area(np.asarray(self.outline, dtype=float))))
+                      + abs(float(polygon_area(self.top_outline()))))
+        return area - float(np.pi / 4.0 * (d * d).sum())
 
     def base(self, z: float | None = None) -> np.ndarray:
         """``(k, 3)`` the outline in 3D at height ``z`` above the frame (default ``z0``), mm."""
@@ -125,7 +143,12 @@ class Element:
         n = len(flat)
         tri = cap_triangles(self.outline, rings[1:])
         bottom = self.frame.to3d(flat) + self.z0 * self.frame.normal
-        top = bottom + self.height * self.frame.normal
+        if self.outline_top is None:
+            top_tri, top = tri, bottom + self.height * self.frame.normal
+        else:                                   # two faces: each cap triangulated on its own corners
+            top_flat = np.concatenate([self.top_outline()] + rings[1:])
+            top_tri = cap_triangles(self.top_outline(), rings[1:])
+            top = self.frame.to3d(top_flat) + (self.z0 + self.height) * self.frame.normal
         sides = []
         start = 0
         for r in rings:
@@ -133,7 +156,7 @@ class Element:
             nxt = start + np.roll(np.arange(len(r)), -1)
             sides += [np.stack([ring, nxt, nxt + n], axis=1), np.stack([ring, nxt + n, ring + n], axis=1)]
             start += len(r)
-        faces = np.concatenate([tri[:, ::-1], tri + n] + sides)
+        faces = np.concatenate([tri[:, ::-1], top_tri + n] + sides)
         return np.concatenate([bottom, top]), faces
 
 
@@ -191,8 +214,16 @@ def elements(build: "Build", files: Files) -> list[Element]:
         row["planarity_dev_mm"] = round(float(b.plane_deviation), 4)
         row.setdefault("family", FAMILY_NAMES[b.family])
         t = float(b.thickness)
+        holes = np.asarray(b.holes, dtype=float).reshape(-1, 3)
+        if b.bevels and b.cut_outline is not None:          # the solid between its two faces, as in beams.step
+            from ..beams.bevel_cut import face_outlines
+
+            front, back = face_outlines(b)
+            out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, back, b.frame, -0.5 * t, t,
+                               _props(row), holes, outline_top=front))
+            continue
         out.append(Element(b.part_id, "beam", FAMILY_NAMES[b.family], b.beam_id, b.flat_outline, b.frame, -0.5 * t, t,
-                           _props(row), np.asarray(b.holes, dtype=float).reshape(-1, 3)))
+                           _props(row), holes))
     return out + _glazing_elements(build, rows)
 
 

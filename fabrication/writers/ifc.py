@@ -15,7 +15,9 @@ Spatial structure and decomposition (``IfcRelAggregates`` unless noted)::
 
 Each element (:mod:`fabrication.writers._elements`) is one ``IfcExtrudedAreaSolid``: its flat outline as an
 ``IfcArbitraryClosedProfileDef`` in its own placement (origin, normal, x direction of the part's frame), extruded
-along the local z from ``z0`` by its height, in millimetres — the same prism as ``beams.step`` and the DXF outline.
+along the local z from ``z0`` by its height, in millimetres — the same prism as ``beams.step`` and the DXF outline;
+a plate bevelled under its strips, whose two faces differ, is an ``IfcFacetedBrep`` of its faces in the same
+placement (the solid of ``beams.step``, holes as polygons of their area).
 It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.csv`` values of
 :data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
 ``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
@@ -177,6 +179,8 @@ class IfcModel:
         placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
         if el.copies is not None:
             return self._add_copies(el, material, category, placement)
+        if el.two_faces:
+            return self._add_brep(el, material, category, placement)
         pts = [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y))) for x, y in el.outline]
         outer = f.create_entity("IfcPolyline", Points=pts + pts[:1])
         if len(el.holes):                        # bolt holes: circular voids of the profile
@@ -192,6 +196,39 @@ class IfcModel:
                                 ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
         f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
         return self._product(el, material, category, placement, [solid])
+
+    def _add_brep(self, el: Element, material: str, category: str | None, placement) -> Any:
+        """A part whose two faces differ (a plate bevelled under its strips) as an ``IfcFacetedBrep`` in its frame:
+        the bottom and top faces with the bolt holes as inner bounds (polygons of the hole's area,
+        :meth:`Element.hole_rings`), a planar side face per outline edge and per hole edge — the faces of
+        :meth:`Element.prism_mesh` before triangulation."""
+        f = self.f
+        bottom = [np.asarray(el.outline, dtype=float)] + el.hole_rings()
+        top = [el.top_outline()] + bottom[1:]
+        z0, z1 = float(el.z0), float(el.z0 + el.height)
+
+        def points(ring: np.ndarray, z: float) -> list:
+            return [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y), z)) for x, y in ring]
+
+        lo = [points(r, z0) for r in bottom]
+        hi = [points(r, z1) for r in top]
+
+        def face(outer: list, inner: list[list] = ()) -> Any:      # type: ignore[assignment]
+            bounds = [f.create_entity("IfcFaceOuterBound", Bound=f.create_entity("IfcPolyLoop", Polygon=outer),
+                                      Orientation=True)]
+            bounds += [f.create_entity("IfcFaceBound", Bound=f.create_entity("IfcPolyLoop", Polygon=ring),
+                                       Orientation=True) for ring in inner]
+            return f.create_entity("IfcFace", Bounds=bounds)
+
+        # the outline is counter-clockwise about +z, the hole rings clockwise: the bottom face (normal −z) runs
+        # every ring backwards, the top face forwards; a side face runs p_k, p_k+1 on top back to the bottom
+        faces = [face(lo[0][::-1], [r[::-1] for r in lo[1:]]), face(hi[0], hi[1:])]
+        for a, b in zip(lo, hi):
+            m = len(a)
+            faces += [face([a[k], a[(k + 1) % m], b[(k + 1) % m], b[k]]) for k in range(m)]
+        brep = f.create_entity("IfcFacetedBrep", Outer=f.create_entity("IfcClosedShell", CfsFaces=faces))
+        f.create_entity("IfcStyledItem", Item=brep, Styles=[self._style(el.layer)])
+        return self._product(el, material, category, placement, [brep], representation="Brep")
 
     def _add_copies(self, el: Element, material: str, category: str | None, placement) -> Any:
         """An element of many equal round prisms (the screws of a plate): one shared ``IfcCircleProfileDef``
@@ -210,14 +247,16 @@ class IfcModel:
             solids.append(solid)
         extra = {"NominalDiameter": 2.0 * radius, "NominalLength": float(el.height)} \
             if IFC_CLASSES.get(el.kind, ("",))[0] == "IfcMechanicalFastener" else {}
-        return self._product(el, material, category, placement, solids, **extra)
+        return self._product(el, material, category, placement, solids, attributes=extra)
 
     def _product(self, el: Element, material: str, category: str | None, placement, solids: list,
-                 **extra: Any) -> Any:
-        """The product of ``el`` with its body ``solids``, property sets, quantities, material and place."""
+                 representation: str = "SweptSolid", attributes: dict[str, Any] | None = None) -> Any:
+        """The product of ``el`` with its body ``solids`` (of the IFC representation type ``representation``),
+        extra product ``attributes``, property sets, quantities, material and place."""
         f = self.f
+        extra = dict(attributes or {})
         shape = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
-                                RepresentationType="SweptSolid", Items=solids)
+                                RepresentationType=representation, Items=solids)
         cls, predefined = IFC_CLASSES.get(el.kind, ("IfcMember", "USERDEFINED"))
         if predefined == "USERDEFINED":
             extra["ObjectType"] = el.kind
@@ -323,7 +362,8 @@ class IfcModel:
             r = float(np.linalg.norm(np.asarray(el.outline, dtype=float), axis=1).max())
             area = len(el.copies) * np.pi * r * r
         q = [f.create_entity("IfcQuantityArea", Name="NetArea", AreaValue=area * 1e-6),
-             f.create_entity("IfcQuantityVolume", Name="NetVolume", VolumeValue=area * el.height * 1e-9)]
+             f.create_entity("IfcQuantityVolume", Name="NetVolume",      # two faces: their mean area (net)
+                             VolumeValue=(el.net_area if el.two_faces else area) * el.height * 1e-9)]
         if isinstance(weight, float):
             q.append(f.create_entity("IfcQuantityWeight", Name="NetWeight", WeightValue=weight))
         if el.kind == "panel":

@@ -3,7 +3,8 @@
 Layers (:data:`fabrication.contract.RHINO_LAYERS`, colours :data:`~fabrication.contract.COLOURS`)::
 
     glass          one closed extrusion per pane (its inset outline parallel to the face, on its gaskets)
-    beams::rows    one closed extrusion per beam plate of the row family (centred on its support plane)
+    beams::rows    one closed extrusion per beam plate of the row family (centred on its support plane); a plate
+                   bevelled under its strips (two different faces) one closed mesh of its faces
     beams::cols    … of the column family
     retention::<kind>  one closed extrusion per setting block, stop, pressure gasket, pressure plate, cover cap;
                    one closed mesh per plate's screws (a prism per screw)
@@ -138,7 +139,7 @@ class RhinoModel:
         (``Extrusion.Create`` of the counter-clockwise outline; the check of ``ppfab verify`` confirms the side),
         its bolt holes as inner profiles (circles, in the extrusion's profile plane)."""
         r = self.r
-        if el.copies is not None:
+        if el.copies is not None or el.two_faces:      # many prisms, or a plate bevelled under its strips
             self._add_mesh_part(el, material)
             return
         base = el.base()
@@ -179,7 +180,8 @@ class RhinoModel:
 
     def _add_mesh_part(self, el: Element, material: str) -> None:
         """A part of many prisms (the screws of a plate) as one closed mesh of them all (light: an extrusion per
-        screw would be an object per screw)."""
+        screw would be an object per screw), or a plate whose two faces differ (bevelled under its strips: no
+        extrusion) as the closed mesh of :meth:`Element.prism_mesh`, bolt holes as polygons of their area."""
         v, faces = el.prism_mesh()
         mesh = self.r.Mesh()
         mesh.Vertices.UseDoublePrecisionVertices = True
