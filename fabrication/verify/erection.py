@@ -26,6 +26,7 @@ plate so marked that slides in cleanly is (the mark is wrong).
 from __future__ import annotations
 
 import logging
+import re
 
 from dataclasses import dataclass, replace
 from typing import Any
@@ -430,6 +431,12 @@ def _bodies(v: Verification, files: dict[str, Any], wanted: set[str]) -> dict[st
     return {name: body_of(solid) for name, solid in solids.items() if name in wanted}
 
 
+def _same_line(a: str, b: str) -> bool:
+    """Whether two part ids name the same mesh polyline (``GS-U03-06``, ``CC-U03-06`` and ``B-U03-S01``: ``U03``)."""
+    ma, mb = re.search(r"-([UW]\d+)", a), re.search(r"-([UW]\d+)", b)
+    return ma is not None and mb is not None and ma.group(1) == mb.group(1)
+
+
 def _number(text: Any) -> float | None:
     """A cell's finite positive number, ``None`` otherwise (the parts check names a bad cell)."""
     try:
@@ -482,11 +489,13 @@ def check_erection(v: Verification) -> None:
     overlapping = [p for p in passes if p.static > TOLERANCE]
     # a plate leaning under a part it carries lifts one top corner into it by (t/2)·sin λ < t/2: an overlap in
     # place deeper than half the plate's thickness is no lean but a part placed inside the steel (strips hung
-    # on the glass's side of the plates: 12 mm on a real mesh whose faces pointed inwards)
+    # on the glass's side of the plates: 12 mm on a real mesh whose faces pointed inwards).  Only the parts of
+    # the plate's own polyline: a strip of the other family crossing a plate at a node meets its top edge over
+    # the strip's width (a fit at the crossing, warned below)
     half_t = {r["part_id"]: 0.5 * t for r in parts if r.get("kind") == "beam"
               for t in [_number(r.get("thickness_mm"))] if t is not None}
-    inside = sorted((p for p in overlapping
-                     if p.static > min(half_t.get(p.part, np.inf), half_t.get(p.through, np.inf)) + TOLERANCE),
+    inside = sorted((p for p in overlapping if _same_line(p.part, p.through)
+                     and p.static > min(half_t.get(p.part, np.inf), half_t.get(p.through, np.inf)) + TOLERANCE),
                     key=lambda p: -p.static)
     for p in inside[:20]:
         plate = p.through if p.through in half_t else p.part
