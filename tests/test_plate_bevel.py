@@ -310,3 +310,25 @@ def test_the_bevels_check_names_a_square_plate_and_a_strip_moved_into_it(bevelle
     assert len(square) == 1 and plate.part_id in square[0] and "no bevelled face" in square[0]
     moved = findings(pts - 2.0 * strip.frame.normal, plate_solid(plate))
     assert len(moved) == 1 and "no bevelled face" in moved[0]
+
+
+def test_the_union_of_two_faces_sharing_their_end_cuts_is_the_larger_face():
+    """The two faces of a welded splice's plate as a STEP text read gives them (bottom corners equal to the 14th
+    digit, end cuts on one line, the top edge 0.565 mm apart): GEOS's floating overlay returned the front face for
+    their union (259,577 mm² for 260,561); the build's cut outline and verify's both take it snap-rounded. The back
+    face holds the front (each front corner within 1e-9 mm of it), so the union is the back face."""
+    from shapely.geometry import Point, Polygon
+
+    from fabrication.beams.bevel_cut import cut_outline
+    from fabrication.verify._shapes import faces_union
+    from ppfab.metrics import polygon_area
+
+    front = np.array([[1757.2810828386484, -149.25951024111808], [1742.423069465653, -0.2825019921351693],
+                      [0.028174940397624353, -0.2825019920797094], [14.88618831358609, -149.25951024106442]])
+    back = np.array([[1757.2810828386484, -149.25951024111808], [1742.366719583653, 0.2825019924991177],
+                     [-0.028174941092548193, 0.2825019925533222], [14.886188313586038, -149.25951024106442]])
+    assert all(Polygon(back).buffer(1e-9).contains(Point(p)) for p in front)
+    want = abs(float(polygon_area(back)))
+    assert want - abs(float(polygon_area(front))) > 900.0          # what the wrong union lost
+    for union in (faces_union(front, back), cut_outline(front, back)):
+        assert union is not None and abs(abs(float(polygon_area(union))) - want) < 1e-3

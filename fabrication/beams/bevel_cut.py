@@ -224,7 +224,14 @@ def cut_outline(front: np.ndarray, back: np.ndarray) -> np.ndarray:
 
     from .joints import _clean
 
-    union = Polygon(front).union(Polygon(back))
+    import shapely
+
+    # snap-rounded on a 1e-9 mm grid: the faces share their end cuts, and a floating overlay of segments on one
+    # line that differ in the last digits can return one face for the union
+    union = shapely.union(Polygon(front), Polygon(back), grid_size=1e-9)
+    if union.geom_type == "GeometryCollection":      # a line the snap rounding left beside the outline
+        polygons = [g for g in shapely.get_parts(union) if g.geom_type == "Polygon"]
+        union = polygons[0] if len(polygons) == 1 else union
     if union.geom_type != "Polygon" or len(union.interiors):       # pragma: no cover - faces overlap by design
         raise BevelError("the two faces of a bevelled plate do not overlap into one outline")
     q = _clean(np.asarray(union.exterior.coords))

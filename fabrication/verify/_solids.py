@@ -104,6 +104,22 @@ def check_outline_place(v: Verification, rel: str, row: dict[str, str], ring: np
                                      f"({len(ring)} corners, expected {len(ref)})")
 
 
+def _drop_straight(q: np.ndarray, tol: float) -> np.ndarray:
+    """The polygon ``q (k, 2)`` without its corners within ``tol`` of the line through their neighbours, the
+    straightest first, one at a time (shapely's topology-preserving simplification keeps a ring's first points)."""
+    q = np.asarray(q, dtype=float)
+    while len(q) > 3:
+        prev, nxt = np.roll(q, 1, axis=0), np.roll(q, -1, axis=0)
+        chord = nxt - prev
+        off = np.abs(chord[:, 0] * (q[:, 1] - prev[:, 1]) - chord[:, 1] * (q[:, 0] - prev[:, 0]))
+        off = off / np.maximum(np.linalg.norm(chord, axis=1), 1e-300)
+        k = int(np.argmin(off))
+        if off[k] >= tol:
+            break
+        q = np.delete(q, k, axis=0)
+    return q
+
+
 def two_face_outline(row: dict[str, str], bottom: np.ndarray, top: np.ndarray,
                      eps: float = 0.0) -> tuple[np.ndarray, float] | None:
     """For a beam plate modelled between two different faces (bevelled under its strips), the faces' rings
@@ -112,8 +128,6 @@ def two_face_outline(row: dict[str, str], bottom: np.ndarray, top: np.ndarray,
     its volume goes (:mod:`fabrication.verify.step`); ``None`` without a frame or an overlap of the faces.
     Where the faces cross on nearly one line the union has corners that are none; with ``eps`` (the precision
     of the points read, mm) a corner within ``4 eps`` of the line through its neighbours is dropped."""
-    from shapely.geometry import Polygon
-
     from ppfab.metrics import polygon_area
 
     from ._shapes import faces_union, frame_of, to_frame
@@ -126,7 +140,7 @@ def two_face_outline(row: dict[str, str], bottom: np.ndarray, top: np.ndarray,
     if cut is None:
         return None
     if eps > 0:
-        cut = np.asarray(Polygon(cut).simplify(4.0 * eps, preserve_topology=True).exterior.coords)[:-1]
+        cut = _drop_straight(cut, 4.0 * eps)
     ring = frame["origin"] + cut[:, :1] * frame["x_dir"] + cut[:, 1:] * frame["y_dir"]
     return ring, 0.5 * (abs(float(polygon_area(b2))) + abs(float(polygon_area(t2))))
 
