@@ -517,8 +517,8 @@ CASES = [
          design(GEOMETRY + "[nesting]\nsheet = [1500.0, 1000.0]\ntime_budget = 0.3\n", False), build(), 1,
          "part P-U00-V00 (2161.2 x 2061.4 mm) fits no sheet: usable area is 1500.0 x 1000.0 mm, any rotation"),
     # optional files
-    Case("optional file", "a beam plate outline Rhino cannot extrude (model.3dm)", design(GEOMETRY), build(), 1,
-         "model.3dm: B-U00-S00: Rhino cannot extrude its outline (its outline has a zero-length edge: points 1 and 2 "
+    Case("optional file", "a beam plate outline Rhino cannot make a solid of (model.3dm)", design(GEOMETRY), build(),
+         1, "model.3dm: B-U00-S00: Rhino cannot make a solid of its outline (its outline has a zero-length edge: points 1 and 2 "
          "of", patch=_unextrudable_plate, check=_no_leftovers),
     # text that goes into files
     Case("text", "a design name with a newline and an OBJ vertex line", design(GEOMETRY.replace(

@@ -32,7 +32,7 @@ def test_bad_input(tmp_path, case):
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(set(before) | set(case.new_files))
 
 
-def test_rhino_names_what_is_wrong_with_an_outline_it_cannot_extrude():
+def test_rhino_names_what_is_wrong_with_an_outline_it_cannot_make_a_solid_of():
     """A real outline rhino3dm refuses to extrude (a repeated point: a zero-length edge), without any patching:
     the error names the part and the defect, where it used to say only that the extrusion failed."""
     import numpy as np
@@ -50,9 +50,19 @@ def test_rhino_names_what_is_wrong_with_an_outline_it_cannot_extrude():
     spoiled = np.insert(square, 2, square[1], axis=0)
     with pytest.raises(FabricationError) as info:
         model.add(Element("B-R0077-S01", "beam", "rows", "B", spoiled, frame, -6.0, 12.0), "S355")
-    assert str(info.value) == ("B-R0077-S01: Rhino cannot extrude its outline (its outline has a zero-length edge: "
-                               "points 1 and 2 of 5 coincide at (100.000, 0.000) mm (1 such edge(s)))")
+    assert str(info.value) == ("B-R0077-S01: Rhino cannot make a solid of its outline (its outline has a zero-length "
+                               "edge: points 1 and 2 of 5 coincide at (100.000, 0.000) mm (1 such edge(s)))")
     assert len(model.f.Objects) == 1                      # nothing half-added
+    # a plate bevelled under its strips (two faces: a closed mesh, not an extrusion) with the same defect
+    top = square + np.array([[0.0, 0.0], [0.0, 0.0], [-2.0, 0.0], [0.0, 0.0]])
+    model.add(Element("B-BEV", "beam", "rows", "B", square, frame, -6.0, 12.0, outline_top=top), "S355")
+    assert len(model.f.Objects) == 2
+    with pytest.raises(FabricationError) as info:
+        model.add(Element("B-R0078-S01", "beam", "rows", "B", spoiled, frame, -6.0, 12.0,
+                          outline_top=np.insert(top, 2, top[1], axis=0)), "S355")
+    assert str(info.value).startswith("B-R0078-S01: Rhino cannot make a solid of its outline (its outline has a "
+                                      "zero-length edge: points 1 and 2 of 5 coincide at (100.000, 0.000) mm")
+    assert len(model.f.Objects) == 2
 
 
 @pytest.mark.parametrize("outline, height, problem", [

@@ -153,7 +153,7 @@ class RhinoModel:
 
             from ._failures import outline_problem
 
-            raise FabricationError(f"{el.part_id}: Rhino cannot extrude its outline "
+            raise FabricationError(f"{el.part_id}: Rhino cannot make a solid of its outline "
                                    f"({outline_problem(el.outline, el.height)})")
         if len(el.holes):
             plane = ext.GetProfilePlane(0.0)
@@ -182,7 +182,17 @@ class RhinoModel:
         """A part of many prisms (the screws of a plate) as one closed mesh of them all (light: an extrusion per
         screw would be an object per screw), or a plate whose two faces differ (bevelled under its strips: no
         extrusion) as the closed mesh of :meth:`Element.prism_mesh`, bolt holes as polygons of their area."""
-        v, faces = el.prism_mesh()
+        from ppfab.errors import FabricationError
+
+        from ._failures import outline_problem
+
+        try:
+            v, faces = el.prism_mesh()
+        except (FabricationError, ValueError) as exc:
+            problem = outline_problem(el.outline, el.height)
+            if problem.startswith("no defect"):
+                problem = f"{exc}"
+            raise FabricationError(f"{el.part_id}: Rhino cannot make a solid of its outline ({problem})") from None
         mesh = self.r.Mesh()
         mesh.Vertices.UseDoublePrecisionVertices = True
         for p in v:
