@@ -352,6 +352,13 @@ def sheet_file(prefix: str, sheet: int, sheets: int) -> str:
     return f"{prefix}_{sheet:0{max(2, len(str(sheets)))}d}.dxf"
 
 
+def sheet_files(directory: str, prefix: str, sheets: int) -> list[str]:
+    """The cutting-sheet files of one kind, relative to the build folder, in sheet order:
+    ``["glass/glass_01.dxf", …]`` for ``(GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, sheets)``.  The DXF writer writes
+    these files; the parts list names them in its ``sheet_file`` column without waiting for it."""
+    return [f"{directory}/{sheet_file(prefix, k + 1, sheets)}" for k in range(sheets)]
+
+
 def type_file(type_id: str, prefix: str = TYPE_PREFIX) -> str:
     """``type_T017.dxf``: the flat DXF of a panel type."""
     return f"{prefix}_{type_id}.dxf"

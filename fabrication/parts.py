@@ -18,15 +18,52 @@ import io
 import json
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from .contract import ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS, PARTS_KNOWN_COLUMNS, csv_cell, json_safe
+from .contract import (GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS,
+                       PARTS_KNOWN_COLUMNS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, csv_cell, json_safe, sheet_files)
 from .flatpart import FlatPart, Placement
+from .model import PartsTable
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .pipeline.records import Build
 
 
 
 def _num(v: float, digits: int) -> float:
     r = round(float(v), digits)
     return 0.0 if r == 0 else r
+
+
+def parts_table(build: "Build") -> PartsTable:
+    """The parts list of a build (made once, by the pipeline, before any file is written): glass panels, then
+    beam plates, each with its placement and the file of its cutting sheet (:func:`~fabrication.contract.
+    sheet_files`, the names the DXF writer writes); then the glazing strips, splice cover plates and retention
+    parts (:mod:`fabrication.glazing.rows`)."""
+    nest = build.nesting
+    rows = part_rows(list(nest.glass_parts), nest.glass.placements,
+                     sheet_files(GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, nest.glass.sheets)) + \
+        part_rows(list(nest.beam_parts), nest.plates.placements,
+                  sheet_files(PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, nest.plates.sheets))
+    g = build.glazing
+    if g is None:
+        return PartsTable(tuple(rows))
+    from .glazing.retention import build_retention
+    from .glazing.rows import beam_joins, retention_part_rows, splice_rows, strip_rows
+
+    joins = beam_joins(g)
+    bite: dict[str, float] = {}
+    for b in g.bites:
+        bite[b.panel] = min(bite.get(b.panel, float("inf")), b.bite)
+    for row in rows:
+        if row["kind"] == "beam" and row["part_id"] in joins:
+            row.update(joins[row["part_id"]])
+        elif row["kind"] == "panel" and row["part_id"] in bite:
+            row["bite_min_mm"] = round(bite[row["part_id"]], 3)
+            row["setting_blocks"] = f"2 x {g.params.setting_block_length:g} mm"
+    retention = build_retention(build) if g.strips else None
+    extra = retention_part_rows(retention) if retention is not None else []
+    return PartsTable(tuple(rows + strip_rows(g, build.beams) + splice_rows(g, build.beams) + extra))
 
 
 def part_rows(parts: list[FlatPart], placements: list[Placement] | None = None,

@@ -306,8 +306,8 @@ def _unextrudable_plate():
 
     original = rhino.elements
 
-    def spoiled(build, files):
-        els = original(build, files)
+    def spoiled(build):
+        els = original(build)
         k = next(i for i, e in enumerate(els) if e.kind == "beam")
         o = np.asarray(els[k].outline, dtype=float)
         els[k] = dataclasses.replace(els[k], outline=np.insert(o, 2, o[1], axis=0))

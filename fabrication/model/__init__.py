@@ -10,10 +10,11 @@ from a build in memory (``package_of``).
 from .mesh import MeshData
 from .node import Node, NodeBeam, NodePair
 from .package import Package, differences
+from .parts_table import PartsTable
 from .part import (KIND_DATA, BeamData, ColumnError, Frame, Hole, PanelData, Part, Placement, SpliceData,
                    StripData)
 from .sheet import Sheet
 from .weld import Weld
 
 __all__ = ["KIND_DATA", "BeamData", "ColumnError", "Frame", "Hole", "MeshData", "Node", "NodeBeam", "NodePair",
-           "Package", "PanelData", "Part", "Placement", "Sheet", "SpliceData", "StripData", "Weld", "differences"]
+           "Package", "PanelData", "PartsTable", "Part", "Placement", "Sheet", "SpliceData", "StripData", "Weld", "differences"]

@@ -14,6 +14,8 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..model import PartsTable
+
 if TYPE_CHECKING:  # pragma: no cover
     from ppfab.geometry import Geometry
     from ppfab.metrics import Quality
@@ -102,8 +104,9 @@ class Summary:
 class Build:
     """Everything a build computed, stage by stage; :meth:`write` turns it into the output folder.
 
-    Made by :func:`fabrication.pipeline` (``build(design) -> Build``).  ``times`` holds the seconds each stage
-    took (not written to any file, so builds stay byte-reproducible).
+    Made by :func:`fabrication.pipeline` (``build(design) -> Build``).  ``parts`` is the parts list, made once
+    from the other records (:func:`fabrication.parts.parts_table`) for every writer that lists parts.
+    ``times`` holds the seconds each stage took (not written to any file, so builds stay byte-reproducible).
     """
 
     design: "Design"
@@ -116,6 +119,7 @@ class Build:
     nodes: NodeTable
     summary: Summary
     glazing: "Glazing | None" = None
+    parts: PartsTable = field(default_factory=PartsTable)
     times: dict[str, float] = field(default_factory=dict, compare=False)
     _written: list[Path] = field(default_factory=list, repr=False, compare=False)
 

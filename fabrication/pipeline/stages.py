@@ -70,8 +70,10 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
               times=p.times)
 
     from ..glazing.retention import retention_mass_kg      # the retention is placed on the built panes and strips
+    from ..parts import parts_table
 
-    return replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
+    b = replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
+    return replace(b, parts=parts_table(b))                  # the parts list, once, for every writer
 
 
 def stage_geometry(design: Design, progress: Progress, allow_large: bool) -> Geometry:

@@ -1,7 +1,7 @@
 """``package_of(build) -> Package``: the records of a build in memory, made as :func:`open_build` makes them
 from its folder, so that ``differences(open_build(build.write(out)), package_of(build)) == []``.
 
-The parts' columns are the rows the parts table is written from (:func:`fabrication.writers.tables.parts_table`);
+The parts' columns are the rows the parts table is written from (the build's :class:`~fabrication.model.PartsTable`);
 the outlines the flat parts', the splice types' and the strips' own, unrounded; nodes, welds, sheets and mesh
 from the build's stage records.
 """
@@ -12,16 +12,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..contract import GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, json_safe, sheet_file
+from ..contract import GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, json_safe, sheet_files
 from ..model import MeshData, Node, Package, Part, Sheet, Weld
 from .geometry import strip_outline
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
-
-
-def _sheet_names(directory: str, prefix: str, count: int) -> list[str]:
-    return [f"{directory}/{sheet_file(prefix, k + 1, count)}" for k in range(count)]
 
 
 def _geometry(build: "Build") -> dict[str, tuple[Any, Any]]:
@@ -61,7 +57,7 @@ def _sheets(build: "Build") -> tuple[Sheet, ...]:
             (nest.glass, nest.glass_parts, "panel", GLASS_SHEET_DIR, GLASS_SHEET_PREFIX),
             (nest.plates, nest.beam_parts, "beam", PLATE_SHEET_DIR, PLATE_SHEET_PREFIX)):
         by_id = {p.part_id: p for p in parts}
-        names = _sheet_names(directory, prefix, nesting.sheets)
+        names = sheet_files(directory, prefix, nesting.sheets)
         for k, group in enumerate(nesting.by_sheet()):
             material, thickness = stock_of([by_id[pl.part_id] for pl in group])
             sheets.append(Sheet(names[k], kind, k + 1, (float(nesting.sheet_size[0]), float(nesting.sheet_size[1])),
@@ -90,15 +86,9 @@ def _mesh(build: "Build") -> MeshData:
 
 def package_of(build: "Build") -> Package:
     """The :class:`~fabrication.model.Package` of ``build`` without writing a file."""
-    from ..writers.tables import parts_table
-
-    nest = build.nesting
-    files: dict[str, str | list[str]] = {
-        "glass_sheets": _sheet_names(GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, nest.glass.sheets),
-        "beam_sheets": _sheet_names(PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, nest.plates.sheets)}
     geometry = _geometry(build)
     parts = []
-    for row in parts_table(build, files):
+    for row in build.parts:
         cols = json_safe(row)
         assert isinstance(cols, dict)
         outline, holes = geometry.get(row["part_id"], (None, ()))

@@ -38,8 +38,6 @@ from ppfab.frame import Frame
 from ppfab.topology import FAMILY_NAMES
 
 from ..contract import EXCHANGE_PROPERTIES
-from . import Files
-from .tables import parts_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
@@ -197,11 +195,11 @@ def _value(v: Any) -> Value | None:
     return str(v)
 
 
-def elements(build: "Build", files: Files) -> list[Element]:
+def elements(build: "Build") -> list[Element]:
     """The panels (in face order), then the beam plates (in plate order), as :class:`Element` records."""
     from ..glazing.seat import pane_offsets
 
-    rows = {r["part_id"]: r for r in parts_table(build, files)}
+    rows = build.parts.by_id()
     seat = pane_offsets(build)
     out = []
     for p in build.panels.panels:

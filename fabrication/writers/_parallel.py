@@ -1,7 +1,8 @@
 """Writing the output files on two cores: the writers of :data:`SECOND_PROCESS` in a forked process.
 
-The writers are independent except through the ``files`` table: most read the file names that earlier
-writers recorded (the sheet files in ``parts.csv``, the report's list of files, the manifest's digests).
+The writers are independent except through the ``files`` table: some read the file names that earlier
+writers recorded (the report's list of files, the manifest's digests; the sheet files of ``parts.csv`` come
+from the build's parts list, not from the DXF writer).
 The writers named in :data:`SECOND_PROCESS` read nothing of it; they run in one forked child process while
 this process runs all the others in their order.  The child is joined before the first writer of
 :data:`READS_EVERY_FILE` (the report lists every file, the manifest digests every file), and the ``files``

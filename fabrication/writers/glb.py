@@ -37,7 +37,7 @@ def glb_bytes(build: "Build", files: Files) -> bytes:
                                        layer == "glass" else 0.6, roughnessFactor=0.1 if layer == "glass" else 0.5,
                                        alphaMode="BLEND" if a < 1.0 else "OPAQUE", doubleSided=False)
     scene = trimesh.Scene()
-    for el in elements(build, files):
+    for el in elements(build):
         try:
             v, f = el.prism_mesh()
         except Exception as exc:            # a degenerate outline: name the part and what is wrong with it

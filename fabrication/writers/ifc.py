@@ -427,7 +427,7 @@ def ifc_model(build: "Build", files: Files) -> IfcModel:
     plates with the materials of their ``parts.csv`` rows)."""
     design = build.design
     model = IfcModel(design.info.name, design.info.description)
-    for el in elements(build, files):
+    for el in elements(build):
         try:
             if el.kind == "panel":
                 model.add(el, design.panels.makeup, "glass")

@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from . import Files, writer
-from .tables import parts_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..pipeline.records import Build
@@ -20,7 +19,7 @@ def write_report(build: "Build", out: Path, files: Files) -> str:
     for key in ("drawings", "node_sheets"):
         for rel in files.get(key, []):
             drawings[str(rel)] = (out / str(rel)).read_text(encoding="utf-8")
-    html = build_report(build, files, parts_table(build, files), drawings)
+    html = build_report(build, files, list(build.parts), drawings)
     (out / "report.html").write_text(html, encoding="utf-8")
     files["report_html"] = "report.html"
     return f"{len(html) / 1e6:.1f} MB"

@@ -229,7 +229,7 @@ def rhino_model(build: "Build", files: Files) -> RhinoModel:
     """The Rhino model of a build: panels, beam plates, node axes, the mesh."""
     design = build.design
     model = RhinoModel(design.info.name)
-    for el in elements(build, files):
+    for el in elements(build):
         model.add(el, design.panels.makeup if el.kind == "panel" else part_material(el, design.beams.material))
     for axis in node_axes(build):
         model.add_axis(axis.node_id, axis.start, axis.end, axis.props)
