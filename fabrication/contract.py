@@ -23,6 +23,44 @@ PARTS_KNOWN_COLUMNS = ["mirrored", "sheet_file", "face", "face_i", "face_j", "ty
 value (a list or a table: a beam plate's ``nodes``, ``frame``, ``plane``) is one JSON cell (:func:`csv_cell`).
 ``panel_flags`` was ``flags`` before 0.2 (it shadowed ``pandas.DataFrame.flags``; docs/migration.md)."""
 
+PARTS_MORE_COLUMNS: dict[str, str] = {
+    "bar": "strip: the 1-based stock bar it is cut from (strip_cuts.csv)",
+    "bar_start_mm": "strip: where it starts along its bar",
+    "beam": "strip, splice cover plate, retention part, screw: the beam plate (part id) it sits on",
+    "beam_id": "beam plate: the beam (one planar mesh polyline, split into pieces) it belongs to",
+    "bevels": "beam plate: the spans of its top edge bevelled under leaning strips (bevels.csv)",
+    "bite_min_mm": "panel: its smallest bite on a glazing strip",
+    "bolts": "splice cover plate (side A): the bolt set through both plates, '<n> x <bolt>'",
+    "depth_mm": "beam plate: its depth across the support plane",
+    "diameter_mm": "screw: its shank diameter",
+    "edge_nodes": "strip: the two nodes of its mesh edge, 'a;b'",
+    "family": "beam plate, strip, splice cover plate: the mesh polyline family, rows or cols",
+    "frame": "beam plate, retention part, screw: JSON {origin, x, y, normal} placing the flat outline (or the "
+             "part's box from a corner of its underside) in the building, mm",
+    "gasket": "strip: the gasket laid on it (material, width x thickness, length)",
+    "hole_mm": "beam plate, splice cover plate: the bolt hole diameter",
+    "holes": "beam plate, splice cover plate: how many bolt holes",
+    "joins": "beam plate, splice cover plate: the pieces of the beam joined at its cuts, ';'-separated",
+    "length_mm": "beam plate, strip, retention part, screw: its length",
+    "mass_kg": "beam plate, strip, splice cover plate, retention part, screw: its mass (steel as cut, before "
+               "planing a bevel; screws: all of the row's quantity)",
+    "nodes": "beam plate: JSON list of the mesh vertices it runs through, in order",
+    "owner": "retention part: the pane it holds (a screw: the pressure plate it clamps)",
+    "piece": "beam plate: 0-based piece of its beam",
+    "pieces": "beam plate: how many pieces its beam is cut into",
+    "plane": "beam plate: JSON [a, b, c, d] of its support plane a x + b y + c z = d (mm)",
+    "quantity": "retention part, screw: how many (a screw row: the screws of one plate)",
+    "rotation": "panel: how the pane may turn on the stock sheet ([panels] rotation)",
+    "screw_stations_mm": "screw: the stations of the screws along the strip, ';'-separated",
+    "setting_blocks": "panel: the setting blocks under its lower edge, '2 x <length> mm'",
+    "slots": "beam plate: how many half-lap slots are cut into it",
+    "splices": "beam plate: the splice cover plates on its cuts, ';'-separated",
+    "strip": "retention part, screw: the glazing strip it sits over",
+    "weld": "strip: its weld to the beam plate",
+}
+"""Every further column of ``parts.csv`` with what it holds (units mm and kg unless said); in the file they
+follow :data:`PARTS_KNOWN_COLUMNS`, sorted by name.  A cell that does not apply to a part's kind is blank."""
+
 ORDER_COLUMNS = ["type_id", "quantity", "parts", "width_mm", "height_mm", "area_mm2", "material", "thickness_mm",
                  "rotations", "mirror_allowed", "file"]
 """The first columns of ``glass_order.csv`` (one row per panel type); :data:`ORDER_SHAPE_COLUMNS` follow."""

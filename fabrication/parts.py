@@ -94,7 +94,8 @@ def part_rows(parts: list[FlatPart], placements: list[Placement] | None = None,
 
 
 def columns(rows: list[dict]) -> list[str]:
-    """Contract columns, then the known ones present, then any others (sorted)."""
+    """Contract columns, then the known ones present, then any others (sorted by name: those of
+    :data:`~fabrication.contract.PARTS_MORE_COLUMNS` in a build of this version)."""
     present = {k for r in rows for k in r}
     cols = PARTS_CONTRACT_COLUMNS + [c for c in PARTS_KNOWN_COLUMNS if c in present]
     return cols + sorted(present - set(cols))

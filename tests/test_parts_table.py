@@ -72,3 +72,24 @@ def test_the_sheet_files_the_parts_list_names_are_the_ones_written(counted):
                          if code == 1000 and str(v).startswith("part_id=")}
         assert r["part_id"] in ids_on[f], (r["part_id"], f)
     assert len(ids_on) == b.nesting.glass.sheets + b.nesting.plates.sheets
+
+
+def test_every_column_of_the_parts_list_is_named_in_the_contract(counted):
+    """``contract.py`` names every column a build writes (with what it holds), and the file's column order is the
+    rule of :func:`fabrication.parts.columns`: the contract's, the known ones in order, the rest sorted."""
+    from fabrication.contract import PARTS_CONTRACT_COLUMNS, PARTS_KNOWN_COLUMNS, PARTS_MORE_COLUMNS
+
+    b, out, _, _ = counted
+    named = set(PARTS_CONTRACT_COLUMNS) | set(PARTS_KNOWN_COLUMNS) | set(PARTS_MORE_COLUMNS)
+    present = {k for r in b.parts for k in r}
+    assert present - named == set()
+    kinds = {r["kind"] for r in b.parts}
+    assert {"panel", "beam", "strip"} <= kinds                      # the vault has glazing strips
+    with open(out / "parts.csv", newline="", encoding="utf-8") as fh:
+        header = next(csv.reader(fh))
+    k = len(PARTS_CONTRACT_COLUMNS)
+    assert header[:k] == PARTS_CONTRACT_COLUMNS
+    known = [c for c in header[k:] if c in PARTS_KNOWN_COLUMNS]
+    rest = [c for c in header[k:] if c not in PARTS_KNOWN_COLUMNS]
+    assert header[k:] == known + rest and rest == sorted(rest)
+    assert known == [c for c in PARTS_KNOWN_COLUMNS if c in known]
