@@ -45,6 +45,8 @@ PARTS_MORE_COLUMNS: dict[str, str] = {
     "mass_kg": "beam plate, strip, splice cover plate, retention part, screw: its mass (steel as cut, before "
                "planing a bevel; screws: all of the row's quantity)",
     "nodes": "beam plate: JSON list of the mesh vertices it runs through, in order",
+    "notches": "beam plate: JSON list of the notches of its top edge under strips of other beams that run over "
+               "it, each {strip, node, depth_mm, length_mm} (fabrication.beams.notch)",
     "owner": "retention part: the pane it holds (a screw: the pressure plate it clamps)",
     "piece": "beam plate: 0-based piece of its beam",
     "pieces": "beam plate: how many pieces its beam is cut into",

@@ -139,6 +139,8 @@ def flat_part(plate: BeamPlate, material: str = "", density: float = 0.0, type_i
         meta["hole_mm"] = float(plate.holes[0, 2])
     if plate.bevels:
         meta["bevels"] = len(plate.bevels)
+    if plate.notches:
+        meta["notches"] = [n.cell() for n in plate.notches]
     return HoledPart(plate.part_id, "beam", plate.flat_outline.copy(), marks=axis_marks(plate), label=plate.part_id,
                      type_id=type_id, rotations=None, mirror_allowed=True, meta=meta, holes=plate.holes.copy(),
                      bevels=bevel_marks(plate))

@@ -129,6 +129,8 @@ class BeamPlate:
         (:class:`fabrication.beams.bevel_cut.TopBevel`, in span order; empty: a square top edge)
     cut_outline : ``(r, 2)`` what is cut from the sheet when the plate has bevels (the outline raised by ``Δ``
         on the bevelled spans), else ``None``; ``outline`` stays the plate's section in its mid-plane
+    notches : the notches of its top edge under the glazing strips of other beams that run over it
+        (:class:`fabrication.beams.notch.Notch`; ``outline`` is already cut by them)
     """
 
     part_id: str
@@ -155,6 +157,7 @@ class BeamPlate:
     holes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     bevels: tuple = ()
     cut_outline: np.ndarray | None = None
+    notches: tuple = ()
 
     @property
     def flat_outline(self) -> np.ndarray:

@@ -25,6 +25,7 @@ from ppfab.support.structure import SupportStructure
 
 from ..beams import BeamSet
 from ..beams.bevel_cut import bevelled_beams
+from ..beams.notch import notched_beams
 from ..nesting import Nesting
 from ..design import Design
 from .progress import Progress
@@ -59,6 +60,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         panels = stage_panels(design, geometry, p, quality)
         beams = stage_beams(design, support, p)
         glazing = stage_glazing(design, support, panels, beams, p)
+        beams = notched_beams(beams, glazing)        # top edges cut down under the strips of other beams
         beams = bevelled_beams(beams, glazing)       # top edges raised and bevelled under leaning strips
         nesting = stage_nesting(design, panels, beams, p)
         nodes = stage_nodes(beams, p)

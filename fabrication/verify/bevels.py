@@ -113,8 +113,12 @@ def plate_faces(solid, frame: dict[str, np.ndarray]) -> PlateFaces | None:
     front, back = _ccw(rings[0][:, :2]), _ccw(rings[-1][:, :2])
     mid = None
     if len(front) == len(back):
-        k = int(np.argmin(np.linalg.norm(back - front[0], axis=1)))
-        aligned = np.roll(back, -k, axis=0)
+        # the turn of the back ring that lies closest to the front one corner by corner (not the corner nearest
+        # front[0]: a notch's wall can be shorter than the bevel moves a corner along it)
+        n = len(front)
+        turns = np.stack([np.roll(back, -k, axis=0) for k in range(n)])
+        k = int(np.argmin(np.linalg.norm(turns - front[None], axis=2).max(axis=1)))
+        aligned = turns[k]
         if float(np.linalg.norm(aligned - front, axis=1).max()) < 0.5 * float(np.ptp(front, axis=0).min()):
             mid = 0.5 * (front + aligned)
     cut = faces_union(front, back)

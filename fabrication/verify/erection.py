@@ -221,6 +221,11 @@ def body_of(solid: Any) -> Body:
     other = _opposite_ring(solid, face, n, text)
     if other is not None:                               # a bevelled plate's faces differ: the part both hold
         flat = flat.intersection(Polygon(to2(other)).buffer(0))
+        if flat.geom_type == "GeometryCollection":      # the faces meet along a notch's wall: a line beside it
+            import shapely
+            from shapely.ops import unary_union
+
+            flat = unary_union([g for g in shapely.get_parts(flat) if g.geom_type == "Polygon"])
     convex = abs(flat.area - MultiPoint(to2(pts)).convex_hull.area) <= 1e-4 * max(flat.area, 1.0)
     return Body(pts, convex, fo, ex, ey, n, thick, flat)
 

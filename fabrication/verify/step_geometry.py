@@ -9,7 +9,7 @@ For each beam solid (read by the ``step`` check) and its ``parts.csv`` row:
   ``beams.plane_tolerance``, its axis (``nodes.csv``) lies in the plane within the torsion tolerance at beam
   depth, and its top point lies on the plate's outline — or, where a half-lap slot or an end cut takes
   material away (``nodes.json``), within the distance at which the plate's top edge leaves the strip cut
-  away: the strip is ``r = w/2 + set-back`` wide either side of the node axis (``w`` the slot width), so
+  away, deeper by the notch under a crossing glazing strip there (``parts.csv`` ``notches``): the strip is ``r = w/2 + set-back`` wide either side of the node axis (``w`` the slot width), so
   along a top edge at angle ``θ`` to the in-plane axis the corner lies ``r / sin θ`` from the node (the
   smallest ``θ`` over the mesh edges from the node that lie in the plate's plane);
 * every half-lap slot: at a through node of a ``halflap`` joint, the outline has edges on both lines
@@ -31,6 +31,17 @@ from . import Verification, check
 from .bevels import plate_faces
 from ._shapes import boundary_distance, edges_on_line, face_outline, frame_of, literal, number, solid_points, \
     to_frame, torsion_tolerance
+
+
+def _notch_depths(row: dict) -> dict[int, float]:
+    """Node → the depth (mm) of the deepest notch the plate of ``row`` has there under a strip of another beam
+    (``parts.csv`` ``notches``, rounded there to 0.01 mm: the half of it is added back); empty without notches."""
+    cell = literal(row.get("notches", "")) if row.get("notches") else None
+    out: dict[int, float] = {}
+    for n in cell if isinstance(cell, list) else []:
+        if isinstance(n, dict) and isinstance(n.get("node"), int) and isinstance(n.get("depth_mm"), (int, float)):
+            out[n["node"]] = max(out.get(n["node"], 0.0), float(n["depth_mm"]) + 0.005)
+    return out
 
 
 def _node_plates(v: Verification) -> dict[int, dict[str, dict]]:
@@ -123,6 +134,7 @@ def check_step_geometry(v: Verification) -> None:
             continue
         plane = np.asarray(plane, dtype=float)
         plane = plane / np.linalg.norm(plane[:3])
+        notched = _notch_depths(row)
         solid = solids[pid]
         local = to_frame(solid_points(solid), frame)
         off = float(np.abs(np.abs(local[:, 2]) - 0.5 * t).max()) if len(local) else float("inf")
@@ -179,9 +191,10 @@ def check_step_geometry(v: Verification) -> None:
             gap = float(boundary_distance(q[None], poly)[0])
             allowed = (0.5 * width + trim) / _smallest_sine(q, s, frame, plane, mesh.vertices,
                                                            neighbours.get(k, set()), plane_tol)
+            allowed += notched.get(k, 0.0)
             if gap > allowed + 1e-6:
                 v.error(rel, name, f"the node's top point is {gap:.3g} mm from the plate's outline "
-                                   f"(at most {allowed:.3g} mm where slot and end cut take material away)")
+                                   f"(at most {allowed:.3g} mm where slot, end cut and notch take material away)")
                 continue
             side = np.array([-s[1], s[0]])
             if info.get("joint") == "halflap" and info.get("role") == "through" and width > 0:
