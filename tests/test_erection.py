@@ -174,3 +174,27 @@ def test_strips_hung_inside_the_plates_are_named(tmp_path, monkeypatch):
     assert all(re.search(r"overlaps B-[UW]\d\d-S\d\d ", f.message) for f in inside)     # inside a beam plate
     more = [f for f in v.findings if "more parts inside a beam plate" in f.message]
     assert len(inside) == 20 and more and int(more[0].message.split()[0]) > 50      # strips, caps, screws ...
+
+
+def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_the_roof():
+    """Under a fold of the roof (a pane 1 m above a cover cap, as on the Enneper example), a cap swept down from
+    beyond every earlier part goes through that pane; from ``HAND_APPROACH_MM`` above its place it does not, and
+    a pane within that reach is still passed through."""
+    import numpy as np
+
+    from fabrication.verify.erection import HAND_APPROACH_MM, Body, sweep_passes
+
+    def box(z0: float, size: float = 100.0, thick: float = 10.0) -> Body:
+        c = np.array([[x, y, z] for x in (0.0, size) for y in (0.0, size) for z in (z0, z0 + thick)])
+        return Body(c, True, c[0], np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]), thick,
+                    None)
+
+    down = np.array([0.0, 0.0, -1.0])
+    for above, hand, passes in ((1000.0, True, False), (1000.0, False, True), (100.0, True, True)):
+        bodies = {"P-fold": box(above), "CC-cap": box(0.0)}
+        order = [("P-fold", 1, down), ("CC-cap", 2, down)]
+        found = sweep_passes(order, bodies, {"CC-cap": HAND_APPROACH_MM} if hand else None)
+        deep = [p for p in found if p.depth > 0.25]
+        assert bool(deep) == passes, (above, hand)
+        if passes:
+            assert deep[0].depth == pytest.approx(10.0, abs=1e-6)      # through the pane's whole thickness

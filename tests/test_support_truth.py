@@ -61,11 +61,23 @@ def _axes(folder):
 @pytest.mark.slow
 def test_flipped_support_is_the_same_in_mesh_json_and_nodes_csv(tmp_path):
     plain, flipped = tmp_path / "plain.toml", tmp_path / "flipped.toml"
-    plain.write_text(small_design())
-    flipped.write_text(small_design(extra="[support]\nflip = true\n"))
+    # the beams on the glass's outside carry no glazing strips of ppfab's (they would lie inside the plates)
+    plain.write_text(small_design(extra="[glazing]\nsupport = \"none\"\n"))
+    flipped.write_text(small_design(extra="[support]\nflip = true\n[glazing]\nsupport = \"none\"\n"))
     for d, out in ((plain, "a"), (flipped, "b")):
         assert main(["build", str(d), "-o", str(tmp_path / out), "--quiet"]) == 0
     a_nodes, a_grid = _axes(tmp_path / "a")
     b_nodes, b_grid = _axes(tmp_path / "b")
     assert np.abs(b_grid - b_nodes).max() < 1e-8 and np.abs(a_grid - a_nodes).max() < 1e-8
     assert np.abs(b_nodes + a_nodes).max() < 1e-8                   # flipped: the other side, same lines
+
+
+def test_beams_on_the_outside_with_glazing_strips_are_refused_before_building(tmp_path, capsys):
+    """``flip = true`` with ppfab's glazing strips would put the strips and retention parts inside the plates
+    (12 mm deep: the erection check found them all): refused at the support stage, one line naming the key."""
+    d = tmp_path / "flipped.toml"
+    d.write_text(small_design(extra="[support]\nflip = true\n"))
+    assert main(["build", str(d), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppfab: ") and err.count("\n") == 1 and "support.flip" in err and "inside the plates" in err
+    assert not (tmp_path / "out").exists()

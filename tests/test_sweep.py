@@ -363,13 +363,20 @@ def test_files_stage_writes_a_verified_build_per_variant(tmp_path):
 
 
 @pytest.mark.slow
+def _default_sigint() -> None:
+    """In the child before it runs Python: SIGINT as a terminal gives it.  A test worker may run with SIGINT
+    ignored, and a Python started with it ignored never raises KeyboardInterrupt (the sweep then ran all 12
+    variants through the Ctrl-C and exited 0 in one run of the suite)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_on_the_command_line_leaves_a_consistent_table(tmp_path):
     spec = write_sweep(tmp_path, 'stage = "nesting"\n[vary]\n"panels.gap" = [10.0, 12.0, 14.0, 16.0, 18.0, 20.0]\n'
                                  '"beams.depth" = [150.0, 170.0]\n')
     out = tmp_path / "res"
     sweep = subprocess.Popen([sys.executable, "-m", "fabrication.cli", "sweep", str(spec), "-o", str(out),
                               "--workers", "1", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             start_new_session=True)
+                             start_new_session=True, preexec_fn=_default_sigint)
     try:
         deadline = time.monotonic() + 300
         while sweep.poll() is None and time.monotonic() < deadline and not (out / "results.csv").exists():

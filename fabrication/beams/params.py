@@ -45,8 +45,9 @@ class BeamParams:
                                            "degenerate", min=0, exclusive_max=90)
     min_segment: float = param(10.0, doc="shortest acceptable edge or trimmed segment, mm", min=0)
     max_length: float = param(6000.0, doc="longest flat piece, mm (its extent along its chord); longer beams "
-                                          "(and every closed one) are cut between nodes, clear of the joints; "
-                                          "0 = never split", min=0)
+                                          "(and every closed one) are cut between nodes, clear of the joints, "
+                                          "into pieces one plate thickness shorter (room for the raised edge of "
+                                          "a bevel under the glazing strips); 0 = never split", min=0)
     max_torsion_mm: float = param(0.5, doc="largest torsion of the support structure, as the offset at the "
                                            "beam's bottom edge: how far, mm, the node axis at one end of an edge, "
                                            "followed for the depth, leaves the plane of the edge and the other "

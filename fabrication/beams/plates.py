@@ -404,15 +404,18 @@ def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: 
     vs = line.vertices
     closed = bool(line.closed and len(vs) > 2)
     joints = _node_clearance(support, params, l)
+    # a plate's top edge raised by a bevel under its strips (fabrication.beams.bevel_cut) meets its end cuts
+    # further out: the pieces are planned one thickness shorter (a conical example's piece grew 4.7 mm)
+    max_length = max(params.max_length - params.thickness, 0.5 * params.max_length) if params.max_length else 0.0
     tried: list[str] = []
     for kind, extra in splice_clearances:
         plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
-                         params.max_length, joints + extra, max_height)
+                         max_length, joints + extra, max_height)
         pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
         sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
         long_x = max(x for x, _ in sizes)
         high_y = max(y for _, y in sizes)
-        over = ((params.max_length > 0 and long_x > params.max_length + 1e-6)
+        over = ((max_length > 0 and long_x > max_length + 1e-6)
                 or (max_height > 0 and high_y > max_height + 1e-6))
         if not (plan.problem or over):
             if len(pieces) > 1:

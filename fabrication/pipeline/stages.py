@@ -152,6 +152,12 @@ def stage_support(design: Design, geometry: Geometry, progress: Progress) -> Sup
     progress.start("support")
     beams = BeamContext(design.beams.depth, design.beams.max_torsion_mm)
     params = design.support
+    if params.flip and design.glazing.support == "strip":
+        # the beams on the outside: the glass would hang below them, its strips and retention inside the steel
+        raise DesignError("support.flip", "true hangs the beams on the glass's outside, where the glazing strips "
+                                          "and retention parts of [glazing] would lie inside the plates; set "
+                                          "[glazing] support = \"none\" (a glazing system of your own under the "
+                                          "steel) or leave flip = false")
     if outside_sign(geometry.mesh, design.panels.outside) < 0:      # the glass is on the faces' back: the beams
         params = replace(params, flip=not params.flip)               # hang on their front (axes turned with it)
     support = support_structure(geometry.mesh, params, planar_families=geometry.planar_families or None,

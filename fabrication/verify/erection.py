@@ -10,7 +10,8 @@ The solids come from the STEP files (``beams.step`` as the step check read it, `
 nothing is shared with the code that made the order: a convex solid is the hull of its vertices, any other (a
 slotted plate, a cover plate with holes, a non-convex pane) that face's polygon extruded by the solid's
 thickness.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment ``[−L·d, 0]``, with
-``L`` far enough that it starts beyond every part of the earlier steps: for a convex solid the hull of the solid and the solid moved back by ``L``; for a plate moving in its own plane the extrusion of its
+``L`` far enough that it starts beyond every part of the earlier steps (a retention part, fitted by hand, from
+:data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hull of the solid and the solid moved back by ``L``; for a plate moving in its own plane the extrusion of its
 polygon's 2D Minkowski sum with the segment; otherwise the union of the hulls of the prisms over the polygon's
 triangles and their moved copies.  The sweep is intersected with every part of an
 earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours); the *depth* of an
@@ -34,6 +35,14 @@ from typing import Any
 import numpy as np
 
 from . import Verification, check, read_csv
+
+HAND_APPROACH_MM = 300.0
+"""How far (mm) a part fitted by hand (:data:`BY_HAND`) is brought along its direction before it reaches its place:
+it comes from the installer's reach, not from beyond the whole roof (on a surface that folds over itself, a
+cover cap swept from beyond every part went through the panes of the fold above it: Enneper, 17.5 mm)."""
+
+BY_HAND = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
+"""The kinds of ``erection.csv`` fitted by hand: the retention parts."""
 
 TOLERANCE = 0.25
 """mm: the depth up to which a sweep may overlap an earlier part: a pane may sit 0.1 mm into its gasket
@@ -347,10 +356,12 @@ def _perp(d: np.ndarray) -> np.ndarray:
     return np.stack([e1, np.cross(d, e1)])
 
 
-def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Body]) -> list[Pass]:
+def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Body],
+                 approach: dict[str, float] | None = None) -> list[Pass]:
     """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
-    part of an earlier step, against those whose boxes (3D and seen along the direction) overlap its sweep: one
-    :class:`Pass` per pair measured (depth and volume 0 when they do not intersect)."""
+    part of an earlier step (from ``approach[id]`` mm beyond its place where given: a part fitted by hand), against
+    those whose boxes (3D and seen along the direction) overlap its sweep: one :class:`Pass` per pair measured
+    (depth and volume 0 when they do not intersect)."""
     out: list[Pass] = []
     names = [pid for pid, _, _ in order if pid in bodies]
     if not names:
@@ -366,6 +377,8 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
         earlier = steps < step
         reach = float((centre[earlier] @ -d + half[earlier] @ np.abs(d)).max())   # farthest earlier box along −d
         far = max(reach - float((body.points @ -d).min()) + 1.0, 1.0)
+        if approach and pid in approach:
+            far = min(far, approach[pid] + float(np.ptp(body.points @ d)))
         allp = np.vstack([body.points, body.points - far * d])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
         e = _perp(d)
@@ -485,9 +498,11 @@ def check_erection(v: Verification) -> None:
         bodies.update(one)
     order = [(name, step, d) for pid, step, d in order for name in (list(screws[pid]) if pid in screws else [pid])]
     blocked = {pid: spread for pid, _, _, _, spread in rows if spread}
+    kind_of = {pid: kind for pid, kind, *_ in rows}
     beams = {r["part_id"] for r in parts if r.get("kind") == "beam"}
     passes = [replace(p, part=p.part.split("#")[0], through=p.through.split("#")[0])
-              for p in sweep_passes(order, bodies)]             # a screw's pass named by its row of parts.csv
+              for p in sweep_passes(order, bodies, {name: HAND_APPROACH_MM for name, _, _ in order
+                                                    if kind_of.get(name.split("#")[0]) in BY_HAND})]
     deep = [p for p in passes if p.excess > TOLERANCE]
     v.data["erection_passes"] = passes
     kinds = {pid: kind for pid, kind, *_ in rows}

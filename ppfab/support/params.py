@@ -41,7 +41,8 @@ class SupportParams:
                                                 "vertices (a beam along such an axis meets the glass at less "
                                                 "than 90° minus this; the paper's PP constructions reach 60°)",
                                       exclusive_min=0, max=90)
-    flip: bool = param(False, doc="turn all axes to the other side (beams on the outside)")
+    flip: bool = param(False, doc="turn all axes to the other side (beams on the outside; with [glazing] "
+                                  "support = 'none': ppfab's strips would lie inside the plates)")
 
     def __post_init__(self) -> None:
         from .lines import RULES
