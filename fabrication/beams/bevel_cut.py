@@ -234,7 +234,15 @@ def cut_outline(front: np.ndarray, back: np.ndarray) -> np.ndarray:
         union = polygons[0] if len(polygons) == 1 else union
     if union.geom_type != "Polygon" or len(union.interiors):       # pragma: no cover - faces overlap by design
         raise BevelError("the two faces of a bevelled plate do not overlap into one outline")
-    q = _clean(np.asarray(union.exterior.coords))
+    # a point snap rounding put a few 1e-7 mm beside a corner where the faces' collinear edges meet goes onto that
+    # corner (kept beside it, both would be dropped below as straight, and the corner with them)
+    from scipy.spatial import cKDTree
+
+    ring = np.asarray(union.exterior.coords)[:-1]
+    corners = np.vstack([front, back])
+    d, k = cKDTree(corners).query(ring)
+    ring = np.where((d <= 1e-5)[:, None], corners[k], ring)
+    q = _clean(np.vstack([ring, ring[:1]]))
     # a corner where the two faces cross on (nearly) one line is no corner of the cut: its distance from the line
     # through its neighbours is under STRAIGHT_MM (as the step file's decimals leave it)
     prev, nxt = np.roll(q, 1, axis=0), np.roll(q, -1, axis=0)
