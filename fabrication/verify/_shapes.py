@@ -53,17 +53,28 @@ def to_frame(points: np.ndarray, frame: dict[str, np.ndarray]) -> np.ndarray:
     return np.stack([d @ frame["x_dir"], d @ frame["y_dir"], d @ frame["normal"]], axis=1)
 
 
+SAME_POINT_MM = 1e-7
+"""Two consecutive points of an outline closer than this (mm) are one (the cut outline's rule, ``joints._clean``)."""
+
+
 def merge_close(ring: np.ndarray, corners: np.ndarray, tol: float) -> np.ndarray:
     """``ring (k, 2)`` with every point within ``tol`` (mm) of one of ``corners (m, 2)`` moved onto it, then each
-    run of consecutive equal points kept once.  Snap rounding can put a point a few 1e-7 mm from a corner where
+    run of consecutive points within :data:`SAME_POINT_MM` kept once.  Snap rounding can put a point a few 1e-7 mm from a corner where
     two faces' collinear edges meet; were both kept, each would lie on the line through its neighbours and the
     corner would be dropped with them (a notched plate's union lost a 33 mm² corner that way)."""
     from scipy.spatial import cKDTree
 
     d, k = cKDTree(corners).query(ring)
     out = np.where((d <= tol)[:, None], corners[k], ring)
-    keep = np.linalg.norm(out - np.roll(out, 1, axis=0), axis=1) > 1e-12
-    return out[keep] if keep.any() else out[:1]
+    # a point may go onto the front face's corner and its neighbour onto the back face's, 1e-10 mm apart: such a
+    # pair is one point (kept, both would be dropped as straight by any collinearity test)
+    kept = [out[0]]
+    for p in out[1:]:
+        if np.linalg.norm(p - kept[-1]) > SAME_POINT_MM:
+            kept.append(p)
+    while len(kept) > 1 and np.linalg.norm(kept[-1] - kept[0]) <= SAME_POINT_MM:
+        kept.pop()
+    return np.asarray(kept)
 
 
 def faces_union(front: np.ndarray, back: np.ndarray, grid: float | None = None) -> np.ndarray | None:
