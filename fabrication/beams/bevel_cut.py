@@ -210,9 +210,14 @@ def _valid_faces(plate: BeamPlate) -> tuple[np.ndarray, np.ndarray] | None:
         front, back = face_outlines(plate)
     except BevelError:
         return None
+    q = _split_at_nodes(plate, np.asarray(plate.outline, dtype=float))
+    along = np.roll(q, -1, axis=0) - q
     for ring in (front, back):
         poly = Polygon(ring)
         if not poly.is_valid or polygon_area(ring) <= 0:
+            return None
+        # an edge a bevel's corner moved past its other end turns round on that face: the side face folds
+        if len(ring) == len(q) and np.any(np.einsum("ij,ij->i", np.roll(ring, -1, axis=0) - ring, along) <= 0):
             return None
     return front, back
 

@@ -50,7 +50,10 @@ keep a length on both faces and the faces' side walls stay planar quads, :mod:`f
 
 END_MM = 100.0
 """A notch that comes within this (mm, along the top edge) of the plate's end runs out over the end: no sliver of
-top edge is left between it and the end cut (an edge shorter than a bevel moves it cannot be bevelled)."""
+top edge is left between it and the end cut (an edge shorter than a bevel moves it cannot be bevelled).  Where
+that end is a splice cut (the plate one piece of a longer beam) the notch is not made: the cover plates of the
+splice sit a set distance under the full top edge there, and the two pieces' cut edges must stay the same; the
+strip's overlap there stays a warning of the erection check."""
 
 HEADROOM_MM = 1.0e4
 """How far above the strip's underside the region to cut reaches (it only bounds the polytope: the plate below
@@ -60,8 +63,9 @@ its top edge never reaches it)."""
 @dataclass(frozen=True)
 class Notch:
     """A notch of a plate under the strips of another beam that run over one of its nodes: the strips (part ids,
-    ``;``-separated), the node, the notch's depth below the plate's top edge (mm, square to the edge at its
-    deepest) and its length along the top edge (mm)."""
+    ``;``-separated), the node, the notch's depth below the plate's top edge (mm: the larger of its floor's depth
+    square to the edge and the distance of the node's top point from the notched outline) and its length along
+    the top edge (mm)."""
 
     strip: str
     node: int
@@ -140,7 +144,14 @@ def _span_deltas(plate: BeamPlate, own: Sequence["Strip"]) -> dict[int, float]:
     return {c: float(strip_bevel(s, plate, 90.0).delta_mm) for c, s in span_strips(plate, own).items()}
 
 
-def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float]) -> tuple[list[np.ndarray], float,
+def _end_is_node(plate: BeamPlate) -> tuple[bool, bool]:
+    """Whether the plate's first and last top points are nodes (an end cut at a node), not splice cuts."""
+    chain = np.asarray(plate.chain)
+    return bool(np.any(chain == 0)), bool(np.any(chain == len(plate.top) - 1))
+
+
+def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float], extra: float = 0.0
+                  ) -> tuple[list[np.ndarray], float,
                                                                                           float]:
     """The notch cut for the points ``taken (m, 2)`` of the plate that lie in a crossing strip's grown box: on each
     top-edge span they reach, a rectangle square to the span from above the edge down to ``D`` below it over
@@ -171,15 +182,21 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float])
         depth = float(np.max((taken[inside] - p0) @ inward))
         if depth < MIN_NOTCH_MM:
             continue
-        D = depth + deltas.get(c, 0.0) + BEVEL_MARGIN_MM
+        # below the bevel's reach on this span and its neighbours (the rectangle runs past a node into the next)
+        D = depth + max(deltas.get(k, 0.0) for k in (c - 1, c, c + 1)) + BEVEL_MARGIN_MM + extra
         lo, hi = float(along[inside].min()), float(along[inside].max())
         # past a node by D (the next span's rectangle overlaps it), elsewhere by the clearance (no sliver is left
         # between the notch's end and an end cut that is not square to the span)
         lo -= D if lo <= 1e-6 else NOTCH_CLEARANCE_MM
         hi += D if hi >= L - 1e-6 else NOTCH_CLEARANCE_MM
-        if c == 0 and lo < END_MM:                       # at the plate's end: the notch runs out over its end cut
-            lo = -HEADROOM_MM
+        first_node, last_node = _end_is_node(plate)
+        if c == 0 and lo < END_MM:
+            if not first_node:                           # a splice cut: its cover plates need the full top edge
+                return [], 0.0, 0.0
+            lo = -HEADROOM_MM                            # at the plate's end: the notch runs out over its end cut
         if c == len(top) - 2 and hi > L - END_MM:
+            if not last_node:
+                return [], 0.0, 0.0
             hi = L + HEADROOM_MM
         up = -inward * HEADROOM_MM
         rects.append(np.array([p0 + lo * e + up, p0 + lo * e + D * inward, p0 + hi * e + D * inward,
@@ -189,18 +206,38 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float])
     return rects, deepest, length
 
 
-def notch_plate(plate: BeamPlate, strips: Sequence["Strip"],
-                clearance: float = NOTCH_CLEARANCE_MM) -> BeamPlate:
+def notch_plate(plate: BeamPlate, strips: Sequence["Strip"], clearance: float = NOTCH_CLEARANCE_MM,
+                bevel_min_deg: float | None = None) -> BeamPlate:
     """The plate with its outline cut under every strip of another beam that crosses one of its nodes (its
     :attr:`~BeamPlate.outline` less the square notch of each :func:`notch_region`, the notches in
-    :attr:`~BeamPlate.notches`); the plate itself when none is deeper than :data:`MIN_NOTCH_MM`."""
+    :attr:`~BeamPlate.notches`); the plate itself when none is deeper than :data:`MIN_NOTCH_MM`.  With
+    ``bevel_min_deg`` the notches are deepened (by the largest bevel of the plate, up to three times) until the
+    bevel of the notched plate can be drawn: a notch's wall shorter than a bevel moves its corner folds the face."""
+    deltas = _span_deltas(plate, [s for s in strips if s.beam_id == plate.beam_id])
+    reach = max(deltas.values(), default=0.0)
+    out = plate
+    for extra in (0.0, reach, 2.0 * reach, 3.0 * reach):
+        out = _notched(plate, strips, clearance, deltas, extra)
+        if bevel_min_deg is None or not out.notches or reach <= 0 or _bevel_drawable(out, strips, bevel_min_deg):
+            return out
+    return out
+
+
+def _bevel_drawable(plate: BeamPlate, strips: Sequence["Strip"], min_deg: float) -> bool:
+    from .bevel_cut import _valid_faces, top_bevels
+
+    bevels = top_bevels(plate, [s for s in strips if s.beam_id == plate.beam_id], min_deg)
+    return not bevels or _valid_faces(replace(plate, bevels=bevels)) is not None
+
+
+def _notched(plate: BeamPlate, strips: Sequence["Strip"], clearance: float, deltas: dict[int, float],
+             extra: float) -> BeamPlate:
     from shapely.geometry import Polygon
     from shapely.ops import unary_union
 
     from .joints import _clean
 
     outline = Polygon(plate.outline)
-    deltas = _span_deltas(plate, [s for s in strips if s.beam_id == plate.beam_id])
     at: dict[int, list] = {}
     for s, node in _crossing_strips(plate, strips):
         at.setdefault(node, []).append(s)
@@ -215,7 +252,7 @@ def notch_plate(plate: BeamPlate, strips: Sequence["Strip"],
             continue
         pts = np.concatenate([np.asarray(g.exterior.coords) for g in getattr(taken, "geoms", [taken])
                               if g.geom_type == "Polygon"])
-        rects, depth, length = _square_notch(plate, pts, deltas)
+        rects, depth, length = _square_notch(plate, pts, deltas, extra)
         if not rects:
             continue
         rest = outline.difference(unary_union([Polygon(r) for r in rects]))
@@ -225,6 +262,13 @@ def notch_plate(plate: BeamPlate, strips: Sequence["Strip"],
         notches.append(Notch(";".join(sorted(s.part_id for s in crossing)), node, depth, length))
     if not notches:
         return plate
+    # the depth at the node is what the cut leaves there: where two spans' rectangles meet at a kink of the top
+    # edge, the floor's corner lies D / cos(kink / 2) below the node's top point, a little more than D
+    from shapely.geometry import Point
+
+    chain = {int(n): int(c) for n, c in zip(plate.nodes, plate.chain)}
+    notches = [replace(n, depth=max(n.depth, float(outline.exterior.distance(Point(plate.top[chain[n.node]])))))
+               if n.node in chain else n for n in notches]
     return replace(plate, outline=_clean(np.asarray(outline.exterior.coords)), notches=tuple(notches))
 
 
@@ -242,7 +286,7 @@ def notched_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
     plates = []
     for p in beams.plates:
         near = {id(s): s for k in p.nodes for s in at_node.get(int(k), [])}
-        plates.append(notch_plate(p, list(near.values())))
+        plates.append(notch_plate(p, list(near.values()), bevel_min_deg=glazing.params.bevel_min_deg))
     notched = {p.part_id: p for p in plates if p.notches}
     if not notched:
         return beams

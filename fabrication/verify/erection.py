@@ -356,6 +356,12 @@ def _perp(d: np.ndarray) -> np.ndarray:
     return np.stack([e1, np.cross(d, e1)])
 
 
+def _holds(part: str, pane: str) -> bool:
+    """Whether retention part ``part`` is a setting block or stop of pane ``pane`` (``SB-U07-V12-1`` and
+    ``ST-U07-V12-1`` of ``P-U07-V12``); pressure plates, their gaskets and caps go on after the panes they clamp."""
+    return part[:2] in ("SB", "ST") and part[2:].rsplit("-", 1)[0] == pane[1:]
+
+
 def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Body],
                  approach: dict[str, float] | None = None) -> list[Pass]:
     """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
@@ -546,9 +552,16 @@ def check_erection(v: Verification) -> None:
             "or cover plate "
             "on their way in (%s): no single straight way in past leaning steel; fit them before that plate, from the "
             "side, or split them", len(onto_steel), ", ".join(onto_steel[:6]))
+    # a pane that has no straight way in past the steel or glazing of a fold above it meets the setting blocks,
+    # stops and caps of that fold's panes on the same way: the same warning, not another finding (its own blocks
+    # stay findings: they would be set where the pane cannot come down onto them)
+    fitted = {pid for pid, kind, *_ in rows if kind in RETENTION}
+    others = {(p.part, p.through) for p in deep if kinds.get(p.part) == "panel" and p.part in onto_steel
+              and p.through in fitted and not _holds(p.through, p.part)}
     shown = 0
     for p in sorted(deep, key=lambda p: -p.depth):
-        if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel | glazing):
+        if (p.part in blocked and p.through in beams) or (p.part in onto_steel and p.through in steel | glazing) \
+                or (p.part, p.through) in others:
             continue
         if shown < 20:
             v.error(rel, p.part, f"passes through {p.through} by {p.depth:.2f} mm ({p.volume:.0f} mm³) on its way in "
