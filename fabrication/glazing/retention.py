@@ -48,7 +48,7 @@ import logging
 import math
 import re
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
@@ -278,6 +278,9 @@ class ScrewSet:
     length: float
     diameter: float
     stations: tuple[float, ...]
+    clearance_mm: float = math.inf
+    """The least clear distance between a screw and the glass of the panes beside its joint
+    (:func:`screw_clearance`; negative: the screw would go into the glass)."""
 
     def axes(self) -> np.ndarray:
         """``(n, 2, 3)``: every screw's axis, from its foot on the strip to its top."""
@@ -425,6 +428,52 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
             height = max(min(top - base, reach), 1.0)
             out.append(Prism(pid, kind, owner, sid, beam, f, rect, base, height))
     return out
+
+
+def screw_clearance(axes: np.ndarray, diameter: float, panes: Sequence[tuple["Panel", int, float]]) -> float:
+    """How far (mm) the glass beside the clamping screws' joint could move towards them, in the pane's plane, before
+    it touches one; negative: the screw is in the glass, and the pane's edge would have to move back that much —
+    ``[panels] gap`` widened by twice it.  The screws are cylinders of ``diameter`` on ``axes (n, 2, 3)`` (foot,
+    top).
+
+    ``panes``: each pane on the strip, its outline edge ``k`` over the strip and its seat (mm above its face plane).
+    Seen along the edge, in coordinates ``p = ((x − a)·m, (x − a)·N)`` about the edge's point ``a`` (``m`` the
+    outward unit normal of the edge in the pane's plane, ``N`` the pane's normal), the glass is the half-strip
+    ``p_m ≤ 0, 0 ≤ p_N − seat ≤ t``.  Moved by ``c`` along ``m`` it touches the screw's axis thickened by ``r`` when
+    ``c = p_m − r·√(u_m² + u_N²)/|u_N|`` at the axis's point on the glass's underside or top (``u`` the axis's
+    direction: the disc of radius ``r`` across the tilted axis reaches that far along ``m`` at one level of
+    ``N``), whichever is less; ``c`` is linear along the axis, so these two ends of its part in the glass's slab
+    bound it.  A kink that tilts the edge face over the joint (a valley) closes it at the glass's top by about
+    ``t·tan(κ/2)``."""
+    axes = np.asarray(axes, dtype=float).reshape(-1, 2, 3)
+    r = 0.5 * diameter
+    least = math.inf
+    for panel, k, seat in panes:
+        N = panel.frame.normal
+        ring = panel.outline_3d()
+        a, b = ring[k], ring[(k + 1) % len(ring)]
+        edge = float(np.linalg.norm(b - a))
+        e = (b - a) / edge
+        m = np.cross(e, N)
+        m /= np.linalg.norm(m)
+        t = panel.thickness_mm
+        for foot, top in axes:
+            if not 0.0 <= float((foot - a) @ e) <= edge:
+                continue                              # this screw is beside another pane of the strip
+            u = top - foot
+            length = float(np.linalg.norm(u))
+            u = u / length
+            u_m, u_N = float(u @ m), float(u @ N)
+            if abs(u_N) < 1e-9:
+                continue
+            h0 = float((foot - a) @ N) - seat
+            reach = r * math.hypot(u_m, u_N) / abs(u_N)
+            for level in (0.0, t):
+                s = min(max((level - h0) / u_N, 0.0), length)
+                x = foot + s * u
+                if -1e-9 <= float((x - a) @ N) - seat <= t + 1e-9:
+                    least = min(least, float((x - a) @ m) - reach)
+    return least
 
 
 def _pane_top_under(strip_frame: Frame, rect: np.ndarray, panel: "Panel", top: float) -> tuple[float, float] | None:
@@ -579,9 +628,12 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             xs = screw_stations(x1 - x0, p.bolt_pitch, [(lo - x0, hi - x0) for lo, hi in blocks_on.get(sid, [])])
             stations[pressure_plate_id(sid)] = xs
             assert bolt is not None
-            screw_sets.append(ScrewSet(screw_set_id(sid), pressure_plate_id(sid), sid, s.beam_id, s.frame, x0,
-                                       s.thickness, plate_top - s.thickness + NUT_HEIGHT * bolt.diameter,
-                                       bolt.diameter, xs))
+            one = ScrewSet(screw_set_id(sid), pressure_plate_id(sid), sid, s.beam_id, s.frame, x0, s.thickness,
+                           plate_top - s.thickness + NUT_HEIGHT * bolt.diameter, bolt.diameter, xs)
+            one = replace(one, clearance_mm=screw_clearance(one.axes(), bolt.diameter,
+                                                            [(panel, k, seat_of.get(panel.part_id, 0.0))
+                                                             for panel, k in on]))
+            screw_sets.append(one)
             line = sum(p.load_factor * p.wind_suction * 1e-3 * panel.area_mm2 / _perimeter(panel) for panel, _ in on)
             bending[pressure_plate_id(sid)] = plate_bending(
                 pressure_plate_id(sid), line, xs, x1 - x0, p.pressure_plate_width, p.pressure_plate_thickness,
@@ -614,6 +666,12 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                                  max(spacing.get(panel.part_id, [0.0])), sil,
                                  (strip_bites or {}).get(panel.part_id, math.nan), contact[panel.part_id],
                                  plate_use.get(panel.part_id, math.nan)))
+    tight = sorted((x for x in screw_sets if x.clearance_mm < 0.0), key=lambda x: x.clearance_mm)
+    if tight:
+        log.warning("%d pressure plate(s) have clamping screws that would go into the glass beside their joint, where "
+                    "a kink closes the joint towards the glass's top: %s; widen [panels] gap by twice the depth, or "
+                    "clamp with a smaller [glazing] retention_bolt", len(tight),
+                    ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]))
     low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
     if low:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
