@@ -12,60 +12,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import REPO, shared_file
-
-
-def _stages(design_path):
-    from fabrication.design import load_design
-    from fabrication.pipeline import stages as st
-    from fabrication.pipeline.progress import Progress
-
-    d = load_design(design_path)
-    p = Progress(quiet=True)
-    g = st.stage_geometry(d, p, False)
-    q = st.stage_quality(g, p)
-    s = st.stage_support(d, g, p)
-    panels = st.stage_panels(d, g, p, q)
-    beams = st.stage_beams(d, s, p)
-    return beams, st.stage_glazing(d, s, panels, beams, p)
+from conftest import REPO
+from kernel_solids import kernel_depth, rot4_patch_design, stages, strip_solid
 
 
 @pytest.fixture(scope="module")
 def smallest_roof():
-    return _stages(REPO / "examples" / "smallest_roof.toml")
+    return stages(REPO / "examples" / "smallest_roof.toml")
 
 
 @pytest.fixture(scope="module")
 def real_patch(tmp_path_factory):
-    """A 9 × 8-vertex patch of DOI__rot4_def1_sparse_rot.obj (rows 20:29, columns 0:8, 3 m scale): its plates
-    lean up to 29° off the strips."""
-    from ppfab.io import load_mesh, write_obj
-    from ppfab.mesh import QuadGrid
-
-    root = tmp_path_factory.mktemp("notch_real")
-    grid = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).to_grid()
-    write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 0:8])), root / "patch.obj")
-    (root / "d.toml").write_text(f'[design]\nname = "rot4 patch"\n[geometry]\nmesh = "{(root / "patch.obj").as_posix()}"\n'
-                                 'scale = 3000.0\n[beams]\nfallback = "segmented"\n')
-    return _stages(root / "d.toml")
-
-
-def _box(strip):
-    from fabrication.writers.step import _placed_prism
-
-    return _placed_prism(strip.outline(), strip.frame, 0.0, strip.thickness, strip.part_id)
-
-
-def _depth(a, b, u: np.ndarray) -> float:
-    """Depth (mm, along ``u``) of the kernel's common part of two solids, 0 when it has no volume."""
-    from build123d import Solid
-    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common
-
-    common = Solid(BRepAlgoAPI_Common(a.wrapped, b.wrapped).Shape())
-    if common.volume < 1e-6:
-        return 0.0
-    z = np.array([tuple(p) for p in common.vertices()], dtype=float) @ u
-    return float(z.max() - z.min())
+    """The DOI rot4 patch (:func:`kernel_solids.rot4_patch_design`): its plates lean up to 29° off the strips."""
+    return stages(rot4_patch_design(tmp_path_factory.mktemp("notch_real")))
 
 
 def _crossings(beams, glazing):
@@ -96,9 +55,9 @@ def test_a_strip_running_over_a_plate_at_a_node_does_not_enter_it(which, before_
         if p.part_id not in solids_after:
             solids_before[p.part_id], solids_after[p.part_id] = plate_solid(pb), plate_solid(pa)
             assert solids_after[p.part_id].is_valid, p.part_id
-        box = _box(s)
-        worst_before = max(worst_before, _depth(box, solids_before[p.part_id], s.frame.normal))
-        worst_after = max(worst_after, _depth(box, solids_after[p.part_id], s.frame.normal))
+        box = strip_solid(s)
+        worst_before = max(worst_before, kernel_depth(box, solids_before[p.part_id], s.frame.normal))
+        worst_after = max(worst_after, kernel_depth(box, solids_after[p.part_id], s.frame.normal))
         checked += 1
     assert checked >= 40
     assert worst_before > before_mm                 # without notches the plates stood into the crossing strips

@@ -15,22 +15,12 @@ import numpy as np
 import pytest
 
 from conftest import REPO
+from kernel_solids import kernel_depth, rot4_patch_design, stages, strip_solid
 
 
 @pytest.fixture(scope="module")
 def staged():
-    from fabrication.design import load_design
-    from fabrication.pipeline import stages as st
-    from fabrication.pipeline.progress import Progress
-
-    d = load_design(REPO / "examples" / "smallest_roof.toml")
-    p = Progress(quiet=True)
-    g = st.stage_geometry(d, p, False)
-    q = st.stage_quality(g, p)
-    s = st.stage_support(d, g, p)
-    panels = st.stage_panels(d, g, p, q)
-    beams = st.stage_beams(d, s, p)
-    return beams, st.stage_glazing(d, s, panels, beams, p)
+    return stages(REPO / "examples" / "smallest_roof.toml")
 
 
 def intersection_depth(plates, strip) -> float:
@@ -110,52 +100,12 @@ def bevelled(staged):
 @pytest.fixture(scope="module")
 def real_patch(tmp_path_factory):
     """A 8 × 7-face patch of a real conical PP mesh (DOI__rot4_def1_sparse_rot.obj, surface of revolution), 3 m
-    scale: its plates lean up to 29° off their strips."""
-    from conftest import shared_file
-
-    from ppfab.io import load_mesh, write_obj
-    from ppfab.mesh import QuadGrid
-
+    scale: its plates lean up to 29° off their strips.  Columns reversed: the file's faces turn their normals
+    towards the node axes (the support takes its side from the glass now; kept: it changes nothing measured)."""
     from fabrication.beams.bevel_cut import bevelled_beams
-    from fabrication.design import load_design
-    from fabrication.pipeline import stages as st
-    from fabrication.pipeline.progress import Progress
 
-    root = tmp_path_factory.mktemp("bevel_real")
-    grid = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj")).to_grid()
-    # columns reversed: the file's faces turn their normals towards the node axes, which puts this patch's strips
-    # on the plates' lower side (the glazing stage takes the panes' normals for up); reversed, they face out
-    write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[20:29, 7::-1])), root / "patch.obj")
-    (root / "d.toml").write_text(f'[design]\nname = "rot4 patch"\n[geometry]\nmesh = "{(root / "patch.obj").as_posix()}"\n'
-                                 'scale = 3000.0\n[beams]\nfallback = "segmented"\n')
-    d = load_design(root / "d.toml")
-    p = Progress(quiet=True)
-    g = st.stage_geometry(d, p, False)
-    q = st.stage_quality(g, p)
-    s = st.stage_support(d, g, p)
-    panels = st.stage_panels(d, g, p, q)
-    beams = st.stage_beams(d, s, p)
-    glazing = st.stage_glazing(d, s, panels, beams, p)
+    beams, glazing = stages(rot4_patch_design(tmp_path_factory.mktemp("bevel_real"), reverse_columns=True))
     return beams, bevelled_beams(beams, glazing), glazing
-
-
-def strip_solid(strip):
-    """The strip as the kernel's box over its rectangle (frame and thickness only: none of the bevel code)."""
-    from fabrication.writers.step import _placed_prism
-
-    return _placed_prism(strip.outline(), strip.frame, 0.0, strip.thickness, strip.part_id)
-
-
-def kernel_depth(a, b, u: np.ndarray) -> float:
-    """Depth (mm, along ``u``) of the kernel's common part of two solids, 0 when it has no volume."""
-    from build123d import Solid
-    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common
-
-    common = Solid(BRepAlgoAPI_Common(a.wrapped, b.wrapped).Shape())
-    if common.volume < 1e-6:
-        return 0.0
-    z = np.array([tuple(p) for p in common.vertices()], dtype=float) @ u
-    return float(z.max() - z.min())
 
 
 def pairs(beams, glazing):
