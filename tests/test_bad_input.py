@@ -132,9 +132,9 @@ def test_glb_names_the_part_whose_prism_cannot_be_meshed():
 
     good = _element("B-OK", [[0, 0], [100, 0], [100, 50], [0, 50]])
     flat = _element("B-R0001-S02", [[0, 0], [50, 0], [100, 0]])
-    with mock.patch("fabrication.writers.glb.elements", lambda build, files: [good]):
+    with mock.patch("fabrication.writers.glb.elements", lambda build: [good]):
         assert glb_bytes(None, {})[:4] == b"glTF"
-    with mock.patch("fabrication.writers.glb.elements", lambda build, files: [good, flat]), \
+    with mock.patch("fabrication.writers.glb.elements", lambda build: [good, flat]), \
             pytest.raises(FabricationError) as info:
         glb_bytes(None, {})
     message = str(info.value)

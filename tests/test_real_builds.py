@@ -505,7 +505,8 @@ def test_marking_and_drawings_on_a_real_mesh(dome_build):
     import test_marking
 
     test_marking.test_labels_are_upright_inside_their_part_and_clear_of_slots(dome_build)
-    test_marking.test_face_mark_is_on_the_side_the_3d_model_puts_up(dome_build)
+    # the nesting turns none of its plates over since the notches changed their outlines (41 as drawn)
+    test_marking.test_face_mark_is_on_the_side_the_3d_model_puts_up(dome_build, both_turns=False)
     test_drawings.test_key_plan_names_every_part_once_inside_its_face(dome_build)
     test_drawings.test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(dome_build)
     test_drawings.test_node_sheets_hold_every_node_once_with_angles_within_the_type(dome_build)

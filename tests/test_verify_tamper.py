@@ -281,7 +281,8 @@ def test_node_moved_down_its_axis_into_the_plates(copy, capsys):
     under their top edges.  The row plate's half-lap slot opens from above, so the point lies in its slot,
     within half the slot width (about 6.5 mm) of the outline, which is right; the column plate's slot opens
     from below, so the point lies in solid plate 30 mm from the outline, where the slot (about 13 mm wide,
-    square to the top edge) allows a few mm: verify names that plate at that node."""
+    square to the top edge, and the notch under the row's strips crossing there) allows about 10 mm: verify
+    names that plate at that node."""
     lines = (copy / "mesh.obj").read_text().splitlines()
     vs = [i for i, s in enumerate(lines) if s.startswith("v ")]
     rows = read_rows(copy / "nodes.csv")
@@ -307,7 +308,7 @@ def test_node_moved_down_its_axis_into_the_plates(copy, capsys):
     hit = re.search(rf"beams\.step: (B-\S+) at N{k:04d}: the node's top point is (\d+\.?\d*) mm from the plate's "
                     r"outline \(at most (\d+\.?\d*) mm", err)
     assert hit, err[:2000]
-    assert float(hit.group(2)) > 25.0 > 3 * float(hit.group(3))
+    assert float(hit.group(2)) > 25.0 > 2 * float(hit.group(3))
     plates = set(re.findall(rf"beams\.step: (B-\S+) at N{k:04d}: the node's top point", err))
     assert len(plates) == 1 and plates.pop().startswith("B-W") and "from the plate's plane" not in err
 
