@@ -283,7 +283,16 @@ def bevelled_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
     by_beam: dict[str, list] = {}
     for s in glazing.strips:
         by_beam.setdefault(s.beam_id, []).append(s)
-    plates = tuple(bevel_plate(p, by_beam.get(p.beam_id, []), glazing.params.bevel_min_deg) for p in beams.plates)
+    min_deg = glazing.params.bevel_min_deg
+    plates = tuple(bevel_plate(p, by_beam.get(p.beam_id, []), min_deg) for p in beams.plates)
+    # the pieces of a beam meet at their splice cuts with one cut edge, which the splice's cover plates and
+    # ppfab verify take from both: where one piece had to keep its square top edge, its beam's other pieces do too
+    square = {b.beam_id for a, b in zip(beams.plates, plates)
+              if b.n_pieces > 1 and not b.bevels and top_bevels(a, by_beam.get(a.beam_id, []), min_deg)}
+    if square:
+        logging.getLogger("ppfab").warning("%d beam(s) keep a square top edge on every piece, as one of their pieces "
+                                           "must (%s)", len(square), ", ".join(sorted(square)[:6]))
+        plates = tuple(a if a.beam_id in square else b for a, b in zip(beams.plates, plates))
     types = type_ids(list(plates))
     by_id = {p.part_id: p for p in plates}
     density = beams.params.density

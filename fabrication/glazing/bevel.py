@@ -73,7 +73,11 @@ def strip_bevel(strip: Strip, plate, min_deg: float) -> StripBevel:
 
 
 def strip_bevels(strips: Sequence[Strip], plates: Sequence, min_deg: float) -> list[StripBevel]:
-    """One :class:`StripBevel` per strip that has a plate under it, in strip order."""
+    """One :class:`StripBevel` per strip that has a plate under it, in strip order, as the plates are cut: a strip
+    leaning past ``min_deg`` on a plate that kept its square top edge (its bevel could not be drawn,
+    :mod:`fabrication.beams.bevel_cut`) is ``square`` there, as the plate is."""
+    from dataclasses import replace
+
     by_beam: dict[str, list] = {}
     for p in plates:
         by_beam.setdefault(p.beam_id, []).append(p)
@@ -81,5 +85,9 @@ def strip_bevels(strips: Sequence[Strip], plates: Sequence, min_deg: float) -> l
     for s in strips:
         plate = plate_under(s, by_beam.get(s.beam_id, []))
         if plate is not None:
-            out.append(strip_bevel(s, plate, min_deg))
+            fit = strip_bevel(s, plate, min_deg)
+            cut = getattr(plate, "bevels", None)
+            if fit.bevelled and cut is not None and not any(b.strip == s.part_id for b in cut):
+                fit = replace(fit, bevelled=False)
+            out.append(fit)
     return out

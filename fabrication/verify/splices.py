@@ -223,6 +223,8 @@ def _raise_at_cut(v: Verification, first: str, second: str) -> float:
         a, b = ({int(k) for k in ast.literal_eval(parts[p].get("nodes", "[]"))} for p in (first, second))
     except (KeyError, ValueError, SyntaxError, TypeError):
         return 0.0
+    if not number(parts[first].get("bevels"), 0.0):
+        return 0.0                                    # the piece is cut with a square top edge
     over = set()
     for r in parts.values():
         if r.get("kind") == "strip":
