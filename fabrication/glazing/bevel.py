@@ -72,10 +72,11 @@ def strip_bevel(strip: Strip, plate, min_deg: float) -> StripBevel:
                       math.degrees(lean) > min_deg + 1e-12)
 
 
-def strip_bevels(strips: Sequence[Strip], plates: Sequence, min_deg: float) -> list[StripBevel]:
-    """One :class:`StripBevel` per strip that has a plate under it, in strip order, as the plates are cut: a strip
-    leaning past ``min_deg`` on a plate that kept its square top edge (its bevel could not be drawn,
-    :mod:`fabrication.beams.bevel_cut`) is ``square`` there, as the plate is."""
+def strip_bevels(strips: Sequence[Strip], plates: Sequence, min_deg: float, as_cut: bool = False
+                 ) -> list[StripBevel]:
+    """One :class:`StripBevel` per strip that has a plate under it, in strip order.  ``as_cut`` (``plates`` as
+    :mod:`fabrication.beams.bevel_cut` left them): a strip leaning past ``min_deg`` on a plate that kept its square
+    top edge (its bevel could not be drawn) is ``square`` there, as the plate is."""
     from dataclasses import replace
 
     by_beam: dict[str, list] = {}
@@ -87,7 +88,7 @@ def strip_bevels(strips: Sequence[Strip], plates: Sequence, min_deg: float) -> l
         if plate is not None:
             fit = strip_bevel(s, plate, min_deg)
             cut = getattr(plate, "bevels", None)
-            if fit.bevelled and cut is not None and not any(b.strip == s.part_id for b in cut):
+            if as_cut and fit.bevelled and cut is not None and not any(b.strip == s.part_id for b in cut):
                 fit = replace(fit, bevelled=False)
             out.append(fit)
     return out

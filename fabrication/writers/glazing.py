@@ -296,7 +296,7 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
         files["strip_cuts_csv"] = STRIP_CUTS_CSV
         from ..glazing.bevel import strip_bevels
 
-        bevels = strip_bevels(g.strips, build.beams.plates, g.params.bevel_min_deg)
+        bevels = strip_bevels(g.strips, build.beams.plates, g.params.bevel_min_deg, as_cut=True)
         rows = [{"strip": b.strip, "plate": b.plate, "lean_deg": _plain(b.lean_deg, 3), "overlap_mm": _plain(b.overlap_mm),
                  "delta_mm": _plain(b.delta_mm), "bevel": b.text()} for b in bevels]
         (out / BEVELS_CSV).write_text(csv_text(rows, BEVEL_COLUMNS), encoding="utf-8")
