@@ -151,8 +151,7 @@ def _end_is_node(plate: BeamPlate) -> tuple[bool, bool]:
 
 
 def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float], extra: float = 0.0
-                  ) -> tuple[list[np.ndarray], float,
-                                                                                          float]:
+                  ) -> tuple[list[np.ndarray], float, float]:
     """The notch cut for the points ``taken (m, 2)`` of the plate that lie in a crossing strip's grown box: on each
     top-edge span they reach, a rectangle square to the span from above the edge down to ``D`` below it over
     their extent along the span (``D`` their largest depth below the span, plus the span's bevel allowance and
@@ -164,6 +163,7 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float],
     left = polygon_area(np.concatenate([top, np.asarray(plate.bottom, dtype=float)[::-1]])) > 0
     rects: list[np.ndarray] = []
     deepest, length = 0.0, 0.0
+    first_node, last_node = _end_is_node(plate)
     for c in range(len(top) - 1):
         p0, p1 = top[c], top[c + 1]
         e = p1 - p0
@@ -189,7 +189,6 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float],
         # between the notch's end and an end cut that is not square to the span)
         lo -= D if lo <= 1e-6 else NOTCH_CLEARANCE_MM
         hi += D if hi >= L - 1e-6 else NOTCH_CLEARANCE_MM
-        first_node, last_node = _end_is_node(plate)
         if c == 0 and lo < END_MM:
             if not first_node:                           # a splice cut: its cover plates need the full top edge
                 return [], 0.0, 0.0

@@ -59,9 +59,11 @@ SAME_POINT_MM = 1e-7
 
 def merge_close(ring: np.ndarray, corners: np.ndarray, tol: float) -> np.ndarray:
     """``ring (k, 2)`` with every point within ``tol`` (mm) of one of ``corners (m, 2)`` moved onto it, then each
-    run of consecutive points within :data:`SAME_POINT_MM` kept once.  Snap rounding can put a point a few 1e-7 mm from a corner where
-    two faces' collinear edges meet; were both kept, each would lie on the line through its neighbours and the
-    corner would be dropped with them (a notched plate's union lost a 33 mm² corner that way)."""
+    run of consecutive points within :data:`SAME_POINT_MM` kept once.  Snap rounding can put a point a few 1e-7 mm
+    from a corner where two faces' collinear edges meet; were both kept, each would lie on the line through its
+    neighbours and the corner would be dropped with them (a notched plate's union lost a 33 mm² corner that way).
+    The build's cut outline does the same in :func:`fabrication.beams.bevel_cut.cut_outline`, written apart:
+    verify shares no code with what it checks."""
     from scipy.spatial import cKDTree
 
     d, k = cKDTree(corners).query(ring)

@@ -175,8 +175,8 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
             v.error(rel, pid, "its two faces do not overlap into one outline in its parts.csv frame")
             return
         ring, mean_area = two
-        # the union's corners where the two faces' edges cross are met by edges read to eps, snapped to the grid
-        # of eps: a few eps off (a bevelled plate of the Enneper roof in model.3dm, 1.13e-3 mm at eps 0.9e-3)
+    # the two faces' union has corners where their edges cross, met by edges read to eps and snapped to the grid
+    # of eps: a few eps off (a bevelled plate of the Enneper roof in model.3dm, 1.13e-3 mm at eps 0.9e-3)
     place_eps = 4.0 * eps if mean_area is not None else eps
     if ring is not None:
         check_outline_place(v, rel, row, ring, max(place_eps, 1e-4))

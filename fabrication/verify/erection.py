@@ -11,9 +11,10 @@ nothing is shared with the code that made the order: a convex solid is the hull 
 slotted plate, a cover plate with holes, a non-convex pane) that face's polygon extruded by the solid's
 thickness.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment ``[−L·d, 0]``, with
 ``L`` far enough that it starts beyond every part of the earlier steps (a retention part, fitted by hand, from
-:data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hull of the solid and the solid moved back by ``L``; for a plate moving in its own plane the extrusion of its
-polygon's 2D Minkowski sum with the segment; otherwise the union of the hulls of the prisms over the polygon's
-triangles and their moved copies.  The sweep is intersected with every part of an
+:data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hull of the solid and the solid moved back
+by ``L``; for a plate moving in its own plane the extrusion of its polygon's 2D Minkowski sum with the segment;
+otherwise the union of the hulls of the prisms over the polygon's triangles and their moved copies.  The sweep is
+intersected with every part of an
 earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours); the *depth* of an
 intersection is the thinnest extent of its thickest connected piece (the smallest width over the piece's face
 normals), how far the two would have to move apart.  Deeper than :data:`TOLERANCE` is a finding naming the part,
