@@ -221,6 +221,13 @@ class Problem:
     crease0: np.ndarray = field(default_factory=lambda: np.zeros(0))   # input dihedral angles, degrees
     crease_limit: float = 180.0                                         # input max + params.crease_limit
     surface: ReferenceSurface | None = None                             # the input surface (normalised)
+    held: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (N, 3) mesh units: input, anchors moved
+
+    def to_mesh_units(self, v: np.ndarray) -> np.ndarray:
+        """``(N, 3)`` normalised vertices in mesh units, the fixed vertices exactly where they are held."""
+        out = v * self.scale + self.center
+        out[~self.free] = self.held[~self.free]
+        return out
 
     def on_stage(self, z: np.ndarray) -> None:
         """A stage begins: update the shape barrier's face normals and the surface foot points."""
@@ -270,8 +277,10 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     try:
         sel = select_polylines(qm, p.families, p.polylines, p.fair_families)
         free = free_vertices(qm, p.fix_boundary, p.fixed_vertices)
+        held = anchored(v, p.anchors)
     except DesignError as exc:
         raise DesignError(f"optimize.{exc.key}", str(exc).split(": ", 1)[-1]) from None
+    free[[int(a[0]) for a in p.anchors]] = False
     if not free.any():
         raise DesignError("optimize.fixed_vertices" if p.fixed_vertices else "optimize.fix_boundary",
                           f"all {len(free)} vertices are fixed: nothing can move")
@@ -302,15 +311,33 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
                     p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
                     axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start)
-    nf, ns = _initial_normals(vn, faces, sel.planar)
-    z0 = res.pack(vn, ns, nf)
+    v_start = (held - center) / scale                      # the anchors where they are held, the rest as input
+    nf, ns = _initial_normals(vn, faces, sel.planar)       # the planes of the input: an anchor moved far makes
+    z0 = res.pack(v_start, ns, nf)                         # spikes whose own planes would keep them (nonconvex)
     metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
     guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
     surface = ReferenceSurface(vn, faces) if reference is None else \
         ReferenceSurface((np.asarray(reference[0], dtype=float) - center) / scale, reference[1])
     ref = surface if p.closeness == "surface" else None
     return Problem(qm, p, sel, free, center, scale, res, z0, metrics, guard, ref, fairness,
-                   "exact" if exact else "projected", stars, pairs, crease0, limit, surface)
+                   "exact" if exact else "projected", stars, pairs, crease0, limit, surface, held)
+
+
+def anchored(vertices: np.ndarray, anchors: list[list[float]]) -> np.ndarray:
+    """``(N, 3)`` copy of ``vertices`` with every anchor ``[vertex, x, y, z]`` moved to its point.
+
+    Raises :class:`DesignError` (key ``anchors[k]``) for a vertex that does not exist or is anchored twice."""
+    out = np.array(vertices, dtype=float)
+    seen: set[int] = set()
+    for k, a in enumerate(anchors):
+        i = int(a[0])
+        if not 0 <= i < len(out):
+            raise DesignError(f"anchors[{k}]", f"vertex {i} does not exist (the mesh has {len(out)} vertices)")
+        if i in seen:
+            raise DesignError(f"anchors[{k}]", f"vertex {i} is anchored twice; keep one of its entries")
+        seen.add(i)
+        out[i] = [float(x) for x in a[1:4]]
+    return out
 
 
 def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None, *,
@@ -358,10 +385,10 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     v_n = prob.residuals.unpack(z_out)[0]
     v0 = np.asarray(prob.mesh.vertices)
     v = v0 + (v_n - prob.residuals.vertices0) * prob.scale         # unmoved vertices stay bit-identical
-    v[~prob.free] = v0[~prob.free]
-    if returned == "input":
-        v = v0.copy()
-        v_n = prob.residuals.vertices0
+    v[~prob.free] = prob.held[~prob.free]
+    if returned == "input":                                        # the input, with its anchors where held
+        v = prob.held.copy()
+        v_n = prob.residuals.unpack(prob.z0)[0]
     out_qm = prob.mesh.with_vertices(v)
     planes = _support_planes(v, prob.selection.planar)
     out = _as_input_type(mesh, out_qm, prob.selection, planes)

@@ -76,6 +76,9 @@ class OptimizeParams:
                                          "before the shape barrier acts", min=0.0, exclusive_max=1.0)
     fix_boundary: bool = param(False, doc="keep boundary vertices where they are")
     fixed_vertices: list[int] = param([], doc="indices of vertices that must not move", min=0)
+    anchors: list[list[float]] = param([], doc="vertices held at new positions, each [vertex, x, y, z] (mesh "
+                                                "units; the studio's live anchors): the optimisation starts with "
+                                                "them moved there and keeps them fixed")
     plane_solver: str = param("auto", doc="support normals in the linear system (exact: best steps, but a "
                                           "normal couples all vertices of its polyline, so the factorisation "
                                           "grows with polyline length²), eliminated by variable projection "
@@ -103,6 +106,10 @@ class OptimizeParams:
                                            "input length (collapse guard)", exclusive_min=0.0, exclusive_max=1.0)
 
     def __post_init__(self):
+        for k, a in enumerate(self.anchors):
+            if len(a) != 4 or float(a[0]) != int(a[0]) or a[0] < 0 or not all(abs(float(x)) < 1e300 for x in a):
+                raise DesignError(f"anchors[{k}]", f"{a} is not [vertex, x, y, z]: give a vertex index and a "
+                                                   "finite point in mesh units")
         if self.families == "none" and not self.polylines and not self.planar_faces:
             raise DesignError("families", "nothing to optimise: families = 'none', no polylines and "
                                           "planar_faces = false")

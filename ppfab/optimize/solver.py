@@ -297,6 +297,21 @@ class LevenbergMarquardt:
         self._linearise()
         return ""
 
+    def restart(self, z: np.ndarray) -> None:
+        """Go on from state ``z`` changed outside the solver (a fixed vertex moved: a live anchor): the
+        continuation starts again at stage 0 (``s = 1``), the damping from the new linearisation, the iteration
+        count from 0; the best state and the start's measures are those of ``z``."""
+        self.z = self.p.project_normals(np.array(z, dtype=float))
+        self.reg, self.stage, self.iteration, self.rejections, self.nu, self.mu = 1.0, 0, 0, 0, 2.0, 0.0
+        if self.on_stage is not None:
+            self.on_stage(self.z)
+        self._linearise()
+        self.current_metrics = self.metrics(self.vertices)
+        self.current_conical = self.metrics.conical_max(self.vertices)
+        self.start_score = self.best_score = self._score()
+        self.start_metrics = self._measures()
+        self.best_z, self.best_iteration = self.z.copy(), 0
+
     def run(self) -> SolverState:
         """Iterate until a stop criterion (see module docstring)."""
         reason = "targets" if self.targets_met() else ""
