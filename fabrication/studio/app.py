@@ -162,6 +162,7 @@ class Studio:
             undo.on_click(lambda _: self._guard(lambda: self._history(self.model.undo)))
             redo.on_click(lambda _: self._guard(lambda: self._history(self.model.redo)))
         self.params_folder = gui.add_folder("Parameters")
+        self.live: Any = None
         if self.model.method is None and "optimize" in self.model.doc:
             with gui.add_folder("Optimise ([optimize])"):
                 run = gui.add_button("Optimise")
@@ -169,6 +170,9 @@ class Studio:
                 run.on_click(lambda _: self._guard(self._optimize))
                 stop.on_click(lambda _: self._guard(self._cancel_optimize))
                 self.opt_msg = gui.add_markdown("")
+                from .live_panel import LivePanel
+
+                self.live = LivePanel(self)
         with gui.add_folder("Save and build"):
             default = str(Path(design_path).with_name(Path(design_path).stem + "_edited.toml")) if design_path else ""
             self.save_path = gui.add_text("save as", default)
@@ -331,6 +335,8 @@ class Studio:
     def _history(self, step: Any) -> None:
         if step():
             self._sync_controls()
+            if self.live is not None and self.live.on:       # the live mesh starts again from the design restored
+                self.live.restart()
         self.redraw(handles=True)
 
     def _set_metric(self) -> None:
@@ -408,6 +414,8 @@ class Studio:
 
         if self.opt_job is not None and self.opt_job.status == "running":
             raise ValueError("the optimisation is running; cancel it first")
+        if self.live is not None and self.live.on:
+            raise ValueError("the live relaxation is on; switch 'live: drag anchors' off first")
         params = parse_params(OptimizeParams, dict(self.model.doc.get("optimize", {})), "optimize")
         families = tuple(families_of(params.families))
 
@@ -595,9 +603,12 @@ class Studio:
             st = self.model.state
             return {"vertices": st.placed.vertices.copy(), "delta_p": dict(st.delta_p), "error": self.model.error,
                     "handles": {h.key: h.position for h in self.model.handles()}, "redraws": self.redraws,
-                    "params": self.model.params, "figures": dataclasses.asdict(st.figures)}
+                    "params": self.model.params, "figures": dataclasses.asdict(st.figures),
+                    "live": self.live.snapshot() if self.live is not None else {"on": False}}
 
     def stop(self) -> None:
+        if self.live is not None:
+            self.live.stop()
         self.server.stop()
 
 

@@ -80,9 +80,10 @@ def solve(doc: dict, base_dir: Path | None = None) -> Solve:
     return measure(doc, geometry.mesh, geometry.planar_families, t0)
 
 
-def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = None) -> Solve:
+def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = None, support: bool = True) -> Solve:
     """The :class:`Solve` of a mesh in construction units (placed by ``doc``'s ``[geometry]``): δ_P of
-    ``families``, the figures and the fold marks."""
+    ``families``, the figures and the fold marks.  ``support = False`` leaves the support structure out of the
+    torsion figure (it is 90 % of the time at 31 × 31: a live frame measures it only when the mesh settles)."""
     from ppfab.folds import folded_faces
     from ppfab.geometry import GeometrySpec
     from ppfab.metrics import polyline_planarity
@@ -112,7 +113,13 @@ def measure(doc: dict, raw: Any, families: tuple[str, ...], t0: float | None = N
                    (float(nest.sheet[0]), float(nest.sheet[1])), (x1 - x0, y1 - y0),
                    float(beams.get("depth", 200.0)), float(beams.get("max_length", 0.0) or 0.0),
                    float(nest.spacing), float(gap))
-    figs = _support_torsion(doc, placed, families, figs)
+    if support:
+        figs = _support_torsion(doc, placed, families, figs)
+    else:
+        import dataclasses
+
+        figs = dataclasses.replace(figs, torsion_of="the mesh's node axes while it moves; the support's when it "
+                                                    "settles")
     try:
         folded = np.asarray(folded_faces(placed), dtype=bool)
     except Exception:                            # a grid too small for the fold test: nothing to mark
@@ -326,11 +333,23 @@ class StudioModel:
             del self.history.undo[:-self.history.limit]
             self.history.redo.clear()
 
-    def adopt(self, mesh: Any, families: tuple[str, ...]) -> None:
+    def adopt(self, mesh: Any, families: tuple[str, ...], support: bool = True) -> None:
         """Show ``mesh`` (construction units, e.g. the optimiser's result for ``[optimize]``) as the current
-        state; the document is unchanged (a build optimises again from it)."""
-        self.state = measure(self.doc, mesh, families)
+        state; the document is unchanged (a build optimises again from it).  ``support``: see :func:`measure`."""
+        self.state = measure(self.doc, mesh, families, support=support)
         self.error, self.refused_folds = "", None
+
+    def set_anchors(self, points: list[list[float]], mesh: Any, families: tuple[str, ...]) -> None:
+        """Record live anchors as ``[optimize] anchors`` (``[vertex, x, y, z]``, mesh units) — one undo step —
+        and show ``mesh``, the relaxation they hold (a build's optimisation holds them at the same points)."""
+        doc = copy.deepcopy(self.doc)
+        doc.setdefault("optimize", {})["anchors"] = [[int(p[0]), *map(float, p[1:4])] for p in points]
+        if doc != self.doc:
+            self.history.undo.append(self.doc)
+            del self.history.undo[:-self.history.limit]
+            self.history.redo.clear()
+            self.doc = doc
+        self.adopt(mesh, families)
 
     def undo(self) -> bool:
         if not self.history.undo:
