@@ -265,6 +265,49 @@ def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
         studio.stop()
 
 
+def test_live_anchor_dragged_in_the_browser_moves_the_mesh_which_settles_pp(browser, tmp_path):
+    """A mesh-file design (Fig. 23: the real ``DOS__enneper2.obj``, 31 × 31 vertices): the *live* checkbox
+    clicked, the centre typed as an anchor, its gizmo dragged up with the mouse; the mesh follows while the
+    drag goes on, settles planar (faces and both families, by SVD) with the anchor where the drag left it, and
+    the drag is recorded in ``[optimize] anchors``."""
+    path = REPO / "examples" / "fig23_enneper_pp_to_conical.toml"
+    studio = _open(browser, StudioModel.load(path), str(path))
+    try:
+        before = studio.snapshot()
+        field = _control(browser, "anchors [row, column]")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", field)
+        field.click()
+        field.send_keys(Keys.CONTROL, "a")
+        field.send_keys("[[0, 0], [0, 30], [30, 0], [30, 30], [15, 15]]", Keys.ENTER)
+        _wait(lambda: "[15, 15]" in str(studio.live.cells.value), what="the typed anchors")
+        box = _control(browser, "live: drag anchors")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", box)
+        browser.execute_script("arguments[0].click();", box)
+        _wait(lambda: "a15_15" in studio.snapshot()["handles"], what="the live anchors")
+        _wait(lambda: studio.snapshot()["live"]["settled"], 120, "the first relaxation")
+        _shot(browser, "studio_live.png", tmp_path)
+        undo_before = len(studio.model.history.undo)
+        redraws = studio.redraws
+        _drag_handle(browser, studio, "a15_15", 20.0)
+        _wait(lambda: len(studio.model.history.undo) > undo_before, what="the drag to be recorded")
+        _wait(lambda: studio.snapshot()["live"]["settled"], 120, "the mesh to settle")
+        time.sleep(0.5)
+        after = studio.snapshot()
+        assert studio.redraws > redraws + 1                           # the mesh was redrawn as it relaxed
+        v = after["vertices"]
+        lift = v[15, 15, 2] - before["vertices"][15, 15, 2]
+        assert lift > 50.0, f"the anchor rose only {lift} mm"
+        assert np.allclose(after["handles"]["a15_15"], v[15, 15] / 1000.0, atol=1e-9)
+        assert abs(v[16, 15, 2] - before["vertices"][16, 15, 2]) > 0.1 * lift     # its neighbours followed
+        quads = np.stack([v[:-1, :-1], v[:-1, 1:], v[1:, 1:], v[1:, :-1]], axis=2).reshape(-1, 4, 3)
+        assert _delta_p(quads, ("rows",)) <= 1e-6, (lift, after["live"])   # every face planar (SVD, 4 corners)
+        assert _delta_p(v, ("rows", "cols")) <= 1e-6
+        recorded = {int(a[0]): a[1:] for a in studio.model.doc["optimize"]["anchors"]}
+        assert np.allclose(recorded[15 * 31 + 15], studio.live.session.relaxation.vertices[15 * 31 + 15], atol=0)
+    finally:
+        studio.stop()
+
+
 def test_a_page_of_another_origin_cannot_reach_the_studio(browser, tmp_path):
     """A page served from another origin (another port on this machine) opens viser's WebSocket with the
     right subprotocol and even the session key: Chromium sends its Origin, the studio refuses the handshake

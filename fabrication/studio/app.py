@@ -602,7 +602,9 @@ class Studio:
         with self.lock:
             st = self.model.state
             return {"vertices": st.placed.vertices.copy(), "delta_p": dict(st.delta_p), "error": self.model.error,
-                    "handles": {h.key: h.position for h in self.model.handles()}, "redraws": self.redraws,
+                    "handles": {**{h.key: h.position for h in self.model.handles()},
+                                **(self.live.snapshot().get("anchors", {}) if self.live is not None else {})},
+                    "redraws": self.redraws,
                     "params": self.model.params, "figures": dataclasses.asdict(st.figures),
                     "live": self.live.snapshot() if self.live is not None else {"on": False}}
 

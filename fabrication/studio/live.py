@@ -131,8 +131,11 @@ class LiveSession:
         return bool(self.relaxation.stopped)
 
     def anchor_points(self) -> list[list[float]]:
-        """``[optimize] anchors`` for the anchors where they are now (``[vertex, x, y, z]``, mesh units)."""
-        return self.relaxation.anchor_points()
+        """``[optimize] anchors`` for the anchors where they are now or are asked to be by a :meth:`request` not
+        yet applied (``[vertex, x, y, z]``, mesh units): a drag's last move is recorded, not the one before."""
+        with self._lock:
+            pending = dict(self._pending)
+        return [[p[0], *map(float, pending[p[0]])] if p[0] in pending else p for p in self.relaxation.anchor_points()]
 
     def rate(self, window: float = 2.0) -> float:
         """Updates per second over the last ``window`` seconds of frames (0 with fewer than two)."""

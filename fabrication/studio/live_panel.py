@@ -24,9 +24,17 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("ppfab")
 
-FRAME_SECONDS = 0.08
-"""Solver time per live frame: one frame is a few Levenberg–Marquardt steps plus the redraw (about 5–10 frames
-per second at 31 × 31 vertices, ``benchmarks/live.py``)."""
+FRAME_SECONDS = 0.03
+"""Solver time per live frame: shorter than one Levenberg–Marquardt step at 31 × 31 vertices (45–60 ms), so a
+frame is one step and the redraw (about 17 ms): 8–9 updates per second while an anchor is dragged
+(``benchmarks/live.py``)."""
+
+
+PAUSE_SECONDS = 0.015
+"""Pause of the live thread after each frame, for the server's event loop (see :meth:`LivePanel._run`)."""
+
+IDLE_SECONDS = 0.03
+"""Pause of the live thread while the mesh is settled and no anchor moves."""
 
 
 class LivePanel:
@@ -140,8 +148,10 @@ class LivePanel:
                     log.info("studio live: %s", exc, exc_info=True)
                     self.message.content = f"**live stopped:** {exc}"
                     return
-            if mesh is None:
-                time.sleep(0.03)
+            # outside the lock, a pause for the server's event loop: the factorisation holds Python's GIL for
+            # tens of ms, and without a pause every socket call of the event loop waits for the next one (a
+            # 30-move drag sent at 30 Hz took 6.6 s to arrive; with the pause see benchmarks/live.py)
+            time.sleep(IDLE_SECONDS if mesh is None else PAUSE_SECONDS)
 
     def snapshot(self) -> dict:
         """For tests: the anchors' display positions, updates per second, frames so far, settled or not."""
