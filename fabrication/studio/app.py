@@ -30,6 +30,10 @@ log = logging.getLogger("ppfab")
 _RAMP = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
 FOLD_RGB = (230, 30, 30)
 
+SEND_PAUSE = 0.003
+"""Seconds a redraw yields (Python's GIL) after the status and figures, so the server's event loop sends them
+before the scene's messages are built: the figures reach the page first (``benchmarks/studio_latency.py``)."""
+
 
 def ramp(values: np.ndarray, bounds: tuple[float, float] | None = None) -> np.ndarray:
     """``(k, 3)`` uint8 colours of ``values (k,)`` on the ramp, scaled from ``bounds`` (default: their min and
@@ -451,9 +455,14 @@ class Studio:
         self.figures.content = st.figures.markdown()
 
     def redraw(self, handles: bool = True) -> None:
-        """Redraw the mesh, beams, axes (and the handles) from the model."""
+        """Redraw the mesh, beams, axes (and the handles) from the model.  The status and figures go first: the
+        browser handles messages in order, so the numbers a user waits for are not queued behind the scene's
+        meshes (``benchmarks/studio_latency.py``)."""
         scene: Any = self.server.scene
         st = self.model.state
+        self._show_status()
+        self.server.flush()              # the figures go out now, before the scene is built: the
+        time.sleep(SEND_PAUSE)           # event loop gets the GIL to send them
         v = st.placed.vertices / 1000.0
         corners = face_corners(v, st.placed.closed)
         m, n = corners.shape[:2]
@@ -499,7 +508,6 @@ class Studio:
             self._remove("/beams")
         if handles:
             self._draw_handles()
-        self._show_status()
         self.redraws += 1
 
     def _draw_panels(self, quads: np.ndarray, colours: np.ndarray) -> None:
@@ -538,13 +546,16 @@ class Studio:
 
     def _draw_handles(self) -> None:
         scene: Any = self.server.scene
-        for h in self._handles.values():
-            h.remove()
-        self._handles = {}
         v = self.model.state.placed.vertices / 1000.0
         size = 0.08 * float(np.linalg.norm(v.reshape(-1, 3).max(0) - v.reshape(-1, 3).min(0)))
+        wanted = self.model.handles()
+        if self._move_handles(wanted, size):
+            return
+        for item in self._handles.values():
+            item.remove()
+        self._handles = {}
         self.handle_scale = size
-        for h in self.model.handles():
+        for h in wanted:
             g = scene.add_transform_controls(f"/handles/{h.key}", scale=size, position=tuple(h.position),
                                              disable_rotations=not h.rotatable, disable_sliders=True)
             g.on_update(self._gizmo_callback(h.key))
@@ -562,6 +573,28 @@ class Studio:
                 ico = scene.add_icosphere(f"/handles/sphere{k}", radius=abs(float(sph[3])) * s / 1000.0,
                                           color=(200, 60, 160), opacity=0.12, position=tuple(c), subdivisions=2)
                 self._handles[f"sphere{k}"] = ico
+
+    def _move_handles(self, wanted: list, size: float) -> bool:
+        """Move the drawn handles to ``wanted`` when they are the same handles at the same scale (a position
+        message each, instead of removing and creating every gizmo); ``False`` when they must be drawn anew."""
+        keys = [h.key for h in wanted]
+        if self.model.method == "conical_spheres" or not keys or getattr(self, "handle_scale", None) != size or \
+                set(self._handles) != {k for h in wanted for k in (h.key, f"{h.key}-label")} | {
+                    f"{h.key}-plane" for h in wanted if h.normal is not None}:
+            return False
+        scene: Any = self.server.scene
+        for h in wanted:
+            gizmo = self._handles[h.key]
+            if np.array_equal(np.asarray(gizmo.position, dtype=float), np.asarray(h.position, dtype=float)):
+                continue                             # not moved: no message
+            gizmo.position = tuple(h.position)
+            self._handles[f"{h.key}-label"].position = tuple(h.position)
+            if h.normal is not None:
+                self._handles[f"{h.key}-plane"].remove()
+                verts, faces = plane_square(np.asarray(h.position, float), h.normal, 0.6 * size)
+                self._handles[f"{h.key}-plane"] = scene.add_mesh_simple(
+                    f"/handles/{h.key}-plane", verts, faces, color=h.color, opacity=0.25, side="double")
+        return True
 
     def _gizmo_callback(self, key: str) -> Any:
         """The gizmo's callback: ``async`` so that the phases of one drag (start, update…, end) arrive in order."""
