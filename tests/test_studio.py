@@ -4,6 +4,7 @@ undo/redo, and the live figures against independent formulas."""
 
 from __future__ import annotations
 
+import json
 import math
 import socket
 import time
@@ -364,3 +365,70 @@ def test_figures_take_a_per_side_trim_and_refuse_a_bad_nesting_table(default):
     doc["nesting"]["margin"] = "wide"
     with pytest.raises(DesignError):
         solve(doc, default.base_dir)
+
+
+def test_nested_list_parameters_have_a_field_per_number_and_rows_that_the_construction_checks(studio):
+    """The default's curve coefficients ``g`` (four rows of 2, 4, 1 and 5 numbers) are edited in vector and
+    number fields; a changed field sets exactly that coefficient, a row the construction refuses leaves the
+    model and the fields as they were with the reason, bad JSON is refused in one line, undo restores."""
+    from fabrication.studio.table_editor import TableEditor
+
+    editor = studio._controls["g"][0]
+    assert isinstance(editor, TableEditor)
+    g0 = studio.model.params["g"]
+    assert [(r, s) for r, s, _ in editor.fields] == [(r, s) for r, row in enumerate(g0) for s in range(0, len(row), 3)]
+    field = next(h for r, s, h in editor.fields if (r, s) == (1, 3))    # g's y: its x³ coefficient alone
+    assert field.value == g0[1][3]
+    before = studio.snapshot()["vertices"].copy()
+    field.value = 2.0 * g0[1][3]
+    g1 = studio.model.params["g"]
+    assert studio.model.error == "" and g1[1] == [*g0[1][:3], 2.0 * g0[1][3]]
+    assert [g1[k] for k in (0, 2, 3)] == [g0[k] for k in (0, 2, 3)]
+    after = studio.snapshot()
+    assert np.abs(after["vertices"] - before).max() > 1.0
+    assert _delta_p(after["vertices"], ("rows", "cols")) <= 1e-9
+    assert json.loads(editor.text.value) == g1
+
+    studio._apply_table("g", lambda: [*g1, [1.0]])                # a fifth row: refused by the construction
+    assert studio.model.error and studio.model.params["g"] == g1
+    editor = studio._controls["g"][0]
+    assert len({r for r, _, _ in editor.fields}) == 4 and field.value == g1[1][3]
+
+    editor.text.value = "[[0.0, 1"
+    assert studio.model.error.startswith("g: not JSON")
+    assert studio.model.params["g"] == g1 and json.loads(editor.text.value) == g1
+
+    studio._guard(lambda: studio._history(studio.model.undo))
+    assert studio.model.params["g"] == g0
+    assert next(h for r, s, h in studio._controls["g"][0].fields if (r, s) == (1, 3)).value == g0[1][3]
+
+
+def test_a_table_that_gains_a_row_is_drawn_anew():
+    from fabrication.studio.table_editor import row_chunks, with_cells, with_rows
+
+    assert row_chunks(4) == [(0, 3), (3, 4)] and row_chunks(2) == [(0, 2)] and row_chunks(7)[-1] == (6, 7)
+    table = [[0.0, 1.0, 2.0, 3.0], [4.0]]
+    assert with_cells(table, 0, 3, 9) == [[0.0, 1.0, 2.0, 9.0], [4.0]] and table[0][3] == 3.0
+    assert with_rows(table, +1) == [[0.0, 1.0, 2.0, 3.0], [4.0], [4.0]]
+    assert with_rows([[1.0]], -1) == [[1.0]]
+
+
+def test_a_sphere_removed_by_its_table_button_redraws_the_table_with_one_row_less():
+    pytest.importorskip("viser")
+    from fabrication.studio.app import Studio
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    studio = Studio(StudioModel.load(CONICAL), port=port)
+    try:
+        spheres = studio.model.params["spheres"]
+        studio._controls["spheres"][0]._rows(-1)
+        assert studio.model.error == "" and studio.model.params["spheres"] == spheres[:-1]
+        editor = studio._controls["spheres"][0]
+        assert len({r for r, _, _ in editor.fields}) == len(spheres) - 1
+        x, y, z, r = spheres[0]
+        assert [h.value for row, _, h in editor.fields if row == 0] == [(x, y, z), r]   # [x, y, z] and r
+        assert _delta_p(studio.snapshot()["vertices"], ("rows",)) <= 1e-9
+    finally:
+        studio.stop()

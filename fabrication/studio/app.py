@@ -23,6 +23,7 @@ import numpy as np
 
 from .figures import face_corners
 from .model import METRICS, StudioModel, face_metric
+from .table_editor import TableEditor, is_table
 
 log = logging.getLogger("ppfab")
 
@@ -254,6 +255,10 @@ class Studio:
         elif isinstance(value, list) and len(value) in (2, 3) and all(isinstance(x, (int, float)) for x in value):
             add = gui.add_vector2 if len(value) == 2 else gui.add_vector3
             h = add(key, tuple(float(x) for x in value), step=0.01, hint=hint)
+        elif is_table(value):                  # a nested list of numbers: one line of fields per row
+            def apply(make: Any, key: str = key) -> None:
+                self._apply_table(key, make)
+            return TableEditor(gui, key, value, hint, apply, lambda: self._syncing)
         else:
             h = gui.add_text(key, json.dumps(value), multiline=False, hint=hint)
 
@@ -265,7 +270,8 @@ class Studio:
         return h
 
     def _sync_controls(self) -> None:
-        """Show the model's values in the controls (after undo/redo or a handle drag)."""
+        """Show the model's values in the controls (after undo/redo or a handle drag); a table whose rows
+        changed is drawn anew (all controls are)."""
         params = self.model.params
         self._syncing = True
         try:
@@ -274,6 +280,12 @@ class Studio:
                     continue
                 value = self.model.geometry.get(key.split(".", 1)[1]) if key.startswith("geometry.") else params.get(key)
                 if value is None:
+                    continue
+                if isinstance(h, TableEditor):
+                    if not h.sync(value):
+                        self._syncing = False
+                        self._rebuild_param_controls()
+                        return
                     continue
                 if isinstance(h.value, str) and not isinstance(value, str):
                     value = json.dumps(value)
@@ -328,6 +340,14 @@ class Studio:
         self.redraw(handles=True)
         if not applied:                        # refused by the model: its reason goes under the field
             raise ValueError(self.model.error)
+
+    def _apply_table(self, key: str, make: Any) -> None:
+        """A table editor's edit: set ``make()`` (guarded; a refusal reverts the fields), then show the model's
+        value in every control (a table that gained or lost a row is drawn anew)."""
+        def edit() -> None:
+            self._set(key, make())
+            self._sync_controls()
+        self._guard(edit, field=key)
 
     def _scalar(self, sc: Any, value: float) -> None:
         doc_params = sc.set(self.model.params, value)

@@ -135,7 +135,11 @@ class LiveSession:
         yet applied (``[vertex, x, y, z]``, mesh units): a drag's last move is recorded, not the one before."""
         with self._lock:
             pending = dict(self._pending)
-        return [[p[0], *map(float, pending[p[0]])] if p[0] in pending else p for p in self.relaxation.anchor_points()]
+        out = []
+        for point in self.relaxation.anchor_points():
+            vertex = int(point[0])
+            out.append([vertex, *map(float, pending[vertex])] if vertex in pending else point)
+        return out
 
     def rate(self, window: float = 2.0) -> float:
         """Updates per second over the last ``window`` seconds of frames (0 with fewer than two)."""
