@@ -271,7 +271,7 @@ def test_live_anchor_dragged_in_the_browser_moves_the_mesh_which_settles_pp(brow
     drag goes on, settles planar (faces and both families, by SVD) with the anchor where the drag left it, and
     the drag is recorded in ``[optimize] anchors``."""
     path = REPO / "examples" / "fig23_enneper_pp_to_conical.toml"
-    studio = _open(browser, StudioModel.load(path), str(path))
+    studio = _open(browser, StudioModel.load(path), "examples/" + path.name)   # relative: the screenshot's save-as
     try:
         before = studio.snapshot()
         field = _control(browser, "anchors [row, column]")
@@ -285,7 +285,9 @@ def test_live_anchor_dragged_in_the_browser_moves_the_mesh_which_settles_pp(brow
         browser.execute_script("arguments[0].click();", box)
         _wait(lambda: "a15_15" in studio.snapshot()["handles"], what="the live anchors")
         _wait(lambda: studio.snapshot()["live"]["settled"], 120, "the first relaxation")
-        _shot(browser, "studio_live.png", tmp_path)
+        canvas = max(browser.find_elements(By.TAG_NAME, "canvas"), key=lambda c: c.size["width"] * c.size["height"])
+        ActionChains(browser).move_to_element_with_offset(canvas, -canvas.size["width"] // 2 + 5, 0).perform()
+        _shot(browser, "studio_live.png", tmp_path)                # the pointer off the panel: no tooltip
         undo_before = len(studio.model.history.undo)
         redraws = studio.redraws
         _drag_handle(browser, studio, "a15_15", 20.0)

@@ -663,7 +663,7 @@ class Studio:
 
     def stop(self) -> None:
         if self.live is not None:
-            self.live.stop()
+            self.live.stop(join=True)
         self.server.stop()
 
 

@@ -152,7 +152,8 @@ class LiveSession:
         if not self.frames:
             return f"live: {len(self.anchors)} anchors; drag one"
         frame = self.frames[-1][1]
-        state = f"relaxing (s = {frame.reg:.0e})" if not self.settled else \
-            "settled, targets met" if frame.reason == "targets" else f"settled ({frame.reason}), targets not met"
-        return (f"live: {self.rate():.1f} updates/s · max δ_f {frame.delta_f_max:.1e} · max δ_P "
-                f"{frame.delta_p_max:.1e} · {state}")
+        figures = f"max δ_f {frame.delta_f_max:.1e} · max δ_P {frame.delta_p_max:.1e}"
+        if not self.settled:
+            return f"live: relaxing (s = {frame.reg:.0e}), {self.rate():.1f} updates/s · {figures}"
+        met = "targets met" if frame.reason == "targets" else f"{frame.reason}, targets not met"
+        return f"live: settled ({met}) · {figures}"

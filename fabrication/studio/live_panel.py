@@ -89,10 +89,12 @@ class LivePanel:
                                        daemon=True)
         self.thread.start()
 
-    def stop(self) -> None:
-        """Stop the session: its thread ends at its next frame (it may be waiting for the studio's lock, which
-        the caller can hold, so it is not joined)."""
+    def stop(self, join: bool = False) -> None:
+        """Stop the session: its thread ends at its next frame.  ``join`` waits for it (only from a caller that
+        does not hold the studio's lock, which the thread may be waiting for: the studio's own stop)."""
         self._stop.set()
+        if join and self.thread is not None:
+            self.thread.join(10.0)
         self.thread = None
         for g in self.gizmos.values():
             g.remove()

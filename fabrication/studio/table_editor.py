@@ -68,7 +68,8 @@ class TableEditor:
         with self.folder:
             for r, row in enumerate(value):
                 for start, stop in row_chunks(len(row)):
-                    label = f"{key}[{r}]" if start == 0 else f"{key}[{r}][{start}:]"
+                    label = f"{key}[{r}]" if start == 0 else f"{key}[{r}][{start}]" if stop - start == 1 else \
+                        f"{key}[{r}][{start}:{stop}]"
                     part = tuple(float(x) for x in row[start:stop])
                     if len(part) == 1:
                         h = gui.add_number(label, part[0], step=0.001, hint=hint)
