@@ -265,6 +265,34 @@ def test_studio_conical_design_handle_and_screenshot(browser, tmp_path):
         studio.stop()
 
 
+def test_a_refused_value_reverts_its_field_and_says_why_under_it_and_the_figures_say_what_they_count(browser):
+    """Typed in Chromium: scale = -5 on the default.  The model keeps 1000, the field shows 1000 again and the
+    reason appears right under the field (not only in the status at the top); the figures on the page name
+    what they measure — the support the build makes, the panes as cut — with the studio's numbers."""
+    studio = _open(browser, StudioModel.load(None))
+    try:
+        field = _control(browser, "scale")
+        browser.execute_script("arguments[0].scrollIntoView({block: 'center'});", field)
+        field.click()
+        field.send_keys(Keys.CONTROL, "a")
+        field.send_keys("-5", Keys.ENTER)
+        _wait(lambda: studio.model.error, what="the refusal")
+        assert studio.model.geometry["scale"] == 1000.0
+        _wait(lambda: field.get_attribute("value") in ("1000", "1,000"), what="the field to show 1000 again")
+        below = _wait(lambda: [p for p in browser.find_elements(By.XPATH, "//p[starts-with(normalize-space(.), "
+                                                                          "'not applied:')]")
+                               if "scale stays 1000" in p.text], what="the reason under the field")
+        gap = below[0].location["y"] - (field.location["y"] + field.size["height"])
+        assert 0 <= gap < 60, f"the reason is {gap} px from the field"     # right under it, where one looks
+        figures = {t.split(":", 1)[0]: t for t in (li.text for li in browser.find_elements(By.TAG_NAME, "li"))}
+        figs = studio.snapshot()["figures"]
+        assert figures["torsion"] == f"torsion: {figs['torsion_mm']:.2e} mm (the PP support the build makes)"
+        assert figures["glass as cut"].startswith(f"glass as cut: {figs['glass_area_m2']:.1f} m² (faces inset by "
+                                                  f"half the {figs['gap_mm']:g} mm gap)")
+    finally:
+        studio.stop()
+
+
 def test_live_anchor_dragged_in_the_browser_moves_the_mesh_which_settles_pp(browser, tmp_path):
     """A mesh-file design (Fig. 23: the real ``DOS__enneper2.obj``, 31 × 31 vertices): the *live* checkbox
     clicked, the centre typed as an anchor, its gizmo dragged up with the mouse; the mesh follows while the
