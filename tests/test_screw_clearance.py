@@ -84,21 +84,29 @@ def test_a_screw_beside_another_pane_of_the_strip_is_not_measured_against_this_o
     assert screw_clearance(_screw(), 8.0, [(pane, 0, 0.0)]) < 0
 
 
-def test_smallest_roof_screws_in_the_glass_are_those_verify_measures():
-    """The build's clearance of every screw set of ``smallest_roof`` against the overlaps in place that the erection
-    check measures with manifold3d on the written STEP solids and rebuilt screws: a set whose screws stand in the
-    glass overlaps a pane by its depth (within 0.05 mm), a set with room overlaps none."""
+def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names():
+    """The build's clearance of every screw set of ``smallest_roof`` with 10 mm joints (its example widens them
+    to 18 mm for this) against the overlaps in place that the erection check measures with manifold3d on the
+    written STEP solids and rebuilt screws: a set whose screws stand in the glass overlaps a pane by its depth
+    (within 0.05 mm) and the check names the pane and the screw; a set with room overlaps none.  With the
+    example's 18 mm joints no screw stands in the glass."""
     import json
     import tempfile
+    import tomllib
 
     from fabrication import build, load_design
+    from fabrication.design import parse_design
     from fabrication.glazing.retention import build_retention
     from fabrication.pipeline.progress import Progress
     from fabrication.verify import Verification, read_csv
     from fabrication.verify.erection import check_erection
     from fabrication.writers import write_all
 
-    b = build(load_design(REPO / "examples" / "smallest_roof.toml"))
+    example = REPO / "examples" / "smallest_roof.toml"
+    assert all(s.clearance_mm >= 0.0 for s in build_retention(build(load_design(example))).screws)
+    doc = tomllib.loads(example.read_text(encoding="utf-8"))
+    doc["panels"]["gap"] = 10.0
+    b = build(parse_design(doc, source="<smallest_roof, 10 mm joints>", base_dir=example.parent))
     ret = build_retention(b)
     assert ret is not None and ret.screws
     with tempfile.TemporaryDirectory() as tmp:
@@ -121,3 +129,6 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures():
     for s in ret.screws:
         if s.clearance_mm >= 0.05:
             assert measured.get(s.part_id, 0.0) <= 0.25, s.part_id
+    named = [e for e in v.findings if " inside it in its final place" in str(e) and "SC-" in str(e)]
+    assert named and len(named) == min(20, sum(1 for p in v.data["erection_passes"]
+                                               if p.static > 0.25 and "P-" in (p.part[:2], p.through[:2])))

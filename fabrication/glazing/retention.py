@@ -669,9 +669,10 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
     tight = sorted((x for x in screw_sets if x.clearance_mm < 0.0), key=lambda x: x.clearance_mm)
     if tight:
         log.warning("%d pressure plate(s) have clamping screws that would go into the glass beside their joint, where "
-                    "a kink closes the joint towards the glass's top: %s; widen [panels] gap by twice the depth, or "
-                    "clamp with a smaller [glazing] retention_bolt", len(tight),
-                    ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]))
+                    "a kink closes the joint towards the glass's top: %s; the build's check will refuse them (glass "
+                    "takes no steel): widen [panels] gap to at least %.0f mm, or clamp with a smaller [glazing] "
+                    "retention_bolt", len(tight), ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]),
+                    math.ceil(gap - 2.0 * tight[0].clearance_mm + 0.5))
     low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
     if low:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "

@@ -532,6 +532,17 @@ def check_erection(v: Verification) -> None:
     if len(inside) > 20:
         v.error(rel, "", f"{len(inside) - 20} more parts inside a beam plate in their final places")
     overlapping = [p for p in overlapping if p not in inside]
+    # glass takes no steel: a part standing in a pane in its final place (a clamping screw beside a joint a kink
+    # closes towards the glass's top) is a finding, whatever else overlaps by a lean's fit
+    in_glass = sorted((p for p in overlapping if "panel" in (kinds.get(p.part), kinds.get(p.through))),
+                      key=lambda p: -p.static)
+    for p in in_glass[:20]:
+        pane, other = (p.part, p.through) if kinds.get(p.part) == "panel" else (p.through, p.part)
+        v.error(rel, pane, f"has {other} {p.static:.2f} mm inside it in its final place (more than {TOLERANCE:g} mm): "
+                           f"glass takes no steel; widen [panels] gap by twice that to clear a clamping screw")
+    if len(in_glass) > 20:
+        v.error(rel, "", f"{len(in_glass) - 20} more parts inside a pane in their final places")
+    overlapping = [p for p in overlapping if p not in in_glass]
     if overlapping:
         worst = max(overlapping, key=lambda p: p.static)
         logging.getLogger("ppfab").warning(
