@@ -75,7 +75,8 @@ class LiveRelaxation:
     mesh : :class:`QuadMesh` or :class:`QuadGrid` (its vertex order: :meth:`QuadGrid.to_quadmesh`)
     params : the design's ``[optimize]`` (:class:`OptimizeParams` or its dict); its families, weights, targets and
         ``reg_decay`` are used; closeness is always to the input's vertices and fairness relative to the input
-    anchors : indices of the vertices the designer holds and moves (added to ``params.fixed_vertices``)
+    anchors : indices of the vertices the designer holds and moves, held where they are (added to
+        ``params.anchors``, whose vertices are held at their points)
     weight_close : λ_close of the closeness to the input (higher: the mesh stays nearer its input around the
         anchors; lower: a dragged anchor moves more of the mesh)
     """
@@ -94,8 +95,9 @@ class LiveRelaxation:
                                              f"(0 to {len(v_in) - 1})")
             held.setdefault(int(a), v_in[int(a)].tolist())
         self.anchors = tuple(sorted(held))
-        solver = "projected" if p.plane_solver == "auto" else p.plane_solver    # as sparse as the mesh: the
-        p = dataclasses.replace(p, anchors=[[i, *held[i]] for i in self.anchors],   # cheapest step per frame
+        # support normals projected out unless the design says otherwise: as sparse as the mesh, the cheapest step
+        solver = "projected" if p.plane_solver == "auto" else p.plane_solver
+        p = dataclasses.replace(p, anchors=[[i, *held[i]] for i in self.anchors],
                                 closeness="vertices", fairness="relative", plane_solver=solver,
                                 max_iterations=LIVE_ITERATIONS,
                                 weight_close=p.weight_close if weight_close is None else float(weight_close))
