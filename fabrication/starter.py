@@ -75,6 +75,7 @@ class MeshSurvey:
     tilt_max: tuple[float, float] = (0.0, 0.0)
     across: tuple[int, int] = (0, 0)
     polylines: tuple[int, int] = (0, 0)
+    kink_max_deg: float = 0.0            # the largest angle between the normals of two neighbouring faces
 
     @property
     def holes(self) -> int:
@@ -120,7 +121,7 @@ def survey(path: str | os.PathLike) -> MeshSurvey:
     from ppfab.metrics import quality
     from ppfab.support.lines import singular_vertices
 
-    from ppfab.metrics import conjugacy_defect
+    from ppfab.metrics import conjugacy_defect, dihedral_angles
     from ppfab.support.lines import polyline_planes
     from ppfab.support.structure import vertex_normals
 
@@ -133,13 +134,16 @@ def survey(path: str | os.PathLike) -> MeshSurvey:
     planes = polyline_planes(qm, vertex_normals(qm))
     tilt = [[float(planes.tilt_deg[k]) for k, p in enumerate(qm.polylines)
              if p.family == f and len(p) >= 3 and np.isfinite(planes.tilt_deg[k])] for f in (0, 1)]
+    c = np.asarray(qm.vertices, dtype=float)[np.asarray(qm.faces)]
+    kinks = dihedral_angles(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]), topo.edge_faces)
+    kink = float(np.nanmax(kinks)) if np.isfinite(kinks).any() else 0.0
     return MeshSurvey(Path(path), len(qm.vertices), len(qm.faces), (float(ext[0]), float(ext[1]), float(ext[2])),
                       float(e.mean()), float(e.max()), q.delta_f_max, q.delta_p_rows_max, q.delta_p_cols_max,
                       q.conical_max, int(singular_vertices(qm).sum()), _boundary_loops(topo),
                       bool(topo.families_consistent), q.grid_shape, conjugacy_defect(qm),
                       (max(tilt[0], default=0.0), max(tilt[1], default=0.0)),
                       (sum(t > MAX_NORMAL_ANGLE_DEG for t in tilt[0]), sum(t > MAX_NORMAL_ANGLE_DEG for t in tilt[1])),
-                      (len(tilt[0]), len(tilt[1])))
+                      (len(tilt[0]), len(tilt[1])), kink)
 
 
 def propose(s: MeshSurvey) -> Proposal:
@@ -224,7 +228,54 @@ def propose(s: MeshSurvey) -> Proposal:
                        + ": polylines that cannot be planar beams are left out ([support] exclude = [\"auto\"]; "
                          "`ppfab check MESH --polylines` lists them) and become one-edge plates ([beams] fallback "
                          "= \"segmented\")")
+    gap = _joint_for_screws(s.kink_max_deg)
+    if gap is not None:
+        sections["panels"] = {"gap": gap}
+        reasons.append(f"neighbouring faces kink by up to {s.kink_max_deg:.1f}°: where a kink closes a joint towards "
+                       f"the glass's top, the clamping screws of a 10 mm joint would stand in the glass, which the "
+                       f"build refuses; [panels] gap = {gap:g} clears them (fabrication.glazing.retention."
+                       "joint_clearing_screws, a bound: narrow it where the build's check allows)")
+        glazing = _glazing_for_joint(gap)
+        if glazing:
+            sections["glazing"] = glazing
+            reasons.append("so that the panes still bite [panels] min_bite on the strips and the pressure plates "
+                           "clamp both panes: " + ", ".join(f"[glazing] {k} = {v:g}" for k, v in glazing.items()))
     return Proposal(sections, reasons)
+
+
+FLAT_BAR_WIDTHS = (60.0, 70.0, 80.0, 90.0, 100.0, 120.0)
+"""mm: standard flat bar widths (EN 10058) a proposed glazing strip or pressure plate is taken from."""
+
+
+def _glazing_for_joint(gap: float) -> dict[str, float]:
+    """``[glazing]`` widths for a joint of ``gap`` mm: a strip wide enough for ``min_bite`` + 5 mm on each side of
+    the joint (the kink takes about 3 mm of the bite: the tube mesh of compas_libigl bit 10.8 mm at a 33 mm joint
+    on a 60 mm strip), a pressure plate for ``min_clamp_bite`` + 5 mm on each pane (its gasket and the kink take
+    some: 2 mm left panes of the same tube mesh unclamped at a quarter of their edges); the next standard width, only
+    where the default is narrower."""
+    from .glazing.params import GlazingParams
+    from .panels.params import PanelParams
+
+    g, p = GlazingParams(), PanelParams()
+    out = {}
+    for key, default, need in (("width", g.width, gap + 2.0 * (p.min_bite + 5.0)),
+                               ("pressure_plate_width", g.pressure_plate_width, gap + 2.0 * (g.min_clamp_bite + 5.0))):
+        if need > default:
+            out[key] = next((w for w in FLAT_BAR_WIDTHS if w >= need), float(math.ceil(need / 10.0) * 10.0))
+    return out
+
+
+def _joint_for_screws(kink_deg: float) -> float | None:
+    """The ``[panels] gap`` (mm, whole) whose default-sized clamping screws clear the glass at a kink of
+    ``kink_deg`` with the default strip, gasket and make-up, or ``None`` when the default joint does."""
+    from .glazing.params import GlazingParams
+    from .glazing.retention import RetentionBolt, joint_clearing_screws
+    from .panels.params import PanelParams
+
+    panels, glazing = PanelParams(), GlazingParams()
+    need = joint_clearing_screws(kink_deg, panels.pane_thickness, glazing.thickness + glazing.gasket_thickness,
+                                 RetentionBolt.parse(glazing.retention_bolt).diameter)
+    return float(math.ceil(need)) if need > panels.gap + 1e-9 else None
 
 
 def toml_value(v: Any) -> str:

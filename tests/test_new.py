@@ -184,3 +184,37 @@ def test_new_on_a_flat_mesh_does_not_call_it_a_pp_gridshell(tmp_path):
     text = design.read_text(encoding="utf-8")
     assert "a PP mesh already" not in text and "this is not a PP gridshell" in text and "up to 90°" in text
     assert tomllib.loads(text)["beams"]["fallback"] == "segmented"
+
+
+def test_new_widens_the_joints_where_the_faces_kink_so_the_screws_clear_the_glass():
+    """The largest kink between neighbouring faces, measured here from SVD plane fits of the faces, sets the proposed
+    ``[panels] gap`` by the bound (seat + t)·tan(κ/2) + r/cos(κ/2) each side plus 2 mm, with the default strip
+    (8 + 3 mm), make-up (17.52 mm) and M8 screws; strips and pressure plates widen to the next flat bar where the
+    joint needs it.  A flat-ish mesh keeps the defaults."""
+    import math
+
+    from fabrication.starter import propose, survey
+    from ppfab.io import load_mesh
+
+    for name, wider in (("compas_libigl__tubemesh.off", True), ("DOS__enneper2.obj", False)):
+        path = shared_file(name)
+        mesh = load_mesh(path)
+        qm = mesh.to_quadmesh() if hasattr(mesh, "to_quadmesh") else mesh
+        v = np.asarray(qm.vertices)[np.asarray(qm.faces)]
+        normals = np.array([np.linalg.svd(q - q.mean(0))[2][-1] for q in v])
+        normals *= np.sign(np.einsum("ij,ij->i", normals, np.cross(v[:, 2] - v[:, 0], v[:, 3] - v[:, 1])))[:, None]
+        ef = qm.topology.edge_faces
+        inner = ef[(ef >= 0).all(axis=1)]
+        kink = float(np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", normals[inner[:, 0]], normals[inner[:, 1]]),
+                                                   -1, 1))).max())
+        s = survey(path)
+        assert s.kink_max_deg == pytest.approx(kink, abs=1.0)        # the faces are not planar: normals differ
+        b = math.radians(s.kink_max_deg / 2)
+        need = 2 * ((8 + 3 + 17.52) * math.tan(b) + 4 / math.cos(b)) + 2
+        sections = propose(s).sections
+        assert sections["panels"]["gap"] == math.ceil(need)
+        glazing = sections.get("glazing", {})
+        assert bool(glazing) == wider
+        if wider:
+            assert glazing["width"] >= sections["panels"]["gap"] + 2 * 15 and glazing["width"] in (70, 80, 90, 100)
+            assert glazing["pressure_plate_width"] >= sections["panels"]["gap"] + 2 * 10

@@ -129,6 +129,8 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names()
     for s in ret.screws:
         if s.clearance_mm >= 0.05:
             assert measured.get(s.part_id, 0.0) <= 0.25, s.part_id
-    named = [e for e in v.findings if " inside it in its final place" in str(e) and "SC-" in str(e)]
-    assert named and len(named) == min(20, sum(1 for p in v.data["erection_passes"]
-                                               if p.static > 0.25 and "P-" in (p.part[:2], p.through[:2])))
+    named = [e for e in v.findings if " inside it in its final place" in str(e)]
+    pairs = {tuple(sorted((p.part, p.through))) for p in v.data["erection_passes"]
+             if p.static > 0.25 and {p.part[:3], p.through[:3]} & {"SC-"} and {p.part[:2], p.through[:2]} & {"P-"}}
+    assert named and all("SC-" in e.message for e in named)
+    assert len(named) == min(20, len(pairs)) and len({(e.element, e.message) for e in named}) == len(named)

@@ -476,6 +476,28 @@ def screw_clearance(axes: np.ndarray, diameter: float, panes: Sequence[tuple["Pa
     return least
 
 
+def joint_clearing_screws(kink_deg: float, pane_thickness: float, seat: float, diameter: float,
+                          spare: float = 2.0) -> float:
+    """mm: a joint width (``[panels] gap``) at which clamping screws of ``diameter`` in the joint's centre line stay
+    out of the glass where two panes kink by ``kink_deg`` (a valley: it closes the joint towards the glass's top).
+
+    Each pane's edge face leans over the joint by ``(seat + t)·tan(κ/2)`` at the glass's top, and the screw, at
+    ``κ/2`` to the pane, takes ``r / cos(κ/2)`` of the half-joint in the pane's plane:
+    ``gap = 2·((seat + t)·tan(κ/2) + r / cos(κ/2)) + spare``, with ``spare`` the flat joint's fit (10 mm for M8).
+    ``seat``: the pane's underside above the strip's underside (strip + gasket thickness), an upper bound of
+    the screw's foot below the glass.  :func:`screw_clearance` measures the real geometry; this bound is for
+    proposing a design before there is one (``ppfab new``): ``smallest_roof`` (20° kinks, 17.52 mm glass,
+    8 + 3 mm seat, M8) gives 20.2 mm, where 18 mm clears its screws by 0.20 mm.
+
+    >>> round(joint_clearing_screws(0.0, 17.52, 11.0, 8.0), 6)
+    10.0
+    >>> round(joint_clearing_screws(20.0, 17.52, 11.0, 8.0), 1)
+    20.2
+    """
+    b = math.radians(0.5 * max(float(kink_deg), 0.0))
+    return 2.0 * ((seat + pane_thickness) * math.tan(b) + 0.5 * diameter / math.cos(b)) + spare
+
+
 def _pane_top_under(strip_frame: Frame, rect: np.ndarray, panel: "Panel", top: float) -> tuple[float, float] | None:
     """Over the footprint ``rect`` (strip frame), the highest point (along the strip's normal) of the pane's top
     face ``top`` mm above its face plane, and the clamp bite (area over length along the strip); ``None`` when

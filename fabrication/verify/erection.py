@@ -532,17 +532,27 @@ def check_erection(v: Verification) -> None:
     if len(inside) > 20:
         v.error(rel, "", f"{len(inside) - 20} more parts inside a beam plate in their final places")
     overlapping = [p for p in overlapping if p not in inside]
-    # glass takes no steel: a part standing in a pane in its final place (a clamping screw beside a joint a kink
-    # closes towards the glass's top) is a finding, whatever else overlaps by a lean's fit
-    in_glass = sorted((p for p in overlapping if "panel" in (kinds.get(p.part), kinds.get(p.through))),
-                      key=lambda p: -p.static)
-    for p in in_glass[:20]:
-        pane, other = (p.part, p.through) if kinds.get(p.part) == "panel" else (p.through, p.part)
+    # glass takes no steel: a retention part or another pane standing in a pane in its final place (a clamping
+    # screw beside a joint a kink closes towards the glass's top) is a finding.  The structure under a pane is not
+    # (a beam plate's leaning top corner under glass laid on the plates, [glazing] support = "none": the lean's
+    # fit, warned below; strips and gaskets are the clash check's)
+    def into_glass(p: Any) -> tuple[str, str] | None:
+        for pane, other in ((p.part, p.through), (p.through, p.part)):
+            if kinds.get(pane) == "panel" and kinds.get(other) in (*RETENTION, "panel"):
+                return pane, other
+        return None
+    deepest: dict[tuple[str, str], Any] = {}
+    for p in overlapping:
+        pair = into_glass(p)
+        if pair is not None and (pair not in deepest or p.static > deepest[pair].static):
+            deepest[pair] = p
+    in_glass = sorted(deepest.items(), key=lambda kv: -kv[1].static)
+    for (pane, other), p in in_glass[:20]:
         v.error(rel, pane, f"has {other} {p.static:.2f} mm inside it in its final place (more than {TOLERANCE:g} mm): "
                            f"glass takes no steel; widen [panels] gap by twice that to clear a clamping screw")
     if len(in_glass) > 20:
         v.error(rel, "", f"{len(in_glass) - 20} more parts inside a pane in their final places")
-    overlapping = [p for p in overlapping if p not in in_glass]
+    overlapping = [p for p in overlapping if into_glass(p) is None]
     if overlapping:
         worst = max(overlapping, key=lambda p: p.static)
         logging.getLogger("ppfab").warning(
