@@ -23,6 +23,20 @@ def shared_file(name: str) -> Path:
 FULL = bool(os.environ.get("PPFAB_FULL"))
 
 
+def wait_for(cond, timeout: float = 30.0, what: str = "condition", poll: float = 0.1):
+    """The first truthy value of ``cond()``, polled every ``poll`` s; an AssertionError naming ``what`` after
+    ``timeout`` s (the studio's tests wait on a server thread or a browser)."""
+    import time
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        value = cond()
+        if value:
+            return value
+        time.sleep(poll)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
 def smooth_face_image(m: int, n: int, seed: int = 0, amplitude: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
     """Generators ``g (m+2, 4)``, ``h (n+2, 4)`` of a fair PP face image: a dome-like patch with a
     seeded smooth perturbation (the face normals turn gently, no folds)."""

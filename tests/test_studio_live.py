@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, wait_for
 
 pytest.importorskip("viser", reason="the studio extra is not installed (pip install '.[studio]')")
 
@@ -25,16 +25,6 @@ def _flatness(points: np.ndarray) -> float:
     c = points - points.mean(0)
     return float(np.abs(c @ np.linalg.svd(c, full_matrices=False)[2][-1]).max()
                  / np.linalg.norm(points.max(0) - points.min(0)))
-
-
-def _wait(cond, timeout: float = 120.0, what: str = "condition"):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        value = cond()
-        if value:
-            return value
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.fixture
@@ -79,7 +69,7 @@ def test_live_anchors_drag_the_mesh_which_settles_pp_and_the_drag_is_one_undo_st
     assert snap["on"] and set(snap["anchors"]) == {"a0_0", "a0_30", "a30_0", "a30_30", "a15_15"}
     undo_before = len(studio.model.history.undo)
     _drag(studio, "a15_15", 1.0)                                  # one metre up, in six moves
-    _wait(lambda: panel.snapshot()["settled"], what="the mesh to settle")
+    wait_for(lambda: panel.snapshot()["settled"], 120.0, "the mesh to settle", poll=0.05)
     time.sleep(0.3)                                               # the settled frame shown
     with studio.lock:
         after = studio.snapshot()
@@ -96,7 +86,8 @@ def test_live_anchors_drag_the_mesh_which_settles_pp_and_the_drag_is_one_undo_st
     assert [a[0] for a in recorded] == [0, 30, 15 * 31 + 15, 930, 960]
     studio._guard(lambda: studio._history(studio.model.undo))
     assert "anchors" not in studio.model.doc["optimize"]
-    _wait(lambda: panel.snapshot().get("frames", 0) == 0 or panel.snapshot()["settled"], what="the restart")
+    wait_for(lambda: panel.snapshot().get("frames", 0) == 0 or panel.snapshot()["settled"], 120.0, "the restart",
+             poll=0.05)
     assert np.allclose(panel.snapshot()["anchors"]["a15_15"], before[15, 15] / 1000.0, atol=1e-12)
 
 

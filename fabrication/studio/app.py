@@ -654,12 +654,11 @@ class Studio:
         last error and the number of redraws."""
         with self.lock:
             st = self.model.state
+            live: dict[str, Any] = self.live.snapshot() if self.live is not None else {"on": False}
             return {"vertices": st.placed.vertices.copy(), "delta_p": dict(st.delta_p), "error": self.model.error,
-                    "handles": {**{h.key: h.position for h in self.model.handles()},
-                                **(self.live.snapshot().get("anchors", {}) if self.live is not None else {})},
-                    "redraws": self.redraws,
-                    "params": self.model.params, "figures": dataclasses.asdict(st.figures),
-                    "live": self.live.snapshot() if self.live is not None else {"on": False}}
+                    "handles": {**{h.key: h.position for h in self.model.handles()}, **live.get("anchors", {})},
+                    "redraws": self.redraws, "params": self.model.params,
+                    "figures": dataclasses.asdict(st.figures), "live": live}
 
     def stop(self) -> None:
         if self.live is not None:
