@@ -140,6 +140,33 @@ def test_every_split_beam_has_its_splice():
         assert s.pieces[1] in joins[s.pieces[0]]["joins"].split(";")
 
 
+@pytest.mark.parametrize("name", ["default", "pp_cauchy"])
+def test_cover_plates_keep_the_top_clearance_over_their_own_length(name):
+    """Each cover plate's top edge lies ``splices.top_clear`` under the beam's top edge where it is closest to it
+    and nowhere closer: that edge moved up (square to itself) by ``top_clear − 0.01`` mm stays inside the two
+    pieces' outlines, moved by ``top_clear + 0.05`` mm it leaves them (shapely).  pp_cauchy's plates were 7 mm
+    lower where a crossing slot lay a plate's length from the cut."""
+    design, support, panels, beams, glazing = _stages(name)
+    plates = {p.part_id: p for p in beams.plates}
+    clear = design.splices.top_clear
+    assert glazing.splices
+    for s in glazing.splices:
+        a, b = plates[s.pieces[0]], plates[s.pieces[1]]
+        body = Polygon(a.outline).union(Polygon(a.frame.to2d(b.frame.to3d(b.outline)))).buffer(1e-6)
+        ring = np.asarray(s.outline)
+        edges = [(ring[k], ring[(k + 1) % len(ring)]) for k in range(len(ring))]
+        up_point = np.asarray(a.top[-1])
+        p, q = min(edges, key=lambda e: float(np.linalg.norm(0.5 * (e[0] + e[1]) - up_point)))   # its top edge
+        d = (q - p) / np.linalg.norm(q - p)
+        n = np.array([-d[1], d[0]])
+        if n @ (up_point - p) < 0:
+            n = -n                                                 # square to the edge, towards the beam's top
+        inside = LineString([p + (clear - 0.01) * n, q + (clear - 0.01) * n])
+        beyond = LineString([p + (clear + 0.05) * n, q + (clear + 0.05) * n])
+        assert body.contains(inside), (s.part_ids, name)
+        assert not body.contains(beyond), (s.part_ids, name)
+
+
 @pytest.mark.slow
 def test_weld_dihedrals_are_the_angles_of_the_plates():
     design, support, panels, beams, glazing = _stages("default")

@@ -195,19 +195,38 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
         body = unary_union([Polygon(a.outline).buffer(1e-3),
                             Polygon(f.to2d(b.frame.to3d(b.outline))).buffer(1e-3)])
         depth = float(np.linalg.norm(a.bottom[-1] - a.top[-1]))
-        reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in (0.0, depth)]
-        top, bottom = -np.inf, np.inf
-        for tau in np.linspace(min(reach), max(reach), 9):  # the plate's depth under the top edge
-            foot = c + tau * u
-            ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
-            hit = ray.intersection(body)
-            spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
-            if not spans:
-                top, bottom = np.inf, -np.inf
+        corners = np.asarray(body.exterior.coords) if body.geom_type == "Polygon" else np.zeros((0, 2))
+
+        def under_top_edge(*ys: float) -> tuple[float, float]:
+            """The beam's top and bottom (depths under the top edge through ``c``) over the stretch of the top
+            edge that the plate's edges at depths ``ys`` span, exact: at its ends and at every corner of the
+            pieces' outline between them (the depth of the first material under the edge is linear between)."""
+            reach = [float((to_p @ np.array([x, y])) @ u) for x in (-0.5 * L, 0.5 * L) for y in ys]
+            ends = [min(reach), max(reach)]
+            taus = [*ends, *(float(t) for t in (corners - c) @ u if ends[0] < t < ends[1])]
+            top, bottom = -np.inf, np.inf
+            for tau in taus:
+                foot = c + tau * u
+                ray = LineString([foot - 2.0 * depth * m, foot + 3.0 * depth * m])
+                hit = ray.intersection(body)
+                spans = [np.asarray(g.coords) for g in getattr(hit, "geoms", [hit]) if not g.is_empty]
+                if not spans:
+                    return np.inf, -np.inf
+                main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
+                yy = sorted(float((q - foot) @ m) for q in main)
+                top, bottom = max(top, yy[0]), min(bottom, yy[-1])
+            return top, bottom
+
+        # the top clearance is kept over the plate's own top edge (a slot or notch beyond its end does not lower
+        # it: a crossing slot a plate length from the cut lowered pp_cauchy's plates by 7 mm when the whole
+        # depth's reach was sampled); the edge's stretch moves with its depth on a skew cut, so settle it
+        top = under_top_edge(params.top_clear)[0]
+        for _ in range(4):
+            again = under_top_edge(top + params.top_clear)[0]
+            if not np.isfinite(again) or again <= top + 1e-9:
                 break
-            main = max(spans, key=lambda q: float(np.linalg.norm(q[-1] - q[0])))
-            yy = sorted(float((q - foot) @ m) for q in main)
-            top, bottom = max(top, yy[0]), min(bottom, yy[-1])
+            top = again
+        bottom = under_top_edge(0.0, depth)[1]
         h = bottom - top
         lo, hi = top + params.top_clear, bottom - params.bottom_clear
         if hi - lo < 2 * params.e2:
