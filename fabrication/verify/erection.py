@@ -22,7 +22,7 @@ the part it passes through and the depth.
 
 Two parts overlapping in their final places (the *static* depth of a pass) by more than :data:`TOLERANCE` are a
 finding where the design says they meet: a retention part or another pane inside a pane, a strip or gasket
-inside another, a part deeper inside a beam plate than half its thickness; what remains (a plate's lean under
+inside another or in a splice's cover plate, a part deeper inside a beam plate than half its thickness; what remains (a plate's lean under
 glass laid directly on the plates, ``[glazing] support = "none"``) is a warning.
 
 A plate whose slot directions spread too far for one direction (``blocked_spread_deg`` set by the build) is
@@ -559,14 +559,24 @@ def check_erection(v: Verification) -> None:
         v.error(rel, "", f"{len(in_glass) - 20} more parts inside a pane in their final places")
     overlapping = [p for p in overlapping if into_glass(p) is None]
     # strips and gaskets meet, they do not overlap: a gasket lies on its strip's top face, the strips of a
-    # polyline running through a node end on the mitre between them, the others stop clear of the running strip
+    # polyline running through a node end on the mitre between them, the others stop clear of the running strip;
+    # a splice's cover plates stand clear of the strip leaning over them
     glazing_kind = ("strip", "gasket")
-    in_glazing = sorted((p for p in overlapping if kinds.get(p.part) in glazing_kind
-                         and kinds.get(p.through) in glazing_kind), key=lambda p: -p.static)
+
+    def glazing_pair(p: Any) -> str | None:
+        ours = kinds.get(p.part) in glazing_kind, kinds.get(p.through) in glazing_kind
+        if all(ours):
+            return ("strips and gaskets meet on the mitre at a node or stop clear of the strip running through it "
+                    "(docs/glazing.md, 'At the nodes')")
+        if any(ours) and "splice" in (kinds.get(p.part), kinds.get(p.through)):
+            return ("a splice's cover plates stand splices.top_clear under the strip's underside where it leans "
+                    "over them (docs/glazing.md, 'Splices')")
+        return None
+
+    in_glazing = sorted((p for p in overlapping if glazing_pair(p) is not None), key=lambda p: -p.static)
     for p in in_glazing[:20]:
         v.error(rel, p.part, f"overlaps {p.through} in its final place by {p.static:.2f} mm (more than {TOLERANCE:g} "
-                             "mm): strips and gaskets meet on the mitre at a node or stop clear of the strip "
-                             "running through it (docs/glazing.md, 'At the nodes')")
+                             f"mm): {glazing_pair(p)}")
     if len(in_glazing) > 20:
         v.error(rel, "", f"{len(in_glazing) - 20} more strips or gaskets overlapping in their final places")
     overlapping = [p for p in overlapping if p not in in_glazing]
