@@ -137,9 +137,12 @@ def test_the_seat_is_the_highest_gasket_point_under_the_pane(alpha):
 
 @pytest.mark.parametrize("name", BUILDS)
 def test_no_pane_enters_a_strip_or_gasket(name, request):
+    no_pane_enters_a_strip_or_gasket(request.getfixturevalue(name))
+
+
+def no_pane_enters_a_strip_or_gasket(folder: Path) -> None:
     """The common of every pane with every strip and gasket whose box meets its own is empty or thinner than the
     tolerance below the pane's underside; every pane touches (its box meets) at least three gaskets."""
-    folder = request.getfixturevalue(name)
     panes, gaskets, strips = read(folder)
     support = {**gaskets, **strips}
     boxes = {k: (points(s).min(axis=0), points(s).max(axis=0)) for k, s in support.items()}
@@ -162,11 +165,15 @@ def test_no_pane_enters_a_strip_or_gasket(name, request):
 
 @pytest.mark.parametrize("name", BUILDS)
 def test_no_strip_or_gasket_enters_another(name, request):
+    no_strip_or_gasket_enters_another(request.getfixturevalue(name))
+
+
+def no_strip_or_gasket_enters_another(folder: Path) -> None:
     """The kernel's common of every two strips or gaskets of glazing.step whose boxes meet has no volume: a
     gasket touches its own strip along their face, the strips of a polyline running through a node meet at most
     on the mitre between them (smallest_roof's boundary beams, whose strips roll 1.4° against each other, had a
     gasket 0.75 mm inside the next strip when the strips were set back for their top faces alone)."""
-    _, gaskets, strips = read(request.getfixturevalue(name))
+    _, gaskets, strips = read(folder)
     solids = {**gaskets, **strips}
     names = sorted(solids)
     lo = np.array([points(solids[k]).min(axis=0) for k in names]) - 0.1
@@ -216,6 +223,10 @@ STEP = 0.5
 
 @pytest.mark.parametrize("name", BUILDS)
 def test_rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(name, request, tmp_path):
+    rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(request.getfixturevalue(name), tmp_path)
+
+
+def rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(folder: Path, tmp_path: Path) -> None:
     """From the underside of every pane, at three stations along the middle of each edge and every 0.5 mm from
     the edge to ``min_bite`` into the glass (and on to 35 mm), a ray along the pane's normal: within the bite
     every ray hits a gasket, no hit lies above the underside by more than the tolerance (no penetration), the
@@ -223,7 +234,6 @@ def test_rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(name, reques
     edge within the wedge of the tilts of its pane's edges (``bites.csv``) across the strip width."""
     from trimesh.ray.ray_triangle import ray_triangle_id
 
-    folder = request.getfixturevalue(name)
     m = json.loads((folder / "manifest.json").read_text())
     fab = m["fabrication"]
     min_bite, width = float(fab["panels"]["min_bite"]), float(fab["glazing"]["width"])

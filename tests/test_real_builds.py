@@ -510,3 +510,16 @@ def test_marking_and_drawings_on_a_real_mesh(dome_build):
     test_drawings.test_key_plan_names_every_part_once_inside_its_face(dome_build)
     test_drawings.test_no_text_overlaps_another_or_crosses_a_line_on_any_sheet(dome_build)
     test_drawings.test_node_sheets_hold_every_node_once_with_angles_within_the_type(dome_build)
+
+
+def test_the_real_dome_as_built_has_no_clash_and_every_pane_bears(dome_build, tmp_path):
+    """The assembly checks of tests/test_assembly_clash.py on a second real mesh (DOS quad_dome, PP with four
+    valence-3 vertices, half-lap joints, one-edge beams where the support leaves polylines out), as written:
+    no pane enters a strip or gasket (the kernel's common), no strip or gasket enters another, and rays from
+    every pane edge's underside land on a gasket across the bite (trimesh)."""
+    from test_assembly_clash import (no_pane_enters_a_strip_or_gasket, no_strip_or_gasket_enters_another,
+                                     rays_from_every_pane_edge_land_on_a_gasket_within_the_bite)
+
+    no_pane_enters_a_strip_or_gasket(dome_build)
+    no_strip_or_gasket_enters_another(dome_build)
+    rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(dome_build, tmp_path)

@@ -265,7 +265,9 @@ def bevel_plate(plate: BeamPlate, strips: Sequence["Strip"], min_deg: float) -> 
     faces = _valid_faces(out)
     if faces is None:
         logging.getLogger("ppfab").warning("%s: the bevel of its top edge cannot be drawn (an edge of the outline "
-                                           "is shorter than the bevel moves it); the plate keeps a square top edge",
+                                           "is shorter than the bevel moves it); the plate keeps a square top edge and the strip's fillet weld takes "
+                                           "up the lean's overlap (the shop fits it; raise glazing.bevel_min_deg to "
+                                           "bevel fewer plates, or thin beams.thickness to shrink the overlap)",
                                            plate.part_id)
         return plate
     return replace(out, cut_outline=cut_outline(*faces))
@@ -291,7 +293,8 @@ def bevelled_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
               if b.n_pieces > 1 and not b.bevels and top_bevels(a, by_beam.get(a.beam_id, []), min_deg)}
     if square:
         logging.getLogger("ppfab").warning("%d beam(s) keep a square top edge on every piece, as one of their pieces "
-                                           "must (%s)", len(square), ", ".join(sorted(square)[:6]))
+                                           "must (%s); their strips' fillet welds take up the lean's overlap (raise glazing.bevel_min_deg to "
+                                           "accept this everywhere)", len(square), ", ".join(sorted(square)[:6]))
         plates = tuple(a if a.beam_id in square else b for a, b in zip(beams.plates, plates))
     types = type_ids(list(plates))
     by_id = {p.part_id: p for p in plates}

@@ -146,4 +146,6 @@ def check_bites(bites: list[EdgeBite], min_bite: float, max_tilt_deg: float) -> 
     if steep:
         names = ", ".join(f"{b.panel} edge {b.edge} ({b.tilt_deg:.1f}°)" for b in steep[:8])
         log.warning("%d pane edge(s) lie steeper on their glazing strip than glazing.max_tilt_deg = %g°: %s; "
-                    "they need tapered (wedge) gaskets", len(steep), max_tilt_deg, names)
+                    "order tapered (wedge) gaskets for them (the glass order does not; flat gaskets leave the pane on one "
+                    "line of its edge), or raise glazing.max_tilt_deg where the gasket takes the wedge",
+                    len(steep), max_tilt_deg, names)

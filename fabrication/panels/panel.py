@@ -291,7 +291,8 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
         small = np.flatnonzero(used < p.mark_size)
         k = int(small[np.argmin(used[small])])
         log.warning("panels.mark_size %g mm does not fit %d panel(s): their reference marks are drawn smaller, "
-                    "down to %.3g mm on %s", p.mark_size, len(small), used[k], ids[k])
+                    "down to %.3g mm on %s (the cutter still finds the corner; lower panels.mark_size to draw them all "
+                    "alike)", p.mark_size, len(small), used[k], ids[k])
     types = group_congruent(list(outline), p.type_tol, p.mirror_allowed)
     wt = max(3, len(str(int(types.max()) + 1)))
     panels: list[Panel] = []

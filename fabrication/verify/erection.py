@@ -583,8 +583,9 @@ def check_erection(v: Verification) -> None:
     if overlapping:
         worst = max(overlapping, key=lambda p: p.static)
         logging.getLogger("ppfab").warning(
-            "erection: %d pair(s) of parts overlap in their final places by up to %.2f mm (%s in %s): a fit of the "
-            "finished model (plate lean under the glazing, docs/glazing.md), not of the order",
+            "erection: %d pair(s) of parts overlap in their final places by up to %.2f mm (%s in %s): a leaning "
+            "plate's top corner under glass laid on the plates, taken up by the glass's setting on them "
+            "(docs/glazing.md); [glazing] support = \"strip\" puts the glass on strips over bevelled plates instead",
             len(overlapping), worst.static, worst.part, worst.through)
     # the plan's way in for cover plates, strips, gaskets and panes past the steel (lowered in the beam's plane,
     # along the strip's down or the pane's inside normal) is not proven on leaning beams: said, not failed; the

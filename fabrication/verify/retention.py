@@ -220,7 +220,8 @@ def check_retention(v: Verification) -> None:
     if low:
         logging.getLogger("ppfab").warning(
             "retention: %d setting block(s) bear on less than half the glass edge (a kink closes the joint over them): "
-            "%s", len(low), ", ".join(low[:6]))
+            "%s; the block carries the pane on its edge's arris: widen [panels] gap or give these panes a bracket "
+            "under the edge", len(low), ", ".join(low[:6]))
     if not plates:
         v.checked.append("retention")
         return

@@ -34,7 +34,13 @@ def write_erection(build: "Build", out: Path, files: Files) -> str:
     sheet = sheet_register(build)[ERECTION_SVG].info
     svg.write_text(erection_svg(plan, outlines, sheet.title, sheet=sheet), encoding="utf-8")
     files["erection_drawing"] = ERECTION_SVG
-    for b in plan.blocked:
-        logging.getLogger("ppfab").warning("erection: %s", b)
+    if plan.blocked:
+        worst = sorted(plan.blocked, key=lambda b: -b.spread_deg)
+        logging.getLogger("ppfab").warning(
+            "erection: %d plate(s) have no single insertion direction, their slots and end cuts spreading up to "
+            "%.1f° (%s): slid in as one piece each would push a mating plate further sideways in its slot than its "
+            "clearance; the erector fits them in pieces, or before the plates they cross (erection.csv "
+            "blocked_spread_deg); shorter pieces (beams.max_length) or more slot play (beams.clearance) ease it",
+            len(worst), worst[0].spread_deg, ", ".join(f"{b.part_id} {b.spread_deg:.1f}°" for b in worst[:6]))
     return f"{len(plan.steps)} steps, {len(plan.insertions)} rows" + \
         (f", {len(plan.blocked)} plates with no single insertion direction" if plan.blocked else "")
