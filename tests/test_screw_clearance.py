@@ -84,7 +84,38 @@ def test_a_screw_beside_another_pane_of_the_strip_is_not_measured_against_this_o
     assert screw_clearance(_screw(), 8.0, [(pane, 0, 0.0)]) < 0
 
 
-def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names():
+def test_screws_in_the_glass_stop_the_build_before_any_file_with_the_joint_that_clears_them(tmp_path, capsys):
+    """smallest_roof with 10 mm joints: the build stops (exit 2) in one line naming ``panels.gap``, the plates
+    whose screws stand in the glass and the joint that clears them, and writes no folder; that joint, built,
+    leaves no screw in the glass."""
+    import tomllib
+
+    from fabrication import build
+    from fabrication.cli import main
+    from fabrication.design import parse_design
+    from fabrication.glazing.retention import build_retention
+
+    example = REPO / "examples" / "smallest_roof.toml"
+    doc = tomllib.loads(example.read_text(encoding="utf-8"))
+    doc["panels"]["gap"] = 10.0
+    design = tmp_path / "d.toml"
+    design.write_text(example.read_text(encoding="utf-8").replace("gap = 18.0", "gap = 10.0"), encoding="utf-8")
+    capsys.readouterr()
+    assert main(["build", str(design), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+    import re
+    found = re.search(r"panels\.gap: (\d+) pressure plate\(s\) have clamping screws standing in the glass.*"
+                      r"widen \[panels\] gap to at least (\d+) mm \(from 10\)", err)
+    assert found, err
+    assert not (tmp_path / "out").exists()
+    doc["panels"]["gap"] = float(found.group(2))
+    ret = build_retention(build(parse_design(doc, source="<smallest_roof, the joint it names>",
+                                             base_dir=example.parent)))
+    assert ret is not None and min(s.clearance_mm for s in ret.screws) >= 0.0
+
+
+def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(monkeypatch):
     """The build's clearance of every screw set of ``smallest_roof`` with 10 mm joints (its example widens them
     to 18 mm for this) against the overlaps in place that the erection check measures with manifold3d on the
     written STEP solids and rebuilt screws: a set whose screws stand in the glass overlaps a pane by its depth
@@ -106,6 +137,9 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names()
     assert all(s.clearance_mm >= 0.0 for s in build_retention(build(load_design(example))).screws)
     doc = tomllib.loads(example.read_text(encoding="utf-8"))
     doc["panels"]["gap"] = 10.0
+    import fabrication.glazing.retention as retention
+
+    monkeypatch.setattr(retention, "SCREWS_IN_GLASS_MM", float("inf"))     # built and written, for verify to judge
     b = build(parse_design(doc, source="<smallest_roof, 10 mm joints>", base_dir=example.parent))
     ret = build_retention(b)
     assert ret is not None and ret.screws

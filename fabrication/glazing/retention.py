@@ -688,12 +688,13 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                                  max(spacing.get(panel.part_id, [0.0])), sil,
                                  (strip_bites or {}).get(panel.part_id, math.nan), contact[panel.part_id],
                                  plate_use.get(panel.part_id, math.nan)))
-    tight = sorted((x for x in screw_sets if x.clearance_mm < 0.0), key=lambda x: x.clearance_mm)
+    tight = sorted((x for x in screw_sets if 0.0 < -x.clearance_mm <= SCREWS_IN_GLASS_MM),
+                   key=lambda x: x.clearance_mm)
     if tight:
-        log.warning("%d pressure plate(s) have clamping screws that would go into the glass beside their joint, where "
-                    "a kink closes the joint towards the glass's top: %s; the build's check will refuse them (glass "
-                    "takes no steel): widen [panels] gap to at least %.0f mm, or clamp with a smaller [glazing] "
-                    "retention_bolt", len(tight), ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]),
+        log.warning("%d pressure plate(s) have clamping screws touching the glass beside their joint, where a kink "
+                    "closes the joint towards the glass's top: %s, within the %g mm the build allows; widen [panels] "
+                    "gap to at least %.0f mm for room", len(tight),
+                    ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]), SCREWS_IN_GLASS_MM,
                     math.ceil(gap - 2.0 * tight[0].clearance_mm + 0.5))
     low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
     if low:
@@ -742,6 +743,30 @@ def build_retention(build: "Build") -> Retention | None:
                            float(build.design.panels.gap), bites)
         _CACHE[g] = r
     return r
+
+
+SCREWS_IN_GLASS_MM = 0.25
+"""mm: how far a clamping screw may stand in the glass beside its joint before the build refuses (the tolerance
+of the erection check for parts in place, :data:`fabrication.verify.erection.TOLERANCE`)."""
+
+
+def refuse_screws_in_glass(retention: Retention | None, gap: float) -> None:
+    """Raise :class:`~ppfab.errors.DesignError` (``panels.gap``) naming the pressure plates whose clamping screws
+    stand more than :data:`SCREWS_IN_GLASS_MM` in the glass (a kink closing the joint towards the glass's top)
+    and the joint that clears them: before any file is written, where the build's verify would refuse them
+    after writing every file (glass takes no steel)."""
+    from ppfab.errors import DesignError
+
+    if retention is None:
+        return
+    deep = sorted((x for x in retention.screws if -x.clearance_mm > SCREWS_IN_GLASS_MM), key=lambda x: x.clearance_mm)
+    if deep:
+        raise DesignError("panels.gap", f"{len(deep)} pressure plate(s) have clamping screws standing in the glass "
+                                        "beside their joint, where a kink closes it towards the glass's top: "
+                                        + ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in deep[:6])
+                                        + f"; glass takes no steel: widen [panels] gap to at least "
+                                        f"{math.ceil(gap - 2.0 * deep[0].clearance_mm + 0.5):.0f} mm (from {gap:g}), "
+                                        "or clamp with a smaller [glazing] retention_bolt")
 
 
 def retention_mass_kg(build: "Build") -> float:

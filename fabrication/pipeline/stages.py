@@ -71,9 +71,10 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
               times=p.times)
 
-    from ..glazing.retention import retention_mass_kg      # the retention is placed on the built panes and strips
+    from ..glazing.retention import build_retention, refuse_screws_in_glass, retention_mass_kg
     from ..parts import parts_table
 
+    refuse_screws_in_glass(build_retention(b), design.panels.gap)   # placed on the built panes and strips
     b = replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
     return replace(b, parts=parts_table(b))                  # the parts list, once, for every writer
 
