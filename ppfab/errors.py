@@ -8,6 +8,11 @@ measured value, limit) so callers can react without parsing the message.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .finding import Finding
+
 from typing import Any, Sequence
 
 
@@ -75,11 +80,13 @@ class FabricationError(PpfabError):
 class NonPlanarPanelError(FabricationError):
     """Panels deviate from their plane by more than the tolerance (in mm)."""
 
-    def __init__(self, offenders: list[tuple[str, float]], tolerance_mm: float, advice: str = ""):
+    def __init__(self, offenders: "list[Finding]", tolerance_mm: float, advice: str = ""):
+        """``offenders``: one :class:`~ppfab.finding.Finding` per panel (``planarity``, the panel id, its
+        deviation and the tolerance, mm)."""
         self.offenders = offenders
         self.tolerance_mm = tolerance_mm
-        worst = sorted(offenders, key=lambda o: -o[1])
-        shown = ", ".join(f"{name} {dev:.3g} mm" for name, dev in worst[:8])
+        worst = sorted(offenders, key=lambda o: -(o.value or 0.0))
+        shown = ", ".join(f"{o.element} {o.value:.3g} mm" for o in worst[:8])
         more = f" (and {len(worst) - 8} more)" if len(worst) > 8 else ""
         super().__init__(
             f"{len(offenders)} panel(s) deviate from their plane by more than "

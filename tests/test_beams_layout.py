@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from conftest import shared_file
@@ -150,37 +152,37 @@ def test_depth_beyond_the_crossing_of_axes_is_reported():
     s = support_pp(sample_pp_grid(4, 5, tilt=3.0))
     prm = BeamParams(depth=60000.0, max_length=0, min_segment=0)
     bs = build_beams(s, prm, strict=False)
-    found = [d for d in bs.report.defects if d.kind == "axis_crossing"]
+    found = [d for d in bs.report.defects if d.code == "axis_crossing"]
     assert found
     for d in found:
-        p = bs.by_id[d.part_id]
-        k = int(d.where.split()[-1])
+        p = bs.by_id[d.element]
+        k = int(re.search(r"ends of edge (\d+) ", d.message).group(1))
         va, vb = s.vertices[p.nodes[k]], s.vertices[p.nodes[k + 1]]
         aa, ab = s.axes[p.nodes[k]], s.axes[p.nodes[k + 1]]
         st = np.linalg.lstsq(np.c_[aa, -ab], vb - va, rcond=None)[0]   # the two axes meet (torsion 0)
         assert np.linalg.norm(va + st[0] * aa - vb - st[1] * ab) < 1e-6
         assert d.value == pytest.approx(st.min(), rel=1e-9) and d.value < prm.depth
         assert d.limit == prm.depth
-    with pytest.raises(FabricationError, match=rf"{found[0].part_id}: the node axes at the ends of edge \d+ cross"):
+    with pytest.raises(FabricationError, match=rf"{found[0].element}: the node axes at the ends of edge \d+ cross"):
         build_beams(s, prm)
 
 
 def test_small_angles_and_short_segments_are_reported_by_part_id(pp):
     s, _ = pp
     bs = build_beams(s, BeamParams(min_angle_deg=89.0, min_segment=1300.0, max_length=0), strict=False)
-    angles = [d for d in bs.report.defects if d.kind == "small_angle"]
+    angles = [d for d in bs.report.defects if d.code == "small_angle"]
     assert angles
     for d in angles:
         a, b = d.message.split(" meet ")[0].split(" and ")
         pa, pb = bs.by_id[a], bs.by_id[b]
         expect = np.degrees(pl.angle_between(s.polyline_planes[pa.polyline], s.polyline_planes[pb.polyline]))
         assert d.value == pytest.approx(expect, abs=1e-9) and d.value < 89
-    short = [d for d in bs.report.defects if d.kind == "short_segment" and d.where.startswith("edge")]
+    short = [d for d in bs.report.defects if d.code == "short_segment" and " of its top edge is " in d.message]
     edges = np.linalg.norm(s.vertices[s.edges[:, 1]] - s.vertices[s.edges[:, 0]], axis=1)
     assert len(short) == int((edges < 1300).sum())
     for d in short:
-        p = bs.by_id[d.part_id]
-        k = int(d.where.split()[-1])
+        p = bs.by_id[d.element]
+        k = int(re.search(r": edge (\d+) of its top edge", d.message).group(1))
         assert d.value == pytest.approx(np.linalg.norm(s.vertices[p.nodes[k + 1]] - s.vertices[p.nodes[k]]), abs=1e-6)
     with pytest.raises(FabricationError, match=r"beam defect\(s\): B-[UW]\d\d"):
         build_beams(s, BeamParams(min_angle_deg=89.0, max_length=0))
@@ -225,11 +227,11 @@ def test_long_beams_are_split_into_pieces():
 def test_beams_that_cannot_be_split_short_enough_are_reported():
     s = support_pp(sample_pp_grid(3, 4))
     bs = build_beams(s, BeamParams(max_length=1000.0), strict=False)
-    long = [d for d in bs.report.defects if d.kind == "too_long"]
-    assert sorted(d.part_id for d in long) == sorted({p.beam_id for p in bs.plates})   # edges > 1 m
+    long = [d for d in bs.report.defects if d.code == "too_long"]
+    assert sorted(d.element for d in long) == sorted({p.beam_id for p in bs.plates})   # edges > 1 m
     for d in long:
         assert d.value > 1000.0 and d.value == pytest.approx(
-            max(np.ptp(p.raw_outline[:, 0]) for p in bs.plates if p.beam_id == d.part_id), abs=1e-6)
+            max(np.ptp(p.raw_outline[:, 0]) for p in bs.plates if p.beam_id == d.element), abs=1e-6)
 
 
 def test_closed_rows_are_cut_into_pieces():
@@ -260,7 +262,7 @@ def test_general_mesh_plates_stop_at_singular_vertices():
     assert all(p.part_id.startswith("B-R") for p in bs.plates)
     # the polylines are far from planar here: each edge is its own plate, in its support plane
     assert len(bs.plates) == len(s.edges)
-    assert not any(d.kind in ("axis_crossing", "outline") for d in bs.report.defects)
+    assert not any(d.code in ("axis_crossing", "outline") for d in bs.report.defects)
 
 
 def test_flat_parts(pp):

@@ -131,8 +131,8 @@ def test_nonplanar_panels_stop_before_anything_is_written():
     with pytest.raises(NonPlanarPanelError) as err:
         make_panels(mesh, PanelParams(planarity_tolerance=1.0), scale=1000.0)
     e = err.value
-    assert len(e.offenders) > 10 and all(dev > 1.0 for _, dev in e.offenders)
-    assert "mm" in str(e) and e.offenders[0][0].startswith("P-")
+    assert len(e.offenders) > 10 and all(o.value > 1.0 == o.limit and o.code == "planarity" for o in e.offenders)
+    assert "mm" in str(e) and e.offenders[0].element.startswith("P-")
 
 
 def test_collapsing_inset_is_an_error_naming_the_panel():

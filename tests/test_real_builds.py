@@ -156,7 +156,9 @@ def test_a_build_beyond_its_torsion_tolerance_stops_listing_the_edges(dome):
         build(d)
     msg = str(err.value)
     assert "exceed beams.max_torsion_mm = 1e-07 mm at beam depth 200 mm: N" in msg
-    worst_label, worst_mm = err.value.offenders[0]
+    worst = err.value.offenders[0]
+    worst_label, worst_mm = worst.element, worst.value
+    assert worst.code == "torsion" and worst.limit == 1e-7
     assert worst_mm > 1e-7 and worst_label in msg and f"{worst_mm:.3g} mm" in msg
 
 
@@ -192,15 +194,16 @@ def test_a_build_beyond_its_crease_limit_stops_listing_the_edges(dome, capsys):
     with pytest.raises(CreaseError) as err:
         build(d)
     over = {e: a for e, a in angles.items() if a > limit}
-    listed = {tuple(int(x[1:]) for x in label.split()[0].split("-")): a for label, a in err.value.offenders}
+    listed = {tuple(int(x[1:]) for x in o.element.split()[0].split("-")): o.value for o in err.value.offenders}
+    assert all(o.code == "crease" and o.limit == limit for o in err.value.offenders)
     assert set(listed) == set(over)
     assert max(abs(listed[e] - over[e]) for e in over) < 1e-4       # planar faces (δ_f < 1e-6)
-    assert err.value.offenders[0][1] == pytest.approx(worst, abs=1e-4)
+    assert err.value.offenders[0].value == pytest.approx(worst, abs=1e-4)
     (dome.parent / "crease.toml").write_text(design_text(dome, f"[panels]\nmax_crease_deg = {limit}\n"))
     capsys.readouterr()
     assert main(["build", str(dome.parent / "crease.toml"), "-o", str(dome.parent / "crease_out")]) != 0
     err_text = capsys.readouterr().err.strip().splitlines()[-1]
-    label = err.value.offenders[0][0]
+    label = err.value.offenders[0].element
     assert err_text.startswith(f"ppfab: error: {len(over)} edge(s) fold the glass by more than "
                                f"panels.max_crease_deg = {limit}°")
     assert f"{label} {worst:.1f}°" in err_text and "P-" in label

@@ -62,6 +62,26 @@ def test_t_joint_weld_length_changed(copy, capsys):
     assert f"welds.csv: row {k + 1} column weld_length_mm: {rows[k]['part']} to {rows[k]['to']}" in err
 
 
+def test_verify_json_gives_each_finding_its_check_value_and_limit(copy, capsys):
+    """``ppfab verify --json``: the tampered weld length is a finding of the ``welds`` check with the difference
+    from the recomputed length as its value and the tolerance as its limit; the JSON is the whole of stdout."""
+    from fabrication.verify.welds import LENGTH_TOLERANCE_MM
+
+    rows = read_rows(copy / "welds.csv")
+    k = next(i for i, r in enumerate(rows) if r["joint"] == "T")
+    rows[k]["weld_length_mm"] = str(float(rows[k]["weld_length_mm"]) - 20.0)
+    write_rows(copy / "welds.csv", rows)
+    reseal(copy, "welds.csv")
+    capsys.readouterr()
+    assert main(["verify", str(copy), "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["ok"] is False and "welds" in out["checked"]
+    mine = [f for f in out["findings"] if f["element"] == f"row {k + 1} column weld_length_mm"]
+    assert len(mine) == 1 and mine[0]["code"] == "welds" and mine[0]["file"] == "welds.csv"
+    assert mine[0]["value"] == pytest.approx(20.0, abs=1e-3) and mine[0]["limit"] == LENGTH_TOLERANCE_MM
+    assert all(f["code"] for f in out["findings"])                    # every finding names its check
+
+
 # -- 2. bites.csv ------------------------------------------------------------------------------------------
 
 def test_non_minimal_bite_changed(copy, capsys):

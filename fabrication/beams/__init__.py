@@ -16,7 +16,7 @@ from .joint_types.halflap import slot_width
 from .joints import NodeJoint, end_setback
 from .params import BeamParams
 from .plates import BeamPlate, Slot
-from .report import BeamRecord, BeamReport, Defect
+from .report import BeamRecord, BeamReport
 
 __all__ = ["BeamSet", "build_beams", "BeamParams", "BeamPlate", "Slot", "NodeJoint",
-           "BeamRecord", "BeamReport", "Defect", "slot_width", "end_setback"]
+           "BeamRecord", "BeamReport", "slot_width", "end_setback"]

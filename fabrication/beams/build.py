@@ -8,6 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from ppfab.errors import DesignError
+from ppfab.finding import Finding
 from ppfab.support.structure import SupportStructure
 from ppfab.topology import FAMILY_NAMES
 
@@ -15,7 +16,7 @@ from .flat import flat_parts, type_ids
 from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
 from .params import BeamParams
 from .plates import BeamPlate, SpliceClearances, layout_plates
-from .report import BeamRecord, BeamReport, Defect
+from .report import BeamRecord, BeamReport
 from .torsion import check_torsion
 
 
@@ -132,11 +133,11 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
 _PRIORITY = {"not_planar": 0, "axis_crossing": 1, "small_angle": 2, "short_segment": 3, "too_long": 4, "outline": 5}
 
 
-def _dedupe(defects: list[Defect]) -> list[Defect]:
+def _dedupe(defects: list[Finding]) -> list[Finding]:
     seen, out = set(), []
     for d in defects:
-        key = (d.part_id, d.kind, d.where)
+        key = (d.element, d.code, d.message)
         if key not in seen:
             seen.add(key)
             out.append(d)
-    return sorted(out, key=lambda d: _PRIORITY.get(d.kind, 9))
+    return sorted(out, key=lambda d: _PRIORITY.get(d.code, 9))

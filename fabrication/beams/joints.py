@@ -34,13 +34,13 @@ from shapely.ops import unary_union
 from shapely.validation import explain_validity
 
 from ppfab import planes as pl
+from ppfab.finding import Finding
 from ppfab.metrics import polygon_area
 from ppfab.support.structure import SupportStructure
 
 from .joint_types import get_joint_type
 from .params import BeamParams
 from .plates import BeamPlate, Slot
-from .report import Defect
 
 
 def end_setback(thickness: float, cos_phi: float, sin_phi: float, clearance: float) -> float:
@@ -92,14 +92,14 @@ def _end_direction3(p: BeamPlate, v: int, axis: np.ndarray) -> np.ndarray:
 
 
 def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: BeamParams
-                  ) -> tuple[list[NodeJoint], dict[str, list[tuple[int, float]]], dict[str, list[Slot]], list[Defect]]:
+                  ) -> tuple[list[NodeJoint], dict[str, list[tuple[int, float]]], dict[str, list[Slot]], list[Finding]]:
     """Joints at every node: angles, end set-backs, the joint type's cuts where plates run through
     (:mod:`fabrication.beams.joint_types`), angle defects."""
     jt = get_joint_type(params.joint)
     joints: list[NodeJoint] = []
     trims: dict[str, list[tuple[int, float]]] = {}
     slots: dict[str, list[Slot]] = {}
-    defects: list[Defect] = []
+    defects: list[Finding] = []
     t, cl = params.slot_thickness, params.fit
     min_ang = params.min_angle_deg
     for v, idx in sorted(_incidence(plates).items()):
@@ -130,7 +130,7 @@ def analyse_nodes(plates: list[BeamPlate], support: SupportStructure, params: Be
                 angles.append((ps[i].part_id, ps[j].part_id, dihedral, opening,
                                ps[i].beam_id == ps[j].beam_id))
                 if ang < min_ang:
-                    defects.append(Defect(ps[i].part_id, "small_angle", ang, min_ang, f"node {v}",
+                    defects.append(Finding("small_angle", "", ps[i].part_id, ang, min_ang,
                                           f"{ps[i].part_id} and {ps[j].part_id} meet at node {v} at {ang:.1f}° "
                                           f"(< min_angle_deg {min_ang:g}°)"))
                     continue
@@ -179,29 +179,29 @@ def _clean(coords: np.ndarray) -> np.ndarray:
     return q if polygon_area(q) > 0 else q[::-1]
 
 
-def _single(geom, plate: BeamPlate, stage: str, defects: list[Defect]) -> Polygon | None:
+def _single(geom, plate: BeamPlate, stage: str, defects: list[Finding]) -> Polygon | None:
     if geom.is_empty:
-        defects.append(Defect(plate.part_id, "short_segment", 0.0, 0.0, stage,
+        defects.append(Finding("short_segment", "", plate.part_id, 0.0, 0.0,
                               f"{plate.part_id}: nothing is left after the {stage}"))
         return None
     if geom.geom_type != "Polygon":
         parts = list(getattr(geom, "geoms", []))
-        defects.append(Defect(plate.part_id, "outline", float(len(parts)), 1.0, stage,
+        defects.append(Finding("outline", "", plate.part_id, float(len(parts)), 1.0,
                               f"{plate.part_id}: the {stage} split the plate into {len(parts)} pieces"))
         return None
     if len(geom.interiors):
-        defects.append(Defect(plate.part_id, "outline", float(len(geom.interiors)), 0.0, stage,
+        defects.append(Finding("outline", "", plate.part_id, float(len(geom.interiors)), 0.0,
                               f"{plate.part_id}: the {stage} leave(s) {len(geom.interiors)} hole(s) in the plate"))
         return None
     return geom
 
 
 def apply_joints(plate: BeamPlate, trims: list[tuple[int, float]], slots: list[Slot], params: BeamParams,
-                 defects: list[Defect]) -> BeamPlate:
+                 defects: list[Finding]) -> BeamPlate:
     """The plate with end cuts and slots drawn into its 2D outline (shapely), checked."""
     raw = Polygon(plate.raw_outline)
     if not raw.is_valid:
-        defects.append(Defect(plate.part_id, "outline", 0.0, 0.0, "outline",
+        defects.append(Finding("outline", "", plate.part_id, 0.0, 0.0,
                               f"{plate.part_id}: its outline is not a simple polygon ({explain_validity(raw)}); "
                               "the bottom edge crosses itself"))
         return replace(plate, trims=tuple(trims), slots=tuple(slots))
@@ -216,7 +216,7 @@ def apply_joints(plate: BeamPlate, trims: list[tuple[int, float]], slots: list[S
         r = params.tool_radius
         for s in slots:
             if r > 0 and s.width < 2 * r:
-                defects.append(Defect(plate.part_id, "outline", s.width, 2 * r, f"slot at node {s.node}",
+                defects.append(Finding("outline", "", plate.part_id, s.width, 2 * r,
                                       f"{plate.part_id}: the slot at node {s.node} is {s.width:.3g} mm wide, "
                                       f"narrower than the tool (beams.tool_radius {r:g} mm); use a smaller tool"))
         outline = _single(body.difference(unary_union([s.cutout(r) for s in slots])), plate, "slots",
@@ -228,15 +228,15 @@ def apply_joints(plate: BeamPlate, trims: list[tuple[int, float]], slots: list[S
                    slots=tuple(sorted(slots, key=lambda s: int(np.flatnonzero(plate.nodes == s.node)[0]))))
 
 
-def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Defect]:
+def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Finding]:
     """Depth beyond the crossing of consecutive node axes; zero-length edges; over-trimmed or
     over-slotted segments (less than ``min_segment`` of material left)."""
-    out: list[Defect] = []
+    out: list[Finding] = []
     top, bot = plate.top, plate.bottom
     d = params.depth
     seg = np.linalg.norm(np.diff(top, axis=0), axis=1)
     for edge in np.flatnonzero(seg < max(params.min_segment, 1e-9)):
-        out.append(Defect(plate.part_id, "short_segment", float(seg[edge]), params.min_segment, f"edge {edge}",
+        out.append(Finding("short_segment", "", plate.part_id, float(seg[edge]), params.min_segment,
                           f"{plate.part_id}: edge {edge} of its top edge is {seg[edge]:.3g} mm long "
                           f"(< min_segment {params.min_segment:g} mm)"))
     s = (bot - top) / d
@@ -247,7 +247,7 @@ def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Defect]:
             continue
         al = np.linalg.solve(m, top[k + 1] - top[k])
         if al[0] > 0 and al[1] > 0 and al.min() < d:
-            out.append(Defect(plate.part_id, "axis_crossing", float(al.min()), d, f"edge {k}",
+            out.append(Finding("axis_crossing", "", plate.part_id, float(al.min()), d,
                               f"{plate.part_id}: the node axes at the ends of edge {k} cross {al.min():.0f} mm "
                               f"below the top edge, less than the depth {d:g} mm"))
     # material left between consecutive cuts along the top edge
@@ -261,8 +261,7 @@ def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Defect]:
     for (c0, w0, k0), (c1, w1, k1) in zip(cuts[:-1], cuts[1:]):
         left = arc[c1] - arc[c0] - w0 - w1
         if left < params.min_segment:
-            out.append(Defect(plate.part_id, "short_segment", float(left), params.min_segment,
-                              f"chain {c0}-{c1}", f"{plate.part_id}: only {left:.3g} mm of plate is left between "
+            out.append(Finding("short_segment", "", plate.part_id, float(left), params.min_segment, f"{plate.part_id}: only {left:.3g} mm of plate is left between "
                                                   f"the {k0} cut and the {k1} cut (< min_segment "
                                                   f"{params.min_segment:g} mm)"))
     return out

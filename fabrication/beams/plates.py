@@ -27,6 +27,7 @@ import numpy as np
 
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
+from ppfab.finding import Finding
 from ppfab.frame import Frame
 from ppfab.metrics import polygon_area
 from ppfab.support.structure import SupportStructure
@@ -34,7 +35,6 @@ from ppfab.support.structure import SupportStructure
 from .. import contract
 
 from .params import BeamParams
-from .report import Defect
 from .splitting import Cut, plan_cuts
 
 SpliceClearances = tuple[tuple[str, float], ...]
@@ -290,7 +290,7 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
 
 
 def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0,
-                  splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> tuple[list[BeamPlate], list[Defect]]:
+                  splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> tuple[list[BeamPlate], list[Finding]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
@@ -322,7 +322,7 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
     left_out = {k for k, _ in support.left_out}
     cut = segmented_polylines(support, params)
     plates: list[BeamPlate] = []
-    defects: list[Defect] = []
+    defects: list[Finding] = []
     for l, line in enumerate(support.polylines):
         vs = line.vertices
         if len(vs) < 2:
@@ -335,8 +335,7 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
             why = (f"its vertices lie up to {dev:.3g} mm off the beam plane (tolerance {params.plane_tolerance:g} mm)"
                    if dev > params.plane_tolerance else
                    f"its plane is not a support plane of the '{support.kind}' support structure (the axes leave it)")
-            defects.append(Defect(ids[l], "not_planar", dev, params.plane_tolerance,
-                                  f"polyline {l} ({'rows' if line.family == 0 else 'cols'})",
+            defects.append(Finding("not_planar", "", ids[l], dev, params.plane_tolerance,
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
             plates.extend(_continuous(support, params, l, ids[l], defects, max_height, splice_clearances))
@@ -393,7 +392,7 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
 
 
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
-                defects: list[Defect], max_height: float = 0.0,
+                defects: list[Finding], max_height: float = 0.0,
                 splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> list[BeamPlate]:
     """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
     room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
@@ -429,7 +428,7 @@ def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: 
         else ""
     welded = "" if any(k == "welded" for k, _ in splice_clearances) else \
         "set splices.kind = \"welded\" or \"auto\" (welded splices need less room), "
-    defects.append(Defect(beam_id, "too_long", long_x, params.max_length, f"polyline {l}",
+    defects.append(Finding("too_long", "", beam_id, long_x, params.max_length,
                           f"{beam_id}: cannot be cut into pieces of at most {limit} clear of the joints{clear}: "
                           f"{why}; {welded}raise beams.max_length (up to the usable plate length), use wider plate "
                           "stock ([beam_nesting] sheet) or lower beams.depth"))

@@ -1,10 +1,10 @@
 """The beam report: one record per plate (size, mass, assembly check) and the defects found.
 
-A *defect* is a plate that would be degenerate or wrong — depth beyond the
-crossing of two consecutive node axes, a zero-length or over-trimmed segment,
-plates meeting at less than ``min_angle_deg``, a polyline that is not planar
-where a planar plate is needed, an outline that falls apart — always named by
-part id with the measured value and the limit it breaks.
+A *defect* is a plate that would be degenerate or wrong — depth beyond the crossing of two consecutive node
+axes, a zero-length or over-trimmed segment, plates meeting at less than ``min_angle_deg``, a polyline that is
+not planar where a planar plate is needed, an outline that falls apart — always named by part id with the
+measured value and the limit it breaks: a :class:`~ppfab.finding.Finding` whose ``code`` is its kind
+(``axis_crossing``, ``short_segment``, ``small_angle``, ``not_planar``, ``too_long``, ``outline``).
 """
 
 from __future__ import annotations
@@ -12,23 +12,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 from ppfab.errors import FabricationError
-
-
-@dataclass(frozen=True)
-class Defect:
-    """A degenerate or impossible plate: ``kind`` (``axis_crossing``, ``short_segment``, ``small_angle``,
-    ``not_planar``, ``too_long``, ``outline``), the measured ``value`` and the ``limit`` it breaks (mm or deg),
-    ``where`` (node, edge or polyline) and a one-line ``message``."""
-
-    part_id: str
-    kind: str
-    value: float
-    limit: float
-    where: str
-    message: str
-
-    def as_dict(self) -> dict:
-        return asdict(self)
+from ppfab.finding import Finding
 
 
 @dataclass(frozen=True)
@@ -66,7 +50,7 @@ class BeamReport:
     """Records of all plates, the defects, and torsion of the support structure at beam depth."""
 
     records: tuple[BeamRecord, ...]
-    defects: tuple[Defect, ...]
+    defects: tuple[Finding, ...]
     joint: str
     torsion_max_deg: float
     torsion_offset_max_mm: float

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ppfab.errors import FabricationError
+from ppfab.finding import Finding
 from ppfab.support.structure import SupportStructure
 
 from .. import contract
@@ -21,10 +22,11 @@ from .params import BeamParams
 class TorsionError(FabricationError):
     """Edges of the support structure whose torsion at the bottom edge exceeds ``beams.max_torsion_mm``.
 
-    ``offenders``: ``(edge label "N0012-N0013", offset mm)``, worst first; ``limit_mm``.
+    ``offenders``: one :class:`~ppfab.finding.Finding` per edge (``torsion``, the edge label ``N0012-N0013``,
+    its offset and the limit, mm), worst first; ``limit_mm``.
     """
 
-    def __init__(self, message: str, offenders: list[tuple[str, float]], limit_mm: float):
+    def __init__(self, message: str, offenders: list[Finding], limit_mm: float):
         self.offenders = offenders
         self.limit_mm = limit_mm
         super().__init__(message)
@@ -45,8 +47,10 @@ def check_torsion(support: SupportStructure, params: BeamParams) -> np.ndarray:
     if not len(bad):
         return off
     bad = bad[np.argsort(-off[bad])]
-    offenders = [(edge_label(*edges[k]), float(off[k])) for k in bad]
-    shown = ", ".join(f"{name} {mm:.3g} mm" for name, mm in offenders[:8])
+    offenders = [Finding("torsion", "", edge_label(*edges[k]), float(off[k]), params.max_torsion_mm,
+                         f"edge {edge_label(*edges[k])} is twisted {off[k]:.3g} mm at beam depth")
+                 for k in bad]
+    shown = ", ".join(f"{o.element} {o.value:.3g} mm" for o in offenders[:8])
     more = f" (and {len(bad) - 8} more)" if len(bad) > 8 else ""
     raise TorsionError(f"{len(bad)} edge(s) of the '{support.kind}' support structure exceed beams.max_torsion_mm "
                        f"= {params.max_torsion_mm:g} mm at beam depth {params.depth:g} mm: {shown}{more}; "

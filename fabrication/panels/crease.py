@@ -15,6 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from ppfab.errors import FabricationError
+from ppfab.finding import Finding
 from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.metrics import mesh_dihedral_angles
 
@@ -24,13 +25,14 @@ from .. import contract
 class CreaseError(FabricationError):
     """Edges whose dihedral angle exceeds ``panels.max_crease_deg``.
 
-    ``offenders``: ``(label "N0012-N0013 (P-U03-V04 / P-U03-V05)", angle degrees)``, worst first; ``limit_deg``.
+    ``offenders``: one :class:`~ppfab.finding.Finding` per edge (``crease``, the label ``N0012-N0013 (P-U03-V04 /
+    P-U03-V05)``, its dihedral angle and the limit, degrees), worst first; ``limit_deg``.
     """
 
-    def __init__(self, offenders: list[tuple[str, float]], limit_deg: float):
+    def __init__(self, offenders: list[Finding], limit_deg: float):
         self.offenders = offenders
         self.limit_deg = limit_deg
-        shown = ", ".join(f"{name} {angle:.1f}°" for name, angle in offenders[:8])
+        shown = ", ".join(f"{o.element} {o.value:.1f}°" for o in offenders[:8])
         more = f" (and {len(offenders) - 8} more)" if len(offenders) > 8 else ""
         super().__init__(f"{len(offenders)} edge(s) fold the glass by more than panels.max_crease_deg = "
                          f"{limit_deg:g}° (dihedral angle between neighbouring panels): {shown}{more}; smooth the "
@@ -56,8 +58,10 @@ def check_creases(mesh: QuadMesh | QuadGrid, limit_deg: float, part_ids: Sequenc
     def name(f: int) -> str:
         return part_ids[f] if part_ids is not None else f"face {f}"
 
-    offenders = [(f"{contract.node_id(int(edges[k, 0]))}-{contract.node_id(int(edges[k, 1]))} "
-                  f"({name(int(edge_faces[k, 0]))} / {name(int(edge_faces[k, 1]))})", float(angles[k])) for k in bad]
+    labels = [f"{contract.node_id(int(edges[k, 0]))}-{contract.node_id(int(edges[k, 1]))} "
+              f"({name(int(edge_faces[k, 0]))} / {name(int(edge_faces[k, 1]))})" for k in bad]
+    offenders = [Finding("crease", "", label, float(angles[k]), limit_deg,
+                         f"{label} folds the glass by {angles[k]:.1f}°") for label, k in zip(labels, bad)]
     raise CreaseError(offenders, limit_deg)
 
 

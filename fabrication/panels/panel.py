@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ppfab.errors import FabricationError, GeometryError, NonPlanarPanelError
+from ppfab.finding import Finding
 from ppfab.frame import Frame
 from ppfab.mesh import QuadGrid, QuadMesh
 
@@ -249,7 +250,9 @@ def make_panels(mesh: QuadMesh | QuadGrid, params: PanelParams | None = None, *,
     planes, deviation = geo.oriented_planes(corners)
     bad = np.flatnonzero(~(deviation <= p.planarity_tolerance))
     if len(bad):
-        raise NonPlanarPanelError([(ids[f], float(deviation[f])) for f in bad], p.planarity_tolerance)
+        raise NonPlanarPanelError([Finding("planarity", "", ids[f], float(deviation[f]), p.planarity_tolerance,
+                                           f"{ids[f]} deviates {deviation[f]:.3g} mm from its plane")
+                                   for f in bad], p.planarity_tolerance)
     edges = np.linalg.norm(corners - np.roll(corners, -1, axis=1), axis=2)
     if np.any(edges <= 1e-9):
         f = int(np.argmin(edges.min(axis=1)))

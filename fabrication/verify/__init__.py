@@ -12,21 +12,12 @@ from __future__ import annotations
 
 import csv
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable
 
+from ppfab.finding import Finding
 from ppfab.registry import Registry
-
-
-@dataclass(frozen=True)
-class Finding:
-    file: str
-    element: str
-    message: str
-
-    def __str__(self) -> str:
-        return f"{self.file}: {self.element}: {self.message}" if self.element else f"{self.file}: {self.message}"
 
 
 @dataclass
@@ -40,8 +31,10 @@ class Verification:
     checked: list[str] = field(default_factory=list)
     data: dict[str, Any] = field(default_factory=dict)
 
-    def error(self, file: str, element: str, message: str) -> None:
-        self.findings.append(Finding(file, element, message))
+    def error(self, file: str, element: str, message: str, value: float | None = None,
+              limit: float | None = None, code: str = "") -> None:
+        """A :class:`~ppfab.finding.Finding` of this verification (``code``: the check's name when omitted)."""
+        self.findings.append(Finding(code, file, element, value, limit, message))
 
     @property
     def ok(self) -> bool:
@@ -180,4 +173,5 @@ def _run_one(v: Verification, c: Check, done: dict[str, tuple[list[Finding], lis
     """Run one check and keep what it found and what it says it checked."""
     nf, nc = len(v.findings), len(v.checked)
     c.run(v)
+    v.findings[nf:] = [f if f.code else replace(f, code=c.name) for f in v.findings[nf:]]
     done[c.name] = (v.findings[nf:], v.checked[nc:])

@@ -109,7 +109,8 @@ def check_welds(v: Verification) -> None:
             got = cells.number(n, r, column)
             if got is not None and abs(got - value) > tol:
                 v.error(rel, f"row {n} column {column}", f"{part} to {to} at node {node}: {got:g} written, "
-                                                         f"{value:.6g} from the nodes and plates")
+                                                         f"{value:.6g} from the nodes and plates",
+                        value=abs(got - value), limit=tol)
         if r.get("preparation") != prep:
             v.error(rel, f"row {n} column preparation", f"{part} to {to} at node {node}: {r.get('preparation')!r} "
                                                         f"written, {prep!r} for a dihedral of {dihedral:.2f}°")

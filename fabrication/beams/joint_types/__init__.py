@@ -17,11 +17,11 @@ from ppfab.registry import Registry
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
+    from ppfab.finding import Finding
     from ppfab.support.structure import SupportStructure
 
     from ..params import BeamParams
     from ..plates import BeamPlate, Slot
-    from ..report import Defect
 
 
 @dataclass(frozen=True)
@@ -33,7 +33,7 @@ class ThroughNode:
     width: float
     line: "tuple[np.ndarray, np.ndarray] | None"
     slots: "dict[str, list[Slot]]"
-    defects: "list[Defect]"
+    defects: "list[Finding]"
 
 
 ThroughHook = Callable[["list[BeamPlate]", "list[int]", int, "np.ndarray", "SupportStructure", "BeamParams"],

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from ppfab import planes as pl
+from ppfab.finding import Finding
 from ppfab.support.structure import SupportStructure
 
 from ..params import BeamParams
 from ..plates import BeamPlate, Slot
-from ..report import Defect
 from . import JointType, ThroughNode, joint_type
 
 
@@ -31,7 +31,7 @@ def halflap_node(ps: list[BeamPlate], through: list[int], v: int, a: np.ndarray,
     """The slots of the two plates running through node ``v`` (axis ``a``); more than two is a defect."""
     if len(through) > 2:
         return ThroughNode("butt", float("nan"), None, {}, [
-            Defect(ps[through[0]].part_id, "outline", float(len(through)), 2.0, f"node {v}",
+            Finding("outline", "", ps[through[0]].part_id, float(len(through)), 2.0,
                    f"node {v}: {len(through)} plates run through it, a half-lap joins two")])
     if len(through) != 2:
         return None
