@@ -128,11 +128,13 @@ def plate_faces(solid, frame: dict[str, np.ndarray]) -> PlateFaces | None:
 
 
 def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarray, solid,
-                      frame: dict | None) -> None:
+                      frame: dict | None, ends: np.ndarray | None = None, thickness: float = 0.0) -> None:
     """A bevelled row of bevels.csv against beams.step: the plate has a face in the strip's underside plane —
     corners on both of its faces within :data:`FACE_TOL` of that plane, their plane within :data:`ANGLE_TOL` of
     it — standing ``Δ`` (``delta_mm``, within 0.01 mm) above the mid-plane edge on one face and below it on the
-    other."""
+    other.  The corners looked at are those along the strip's mesh edge (``ends``: its two vertices of mesh.obj,
+    ``(2, 3)``; a plate thickness beyond them, where a bevel's corners meet the next span's); without them,
+    along the strip's own length and as much again on either side."""
     if frame is None:
         return
     plate = row.get("plate", "")
@@ -141,11 +143,17 @@ def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarra
     u, along = axes[2], axes[0]
     pts = solid_points(solid)
     s = (strip_pts - c) @ along
-    reach = float(np.ptp(s))
     a = (pts - c) @ along
-    span = (a >= s.min() - reach) & (a <= s.max() + reach)  # the plate's corners along the strip's span (its
-    # nodes lie beyond its ends); the strip's face the bevel bears on: of its two faces the one the plate's
-    # corners lie on (the strip's underside, on the plate's top edge)
+    if ends is not None:
+        e = (np.asarray(ends, dtype=float) - c) @ along
+        lo, hi = float(e.min()) - thickness, float(e.max()) + thickness
+    else:
+        reach = float(np.ptp(s))
+        lo, hi = float(s.min()) - reach, float(s.max()) + reach
+    # the plate's corners along the strip's span (a strip stopping short of a node, as at a corner where the other
+    # polyline meets it at a few degrees, can be a quarter of its span); the strip's face the bevel bears on: of
+    # its two faces the one the plate's corners lie on (the strip's underside, on the plate's top edge)
+    span = (a >= lo) & (a <= hi)
     faces = []
     for under in ((strip_pts @ u).min(), (strip_pts @ u).max()):
         d = pts @ u - float(under)
@@ -233,7 +241,9 @@ def check_bevels(v: Verification) -> None:
                                   "plate's plane in parts.csv")
         bevelled = r.get("bevel", "") != "square"
         if bevelled and r.get("plate", "") in beam_solids:
-            _check_bevel_face(v, pid, r, pts, beam_solids[r["plate"]], frames.get(r["plate"]))
+            mesh = v.data.get("mesh")
+            ends = mesh.vertices[[i, j]] if mesh is not None and max(i, j) < len(mesh.vertices) else None
+            _check_bevel_face(v, pid, r, pts, beam_solids[r["plate"]], frames.get(r["plate"]), ends, plate[2])
         if lean > threshold + LEAN_TOL and not bevelled:
             if not number(plate_rows.get(r.get("plate", ""), {}).get("bevels"), 0.0) and r.get("plate") in plate_rows:
                 kept_square.append(pid)      # the plate kept its square top edge (its bevel could not be drawn)
