@@ -584,8 +584,9 @@ def check_erection(v: Verification) -> None:
         worst = max(overlapping, key=lambda p: p.static)
         logging.getLogger("ppfab").warning(
             "erection: %d pair(s) of parts overlap in their final places by up to %.2f mm (%s in %s): a leaning "
-            "plate's top corner under glass laid on the plates, taken up by the glass's setting on them "
-            "(docs/glazing.md); [glazing] support = \"strip\" puts the glass on strips over bevelled plates instead",
+            "plate's top corner under a strip or pane it carries, which the fillet weld's fit-up or the glass's "
+            "setting takes up (docs/glazing.md: bevels, notches); a lower glazing.bevel_min_deg bevels more "
+            "top edges",
             len(overlapping), worst.static, worst.part, worst.through)
     # the plan's way in for cover plates, strips, gaskets and panes past the steel (lowered in the beam's plane,
     # along the strip's down or the pane's inside normal) is not proven on leaning beams: said, not failed; the
