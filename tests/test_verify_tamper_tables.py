@@ -62,6 +62,35 @@ def test_t_joint_weld_length_changed(copy, capsys):
     assert f"welds.csv: row {k + 1} column weld_length_mm: {rows[k]['part']} to {rows[k]['to']}" in err
 
 
+def test_corner_weld_row_removed(copy, capsys):
+    """A node where every plate ends (a corner of the vault) loses its corner weld row: verify names the node and
+    the plates left unjoined."""
+    rows = read_rows(copy / "welds.csv")
+    k = next(i for i, r in enumerate(rows) if r["joint"] == "corner")
+    gone = rows.pop(k)
+    assert not any(r["joint"] == "corner" and r["node"] == gone["node"] for r in rows)
+    write_rows(copy / "welds.csv", rows)
+    reseal(copy, "welds.csv")
+    err = findings(copy, capsys)
+    assert f"welds.csv: node {gone['node']}: every plate ends here and " in err
+    line = next(x for x in err.splitlines() if f"welds.csv: node {gone['node']}: every plate ends here" in x)
+    assert gone["part"] in line and gone["to"] in line
+
+
+def test_corner_weld_joining_the_wrong_plate(copy, capsys):
+    rows = read_rows(copy / "welds.csv")
+    k = next(i for i, r in enumerate(rows) if r["joint"] == "corner")
+    node = next(r for r in read_rows(copy / "nodes.csv") if r["vertex"] == rows[k]["node"])
+    other = next(r["part_id"] for r in read_rows(copy / "parts.csv")      # a plate not at that node
+                 if r["kind"] == "beam" and r["part_id"] not in node["beams"].split(";"))
+    rows[k]["to"] = other
+    write_rows(copy / "welds.csv", rows)
+    reseal(copy, "welds.csv")
+    err = findings(copy, capsys)
+    assert (f"welds.csv: row {k + 1}: node {rows[k]['node']}: {rows[k]['part']} and {other} are not two beams' "
+            "plates ending at a node where every plate ends") in err
+
+
 def test_verify_json_gives_each_finding_its_check_value_and_limit(copy, capsys):
     """``ppfab verify --json``: the tampered weld length is a finding of the ``welds`` check with the difference
     from the recomputed length as its value and the tolerance as its limit; the JSON is the whole of stdout."""

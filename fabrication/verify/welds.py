@@ -7,7 +7,8 @@ line over the beam depth (length ``2 · beams.depth``), and the preparation and 
 and ``beams.thickness`` (:func:`fabrication.glazing.welds.preparation`).  Each recomputed weld must have exactly
 one row of ``joint = T`` with the same node, part and ``to``, and that row's dihedral (0.001°), length
 (0.01 mm), preparation and throat must be the recomputed ones; a ``T`` row that no weld recomputes is named
-too.  The ``splice`` rows are the splices check's.
+too.  At a node where every plate ends, the ``corner`` rows must join every plate there to a plate of another
+beam (:func:`check_corner_welds`).  The ``splice`` rows are the splices check's.
 """
 
 from __future__ import annotations
@@ -117,4 +118,57 @@ def check_welds(v: Verification) -> None:
     for node, part, to in sorted(set(want) - seen):
         v.error(rel, f"node {node}", f"no row for the T-joint weld of {part} ending against {to} "
                                      f"({want[(node, part, to)][1]:g} mm)")
+    check_corner_welds(v, rel, rows, cells, nodes, parts, depth, thickness)
     v.checked.append("welds")
+
+
+def check_corner_welds(v: Verification, rel: str, rows: list[dict[str, str]], cells: CellReader,
+                       nodes: list[dict[str, str]], parts: list[dict[str, str]], depth: float,
+                       thickness: float) -> None:
+    """The ``corner`` rows against the nodes where every plate ends (``butt``, every role ``end``, plates of at
+    least two beams): each such node has rows joining plates of it of different beams, every plate there is in
+    one of them, each row's dihedral is the angle between its two plates' planes, its length ``2 · depth``, its
+    throat the plate thickness and its preparation the corner weld's; a ``corner`` row at any other node, or
+    naming a plate not at it, is named too."""
+    from ..glazing.welds import CORNER_PREPARATION
+
+    plates = {r["part_id"]: r for r in parts if r["kind"] == "beam"}
+    corners: dict[int, set[str]] = {}
+    for row in nodes:
+        ids = [b for b in row.get("beams", "").split(";") if b]
+        roles = (row.get("roles") or "").split(";")
+        beams = {plates[b].get("beam_id") for b in ids if b in plates}
+        if row.get("joint") == "butt" and len(roles) == len(ids) >= 2 and all(r == "end" for r in roles) \
+                and len(beams) >= 2:
+            corners[int(row["vertex"])] = set(ids)
+    joined: dict[int, set[str]] = {}
+    for n, r in enumerate(rows, start=1):
+        if r.get("joint") != "corner":
+            continue
+        node = cells.integer(n, r, "node", low=0)
+        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
+        if node is None or part is None or to is None:
+            continue
+        at = corners.get(node)
+        if at is None or part not in at or to not in at or plates[part].get("beam_id") == plates[to].get("beam_id"):
+            v.error(rel, f"row {n}", f"node {node}: {part} and {to} are not two beams' plates ending at a node "
+                                     "where every plate ends (nodes.csv roles and joint)")
+            continue
+        joined.setdefault(node, set()).update((part, to))
+        dihedral = float(np.degrees(angle_between(np.array(eval_plane(plates[part]["plane"])),
+                                                  np.array(eval_plane(plates[to]["plane"])))))
+        for column, value in (("dihedral_deg", dihedral), ("weld_length_mm", 2.0 * depth), ("throat_mm", thickness)):
+            got = cells.number(n, r, column)
+            tol = ANGLE_TOLERANCE_DEG if column == "dihedral_deg" else LENGTH_TOLERANCE_MM
+            if got is not None and abs(got - value) > tol:
+                v.error(rel, f"row {n} column {column}", f"corner weld of {part} to {to} at node {node}: {got:g} "
+                                                         f"written, {value:.6g} from the nodes and plates",
+                        value=abs(got - value), limit=tol)
+        if r.get("preparation") != CORNER_PREPARATION:
+            v.error(rel, f"row {n} column preparation", f"corner weld of {part} to {to} at node {node}: "
+                                                        f"{r.get('preparation')!r}, not the corner weld's")
+    for node, ids in sorted(corners.items()):
+        loose = sorted(ids - joined.get(node, set()))
+        if loose:
+            v.error(rel, f"node {node}", f"every plate ends here and {', '.join(loose)} is joined to none of the "
+                                         "others: no corner weld row")
