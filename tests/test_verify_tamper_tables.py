@@ -91,6 +91,20 @@ def test_corner_weld_joining_the_wrong_plate(copy, capsys):
             "plates ending at a node where every plate ends") in err
 
 
+def test_halflap_weld_row_removed_and_its_length_changed(copy, capsys):
+    rows = read_rows(copy / "welds.csv")
+    laps = [i for i, r in enumerate(rows) if r["joint"] == "halflap"]
+    assert len(laps) >= 2
+    rows[laps[1]]["weld_length_mm"] = str(float(rows[laps[1]]["weld_length_mm"]) / 2)    # two runs, not four
+    gone = rows.pop(laps[0])
+    write_rows(copy / "welds.csv", rows)
+    reseal(copy, "welds.csv")
+    err = findings(copy, capsys)
+    a, b = sorted((gone["part"], gone["to"]))
+    assert f"welds.csv: node {gone['node']}: no row for the half-lap weld of {a} and {b}" in err
+    assert f"welds.csv: row {laps[1]} column weld_length_mm: half-lap weld of " in err      # one row earlier now
+
+
 def test_verify_json_gives_each_finding_its_check_value_and_limit(copy, capsys):
     """``ppfab verify --json``: the tampered weld length is a finding of the ``welds`` check with the difference
     from the recomputed length as its value and the tolerance as its limit; the JSON is the whole of stdout."""

@@ -8,7 +8,8 @@ and ``beams.thickness`` (:func:`fabrication.glazing.welds.preparation`).  Each r
 one row of ``joint = T`` with the same node, part and ``to``, and that row's dihedral (0.001°), length
 (0.01 mm), preparation and throat must be the recomputed ones; a ``T`` row that no weld recomputes is named
 too.  At a node where every plate ends, the ``corner`` rows must join every plate there to a plate of another
-beam (:func:`check_corner_welds`).  The ``splice`` rows are the splices check's.
+beam (:func:`check_corner_welds`); every half-lap crossing has its weld row (:func:`check_halflap_welds`).  The
+``splice`` rows are the splices check's.
 """
 
 from __future__ import annotations
@@ -119,7 +120,66 @@ def check_welds(v: Verification) -> None:
         v.error(rel, f"node {node}", f"no row for the T-joint weld of {part} ending against {to} "
                                      f"({want[(node, part, to)][1]:g} mm)")
     check_corner_welds(v, rel, rows, cells, nodes, parts, depth, thickness)
+    check_halflap_welds(v, rel, rows, cells, nodes, parts, depth, thickness, bool(beams.get("halflap_welds", True)))
     v.checked.append("welds")
+
+
+def check_halflap_welds(v: Verification, rel: str, rows: list[dict[str, str]], cells: CellReader,
+                        nodes: list[dict[str, str]], parts: list[dict[str, str]], depth: float, thickness: float,
+                        welded: bool) -> None:
+    """The ``halflap`` rows against the half-lap crossings (``joint = halflap`` nodes, two plates of different
+    beams both ``through``): with ``beams.halflap_welds`` one row per crossing, its dihedral the angle between
+    the two plates' planes, its length four runs over the depth, its preparation and throat those of that
+    dihedral (:func:`fabrication.glazing.welds.preparation`); without it, none."""
+    from ..glazing.welds import HALFLAP_RUNS
+
+    plates = {r["part_id"]: r for r in parts if r["kind"] == "beam"}
+    crossings: dict[tuple[int, frozenset[str]], float] = {}
+    for row in nodes:
+        if row.get("joint") != "halflap":
+            continue
+        ids = [b for b in row.get("beams", "").split(";") if b]
+        roles = (row.get("roles") or "").split(";")
+        through = [b for b, r in zip(ids, roles) if r == "through" and b in plates and plates[b].get("plane")]
+        for i in range(len(through)):
+            for j in range(i + 1, len(through)):
+                a, b = plates[through[i]], plates[through[j]]
+                if a.get("beam_id") != b.get("beam_id"):
+                    crossings[(int(row["vertex"]), frozenset((through[i], through[j])))] = float(np.degrees(
+                        angle_between(np.array(eval_plane(a["plane"])), np.array(eval_plane(b["plane"])))))
+    seen: set[tuple[int, frozenset[str]]] = set()
+    for n, r in enumerate(rows, start=1):
+        if r.get("joint") != "halflap":
+            continue
+        node = cells.integer(n, r, "node", low=0)
+        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
+        if node is None or part is None or to is None:
+            continue
+        key = (node, frozenset((part, to)))
+        if not welded or key not in crossings or key in seen:
+            why = ("beams.halflap_welds is false" if not welded else "a second row for it" if key in seen
+                   else "not a half-lap crossing of nodes.csv")
+            v.error(rel, f"row {n}", f"node {node}: half-lap weld of {part} and {to}: {why}")
+            continue
+        seen.add(key)
+        dihedral = crossings[key]
+        prep, throat = preparation(dihedral, thickness)
+        for column, value, tol in (("dihedral_deg", dihedral, ANGLE_TOLERANCE_DEG),
+                                   ("weld_length_mm", HALFLAP_RUNS * depth, LENGTH_TOLERANCE_MM),
+                                   ("throat_mm", throat, LENGTH_TOLERANCE_MM)):
+            got = cells.number(n, r, column)
+            if got is not None and abs(got - value) > tol:
+                v.error(rel, f"row {n} column {column}", f"half-lap weld of {part} and {to} at node {node}: {got:g} "
+                                                         f"written, {value:.6g} from the nodes and plates",
+                        value=abs(got - value), limit=tol)
+        if r.get("preparation") != prep:
+            v.error(rel, f"row {n} column preparation", f"half-lap weld of {part} and {to} at node {node}: "
+                                                        f"{r.get('preparation')!r} written, {prep!r} for a dihedral "
+                                                        f"of {dihedral:.2f}°")
+    if welded:
+        for node, pair in sorted(set(crossings) - seen, key=lambda k: (k[0], sorted(k[1]))):
+            a, b = sorted(pair)
+            v.error(rel, f"node {node}", f"no row for the half-lap weld of {a} and {b} (beams.halflap_welds)")
 
 
 def check_corner_welds(v: Verification, rel: str, rows: list[dict[str, str]], cells: CellReader,
