@@ -178,8 +178,9 @@ def check_halflap_welds(v: Verification, rel: str, rows: list[dict[str, str]], c
                                                         f"of {dihedral:.2f}°")
     if welded:
         for node, pair in sorted(set(crossings) - seen, key=lambda k: (k[0], sorted(k[1]))):
-            a, b = sorted(pair)
-            v.error(rel, f"node {node}", f"no row for the half-lap weld of {a} and {b} (beams.halflap_welds)")
+            first, second = sorted(pair)
+            v.error(rel, f"node {node}", f"no row for the half-lap weld of {first} and {second} "
+                                         "(beams.halflap_welds)")
 
 
 def check_corner_welds(v: Verification, rel: str, rows: list[dict[str, str]], cells: CellReader,
@@ -227,8 +228,8 @@ def check_corner_welds(v: Verification, rel: str, rows: list[dict[str, str]], ce
         if r.get("preparation") != CORNER_PREPARATION:
             v.error(rel, f"row {n} column preparation", f"corner weld of {part} to {to} at node {node}: "
                                                         f"{r.get('preparation')!r}, not the corner weld's")
-    for node, ids in sorted(corners.items()):
-        loose = sorted(ids - joined.get(node, set()))
+    for node, members in sorted(corners.items()):
+        loose = sorted(members - joined.get(node, set()))
         if loose:
             v.error(rel, f"node {node}", f"every plate ends here and {', '.join(loose)} is joined to none of the "
                                          "others: no corner weld row")
