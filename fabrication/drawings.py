@@ -337,6 +337,10 @@ def _layout(view: str, panels: Sequence, plates: Sequence, outl: list[np.ndarray
         return tuple(np.asarray(q.exterior.coords)[:4] for q in label_polys if q.intersects(zone))
 
     def free(box: np.ndarray) -> bool:
+        """The label box clear of every line and label and inside the picture (a beam label beside an outer plate
+        line, pushed out, left the frame of the Fig. 16 example's key plan)."""
+        if not picture.contains(Polygon(box)):
+            return False
         b = Polygon(box).buffer(0.9 * margin, join_style="mitre")
         return not len(line_tree.query(b, predicate="intersects")) and not any(b.intersects(q) for q in label_polys)
 
