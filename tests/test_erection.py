@@ -201,26 +201,3 @@ def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_t
         assert bool(deep) == passes, (above, hand)
         if passes:
             assert deep[0].depth == pytest.approx(10.0, abs=1e-6)      # through the pane's whole thickness
-
-
-def test_strips_overlapping_at_a_node_are_named(tmp_path, monkeypatch):
-    """smallest_roof's boundary strips with the setback of their top faces alone, ``t_s · tan(κ/2)`` (the rule
-    before the mitre): each strip's gasket, rolled 1.4° against the next strip of its polyline, stands in that
-    strip, and verify names the pair and the depth (measured apart with manifold3d: 0.75 mm)."""
-    import numpy as np
-
-    import fabrication.glazing.strips as strips
-
-    def top_faces_only(frame, sign, span, node, own, other, half_width, height):
-        kink = float(np.arccos(np.clip(-(own @ other), -1.0, 1.0)))
-        return 8.0 * float(np.tan(0.5 * kink))             # smallest_roof's strips are 8 mm thick
-
-    monkeypatch.setattr(strips, "running_setback", top_faces_only)
-    folder = _write(tmp_path / "out", design_path=ROOT / "examples" / "smallest_roof.toml")
-    v = _check(folder)
-    named = [f for f in v.findings if "strips and gaskets meet" in f.message]
-    assert named, [str(f) for f in v.findings[:5]]
-    pairs = {(f.element, re.search(r"overlaps (\S+) ", f.message).group(1)) for f in named}
-    assert all(a.split("-")[1] == b.split("-")[1] for a, b in pairs)        # along one beam: W00 or W04
-    depths = [float(re.search(r"by ([0-9.]+) mm", f.message).group(1)) for f in named]
-    assert 0.5 < max(depths) < 1.0

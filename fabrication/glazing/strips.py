@@ -13,11 +13,9 @@ so the strip is the rectangle ``x0 ≤ x ≤ x1, |y| ≤ w/2`` at ``0 ≤ z ≤ 
 ``t_s ≤ z ≤ t_s + t_g``), drawn in 2D and extruded once.
 
 At every node one polyline *runs through*: the one with two spans there, of the lowest family (rows before
-columns); at a corner where no polyline continues, the lowest family.  Its strips end at the node, set back
-until the strip and its gasket lie on their side of the mitre plane that bisects the two spans
-(:func:`running_setback`: ``(t_s + t_g) · tan(κ/2)`` with κ the kink in the beam plane, more where the two
-strips roll against each other, as on a boundary beam whose strips each follow the one pane beside them), so
-that neither strips nor gaskets overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
+columns); at a corner where no polyline continues, the lowest family.  Its strips end at the node, set back by
+``t_s · tan(κ/2)`` (κ the kink between the two spans in the beam plane) so that their top faces do not
+overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
 ``|distance| ≤ w/2`` by the clearance ``c``: with ``θ`` the angle between the two spans,
 
     x_stop = (w/2 + c + (w/2)·|cos θ|) / sin θ.
@@ -70,33 +68,6 @@ class Strip:
 
 def _in_plane(v: np.ndarray, n: np.ndarray) -> np.ndarray:
     return v - np.outer(v @ n, n) if v.ndim == 2 else v - (v @ n) * n
-
-
-def running_setback(frame: Frame, sign: float, span: float, node: np.ndarray, own: np.ndarray, other: np.ndarray,
-                    half_width: float, height: float) -> float:
-    """How far (mm, ≥ 0) a strip of a polyline running through ``node`` ends short of it so that the strip and
-    its gasket (``|y| ≤ half_width``, ``0 ≤ z ≤ height`` in ``frame``, the span from ``x = 0`` to ``span``)
-    stay on their side of the mitre plane through ``node`` that bisects the two spans: the plane with normal
-    ``m = (own − other) / |own − other|`` (``own``, ``other`` the unit directions from the node into this span
-    and the next one of the polyline).  With ``sign`` = +1 the strip's end at the node is ``x = setback``,
-    with −1 ``x = span − setback``; the setback is the least for which every corner ``c`` of that end has
-    ``(c − node)·m ≥ 0``:
-
-        setback = max over y = ±w/2, z ∈ {0, height} of −((o − node)·m + y·(ey·m) + z·(up·m)) / (sign·ex·m),
-
-    with ``o`` the end's point at ``y = z = 0`` before the setback.  In the beam plane with both strips square
-    to it this is ``height · tan(κ/2)`` (κ the kink); a strip rolled off the other (its up bisects its own panes)
-    lifts one side corner into the next strip by ``w/2`` times the roll, which this covers too."""
-    m = own - other
-    m = m / np.linalg.norm(m)
-    along = sign * float(frame.ex @ m)
-    if along <= 1e-9:
-        return 0.0
-    o = frame.origin + (0.0 if sign > 0 else span) * frame.ex
-    base = float((o - node) @ m)
-    ey, up = frame.ey @ m, frame.normal @ m
-    reach = max(-(base + y * ey + z * up) for y in (-half_width, half_width) for z in (0.0, height))
-    return max(0.0, reach / along)
 
 
 def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingParams,
@@ -152,8 +123,8 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
                 setback = 0.0
                 for f in other:
                     of = direction[f] if edges[f, 0] == node else -direction[f]
-                    setback = max(setback, running_setback(frame, sign, span, v[node], own, of,
-                                                           0.5 * params.width, ts + params.gasket_thickness))
+                    kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
+                    setback = max(setback, ts * float(np.tan(0.5 * kink)))
                 ends.append(setback)
                 runs.append(True)
             else:

@@ -8,9 +8,7 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
   ``mesh.obj``, least-squares planes, outside as the build chooses it: the side the gaskets are on) made square
   to ``ex`` — or, on an edge without panes, against the node axes in the plane — and ``ey = up × ex``;
 * its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns),
-  set back until its four end corners of strip and gasket (``y = ±w/2``, ``z = 0`` and ``t_s + t_g``) lie on
-  its side of the plane through the node whose normal is the difference of the two spans' directions (the
-  mitre between them; :func:`_mitre_setback`); where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
+  set back by ``t_s · tan(κ/2)``; where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
   against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
   ``t_s ≤ z ≤ t_s + t_g``: every vertex of each solid within :data:`GLAZING_TOL` of that box's corners.
@@ -114,11 +112,11 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
             own = sgn * direction[e]
             x = 0.0
             if running[node] == line[e]:
-                end = pa if sgn > 0 else pb
                 for f in at[node]:
                     if f != e and line[f] == line[e]:
                         of = direction[f] if spans[f][1] == node else -direction[f]
-                        x = max(x, _mitre_setback(end, sgn * ex, ey, up, verts[node], own - of, b, ts + tg))
+                        kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
+                        x = max(x, ts * float(np.tan(0.5 * kink)))
             else:
                 for f in at[node]:
                     if line[f] == running[node]:
@@ -136,18 +134,6 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
 
         out[r["part_id"]] = (box(0.0, ts), box(ts, ts + tg))
     return out
-
-
-def _mitre_setback(end: np.ndarray, inward: np.ndarray, ey: np.ndarray, up: np.ndarray, node: np.ndarray,
-                   normal: np.ndarray, half_width: float, height: float) -> float:
-    """The least ``s ≥ 0`` for which the corners ``end + s·inward ± half_width·ey + {0, height}·up`` lie on the
-    positive side of the plane through ``node`` with normal ``normal`` (any length)."""
-    corners = np.array([end + y * ey + z * up for y in (-half_width, half_width) for z in (0.0, height)])
-    side = (corners - node) @ normal
-    rate = float(inward @ normal)
-    if rate <= 1e-12 * float(np.linalg.norm(normal)):
-        return 0.0
-    return max(0.0, float(-side.min()) / rate)
 
 
 @check("glazing_step", 66)
