@@ -46,8 +46,7 @@ def recompute_t_welds(nodes: list[dict[str, str]], parts: list[dict[str, str]], 
                     continue
                 if a.get("beam_id") == b.get("beam_id"):
                     continue
-                dihedral = float(np.degrees(angle_between(np.array(eval_plane(a["plane"])),
-                                                          np.array(eval_plane(b["plane"])))))
+                dihedral = plate_dihedral(a, b)
                 for (end, re), (through, rt) in (((ids[i], roles[i]), (ids[j], roles[j])),
                                                  ((ids[j], roles[j]), (ids[i], roles[i]))):
                     if re == "end" and rt == "through":
@@ -61,6 +60,42 @@ def eval_plane(text: str) -> list[float]:
     from ._shapes import literal
 
     return [float(x) for x in literal(text)]
+
+
+def plate_dihedral(a: dict[str, str], b: dict[str, str]) -> float:
+    """Degrees between the planes of two beam plate rows of ``parts.csv``."""
+    return float(np.degrees(angle_between(np.array(eval_plane(a["plane"])), np.array(eval_plane(b["plane"])))))
+
+
+def _joint_rows(rows: list[dict[str, str]], cells: CellReader, joint: str):
+    """``(row number, row, node, part, to)`` of the rows of ``welds.csv`` of one ``joint`` kind whose three cells
+    read (a bad cell is the cell reader's finding)."""
+    for n, r in enumerate(rows, start=1):
+        if r.get("joint", "T") != joint:
+            continue
+        node = cells.integer(n, r, "node", low=0)
+        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
+        if node is not None and part is not None and to is not None:
+            yield n, r, node, part, to
+
+
+def _check_sizes(v: Verification, rel: str, cells: CellReader, n: int, r: dict[str, str], weld: str,
+                 dihedral: float, length: float, throat: float) -> None:
+    """A row's dihedral, length and throat against the recomputed ones; ``weld`` names it in the finding."""
+    for column, value, tol in (("dihedral_deg", dihedral, ANGLE_TOLERANCE_DEG),
+                               ("weld_length_mm", length, LENGTH_TOLERANCE_MM),
+                               ("throat_mm", throat, LENGTH_TOLERANCE_MM)):
+        got = cells.number(n, r, column)
+        if got is not None and abs(got - value) > tol:
+            v.error(rel, f"row {n} column {column}", f"{weld}: {got:g} written, {value:.6g} from the nodes and "
+                                                     "plates", value=abs(got - value), limit=tol)
+
+
+def _check_preparation(v: Verification, rel: str, n: int, r: dict[str, str], weld: str, prep: str,
+                       dihedral: float) -> None:
+    if r.get("preparation") != prep:
+        v.error(rel, f"row {n} column preparation", f"{weld}: {r.get('preparation')!r} written, {prep!r} for a "
+                                                    f"dihedral of {dihedral:.2f}°")
 
 
 @check("welds", 48)
@@ -89,13 +124,7 @@ def check_welds(v: Verification) -> None:
         return
     cells = CellReader(v, rel)
     seen: set[tuple[int, str, str]] = set()
-    for n, r in enumerate(rows, start=1):
-        if r.get("joint", "T") != "T":
-            continue
-        node = cells.integer(n, r, "node", low=0)
-        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
-        if node is None or part is None or to is None:
-            continue
+    for n, r, node, part, to in _joint_rows(rows, cells, "T"):
         key = (node, part, to)
         if key not in want:
             v.error(rel, f"row {n}", f"node {node}: no T-joint of {part} ending against {to} there "
@@ -105,17 +134,9 @@ def check_welds(v: Verification) -> None:
             v.error(rel, f"row {n}", f"a second row for the weld of {part} to {to} at node {node}")
         seen.add(key)
         dihedral, length, prep, throat = want[key]
-        for column, value, tol in (("dihedral_deg", dihedral, ANGLE_TOLERANCE_DEG),
-                                   ("weld_length_mm", length, LENGTH_TOLERANCE_MM),
-                                   ("throat_mm", throat, LENGTH_TOLERANCE_MM)):
-            got = cells.number(n, r, column)
-            if got is not None and abs(got - value) > tol:
-                v.error(rel, f"row {n} column {column}", f"{part} to {to} at node {node}: {got:g} written, "
-                                                         f"{value:.6g} from the nodes and plates",
-                        value=abs(got - value), limit=tol)
-        if r.get("preparation") != prep:
-            v.error(rel, f"row {n} column preparation", f"{part} to {to} at node {node}: {r.get('preparation')!r} "
-                                                        f"written, {prep!r} for a dihedral of {dihedral:.2f}°")
+        weld = f"{part} to {to} at node {node}"
+        _check_sizes(v, rel, cells, n, r, weld, dihedral, length, throat)
+        _check_preparation(v, rel, n, r, weld, prep, dihedral)
     for node, part, to in sorted(set(want) - seen):
         v.error(rel, f"node {node}", f"no row for the T-joint weld of {part} ending against {to} "
                                      f"({want[(node, part, to)][1]:g} mm)")
@@ -145,16 +166,9 @@ def check_halflap_welds(v: Verification, rel: str, rows: list[dict[str, str]], c
             for j in range(i + 1, len(through)):
                 a, b = plates[through[i]], plates[through[j]]
                 if a.get("beam_id") != b.get("beam_id"):
-                    crossings[(int(row["vertex"]), frozenset((through[i], through[j])))] = float(np.degrees(
-                        angle_between(np.array(eval_plane(a["plane"])), np.array(eval_plane(b["plane"])))))
+                    crossings[(int(row["vertex"]), frozenset((through[i], through[j])))] = plate_dihedral(a, b)
     seen: set[tuple[int, frozenset[str]]] = set()
-    for n, r in enumerate(rows, start=1):
-        if r.get("joint") != "halflap":
-            continue
-        node = cells.integer(n, r, "node", low=0)
-        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
-        if node is None or part is None or to is None:
-            continue
+    for n, r, node, part, to in _joint_rows(rows, cells, "halflap"):
         key = (node, frozenset((part, to)))
         if not welded or key not in crossings or key in seen:
             why = ("beams.halflap_welds is false" if not welded else "a second row for it" if key in seen
@@ -164,18 +178,9 @@ def check_halflap_welds(v: Verification, rel: str, rows: list[dict[str, str]], c
         seen.add(key)
         dihedral = crossings[key]
         prep, throat = preparation(dihedral, thickness)
-        for column, value, tol in (("dihedral_deg", dihedral, ANGLE_TOLERANCE_DEG),
-                                   ("weld_length_mm", HALFLAP_RUNS * depth, LENGTH_TOLERANCE_MM),
-                                   ("throat_mm", throat, LENGTH_TOLERANCE_MM)):
-            got = cells.number(n, r, column)
-            if got is not None and abs(got - value) > tol:
-                v.error(rel, f"row {n} column {column}", f"half-lap weld of {part} and {to} at node {node}: {got:g} "
-                                                         f"written, {value:.6g} from the nodes and plates",
-                        value=abs(got - value), limit=tol)
-        if r.get("preparation") != prep:
-            v.error(rel, f"row {n} column preparation", f"half-lap weld of {part} and {to} at node {node}: "
-                                                        f"{r.get('preparation')!r} written, {prep!r} for a dihedral "
-                                                        f"of {dihedral:.2f}°")
+        weld = f"half-lap weld of {part} and {to} at node {node}"
+        _check_sizes(v, rel, cells, n, r, weld, dihedral, HALFLAP_RUNS * depth, throat)
+        _check_preparation(v, rel, n, r, weld, prep, dihedral)
     if welded:
         for node, pair in sorted(set(crossings) - seen, key=lambda k: (k[0], sorted(k[1]))):
             first, second = sorted(pair)
@@ -203,31 +208,17 @@ def check_corner_welds(v: Verification, rel: str, rows: list[dict[str, str]], ce
                 and len(beams) >= 2:
             corners[int(row["vertex"])] = set(ids)
     joined: dict[int, set[str]] = {}
-    for n, r in enumerate(rows, start=1):
-        if r.get("joint") != "corner":
-            continue
-        node = cells.integer(n, r, "node", low=0)
-        part, to = cells.text(n, r, "part"), cells.text(n, r, "to")
-        if node is None or part is None or to is None:
-            continue
+    for n, r, node, part, to in _joint_rows(rows, cells, "corner"):
         at = corners.get(node)
         if at is None or part not in at or to not in at or plates[part].get("beam_id") == plates[to].get("beam_id"):
             v.error(rel, f"row {n}", f"node {node}: {part} and {to} are not two beams' plates ending at a node "
                                      "where every plate ends (nodes.csv roles and joint)")
             continue
         joined.setdefault(node, set()).update((part, to))
-        dihedral = float(np.degrees(angle_between(np.array(eval_plane(plates[part]["plane"])),
-                                                  np.array(eval_plane(plates[to]["plane"])))))
-        for column, value in (("dihedral_deg", dihedral), ("weld_length_mm", 2.0 * depth), ("throat_mm", thickness)):
-            got = cells.number(n, r, column)
-            tol = ANGLE_TOLERANCE_DEG if column == "dihedral_deg" else LENGTH_TOLERANCE_MM
-            if got is not None and abs(got - value) > tol:
-                v.error(rel, f"row {n} column {column}", f"corner weld of {part} to {to} at node {node}: {got:g} "
-                                                         f"written, {value:.6g} from the nodes and plates",
-                        value=abs(got - value), limit=tol)
+        weld = f"corner weld of {part} to {to} at node {node}"
+        _check_sizes(v, rel, cells, n, r, weld, plate_dihedral(plates[part], plates[to]), 2.0 * depth, thickness)
         if r.get("preparation") != CORNER_PREPARATION:
-            v.error(rel, f"row {n} column preparation", f"corner weld of {part} to {to} at node {node}: "
-                                                        f"{r.get('preparation')!r}, not the corner weld's")
+            v.error(rel, f"row {n} column preparation", f"{weld}: {r.get('preparation')!r}, not the corner weld's")
     for node, members in sorted(corners.items()):
         loose = sorted(members - joined.get(node, set()))
         if loose:
