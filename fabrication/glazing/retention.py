@@ -695,7 +695,7 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                     "closes the joint towards the glass's top: %s, within the %g mm the build allows; widen [panels] "
                     "gap to at least %.0f mm for room", len(tight),
                     ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in tight[:8]), SCREWS_IN_GLASS_MM,
-                    math.ceil(gap - 2.0 * tight[0].clearance_mm + 0.5))
+                    clearing_gap(gap, tight[0].clearance_mm))
     low = [(x, c) for x in panels if (c := contact[x.part_id]) < 0.5 * x.thickness_mm]
     if low:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
@@ -750,6 +750,12 @@ SCREWS_IN_GLASS_MM = 0.25
 of the erection check for parts in place, :data:`fabrication.verify.erection.TOLERANCE`)."""
 
 
+def clearing_gap(gap: float, clearance: float) -> int:
+    """The whole-millimetre joint (mm) that gives a screw standing ``−clearance`` mm in the glass beside a ``gap``
+    joint half a millimetre of room: the joint widened by twice the depth, each pane's edge moving half of it."""
+    return math.ceil(gap - 2.0 * clearance + 0.5)
+
+
 def refuse_screws_in_glass(retention: Retention | None, gap: float) -> None:
     """Raise :class:`~ppfab.errors.DesignError` (``panels.gap``) naming the pressure plates whose clamping screws
     stand more than :data:`SCREWS_IN_GLASS_MM` in the glass (a kink closing the joint towards the glass's top)
@@ -765,7 +771,7 @@ def refuse_screws_in_glass(retention: Retention | None, gap: float) -> None:
                                         "beside their joint, where a kink closes it towards the glass's top: "
                                         + ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in deep[:6])
                                         + f"; glass takes no steel: widen [panels] gap to at least "
-                                        f"{math.ceil(gap - 2.0 * deep[0].clearance_mm + 0.5):.0f} mm (from {gap:g}), "
+                                        f"{clearing_gap(gap, deep[0].clearance_mm):.0f} mm (from {gap:g}), "
                                         "or clamp with a smaller [glazing] retention_bolt")
 
 
