@@ -210,6 +210,8 @@ def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
                                                                      f"panels.max_crease_deg "
                                                                      f"{design.panels.max_crease_deg:g}°)"),
         ("conical residual max / mean", f"{q.conical_max:.2e} / {q.conical_mean:.2e} rad"),
+        ("circular residual max / mean (panel corners on a circle: 0)",
+         f"{q.circular_max:.2e} / {q.circular_mean:.2e} rad"),
         ("panels above tolerance", len(over)),
         ("beam plates not slidable through their slots", beams.report.totals()["not_slidable"]),
     ]

@@ -131,6 +131,15 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arctan2(cr, dot)
 
 
+def circular_residual(corners: np.ndarray) -> np.ndarray:
+    """``|α_0 − α_1 + α_2 − α_3|`` over the corner angles of every quad ``(F, 4, 3)`` → ``(F,)`` (radians): a
+    planar convex quad is inscribed in a circle iff its opposite angles add up to π, i.e. iff this is 0
+    (§2.3.3, Remark 2.1: circular meshes)."""
+    c = np.asarray(corners, dtype=float)
+    ang = _angle(np.roll(c, 1, axis=1) - c, np.roll(c, -1, axis=1) - c)          # (F, 4)
+    return np.abs(ang[:, 0] - ang[:, 1] + ang[:, 2] - ang[:, 3])
+
+
 def mesh_conical_residual(mesh: QuadMesh) -> np.ndarray:
     """Conical residual at every interior valence-4 vertex of a general quad mesh (NaN elsewhere)."""
     topo = mesh.topology
@@ -327,6 +336,8 @@ class Quality:
     polylines_skipped: int
     conical_max: float
     conical_mean: float
+    circular_max: float
+    circular_mean: float
     crease_max: float
     crease_edges_over_30: int
     corner_deviation_max: float
@@ -354,6 +365,7 @@ class Quality:
              f"{self.delta_p_cols_max:.3e} / {self.delta_p_cols_mean:.3e}"),
             ("polylines skipped (< 3 vertices)", f"{self.polylines_skipped}"),
             ("conical residual max / mean (rad)", f"{self.conical_max:.3e} / {self.conical_mean:.3e}"),
+            ("circular residual max / mean (rad)", f"{self.circular_max:.3e} / {self.circular_mean:.3e}"),
             ("crease max (dihedral angle, deg) / edges > 30 deg", f"{self.crease_max:.2f} / {self.crease_edges_over_30}"),
             ("corner angle max deviation from 90 deg", f"{self.corner_deviation_max:.2f}"),
             ("folds (flipped edges / non-convex faces)", f"{self.flipped_edges} / {self.nonconvex_faces}"),
@@ -399,6 +411,7 @@ def quality(mesh: QuadMesh | QuadGrid, degenerate_tol: float = 1e-9) -> Quality:
             conical = grid_conical_residual(v) if min(v.shape[:2]) >= 3 else np.zeros(0)
     else:
         conical = mesh_conical_residual(qm)
+    circ = circular_residual(corners)
     lengths = qm.edge_lengths()
     scale = float(np.mean(lengths)) if len(lengths) else 1.0
     crease = mesh_dihedral_angles(qm)
@@ -411,6 +424,7 @@ def quality(mesh: QuadMesh | QuadGrid, degenerate_tol: float = 1e-9) -> Quality:
         delta_p_cols_max=_stats(cols)[0], delta_p_cols_mean=_stats(cols)[1],
         polylines_rows=len(rows), polylines_cols=len(cols), polylines_skipped=skip0 + skip1,
         conical_max=_stats(conical)[0], conical_mean=_stats(conical)[1],
+        circular_max=_stats(circ)[0], circular_mean=_stats(circ)[1],
         crease_max=_stats(crease)[0], crease_edges_over_30=int(np.sum(np.nan_to_num(crease) > 30.0)),
         corner_deviation_max=_stats(corner_dev)[0],
         flipped_edges=len(flipped_edges(qm.face_planes, qm.topology.edge_faces)),

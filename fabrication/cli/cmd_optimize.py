@@ -30,6 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fix-boundary", action="store_true", help="keep boundary vertices in place")
     p.add_argument("--keep-conical", action="store_true",
                    help="make or keep the mesh conical (max conical residual <= target_conical, 1e-6 rad)")
+    p.add_argument("--keep-circular", action="store_true",
+                   help="make the mesh circular: every panel's corners on a circle (max circular residual <= "
+                        "target_circular, 1e-6 rad)")
     p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
     p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
     p.add_argument("--target-dp", type=float, default=None, help="target max δ_P (default 1e-6)")
@@ -102,6 +105,8 @@ def collect_params(args: argparse.Namespace) -> dict:
         table["fix_boundary"] = True
     if args.keep_conical:
         table["keep_conical"] = True
+    if args.keep_circular:
+        table["keep_circular"] = True
     return table
 
 
@@ -147,5 +152,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"  distance to the input surface max {result.surface_distance_max:.3g} / mean "
               f"{result.surface_distance_mean:.3g}; crease max {result.crease_max_input:.1f}° -> "
               f"{result.crease_max:.1f}°; conical residual max {result.conical_max_input:.2e} -> "
-              f"{result.conical_max:.2e} rad", file=sys.stderr)
+              f"{result.conical_max:.2e} rad; circular residual max {result.circular_max_input:.2e} -> "
+              f"{result.circular_max:.2e} rad", file=sys.stderr)
     return 0 if result.targets_met else 1

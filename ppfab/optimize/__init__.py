@@ -89,6 +89,8 @@ class OptimizeResult:
     polyline_delta_p : (S,) δ_P of each polyline made planar (same order as ``polylines``)
     fairness, plane_solver : the modes ``"auto"`` resolved to
     conical_max_input, conical_max : max conical residual ``|α1 − α2 + α3 − α4|`` (rad) before / after
+    circular_max_input, circular_max : max circular residual ``|α1 − α2 + α3 − α4|`` over every panel's corner
+        angles (rad) before / after (0 on a circular mesh with planar panels)
     corner_deviation_max_input, corner_deviation_max : max ``|corner angle − 90°|`` (degrees) before / after
     surface_distance_max, surface_distance_mean : distance of the result's vertices to the input surface
         (the input quads), mesh units
@@ -137,6 +139,8 @@ class OptimizeResult:
     params: OptimizeParams = field(default_factory=OptimizeParams)
     conical_max_input: float = 0.0
     conical_max: float = 0.0
+    circular_max_input: float = 0.0
+    circular_max: float = 0.0
     corner_deviation_max_input: float = 0.0
     corner_deviation_max: float = 0.0
     surface_distance_max: float = 0.0
@@ -174,6 +178,7 @@ class OptimizeResult:
             "fairness": self.fairness, "plane_solver": self.plane_solver,
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
             "conical_max_input": self.conical_max_input, "conical_max": self.conical_max,
+            "circular_max_input": self.circular_max_input, "circular_max": self.circular_max,
             "corner_deviation_max_input": self.corner_deviation_max_input,
             "corner_deviation_max": self.corner_deviation_max,
             "surface_distance_max": self.surface_distance_max, "surface_distance_mean": self.surface_distance_mean,
@@ -185,6 +190,16 @@ class OptimizeResult:
             "factorisations": self.factorisations, "cg_solves": self.cg_solves,
             "conjugacy_defect": self.conjugacy_defect, "warnings": list(self.warnings),
         }
+
+
+def solver_control(p: OptimizeParams, max_iterations: int | None = None) -> SolverControl:
+    """The stopping rule of ``p``: its targets (``inf`` for what it does not ask: free faces, no conical or
+    circular goal) and continuation settings; ``max_iterations`` overrides ``p.max_iterations``."""
+    return SolverControl(p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf,
+                         p.target_delta_p, p.max_iterations if max_iterations is None else max_iterations,
+                         p.reg_decay, p.reg_min, p.stall,
+                         target_conical=p.target_conical if p.keep_conical else np.inf,
+                         target_circular=p.target_circular if p.keep_circular else np.inf)
 
 
 def _params(params: OptimizeParams | dict | None, kw: dict) -> OptimizeParams:
@@ -286,13 +301,14 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                           f"all {len(free)} vertices are fixed: nothing can move")
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
                       p.weight_shape, p.shape_ratio, p.weight_conical if p.keep_conical else 0.0,
-                      p.weight_orthogonal, p.weight_axes, p.slide)
+                      p.weight_orthogonal, p.weight_axes, p.slide, p.weight_circular if p.keep_circular else 0.0)
     topo = qm.topology
     stars = conical_stars(faces, len(v), ~topo.boundary_vertices) if p.keep_conical \
         else np.zeros((0, 5), dtype=np.int64)
     if p.keep_conical and not len(stars):
         raise DesignError("optimize.keep_conical", "the mesh has no interior vertex with four faces: there is "
                                                    "no conical condition to keep")
+    circles = faces if p.keep_circular else np.zeros((0, 4), dtype=np.int64)
     pairs = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
     if p.weight_axes > 0:
         edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
@@ -310,11 +326,11 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     start = np.radians(limit - min(CREASE_MARGIN, p.crease_limit / 3.0)) if limit < 180.0 else None
     res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
                     p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
-                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start)
+                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start, circles=circles)
     v_start = (held - center) / scale                      # the anchors where they are held, the rest as input
     nf, ns = _initial_normals(vn, faces, sel.planar)       # the planes of the input: an anchor moved far makes
     z0 = res.pack(v_start, ns, nf)                         # spikes whose own planes would keep them (nonconvex)
-    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars)
+    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars, circles)
     guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
     surface = ReferenceSurface(vn, faces) if reference is None else \
         ReferenceSurface((np.asarray(reference[0], dtype=float) - center) / scale, reference[1])
@@ -366,15 +382,13 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     t0 = time.perf_counter()
     prob = build_problem(mesh, params, reference=reference, **kw)
     p = prob.params
-    target_df = p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf   # faces left free
-    target_c = p.target_conical if p.keep_conical else np.inf
-    control = SolverControl(target_df, p.target_delta_p, p.max_iterations, p.reg_decay, p.reg_min, p.stall,
-                            target_conical=target_c)
+    control = solver_control(p)
+    target_df, _, target_c, target_o = control.targets()
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
     v_last = prob.residuals.unpack(state.z)[0]
     m_last = prob.metrics(v_last)
-    last = (m_last[0], m_last[2], prob.metrics.conical_max(v_last))
+    last = (m_last[0], m_last[2], *prob.metrics.principal(v_last))
     last_score = control.score(*last)
     rose = control.rises(last, state.start_metrics)
     returned = "last"
@@ -396,11 +410,12 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
     dfm, dfa, dpm, dpa = prob.metrics(v)
     df0, _, dp0, _ = prob.metrics(v0)
-    con = prob.metrics.conical_max(v)
+    con, circ = prob.metrics.principal(v)
     c = v_n[np.asarray(prob.mesh.faces)]
     creases = crease_report(dihedral_angles(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]),
                                             prob.mesh.topology.edge_faces), prob.crease0, prob.crease_limit)
-    met = bool(dfm <= target_df and dpm <= p.target_delta_p and con <= target_c and not len(creases.created))
+    met = bool(dfm <= target_df and dpm <= p.target_delta_p and con <= target_c and circ <= target_o
+               and not len(creases.created))
     per_line = prob.metrics.per_polyline(v)
     q_in, q_out = quality(mesh), quality(out)
     foot, _ = prob.surface.closest(v_n) if prob.surface is not None else (v_n, None)
@@ -415,7 +430,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     outcome = Outcome(state.stopped_by, met, dfm, dpm, con, df0, dp0, target_df, p.target_delta_p, target_c,
                       state.iterations, p.max_iterations, state.rejected, returned, state.best_iteration,
                       creases, crease_in, prob.mesh.edges, defect if not met else None,
-                      rose if returned != "last" else ())
+                      rose if returned != "last" else (), circ, target_o)
     warns = tuple(w for w in (conical_loss(q_in.conical_max, q_out.conical_max, p.keep_conical),
                               tangent_planes(out_qm, prob.selection.planar_index)) if w)
     msg = message(outcome) + _notes(p, prob, per_line) + "".join(f"; {w}" for w in warns)
@@ -432,6 +447,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         excluded=prob.selection.crossing, polyline_delta_p=per_line, fairness=prob.fairness,
         plane_solver=prob.plane_solver, params=p,
         conical_max_input=q_in.conical_max, conical_max=q_out.conical_max,
+        circular_max_input=q_in.circular_max, circular_max=q_out.circular_max,
         corner_deviation_max_input=q_in.corner_deviation_max, corner_deviation_max=q_out.corner_deviation_max,
         surface_distance_max=float(dist.max()) if len(dist) else 0.0,
         surface_distance_mean=float(dist.mean()) if len(dist) else 0.0,

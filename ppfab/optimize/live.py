@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import DesignError
 from ..mesh import QuadGrid, QuadMesh
 from .params import OptimizeParams
-from .solver import LevenbergMarquardt, SolverControl
+from .solver import LevenbergMarquardt
 
 LIVE_ITERATIONS = 100_000
 """The solver's iteration limit in a live session (its count restarts at every anchor move)."""
@@ -83,7 +83,7 @@ class LiveRelaxation:
 
     def __init__(self, mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = None,
                  anchors: Sequence[int] = (), weight_close: float | None = None):
-        from . import _params, build_problem
+        from . import _params, build_problem, solver_control
 
         p = _params(params, {})
         qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
@@ -103,10 +103,7 @@ class LiveRelaxation:
                                 weight_close=p.weight_close if weight_close is None else float(weight_close))
         self.params = p
         self.problem = prob = build_problem(qm, p)
-        target_df = p.target_delta_f if (p.planar_faces and p.weight_faces > 0) else np.inf
-        target_c = p.target_conical if p.keep_conical else np.inf
-        self.control = SolverControl(target_df, p.target_delta_p, LIVE_ITERATIONS, p.reg_decay, p.reg_min, p.stall,
-                                     target_conical=target_c)
+        self.control = solver_control(p, LIVE_ITERATIONS)
         self.solver = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, self.control,
                                          prob.on_stage)
         self.stopped = "targets" if self.solver.targets_met() else ""
@@ -165,7 +162,7 @@ class LiveRelaxation:
         lm = self.solver
         if lm.reg > self.control.reg_min * (1.0 + 1e-9):
             return False
-        score = self.control.score(lm.current_metrics[0], lm.current_metrics[2], lm.current_conical)
+        score = lm.score()
         if self._watch is None or score < (1.0 - STALL_GAIN) * self._watch[1]:
             self._watch = (self._steps, score)
             return False

@@ -161,6 +161,8 @@ class Outcome:
     edges: np.ndarray
     conjugacy_defect: float | None
     rose: tuple[str, ...] = ()       # why the last iterate was worse than the input (SolverControl.rises)
+    circular_max: float = 0.0
+    target_circular: float = np.inf
 
 
 def _fmt_rejected(rejected: dict[str, int]) -> str:
@@ -184,6 +186,8 @@ def message(o: Outcome) -> str:
     parts = [f"{what}: max δ_f {o.delta_f_max:.2e}, max δ_P {o.delta_p_max:.2e}"]
     if np.isfinite(o.target_conical):
         parts[0] += f", max conical residual {o.conical_max:.2e} rad"
+    if np.isfinite(o.target_circular):
+        parts[0] += f", max circular residual {o.circular_max:.2e} rad"
     if not o.targets_met:
         miss = []
         if o.delta_f_max > o.target_delta_f:
@@ -192,6 +196,8 @@ def message(o: Outcome) -> str:
             miss.append(f"max δ_P {o.delta_p_max:.2e} > {o.target_delta_p:.0e}")
         if o.conical_max > o.target_conical:
             miss.append(f"conical residual {o.conical_max:.2e} > {o.target_conical:.0e} rad")
+        if o.circular_max > o.target_circular:
+            miss.append(f"circular residual {o.circular_max:.2e} > {o.target_circular:.0e} rad")
         if len(o.creases.created):
             miss.append("creases created")
         parts.append("targets NOT met (" + ", ".join(miss) + ")")

@@ -56,6 +56,15 @@ class OptimizeParams:
     weight_conical: float = param(1.0, doc="λ_c: weight of E_conical (used with keep_conical)", exclusive_min=0.0)
     target_conical: float = param(1e-6, doc="with keep_conical: stop only when the conical residual "
                                             "max abs(α1 − α2 + α3 − α4) (rad) is at most this", exclusive_min=0.0)
+    keep_circular: bool = param(False, doc="make the mesh circular (§2.3.3, Remark 2.1: the corners of every panel "
+                                           "on a circle, a discrete principal net with vertex offsets): adds "
+                                           "E_circular (opposite corner angles adding up to π) with weight "
+                                           "weight_circular, and max circular residual <= target_circular to "
+                                           "the targets; [support] method = \"circular\" builds its exact support")
+    weight_circular: float = param(1.0, doc="λ_○: weight of E_circular (used with keep_circular)", exclusive_min=0.0)
+    target_circular: float = param(1e-6, doc="with keep_circular: stop only when the circular residual "
+                                              "max abs(α1 − α2 + α3 − α4) over the panels' corner angles (rad) "
+                                              "is at most this", exclusive_min=0.0)
     weight_orthogonal: float = param(0.0, doc="λ_⊥: weight of E_orth on the cosines of the face corner angles "
                                               "(near-rectangular panels; 0 switches it off)", min=0.0)
     orthogonality: str = param("keep", doc="E_orth: keep (one-sided: no corner moves further from 90° than in "

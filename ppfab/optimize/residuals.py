@@ -31,6 +31,9 @@ residual vector ``r`` the total energy is ``E = ‖r‖²`` where
 * ``E_axes`` (right angles between support planes and panels, §2.3.2): ``Σ_σ Σ_{faces f along σ} ⟨n_σ, n_f⟩²``
   — rows ``√(s λ_axes) ⟨n_σ, n_f⟩``.  Zero when every support plane is normal to the panels it carries, which
   puts the node axis ``U_i ∩ W_j`` of a PP mesh along the surface normal,
+* ``E_circular = Σ_f (α_0 − α_1 + α_2 − α_3)²`` over the faces, ``α_k`` the corner angles (§2.3.3, Remark 2.1;
+  with planar faces the mesh is circular iff every row vanishes) — rows ``√λ_○ (α_0 − α_1 + α_2 − α_3)``, see
+  :func:`.terms.face_angle_balance`,
 
 ``s`` being the regularisation factor of the current stage (1 at the start): the soft goals (fairness,
 closeness, right angles, axes) fade with it, the constraints and barriers keep their weights.
@@ -51,10 +54,11 @@ from scipy import sparse
 
 from ..topology import Polyline
 from .selection import edge_pairs, triples
-from .terms import angle_balance, corner_cosines, crease_stars, dihedral_and_grad, face_corners_index
+from .terms import (angle_balance, corner_cosines, crease_stars, dihedral_and_grad, face_angle_balance,
+                    face_corners_index)
 
 BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge", "E_conical", "E_orth",
-          "E_axes", "E_slide", "E_crease")
+          "E_axes", "E_slide", "E_crease", "E_circular")
 
 
 @dataclass(frozen=True)
@@ -72,6 +76,7 @@ class Weights:
     orthogonal: float = 0.0
     axes: float = 0.0
     slide: float = 0.3
+    circular: float = 0.0
 
 
 def _pattern(start: int, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -106,6 +111,7 @@ class Residuals:
     orthogonality : ``"right"`` or ``"keep"`` (``E_orth``)
     axes_pairs : ``(owner (P,), face (P,))`` support plane / face pairs of ``E_axes`` (:func:`.terms.polyline_faces`)
     edge_faces, crease_start : ``(E, 2)`` faces of every edge and ``θ_b`` (radians) of ``E_crease`` (off if ``None``)
+    circles : (C, 4) int, the faces of ``E_circular`` (off if ``None`` or ``weights.circular`` is 0)
     """
 
     def __init__(self, vertices0: np.ndarray, faces: np.ndarray, edges: np.ndarray, planar: list[Polyline],
@@ -113,7 +119,8 @@ class Residuals:
                  closeness: str = "vertices", planar_faces: bool = True, plane_unknowns: bool = False,
                  stars: np.ndarray | None = None, orthogonality: str = "keep",
                  axes_pairs: tuple[np.ndarray, np.ndarray] | None = None,
-                 edge_faces: np.ndarray | None = None, crease_start: float | None = None):
+                 edge_faces: np.ndarray | None = None, crease_start: float | None = None,
+                 circles: np.ndarray | None = None):
         v0 = np.asarray(vertices0, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
@@ -185,6 +192,8 @@ class Residuals:
         else:
             self.crease_verts, self.crease_slot = np.zeros((0, 6), dtype=np.int64), np.zeros((0, 4), dtype=np.int64)
         self.crease_start = float(crease_start) if crease_start is not None else np.pi
+        self.circles = np.asarray(circles, dtype=np.int64).reshape(-1, 4) \
+            if (circles is not None and weights.circular > 0) else np.zeros((0, 4), dtype=np.int64)
         # -- Jacobian pattern, block by block in value order ------------------------------------------
         cv = self.close_vertices
         close_cols = vcol[cv].reshape(-1, 1) if closeness == "vertices" else vcol[cv]
@@ -202,6 +211,7 @@ class Residuals:
             np.concatenate([scol[self.axes_pairs[0]], fcol[self.axes_pairs[1]]], axis=1),
             vcol[self.slide_vertices].reshape(-1, 1),
             vcol[self.crease_verts].reshape(-1, 18),
+            vcol[self.circles].reshape(-1, 12),
         ]
         sizes = [len(c) for c in cols_per_block]
         self.block_starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -280,7 +290,7 @@ class Residuals:
         orth = s * w.orthogonal if self.orthogonality == "right" else w.orthogonal
         return [np.sqrt(w.faces), np.sqrt(w.planarity), np.sqrt(w.unit), np.sqrt(s * w.fair),
                 np.sqrt(s * w.close), np.sqrt(w.shape), np.sqrt(w.shape), np.sqrt(w.conical), np.sqrt(orth),
-                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape)]
+                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape), np.sqrt(w.circular)]
 
     def blocks(self, z: np.ndarray) -> list[np.ndarray]:
         """Unweighted residual blocks in the order of :data:`BLOCKS`."""
@@ -311,7 +321,8 @@ class Residuals:
         r_slide = (v[sv] - self.vertices0[sv]).ravel()
         theta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)[0]
         r_crease = np.maximum(0.0, theta - self.crease_start)
-        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease]
+        r_circ = face_angle_balance(v, self.circles)[0]
+        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease, r_circ]
 
     def residual(self, z: np.ndarray, s: float = 1.0) -> np.ndarray:
         """The weighted residual vector ``r (R,)``; ``‖r‖²`` is the total energy at regularisation ``s``."""
@@ -331,7 +342,7 @@ class Residuals:
     def jacobian(self, z: np.ndarray, s: float = 1.0) -> sparse.csc_matrix:
         """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring)."""
         v, ns, nf = self.unpack(z)
-        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease = self._sqrt_weights(s)
+        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease, ccirc = self._sqrt_weights(s)
         vals = []
         for (ia, ib, own), normals, c in ((self.face_edges, nf, cf), (self.plane_edges, ns, cpl)):
             n = normals[own]
@@ -364,6 +375,7 @@ class Residuals:
         vals.append(np.full(3 * len(self.slide_vertices), cslide))
         theta, dtheta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)
         vals.append((ccrease * (theta > self.crease_start))[:, None] * dtheta.reshape(-1, 18))
+        vals.append(ccirc * face_angle_balance(v, self.circles)[1].reshape(-1, 12))
         data = np.concatenate([np.ravel(x) for x in vals])[self._take]
         return sparse.csc_matrix((data, self._indices, self._indptr), shape=(self.n_residuals, self.n_unknowns))
 

@@ -32,7 +32,7 @@ from ..topology import Polyline
 from .guard import StepGuard
 from .linsolve import DampedSystem, FactorCache
 from .residuals import Residuals
-from .terms import angle_balance
+from .terms import angle_balance, face_angle_balance
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,7 @@ class IterationRecord:
     E_conical: float = 0.0
     E_orth: float = 0.0
     E_axes: float = 0.0
+    circular_max: float = 0.0
 
     def line(self) -> str:
         """One line for progress output."""
@@ -73,16 +74,20 @@ class IterationRecord:
         return (f"it {self.iteration:4d} st {self.stage} s={self.reg:.0e} E={self.energy:.3e} "
                 f"E_P={self.E_P:.2e} E_f={self.E_f:.2e} dF={self.delta_f_max:.2e}/{self.delta_f_mean:.2e} "
                 f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e}"
-                + (f" con={self.conical_max:.2e}" if self.conical_max else "") + f" mu={self.mu:.1e} {mark}")
+                + (f" con={self.conical_max:.2e}" if self.conical_max else "")
+                + (f" circ={self.circular_max:.2e}" if self.circular_max else "") + f" mu={self.mu:.1e} {mark}")
 
 
 class PlanarityMetrics:
-    """``δ_f`` of all faces and ``δ_P`` of the selected polylines (§3.3), from vertices ``(N, 3)``."""
+    """``δ_f`` of all faces and ``δ_P`` of the selected polylines (§3.3), from vertices ``(N, 3)``; the conical
+    residual of ``stars (K, 5)`` and the circular residual of ``circles (C, 4)`` when given."""
 
     def __init__(self, faces: np.ndarray, polylines: list[Polyline], n_vertices: int,
-                 stars: np.ndarray | None = None):
+                 stars: np.ndarray | None = None, circles: np.ndarray | None = None):
         self.faces = np.asarray(faces, dtype=np.int64)
         self.stars = np.zeros((0, 5), dtype=np.int64) if stars is None else np.asarray(stars, dtype=np.int64)
+        self.circles = np.zeros((0, 4), dtype=np.int64) if circles is None else \
+            np.asarray(circles, dtype=np.int64).reshape(-1, 4)
         self.has_lines = bool(polylines)
         if polylines:
             idx, self.weights = pad_polylines(np.arange(n_vertices, dtype=float)[:, None], polylines)
@@ -106,6 +111,16 @@ class PlanarityMetrics:
             return 0.0
         return float(np.abs(angle_balance(vertices, self.stars)[0]).max())
 
+    def circular_max(self, vertices: np.ndarray) -> float:
+        """Largest circular residual ``|α_0 − α_1 + α_2 − α_3|`` (rad, corner angles) over the circles (0 without)."""
+        if not len(self.circles):
+            return 0.0
+        return float(np.abs(face_angle_balance(vertices, self.circles)[0]).max())
+
+    def principal(self, vertices: np.ndarray) -> tuple[float, float]:
+        """``(conical_max, circular_max)`` of ``vertices``."""
+        return self.conical_max(vertices), self.circular_max(vertices)
+
 
 RISE = 1.0001
 """Relative rise of a measure above its input value (and its target) that makes an iterate worse than the
@@ -125,23 +140,27 @@ class SolverControl:
     tau: float = 1e-4
     max_rejections: int = 40
     target_conical: float = np.inf
+    target_circular: float = np.inf
 
-    def rises(self, now: tuple[float, float, float], start: tuple[float, float, float]) -> tuple[str, ...]:
-        """The targeted measures — max δ_f, max δ_P, max conical residual — of an iterate ``now`` that are
+    def rises(self, now: tuple[float, ...], start: tuple[float, ...]) -> tuple[str, ...]:
+        """The targeted measures — max δ_f, max δ_P, max conical and circular residual — of an iterate ``now`` that are
         above both their target and their value at the ``start`` (by more than :data:`RISE`), each as
         ``"max δ_f 8.09e-03 > input 4.06e-05"``: an iterate with any is worse than the input, whatever its
         score."""
         out = []
-        for name, x, x0, t in zip(("max δ_f", "max δ_P", "max conical residual"), now, start,
-                                  (self.target_delta_f, self.target_delta_p, self.target_conical)):
+        for name, x, x0, t in zip(("max δ_f", "max δ_P", "max conical residual", "max circular residual"), now,
+                                  start, self.targets()):
             if np.isfinite(t) and x > max(x0 * RISE, t):
                 out.append(f"{name} {x:.2e} > input {x0:.2e}")
         return tuple(out)
 
-    def score(self, dfm: float, dpm: float, conical: float) -> float:
+    def targets(self) -> tuple[float, float, float, float]:
+        """The targets of max δ_f, max δ_P, max conical and max circular residual (``inf``: not targeted)."""
+        return self.target_delta_f, self.target_delta_p, self.target_conical, self.target_circular
+
+    def score(self, dfm: float, dpm: float, conical: float, circular: float = 0.0) -> float:
         """Worst target ratio of an iterate (``<= 1``: every target met)."""
-        ratios = [x / t for x, t in ((dfm, self.target_delta_f), (dpm, self.target_delta_p),
-                                     (conical, self.target_conical)) if np.isfinite(t)]
+        ratios = [x / t for x, t in zip((dfm, dpm, conical, circular), self.targets()) if np.isfinite(t)]
         return float(max(ratios, default=0.0))
 
 
@@ -161,7 +180,7 @@ class SolverState:
     rejected: dict[str, int] = field(default_factory=dict)   # refused steps by reason
     factorisations: int = 0
     cg_solves: int = 0
-    start_metrics: tuple[float, float, float] = (np.inf, np.inf, np.inf)   # max δ_f, max δ_P, conical
+    start_metrics: tuple[float, ...] = (np.inf, np.inf, np.inf, np.inf)   # max δ_f, max δ_P, conical, circular
 
 
 class LevenbergMarquardt:
@@ -202,8 +221,8 @@ class LevenbergMarquardt:
             on_stage(self.z)
         self._linearise()
         self.current_metrics = metrics(self.vertices)
-        self.current_conical = metrics.conical_max(self.vertices)
-        self.start_score = self.best_score = self._score()
+        self.current_conical, self.current_circular = metrics.principal(self.vertices)
+        self.start_score = self.best_score = self.score()
         self.start_metrics = self._measures()
         self.best_z = self.z.copy()
         self.best_iteration = 0
@@ -221,16 +240,15 @@ class LevenbergMarquardt:
         if self.mu == 0.0:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
 
-    def _measures(self) -> tuple[float, float, float]:
-        return self.current_metrics[0], self.current_metrics[2], self.current_conical
+    def _measures(self) -> tuple[float, float, float, float]:
+        return self.current_metrics[0], self.current_metrics[2], self.current_conical, self.current_circular
 
-    def _score(self) -> float:
-        return self.c.score(self.current_metrics[0], self.current_metrics[2], self.current_conical)
+    def score(self) -> float:
+        """Worst target ratio of the current state (:meth:`SolverControl.score`)."""
+        return self.c.score(*self._measures())
 
     def targets_met(self) -> bool:
-        dfm, _, dpm, _ = self.current_metrics
-        return (dfm <= self.c.target_delta_f and dpm <= self.c.target_delta_p
-                and self.current_conical <= self.c.target_conical)
+        return all(x <= t for x, t in zip(self._measures(), self.c.targets()))
 
     def _record(self, accepted: bool, reason: str, step: float) -> IterationRecord:
         e = self.p.energies(self.z, self.reg)
@@ -238,7 +256,7 @@ class LevenbergMarquardt:
         rec = IterationRecord(self.iteration, self.stage, self.reg, accepted, reason, float(self.mu), step,
                               e["total"], e["E_P"], e["E_f"], e["E_1"], e["E_fair"], e["E_close"],
                               m[0], m[1], m[2], m[3], time.perf_counter() - self.t0, self.current_conical,
-                              e["E_conical"], e["E_orth"], e["E_axes"])
+                              e["E_conical"], e["E_orth"], e["E_axes"], self.current_circular)
         self.history.append(rec)
         if self.callback is not None:
             self.callback(rec)
@@ -276,8 +294,8 @@ class LevenbergMarquardt:
         self.mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
         self.nu = 2.0
         self.current_metrics = self.metrics(self.vertices)
-        self.current_conical = self.metrics.conical_max(self.vertices)
-        score = self._score()
+        self.current_conical, self.current_circular = self.metrics.principal(self.vertices)
+        score = self.score()
         if score < self.best_score and not self.c.rises(self._measures(), self.start_metrics):
             self.best_score, self.best_z, self.best_iteration = score, self.z.copy(), self.iteration
         self._record(True, "", step_norm)
@@ -307,8 +325,8 @@ class LevenbergMarquardt:
             self.on_stage(self.z)
         self._linearise()
         self.current_metrics = self.metrics(self.vertices)
-        self.current_conical = self.metrics.conical_max(self.vertices)
-        self.start_score = self.best_score = self._score()
+        self.current_conical, self.current_circular = self.metrics.principal(self.vertices)
+        self.start_score = self.best_score = self.score()
         self.start_metrics = self._measures()
         self.best_z, self.best_iteration = self.z.copy(), 0
 

@@ -8,6 +8,9 @@ the vertices it touches, vectorised over all rows:
   ``α_k = ∠(w_k − v, w_{k+1} − v)``; the mesh is conical at ``v`` iff
   ``α_0 − α_1 + α_2 − α_3 = 0`` [Liu et al. 2006].  Rows ``α_0 − α_1 + α_2 − α_3``
   (radians); columns the 5 vertices ``v, w_0..w_3``.
+* **Circular (opposite angles, §2.3.3, Remark 2.1).**  For a face ``c_0..c_3`` with corner angles ``α_k``,
+  rows ``α_0 − α_1 + α_2 − α_3`` (radians); with planar faces it vanishes iff the quad is inscribed in a
+  circle.  Columns the 4 corners.
 * **Corner angles (near-rectangular panels, §4).**  For the corner ``k`` of a
   face with ``a = c_{k−1} − c_k``, ``b = c_{k+1} − c_k``: ``c = cos α = â·b̂``.  Rows
   ``c`` (``"right"``: right angles) or ``max(0, |c| − |c⁰|)`` (``"keep"``: no corner
@@ -111,6 +114,29 @@ def angle_balance(v: np.ndarray, stars: np.ndarray) -> tuple[np.ndarray, np.ndar
     jac[:, 1:] += da                                                     # w_k is ``a`` of angle k
     jac[:, 1:] += np.roll(db, 1, axis=1)                                 # w_{k+1} is ``b`` of angle k
     jac[:, 0] = -(da.sum(axis=1) + db.sum(axis=1))
+    return r, jac
+
+
+def face_angle_balance(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Circular residual ``α_0 − α_1 + α_2 − α_3`` per quad ``(F,)`` (``α_k`` the corner angle at ``c_k``, between
+    ``c_{k−1} − c_k`` and ``c_{k+1} − c_k``) and its derivative ``(F, 4, 3)`` with respect to ``c_0..c_3``.
+
+    A planar convex quad is inscribed in a circle iff its opposite angles add up to π, i.e. iff this residual
+    vanishes (its angles add up to 2π): with ``E_f`` it makes the mesh circular (§2.3.3, Remark 2.1)."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 4)
+    k = len(f)
+    if k == 0:
+        return np.zeros(0), np.zeros((0, 4, 3))
+    c = v[f]                                                             # (F, 4, 3)
+    a = (np.roll(c, 1, axis=1) - c).reshape(-1, 3)                       # c_{k−1} − c_k
+    b = (np.roll(c, -1, axis=1) - c).reshape(-1, 3)                      # c_{k+1} − c_k
+    theta, da, db = _angle_and_grad(a, b)
+    r = (theta.reshape(k, 4) * SIGNS).sum(axis=1)
+    da = da.reshape(k, 4, 3) * SIGNS[None, :, None]
+    db = db.reshape(k, 4, 3) * SIGNS[None, :, None]
+    jac = -(da + db)                                                     # the apex c_k of angle k
+    jac += np.roll(da, -1, axis=1)                                       # c_k is ``a`` of angle k + 1
+    jac += np.roll(db, 1, axis=1)                                        # c_k is ``b`` of angle k − 1
     return r, jac
 
 
