@@ -33,6 +33,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--keep-circular", action="store_true",
                    help="make the mesh circular: every panel's corners on a circle (max circular residual <= "
                         "target_circular, 1e-6 rad)")
+    p.add_argument("--orthogonal-nodes", action="store_true",
+                   help="support planes at right angles where a planar row and a planar column cross (§2.3.4; "
+                        "needs --families both)")
     p.add_argument("--fixed", default=None, help="comma-separated indices of vertices that must not move")
     p.add_argument("--target-df", type=float, default=None, help="target max δ_f (default 1e-6)")
     p.add_argument("--target-dp", type=float, default=None, help="target max δ_P (default 1e-6)")
@@ -107,6 +110,8 @@ def collect_params(args: argparse.Namespace) -> dict:
         table["keep_conical"] = True
     if args.keep_circular:
         table["keep_circular"] = True
+    if args.orthogonal_nodes:
+        table["orthogonal_nodes"] = True
     return table
 
 
@@ -153,5 +158,7 @@ def run(args: argparse.Namespace) -> int:
               f"{result.surface_distance_mean:.3g}; crease max {result.crease_max_input:.1f}° -> "
               f"{result.crease_max:.1f}°; conical residual max {result.conical_max_input:.2e} -> "
               f"{result.conical_max:.2e} rad; circular residual max {result.circular_max_input:.2e} -> "
-              f"{result.circular_max:.2e} rad", file=sys.stderr)
+              f"{result.circular_max:.2e} rad"
+              + (f"; node angle off 90° max {result.node_angle_max_input:.3g} -> {result.node_angle_max:.3g}°"
+                 if result.params.orthogonal_nodes else ""), file=sys.stderr)
     return 0 if result.targets_met else 1

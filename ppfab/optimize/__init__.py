@@ -49,7 +49,7 @@ from .reference import ReferenceSurface
 from .residuals import Residuals, Weights
 from .selection import Selection, free_vertices, select_polylines
 from .solver import IterationRecord, LevenbergMarquardt, PlanarityMetrics, SolverControl
-from .terms import conical_stars, polyline_faces
+from .terms import conical_stars, node_pairs, polyline_faces
 
 __all__ = ["optimize", "OptimizeParams", "OptimizeResult", "IterationRecord", "Problem", "build_problem"]
 
@@ -91,6 +91,8 @@ class OptimizeResult:
     conical_max_input, conical_max : max conical residual ``|α1 − α2 + α3 − α4|`` (rad) before / after
     circular_max_input, circular_max : max circular residual ``|α1 − α2 + α3 − α4|`` over every panel's corner
         angles (rad) before / after (0 on a circular mesh with planar panels)
+    node_angle_max_input, node_angle_max : with ``orthogonal_nodes``, the largest deviation from 90° (degrees) of
+        the angle between the planes of the row and the column crossing at a node, before / after (0 otherwise)
     corner_deviation_max_input, corner_deviation_max : max ``|corner angle − 90°|`` (degrees) before / after
     surface_distance_max, surface_distance_mean : distance of the result's vertices to the input surface
         (the input quads), mesh units
@@ -141,6 +143,8 @@ class OptimizeResult:
     conical_max: float = 0.0
     circular_max_input: float = 0.0
     circular_max: float = 0.0
+    node_angle_max_input: float = 0.0
+    node_angle_max: float = 0.0
     corner_deviation_max_input: float = 0.0
     corner_deviation_max: float = 0.0
     surface_distance_max: float = 0.0
@@ -179,6 +183,7 @@ class OptimizeResult:
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
             "conical_max_input": self.conical_max_input, "conical_max": self.conical_max,
             "circular_max_input": self.circular_max_input, "circular_max": self.circular_max,
+            "node_angle_max_input": self.node_angle_max_input, "node_angle_max": self.node_angle_max,
             "corner_deviation_max_input": self.corner_deviation_max_input,
             "corner_deviation_max": self.corner_deviation_max,
             "surface_distance_max": self.surface_distance_max, "surface_distance_mean": self.surface_distance_mean,
@@ -199,7 +204,8 @@ def solver_control(p: OptimizeParams, max_iterations: int | None = None) -> Solv
                          p.target_delta_p, p.max_iterations if max_iterations is None else max_iterations,
                          p.reg_decay, p.reg_min, p.stall,
                          target_conical=p.target_conical if p.keep_conical else np.inf,
-                         target_circular=p.target_circular if p.keep_circular else np.inf)
+                         target_circular=p.target_circular if p.keep_circular else np.inf,
+                         target_nodes=p.target_nodes if p.orthogonal_nodes else np.inf)
 
 
 def _params(params: OptimizeParams | dict | None, kw: dict) -> OptimizeParams:
@@ -301,7 +307,8 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                           f"all {len(free)} vertices are fixed: nothing can move")
     weights = Weights(p.weight_planarity, p.weight_faces, p.weight_unit, p.weight_fair, p.weight_close,
                       p.weight_shape, p.shape_ratio, p.weight_conical if p.keep_conical else 0.0,
-                      p.weight_orthogonal, p.weight_axes, p.slide, p.weight_circular if p.keep_circular else 0.0)
+                      p.weight_orthogonal, p.weight_axes, p.slide, p.weight_circular if p.keep_circular else 0.0,
+                      p.weight_nodes if p.orthogonal_nodes else 0.0)
     topo = qm.topology
     stars = conical_stars(faces, len(v), ~topo.boundary_vertices) if p.keep_conical \
         else np.zeros((0, 5), dtype=np.int64)
@@ -309,6 +316,10 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
         raise DesignError("optimize.keep_conical", "the mesh has no interior vertex with four faces: there is "
                                                    "no conical condition to keep")
     circles = faces if p.keep_circular else np.zeros((0, 4), dtype=np.int64)
+    nodes = node_pairs(sel.planar)[0] if p.orthogonal_nodes else np.zeros((0, 2), dtype=np.int64)
+    if p.orthogonal_nodes and not len(nodes):
+        raise DesignError("optimize.orthogonal_nodes", "no planar row crosses a planar column: there is no node "
+                                                       "to make orthogonal")
     pairs = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
     if p.weight_axes > 0:
         edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
@@ -317,7 +328,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     if fairness == "auto":
         far = len(faces) and float(face_planarity(v[faces]).max()) > AUTO_FAIRNESS_DELTA_F
         fairness = "absolute" if far else "relative"
-    exact = p.plane_solver == "exact" or (
+    exact = p.plane_solver == "exact" or p.orthogonal_nodes or (
         p.plane_solver == "auto" and sum(len(ln) ** 2 for ln in sel.planar) <= EXACT_PLANES_LIMIT)
     c0 = vn[faces]
     crease0 = dihedral_angles(np.cross(c0[:, 2] - c0[:, 0], c0[:, 3] - c0[:, 1]), topo.edge_faces)
@@ -326,11 +337,12 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     start = np.radians(limit - min(CREASE_MARGIN, p.crease_limit / 3.0)) if limit < 180.0 else None
     res = Residuals(vn, faces, qm.edges, sel.planar, sel.fair, free, weights, fairness, p.closeness,
                     p.planar_faces, plane_unknowns=exact, stars=stars, orthogonality=p.orthogonality,
-                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start, circles=circles)
+                    axes_pairs=pairs, edge_faces=topo.edge_faces, crease_start=start, circles=circles,
+                    nodes=nodes)
     v_start = (held - center) / scale                      # the anchors where they are held, the rest as input
     nf, ns = _initial_normals(vn, faces, sel.planar)       # the planes of the input: an anchor moved far makes
     z0 = res.pack(v_start, ns, nf)                         # spikes whose own planes would keep them (nonconvex)
-    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars, circles)
+    metrics = PlanarityMetrics(faces, sel.planar, len(vn), stars, circles, nodes)
     guard = StepGuard(faces, qm.edges, vn, p.min_edge_ratio, topo.edge_faces, crease_limit=limit)
     surface = ReferenceSurface(vn, faces) if reference is None else \
         ReferenceSurface((np.asarray(reference[0], dtype=float) - center) / scale, reference[1])
@@ -383,12 +395,12 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     prob = build_problem(mesh, params, reference=reference, **kw)
     p = prob.params
     control = solver_control(p)
-    target_df, _, target_c, target_o = control.targets()
+    target_df, _, target_c, target_o, target_n = control.targets()
     lm = LevenbergMarquardt(prob.residuals, prob.z0, prob.metrics, prob.guard, control, prob.on_stage, callback)
     state = lm.run()
     v_last = prob.residuals.unpack(state.z)[0]
     m_last = prob.metrics(v_last)
-    last = (m_last[0], m_last[2], *prob.metrics.principal(v_last))
+    last = (m_last[0], m_last[2], *prob.metrics.goals(v_last))
     last_score = control.score(*last)
     rose = control.rises(last, state.start_metrics)
     returned = "last"
@@ -410,12 +422,13 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     diag = float(np.linalg.norm(v0.max(axis=0) - v0.min(axis=0)))
     dfm, dfa, dpm, dpa = prob.metrics(v)
     df0, _, dp0, _ = prob.metrics(v0)
-    con, circ = prob.metrics.principal(v)
+    con, circ, node_cos = prob.metrics.goals(v)
+    node_cos_in = prob.metrics.nodes_max(v0)
     c = v_n[np.asarray(prob.mesh.faces)]
     creases = crease_report(dihedral_angles(np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]),
                                             prob.mesh.topology.edge_faces), prob.crease0, prob.crease_limit)
     met = bool(dfm <= target_df and dpm <= p.target_delta_p and con <= target_c and circ <= target_o
-               and not len(creases.created))
+               and node_cos <= target_n and not len(creases.created))
     per_line = prob.metrics.per_polyline(v)
     q_in, q_out = quality(mesh), quality(out)
     foot, _ = prob.surface.closest(v_n) if prob.surface is not None else (v_n, None)
@@ -430,7 +443,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
     outcome = Outcome(state.stopped_by, met, dfm, dpm, con, df0, dp0, target_df, p.target_delta_p, target_c,
                       state.iterations, p.max_iterations, state.rejected, returned, state.best_iteration,
                       creases, crease_in, prob.mesh.edges, defect if not met else None,
-                      rose if returned != "last" else (), circ, target_o)
+                      rose if returned != "last" else (), circ, target_o, node_cos, target_n)
     warns = tuple(w for w in (conical_loss(q_in.conical_max, q_out.conical_max, p.keep_conical),
                               tangent_planes(out_qm, prob.selection.planar_index)) if w)
     msg = message(outcome) + _notes(p, prob, per_line) + "".join(f"; {w}" for w in warns)
@@ -448,6 +461,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         plane_solver=prob.plane_solver, params=p,
         conical_max_input=q_in.conical_max, conical_max=q_out.conical_max,
         circular_max_input=q_in.circular_max, circular_max=q_out.circular_max,
+        node_angle_max_input=_cos_to_deviation(node_cos_in), node_angle_max=_cos_to_deviation(node_cos),
         corner_deviation_max_input=q_in.corner_deviation_max, corner_deviation_max=q_out.corner_deviation_max,
         surface_distance_max=float(dist.max()) if len(dist) else 0.0,
         surface_distance_mean=float(dist.mean()) if len(dist) else 0.0,
@@ -458,6 +472,11 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         axis_angle_mean=float(axis.mean()) if len(axis) else 0.0,
         rejected=state.rejected, returned=returned, factorisations=state.factorisations,
         cg_solves=state.cg_solves, conjugacy_defect=defect, warnings=warns)
+
+
+def _cos_to_deviation(cos: float) -> float:
+    """Deviation from 90° (degrees) of an angle whose ``|cos|`` is ``cos``."""
+    return float(np.degrees(np.arcsin(min(1.0, abs(cos)))))
 
 
 def _all_pairs(prob: Problem) -> tuple[np.ndarray, np.ndarray]:

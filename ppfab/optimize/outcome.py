@@ -163,6 +163,8 @@ class Outcome:
     rose: tuple[str, ...] = ()       # why the last iterate was worse than the input (SolverControl.rises)
     circular_max: float = 0.0
     target_circular: float = np.inf
+    nodes_max: float = 0.0
+    target_nodes: float = np.inf
 
 
 def _fmt_rejected(rejected: dict[str, int]) -> str:
@@ -188,6 +190,8 @@ def message(o: Outcome) -> str:
         parts[0] += f", max conical residual {o.conical_max:.2e} rad"
     if np.isfinite(o.target_circular):
         parts[0] += f", max circular residual {o.circular_max:.2e} rad"
+    if np.isfinite(o.target_nodes):
+        parts[0] += f", max node cosine {o.nodes_max:.2e}"
     if not o.targets_met:
         miss = []
         if o.delta_f_max > o.target_delta_f:
@@ -198,6 +202,8 @@ def message(o: Outcome) -> str:
             miss.append(f"conical residual {o.conical_max:.2e} > {o.target_conical:.0e} rad")
         if o.circular_max > o.target_circular:
             miss.append(f"circular residual {o.circular_max:.2e} > {o.target_circular:.0e} rad")
+        if o.nodes_max > o.target_nodes:
+            miss.append(f"node cosine {o.nodes_max:.2e} > {o.target_nodes:.0e}")
         if len(o.creases.created):
             miss.append("creases created")
         parts.append("targets NOT met (" + ", ".join(miss) + ")")

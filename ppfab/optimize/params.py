@@ -65,6 +65,14 @@ class OptimizeParams:
     target_circular: float = param(1e-6, doc="with keep_circular: stop only when the circular residual "
                                               "max abs(α1 − α2 + α3 − α4) over the panels' corner angles (rad) "
                                               "is at most this", exclusive_min=0.0)
+    orthogonal_nodes: bool = param(False, doc="support planes at right angles in every node (§2.3.4): where a "
+                                              "planar row and a planar column cross, their planes orthogonal; adds "
+                                              "E_nodes with weight weight_nodes and max |cos| of the angle between "
+                                              "them <= target_nodes to the targets; needs families = both, and "
+                                              "solves the support normals exactly (plane_solver exact)")
+    weight_nodes: float = param(1.0, doc="λ_⊥n: weight of E_nodes (used with orthogonal_nodes)", exclusive_min=0.0)
+    target_nodes: float = param(1e-6, doc="with orthogonal_nodes: stop only when max |cos| of the angle between the "
+                                          "row and column planes at a node is at most this", exclusive_min=0.0)
     weight_orthogonal: float = param(0.0, doc="λ_⊥: weight of E_orth on the cosines of the face corner angles "
                                               "(near-rectangular panels; 0 switches it off)", min=0.0)
     orthogonality: str = param("keep", doc="E_orth: keep (one-sided: no corner moves further from 90° than in "
@@ -119,6 +127,10 @@ class OptimizeParams:
             if len(a) != 4 or float(a[0]) != int(a[0]) or a[0] < 0 or not all(abs(float(x)) < 1e300 for x in a):
                 raise DesignError(f"anchors[{k}]", f"{a} is not [vertex, x, y, z]: give a vertex index and a "
                                                    "finite point in mesh units")
+        if self.orthogonal_nodes and self.families != "both":
+            raise DesignError("orthogonal_nodes", f"orthogonal nodes are right angles between a planar row's and a "
+                                                  f"planar column's planes where they cross: set families = "
+                                                  f"\"both\" (is {self.families!r})")
         if self.families == "none" and not self.polylines and not self.planar_faces:
             raise DesignError("families", "nothing to optimise: families = 'none', no polylines and "
                                           "planar_faces = false")

@@ -31,6 +31,9 @@ residual vector ``r`` the total energy is ``E = ‖r‖²`` where
 * ``E_axes`` (right angles between support planes and panels, §2.3.2): ``Σ_σ Σ_{faces f along σ} ⟨n_σ, n_f⟩²``
   — rows ``√(s λ_axes) ⟨n_σ, n_f⟩``.  Zero when every support plane is normal to the panels it carries, which
   puts the node axis ``U_i ∩ W_j`` of a PP mesh along the surface normal,
+* ``E_nodes = Σ_{nodes} ⟨n_U, n_W⟩²`` over the vertices where a planar row (normal ``n_U``) and a planar column
+  (``n_W``) cross (§2.3.4, orthogonal nodes: the two support planes at right angles) — rows ``√λ_⊥n ⟨n_U, n_W⟩``;
+  it acts through the support normals, so it needs them among the unknowns (``plane_unknowns``),
 * ``E_circular = Σ_f (α_0 − α_1 + α_2 − α_3)²`` over the faces, ``α_k`` the corner angles (§2.3.3, Remark 2.1;
   with planar faces the mesh is circular iff every row vanishes) — rows ``√λ_○ (α_0 − α_1 + α_2 − α_3)``, see
   :func:`.terms.face_angle_balance`,
@@ -58,7 +61,7 @@ from .terms import (angle_balance, corner_cosines, crease_stars, dihedral_and_gr
                     face_corners_index)
 
 BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge", "E_conical", "E_orth",
-          "E_axes", "E_slide", "E_crease", "E_circular")
+          "E_axes", "E_slide", "E_crease", "E_circular", "E_nodes")
 
 
 @dataclass(frozen=True)
@@ -77,6 +80,7 @@ class Weights:
     axes: float = 0.0
     slide: float = 0.3
     circular: float = 0.0
+    nodes: float = 0.0
 
 
 def _pattern(start: int, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -112,6 +116,8 @@ class Residuals:
     axes_pairs : ``(owner (P,), face (P,))`` support plane / face pairs of ``E_axes`` (:func:`.terms.polyline_faces`)
     edge_faces, crease_start : ``(E, 2)`` faces of every edge and ``θ_b`` (radians) of ``E_crease`` (off if ``None``)
     circles : (C, 4) int, the faces of ``E_circular`` (off if ``None`` or ``weights.circular`` is 0)
+    nodes : (K, 2) int, positions in ``planar`` of the row and the column crossing at each node of ``E_nodes``
+        (off if ``None`` or ``weights.nodes`` is 0)
     """
 
     def __init__(self, vertices0: np.ndarray, faces: np.ndarray, edges: np.ndarray, planar: list[Polyline],
@@ -120,7 +126,7 @@ class Residuals:
                  stars: np.ndarray | None = None, orthogonality: str = "keep",
                  axes_pairs: tuple[np.ndarray, np.ndarray] | None = None,
                  edge_faces: np.ndarray | None = None, crease_start: float | None = None,
-                 circles: np.ndarray | None = None):
+                 circles: np.ndarray | None = None, nodes: np.ndarray | None = None):
         v0 = np.asarray(vertices0, dtype=float)
         faces = np.asarray(faces, dtype=np.int64)
         edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
@@ -194,6 +200,8 @@ class Residuals:
         self.crease_start = float(crease_start) if crease_start is not None else np.pi
         self.circles = np.asarray(circles, dtype=np.int64).reshape(-1, 4) \
             if (circles is not None and weights.circular > 0) else np.zeros((0, 4), dtype=np.int64)
+        self.nodes = np.asarray(nodes, dtype=np.int64).reshape(-1, 2) \
+            if (nodes is not None and weights.nodes > 0 and ns) else np.zeros((0, 2), dtype=np.int64)
         # -- Jacobian pattern, block by block in value order ------------------------------------------
         cv = self.close_vertices
         close_cols = vcol[cv].reshape(-1, 1) if closeness == "vertices" else vcol[cv]
@@ -212,6 +220,7 @@ class Residuals:
             vcol[self.slide_vertices].reshape(-1, 1),
             vcol[self.crease_verts].reshape(-1, 18),
             vcol[self.circles].reshape(-1, 12),
+            scol[self.nodes].reshape(-1, 6),
         ]
         sizes = [len(c) for c in cols_per_block]
         self.block_starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -290,7 +299,7 @@ class Residuals:
         orth = s * w.orthogonal if self.orthogonality == "right" else w.orthogonal
         return [np.sqrt(w.faces), np.sqrt(w.planarity), np.sqrt(w.unit), np.sqrt(s * w.fair),
                 np.sqrt(s * w.close), np.sqrt(w.shape), np.sqrt(w.shape), np.sqrt(w.conical), np.sqrt(orth),
-                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape), np.sqrt(w.circular)]
+                np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape), np.sqrt(w.circular), np.sqrt(w.nodes)]
 
     def blocks(self, z: np.ndarray) -> list[np.ndarray]:
         """Unweighted residual blocks in the order of :data:`BLOCKS`."""
@@ -322,7 +331,9 @@ class Residuals:
         theta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)[0]
         r_crease = np.maximum(0.0, theta - self.crease_start)
         r_circ = face_angle_balance(v, self.circles)[0]
-        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease, r_circ]
+        r_nodes = np.einsum("ij,ij->i", ns[self.nodes[:, 0]], ns[self.nodes[:, 1]])
+        return [r_f, r_p, r_1, r_fair, r_close, r_corner, r_edge, r_con, r_orth, r_axes, r_slide, r_crease, r_circ,
+                r_nodes]
 
     def residual(self, z: np.ndarray, s: float = 1.0) -> np.ndarray:
         """The weighted residual vector ``r (R,)``; ``‖r‖²`` is the total energy at regularisation ``s``."""
@@ -342,7 +353,8 @@ class Residuals:
     def jacobian(self, z: np.ndarray, s: float = 1.0) -> sparse.csc_matrix:
         """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring)."""
         v, ns, nf = self.unpack(z)
-        cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease, ccirc = self._sqrt_weights(s)
+        (cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease, ccirc,
+         cnodes) = self._sqrt_weights(s)
         vals = []
         for (ia, ib, own), normals, c in ((self.face_edges, nf, cf), (self.plane_edges, ns, cpl)):
             n = normals[own]
@@ -376,6 +388,7 @@ class Residuals:
         theta, dtheta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)
         vals.append((ccrease * (theta > self.crease_start))[:, None] * dtheta.reshape(-1, 18))
         vals.append(ccirc * face_angle_balance(v, self.circles)[1].reshape(-1, 12))
+        vals.append(cnodes * np.concatenate([ns[self.nodes[:, 1]], ns[self.nodes[:, 0]]], axis=1))
         data = np.concatenate([np.ravel(x) for x in vals])[self._take]
         return sparse.csc_matrix((data, self._indices, self._indptr), shape=(self.n_residuals, self.n_unknowns))
 

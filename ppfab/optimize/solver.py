@@ -28,6 +28,7 @@ from typing import Callable
 import numpy as np
 
 from ..metrics import face_planarity, pad_polylines, polyline_planarity
+from ..planes import fit_plane
 from ..topology import Polyline
 from .guard import StepGuard
 from .linsolve import DampedSystem, FactorCache
@@ -67,6 +68,7 @@ class IterationRecord:
     E_orth: float = 0.0
     E_axes: float = 0.0
     circular_max: float = 0.0
+    nodes_max: float = 0.0
 
     def line(self) -> str:
         """One line for progress output."""
@@ -75,19 +77,24 @@ class IterationRecord:
                 f"E_P={self.E_P:.2e} E_f={self.E_f:.2e} dF={self.delta_f_max:.2e}/{self.delta_f_mean:.2e} "
                 f"dP={self.delta_p_max:.2e}/{self.delta_p_mean:.2e}"
                 + (f" con={self.conical_max:.2e}" if self.conical_max else "")
-                + (f" circ={self.circular_max:.2e}" if self.circular_max else "") + f" mu={self.mu:.1e} {mark}")
+                + (f" circ={self.circular_max:.2e}" if self.circular_max else "")
+                + (f" nodes={self.nodes_max:.2e}" if self.nodes_max else "") + f" mu={self.mu:.1e} {mark}")
 
 
 class PlanarityMetrics:
     """``δ_f`` of all faces and ``δ_P`` of the selected polylines (§3.3), from vertices ``(N, 3)``; the conical
-    residual of ``stars (K, 5)`` and the circular residual of ``circles (C, 4)`` when given."""
+    residual of ``stars (K, 5)``, the circular residual of ``circles (C, 4)`` and the orthogonal-node measure of
+    ``nodes (K, 2)`` (positions in ``polylines`` of the row and column crossing at a node) when given."""
 
     def __init__(self, faces: np.ndarray, polylines: list[Polyline], n_vertices: int,
-                 stars: np.ndarray | None = None, circles: np.ndarray | None = None):
+                 stars: np.ndarray | None = None, circles: np.ndarray | None = None,
+                 nodes: np.ndarray | None = None):
         self.faces = np.asarray(faces, dtype=np.int64)
         self.stars = np.zeros((0, 5), dtype=np.int64) if stars is None else np.asarray(stars, dtype=np.int64)
         self.circles = np.zeros((0, 4), dtype=np.int64) if circles is None else \
             np.asarray(circles, dtype=np.int64).reshape(-1, 4)
+        self.nodes = np.zeros((0, 2), dtype=np.int64) if nodes is None else \
+            np.asarray(nodes, dtype=np.int64).reshape(-1, 2)
         self.has_lines = bool(polylines)
         if polylines:
             idx, self.weights = pad_polylines(np.arange(n_vertices, dtype=float)[:, None], polylines)
@@ -117,9 +124,18 @@ class PlanarityMetrics:
             return 0.0
         return float(np.abs(face_angle_balance(vertices, self.circles)[0]).max())
 
-    def principal(self, vertices: np.ndarray) -> tuple[float, float]:
-        """``(conical_max, circular_max)`` of ``vertices``."""
-        return self.conical_max(vertices), self.circular_max(vertices)
+    def nodes_max(self, vertices: np.ndarray) -> float:
+        """Largest ``|cos|`` of the angle between the least-squares planes of the row and the column crossing at a
+        node (0: orthogonal nodes, §2.3.4; 0 without nodes)."""
+        if not len(self.nodes) or not self.has_lines:
+            return 0.0
+        planes, _ = fit_plane(vertices[self.index], self.weights)
+        n = planes[:, :3]
+        return float(np.abs(np.einsum("ij,ij->i", n[self.nodes[:, 0]], n[self.nodes[:, 1]])).max())
+
+    def goals(self, vertices: np.ndarray) -> tuple[float, float, float]:
+        """``(conical_max, circular_max, nodes_max)`` of ``vertices``: the measures of the geometric goals."""
+        return self.conical_max(vertices), self.circular_max(vertices), self.nodes_max(vertices)
 
 
 RISE = 1.0001
@@ -141,26 +157,29 @@ class SolverControl:
     max_rejections: int = 40
     target_conical: float = np.inf
     target_circular: float = np.inf
+    target_nodes: float = np.inf
 
     def rises(self, now: tuple[float, ...], start: tuple[float, ...]) -> tuple[str, ...]:
-        """The targeted measures — max δ_f, max δ_P, max conical and circular residual — of an iterate ``now`` that are
+        """The targeted measures — max δ_f, max δ_P, max conical and circular residual, max node cosine — of an iterate ``now`` that are
         above both their target and their value at the ``start`` (by more than :data:`RISE`), each as
         ``"max δ_f 8.09e-03 > input 4.06e-05"``: an iterate with any is worse than the input, whatever its
         score."""
         out = []
-        for name, x, x0, t in zip(("max δ_f", "max δ_P", "max conical residual", "max circular residual"), now,
-                                  start, self.targets()):
+        for name, x, x0, t in zip(("max δ_f", "max δ_P", "max conical residual", "max circular residual",
+                                   "max node cosine"), now, start, self.targets()):
             if np.isfinite(t) and x > max(x0 * RISE, t):
                 out.append(f"{name} {x:.2e} > input {x0:.2e}")
         return tuple(out)
 
-    def targets(self) -> tuple[float, float, float, float]:
-        """The targets of max δ_f, max δ_P, max conical and max circular residual (``inf``: not targeted)."""
-        return self.target_delta_f, self.target_delta_p, self.target_conical, self.target_circular
+    def targets(self) -> tuple[float, float, float, float, float]:
+        """The targets of max δ_f, max δ_P, max conical and max circular residual and max node cosine (``inf``:
+        not targeted)."""
+        return (self.target_delta_f, self.target_delta_p, self.target_conical, self.target_circular,
+                self.target_nodes)
 
-    def score(self, dfm: float, dpm: float, conical: float, circular: float = 0.0) -> float:
+    def score(self, dfm: float, dpm: float, conical: float, circular: float = 0.0, nodes: float = 0.0) -> float:
         """Worst target ratio of an iterate (``<= 1``: every target met)."""
-        ratios = [x / t for x, t in zip((dfm, dpm, conical, circular), self.targets()) if np.isfinite(t)]
+        ratios = [x / t for x, t in zip((dfm, dpm, conical, circular, nodes), self.targets()) if np.isfinite(t)]
         return float(max(ratios, default=0.0))
 
 
@@ -180,7 +199,7 @@ class SolverState:
     rejected: dict[str, int] = field(default_factory=dict)   # refused steps by reason
     factorisations: int = 0
     cg_solves: int = 0
-    start_metrics: tuple[float, ...] = (np.inf, np.inf, np.inf, np.inf)   # max δ_f, max δ_P, conical, circular
+    start_metrics: tuple[float, ...] = (np.inf,) * 5   # max δ_f, max δ_P, conical, circular, node cosine
 
 
 class LevenbergMarquardt:
@@ -221,7 +240,7 @@ class LevenbergMarquardt:
             on_stage(self.z)
         self._linearise()
         self.current_metrics = metrics(self.vertices)
-        self.current_conical, self.current_circular = metrics.principal(self.vertices)
+        self.current_conical, self.current_circular, self.current_nodes = metrics.goals(self.vertices)
         self.start_score = self.best_score = self.score()
         self.start_metrics = self._measures()
         self.best_z = self.z.copy()
@@ -240,8 +259,9 @@ class LevenbergMarquardt:
         if self.mu == 0.0:
             self.mu = self.c.tau * max(self.system.diag_max, 1e-12)
 
-    def _measures(self) -> tuple[float, float, float, float]:
-        return self.current_metrics[0], self.current_metrics[2], self.current_conical, self.current_circular
+    def _measures(self) -> tuple[float, float, float, float, float]:
+        return (self.current_metrics[0], self.current_metrics[2], self.current_conical, self.current_circular,
+                self.current_nodes)
 
     def score(self) -> float:
         """Worst target ratio of the current state (:meth:`SolverControl.score`)."""
@@ -256,7 +276,7 @@ class LevenbergMarquardt:
         rec = IterationRecord(self.iteration, self.stage, self.reg, accepted, reason, float(self.mu), step,
                               e["total"], e["E_P"], e["E_f"], e["E_1"], e["E_fair"], e["E_close"],
                               m[0], m[1], m[2], m[3], time.perf_counter() - self.t0, self.current_conical,
-                              e["E_conical"], e["E_orth"], e["E_axes"], self.current_circular)
+                              e["E_conical"], e["E_orth"], e["E_axes"], self.current_circular, self.current_nodes)
         self.history.append(rec)
         if self.callback is not None:
             self.callback(rec)
@@ -294,7 +314,7 @@ class LevenbergMarquardt:
         self.mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
         self.nu = 2.0
         self.current_metrics = self.metrics(self.vertices)
-        self.current_conical, self.current_circular = self.metrics.principal(self.vertices)
+        self.current_conical, self.current_circular, self.current_nodes = self.metrics.goals(self.vertices)
         score = self.score()
         if score < self.best_score and not self.c.rises(self._measures(), self.start_metrics):
             self.best_score, self.best_z, self.best_iteration = score, self.z.copy(), self.iteration
@@ -325,7 +345,7 @@ class LevenbergMarquardt:
             self.on_stage(self.z)
         self._linearise()
         self.current_metrics = self.metrics(self.vertices)
-        self.current_conical, self.current_circular = self.metrics.principal(self.vertices)
+        self.current_conical, self.current_circular, self.current_nodes = self.metrics.goals(self.vertices)
         self.start_score = self.best_score = self.score()
         self.start_metrics = self._measures()
         self.best_z, self.best_iteration = self.z.copy(), 0

@@ -24,7 +24,9 @@ normal to ``a``) and ``p_b`` likewise::
 
 and the derivative with respect to the apex is minus their sum.
 
-The support-plane term (right angles between support planes and panels,
+The orthogonal-node term (§2.3.4: where a planar row and a planar column cross, their support planes meet at
+a right angle) is ``⟨n_U, n_W⟩`` per node, bilinear in the support normals; :func:`node_pairs` lists the
+nodes.  The support-plane term (right angles between support planes and panels,
 §2.3.2) is bilinear in the normals and lives with ``E_P`` in
 :mod:`.residuals`; :func:`polyline_faces` lists its (polyline, face) pairs.
 """
@@ -180,6 +182,21 @@ def polyline_faces(lines: list[Polyline], edge_index: dict[tuple[int, int], int]
         owner.extend([s] * len(fs))
         face.extend(sorted(fs))
     return np.asarray(owner, dtype=np.int64), np.asarray(face, dtype=np.int64)
+
+
+def node_pairs(lines: list[Polyline]) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes where a planar polyline of each family crosses, for orthogonal nodes (§2.3.4).
+
+    Returns ``pairs (K, 2)`` — positions in ``lines`` of the family-0 and the family-1 polyline through each
+    node — and ``vertex (K,)``, the node's vertex.  A vertex on two polylines of one family (a singular
+    vertex) keeps the first of each."""
+    first: dict[tuple[int, int], int] = {}
+    for s, p in enumerate(lines):
+        for v in p.vertices.tolist():
+            first.setdefault((int(v), int(p.family)), s)
+    verts = sorted({v for v, f in first if f == 0} & {v for v, f in first if f == 1})
+    pairs = np.array([[first[(v, 0)], first[(v, 1)]] for v in verts], dtype=np.int64).reshape(-1, 2)
+    return pairs, np.asarray(verts, dtype=np.int64)
 
 
 def crease_stars(faces: np.ndarray, edge_faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ class SupportParams:
 
     method: str = param("auto", doc="'auto', 'pp' (the axis of a vertex is the line where its two polyline "
                                     "planes meet), 'p' (axes in the planes of one family), 'conical' (cone axes), "
-                                    "'parallel' (least-squares parallel mesh)")
+                                    "'parallel' (least-squares parallel mesh), 'circular' (circular meshes: the unit vertex offset)")
     family: str = param("rows", doc="the planar family for method 'p': 'rows' or 'cols'",
                         choices=("rows", "cols"))
     planar_tolerance: float = param(1e-6, doc="δ_P (relative) below which a polyline counts as planar "
