@@ -42,6 +42,7 @@ from ..metrics import (CreaseReport, Quality, conjugacy_defect, crease_report, d
                        quality)
 from ..schema import as_plain, parse_params
 from .guard import StepGuard
+from .linsolve import resolve_solver
 from .outcome import (Outcome, axis_normal_angles, conical_loss, message, p_axis_normal_angles,
                       support_panel_angles, tangent_planes)
 from .params import OptimizeParams
@@ -205,7 +206,8 @@ def solver_control(p: OptimizeParams, max_iterations: int | None = None) -> Solv
                          p.reg_decay, p.reg_min, p.stall,
                          target_conical=p.target_conical if p.keep_conical else np.inf,
                          target_circular=p.target_circular if p.keep_circular else np.inf,
-                         target_nodes=p.target_nodes if p.orthogonal_nodes else np.inf)
+                         target_nodes=p.target_nodes if p.orthogonal_nodes else np.inf,
+                         linear_solver=resolve_solver(p.linear_solver))
 
 
 def _params(params: OptimizeParams | dict | None, kw: dict) -> OptimizeParams:

@@ -101,6 +101,10 @@ class OptimizeParams:
                                           "grows with polyline length²), eliminated by variable projection "
                                           "(projected: as sparse as the mesh), or auto (exact while "
                                           "Σ (polyline length)² <= 1.5e5)", choices=("auto", "exact", "projected"))
+    linear_solver: str = param("auto", doc="sparse Cholesky of the damped normal equations: MKL PARDISO (pip "
+                                           "install ppfab[fast]; 1.5-1.8x faster per factorisation), SuperLU with "
+                                           "ppfab's nested-dissection ordering, or auto (PARDISO when installed)",
+                               choices=("auto", "pardiso", "superlu"))
     target_delta_f: float = param(1e-6, doc="stop when max δ_f (face planarity, §3.3) is at most this",
                                   exclusive_min=0.0)
     target_delta_p: float = param(1e-6, doc="stop when max δ_P of the selected polylines is at most this",

@@ -145,7 +145,8 @@ input (:meth:`SolverControl.rises`)."""
 
 @dataclass
 class SolverControl:
-    """Stopping and continuation settings (see module docstring)."""
+    """Stopping and continuation settings (see module docstring), and the sparse solver of the normal equations
+    (``"superlu"`` or ``"pardiso"``, :func:`~ppfab.optimize.linsolve.resolve_solver`)."""
 
     target_delta_f: float = 1e-6
     target_delta_p: float = 1e-6
@@ -158,6 +159,7 @@ class SolverControl:
     target_conical: float = np.inf
     target_circular: float = np.inf
     target_nodes: float = np.inf
+    linear_solver: str = "superlu"
 
     def rises(self, now: tuple[float, ...], start: tuple[float, ...]) -> tuple[str, ...]:
         """The targeted measures — max δ_f, max δ_P, max conical and circular residual, max node cosine — of an iterate ``now`` that are
@@ -235,7 +237,8 @@ class LevenbergMarquardt:
         self.iteration = 0
         self.history: list[IterationRecord] = []
         self.t0 = time.perf_counter()
-        self.cache = FactorCache()
+        self.cache = FactorCache(last=3 * problem.n_planes if problem.plane_unknowns else 0,
+                                 solver=self.c.linear_solver)
         if on_stage is not None:
             on_stage(self.z)
         self._linearise()

@@ -1,0 +1,108 @@
+"""The optimiser's sparse solves: the support normals ordered last, MKL PARDISO beside SuperLU, the fallback.
+
+Each solve is checked against a dense solve with numpy on the same damped normal equations of a real mesh
+(WWmore/DOS ``objs/obj_pq/conical1.obj`` made PP with its support normals among the unknowns).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import sparse
+from scipy.sparse.linalg import splu
+
+from conftest import shared_file
+from ppfab.errors import GeometryError
+from ppfab.io import load_mesh
+from ppfab.optimize import build_problem, optimize
+from ppfab.optimize import linsolve
+from ppfab.optimize.linsolve import DampedSystem, FactorCache, nested_dissection
+
+
+@pytest.fixture(scope="module")
+def system():
+    """``(S, rhs, n_normals)``: the Schur system of the first LM step of conical1 PP, exact support normals."""
+    mesh = load_mesh(shared_file("DOS__conical1.obj"))
+    prob = build_problem(mesh, families="both", plane_solver="exact")
+    res = prob.residuals
+    z = res.project_normals(prob.z0)
+    ds = DampedSystem(res.jacobian(z), res.residual(z), res.n_face_unknowns)
+    mu = 1e-3 * ds.diag_max
+    nb = ds.nz // 3
+    binv = np.linalg.inv(ds.blocks + mu * np.eye(3))
+    bd = sparse.bsr_matrix((binv, np.arange(nb), np.arange(nb + 1)), shape=(ds.nz, ds.nz)).tocsr()
+    s = (ds.a_yy + mu * sparse.identity(ds.ny) - ds.a_yz @ bd @ ds.a_yz.T).tocsr()
+    rhs = np.random.default_rng(1).normal(size=ds.ny)
+    return s, rhs, 3 * res.n_planes
+
+
+def test_normals_last_solve_correctly_with_less_fill(system):
+    s, rhs, last = system
+    dense = np.linalg.solve(s.toarray(), rhs)
+    fills = []
+    for p in (nested_dissection(s), nested_dissection(s, last=last)):
+        assert sorted(p.tolist()) == list(range(s.shape[0]))
+        lu = splu(sparse.csc_matrix(s[p][:, p]), permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+        x = np.empty_like(rhs)
+        x[p] = lu.solve(rhs[p])
+        assert np.linalg.norm(x - dense) <= 1e-9 * np.linalg.norm(dense)
+        fills.append(lu.L.nnz + lu.U.nnz)
+    assert np.all(nested_dissection(s, last=last)[-last:] == np.arange(s.shape[0] - last, s.shape[0]))
+    assert fills[1] < 0.8 * fills[0]                    # the normals among the separators fill more
+
+
+def test_pardiso_and_superlu_solve_the_same_system(system):
+    pytest.importorskip("pypardiso")
+    s, rhs, last = system
+    dense = np.linalg.solve(s.toarray(), rhs)
+    for name in ("superlu", "pardiso"):
+        cache = FactorCache(last=last, solver=name)
+        x = cache.solve(s, rhs)
+        assert cache.factorisations == 1 and cache.solver == name
+        assert np.linalg.norm(x - dense) <= 1e-9 * np.linalg.norm(dense)
+
+
+def test_a_kept_pardiso_factor_preconditions_cg(system):
+    pytest.importorskip("pypardiso")
+    s, rhs, last = system
+    owner = object()
+    cache = FactorCache(last=last, solver="pardiso")
+    cache.solve(s, rhs, owner=owner)
+    s2 = (s + 1e-8 * sparse.identity(s.shape[0])).tocsr()
+    x2 = cache.solve(s2, rhs, owner=owner)
+    assert cache.factorisations == 1 and cache.cg_solves == 1
+    assert np.linalg.norm(s2 @ x2 - rhs) <= 1e-9 * np.linalg.norm(rhs)
+
+
+def test_a_pardiso_error_falls_back_to_superlu(system, monkeypatch):
+    s, rhs, last = system
+
+    class Broken:
+        def __init__(self, *args):
+            raise RuntimeError("pardiso error -4: zero pivot")
+
+    monkeypatch.setattr(linsolve, "_PardisoFactor", Broken)
+    monkeypatch.setattr(linsolve, "_thread_pardiso", lambda: None)
+    cache = FactorCache(last=last, solver="pardiso")
+    x = cache.solve(s, rhs)
+    assert cache.solver == "superlu" and cache.factorisations == 1
+    assert np.linalg.norm(s @ x - rhs) <= 1e-9 * np.linalg.norm(rhs)
+
+
+def test_asking_for_pardiso_without_it_is_one_clear_error(monkeypatch):
+    monkeypatch.setattr(linsolve, "pardiso_available", lambda: False)
+    assert linsolve.resolve_solver("auto") == "superlu"
+    with pytest.raises(GeometryError, match=r"pip install ppfab\[fast\]"):
+        linsolve.resolve_solver("pardiso")
+
+
+def test_both_solvers_reach_the_same_mesh():
+    pytest.importorskip("pypardiso")
+    mesh = load_mesh(shared_file("DOS__enneper2.obj"))
+    a = optimize(mesh, families="both", linear_solver="superlu")
+    b = optimize(mesh, families="both", linear_solver="pardiso")
+    assert a.targets_met and b.targets_met and a.iterations == b.iterations
+    va, vb = np.asarray(a.mesh.vertices).reshape(-1, 3), np.asarray(b.mesh.vertices).reshape(-1, 3)
+    diag = np.linalg.norm(np.ptp(va, axis=0))
+    assert np.abs(va - vb).max() < 1e-8 * diag
