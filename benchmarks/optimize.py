@@ -16,8 +16,10 @@ the input surface, the shape barrier), with the same analytic sparse Jacobian
 Solvers:
 
 * ``ppfab`` — :func:`ppfab.optimize.optimize` as a user calls it (damped normal equations with the face
-  normals eliminated, nested-dissection ordering, SuperLU; support normals exact on 30², by variable
-  projection above, ``plane_solver = "auto"``; guard and result report included in the time);
+  normals eliminated; MKL PARDISO when pypardiso is installed, else SuperLU with ppfab's nested-dissection
+  ordering, ``linear_solver = "auto"``; support normals exact on 30², by variable projection above,
+  ``plane_solver = "auto"``; guard and result report included in the time); with PARDISO a second row gives
+  the same run with SuperLU;
 * ``scipy`` — ``least_squares(method="trf", jac=<the analytic sparse Jacobian>, tr_solver="lsmr")`` with
   every normal an unknown (its natural form of the same residual vector), restarted per stage from a
   ``callback`` that applies the stage rule and the targets after every iteration.  Both ``x_scale=1`` and
@@ -59,12 +61,13 @@ def noisy_grid(n: int, noise: float = 0.03, seed: int = 0) -> QuadGrid:
     return QuadGrid(v + rng.normal(scale=noise * 2.0 / (n - 1), size=v.shape))
 
 
-def run_ppfab(grid: QuadGrid, families: str) -> dict:
+def run_ppfab(grid: QuadGrid, families: str, linear_solver: str = "auto") -> dict:
     t, c = time.perf_counter(), time.process_time()
-    res = optimize(grid, families=families, max_iterations=300, target_delta_f=TARGET, target_delta_p=TARGET)
+    res = optimize(grid, families=families, max_iterations=300, target_delta_f=TARGET, target_delta_p=TARGET,
+                   linear_solver=linear_solver)
     dt, cpu = time.perf_counter() - t, time.process_time() - c
     return {"time": cpu, "wall": dt, "iters": res.iterations, "evals": res.factorisations, "df": res.delta_f_max,
-            "dp": res.delta_p_max, "met": res.targets_met, "variant": res.plane_solver}
+            "dp": res.delta_p_max, "met": res.targets_met, "variant": f"{res.plane_solver}/{res.linear_solver}"}
 
 
 class _Stop(Exception):
@@ -139,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scipy-variants-up-to", type=int, default=60,
                     help="run both x_scale variants of scipy up to this grid size and keep the faster")
     args = ap.parse_args(argv)
-    head = (f"{'grid':>9} {'solver':>6} {'variant':>14} {'CPU s':>8} {'wall s':>8} {'iter':>5} {'jac/fact':>8} "
+    head = (f"{'grid':>9} {'solver':>6} {'variant':>18} {'CPU s':>8} {'wall s':>8} {'iter':>5} {'jac/fact':>8} "
             f"{'max δ_f':>9} {'max δ_P':>9} {'met':>4} {'scipy/ppfab':>11}")
     print(f"families = {args.families}; targets max δ_f, max δ_P <= {TARGET:.0e}; noise 3 % of the spacing; "
           f"same residuals, start, analytic Jacobian and stage rule; time = CPU seconds")
@@ -149,6 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     for n in (int(k) for k in args.sizes.split(",")):
         grid = noisy_grid(n)
         a = run_ppfab(grid, args.families)
+        plain = [run_ppfab(grid, args.families, "superlu")] if a["variant"].endswith("pardiso") else []
         if n <= args.scipy_variants_up_to and not args.scipy_scale:
             runs = [run_scipy(grid, args.families, args.scipy_budget, xs) for xs in (1.0, "jac")]
             met = [r for r in runs if r["met"]] or runs
@@ -158,11 +162,12 @@ def main(argv: list[str] | None = None) -> int:
         else:
             b = run_scipy(grid, args.families, args.scipy_budget, best_scale)
             others = []
-        for name, r in [("ppfab", a), ("scipy", b)] + [("scipy", o) for o in others]:
+        for name, r in [("ppfab", a)] + [("ppfab", q) for q in plain] + [("scipy", b)] + [("scipy", o) for o in others]:
             bound = "" if b["met"] else ">"
             ratio = f"{bound}{r['time'] / a['time']:.1f}" if name == "scipy" else ""
-            note = "" if name != "scipy" or r is b else "  (slower variant)"
-            print(f"{n:>4}x{n:<4} {name:>6} {r['variant']:>14} {r['time']:8.2f} {r['wall']:8.2f} {r['iters']:5d} "
+            note = ("  (slower variant)" if name == "scipy" and r is not b
+                    else f"  (scipy/this {b['time'] / r['time']:.1f})" if name == "ppfab" and r is not a else "")
+            print(f"{n:>4}x{n:<4} {name:>6} {r['variant']:>18} {r['time']:8.2f} {r['wall']:8.2f} {r['iters']:5d} "
                   f"{r['evals']:8d} "
                   f"{r['df']:9.2e} {r['dp']:9.2e} {'yes' if r['met'] else 'no':>4} {ratio:>11}{note}", flush=True)
     return 0

@@ -88,7 +88,7 @@ class OptimizeResult:
     delta_p_max, delta_p_mean : δ_P of the result over the polylines made planar
     excluded : polylines of the requested families left out because they pass twice through a vertex
     polyline_delta_p : (S,) δ_P of each polyline made planar (same order as ``polylines``)
-    fairness, plane_solver : the modes ``"auto"`` resolved to
+    fairness, plane_solver, linear_solver : the modes ``"auto"`` resolved to
     conical_max_input, conical_max : max conical residual ``|α1 − α2 + α3 − α4|`` (rad) before / after
     circular_max_input, circular_max : max circular residual ``|α1 − α2 + α3 − α4|`` over every panel's corner
         angles (rad) before / after (0 on a circular mesh with planar panels)
@@ -139,6 +139,7 @@ class OptimizeResult:
     polyline_delta_p: np.ndarray = field(default_factory=lambda: np.zeros(0))
     fairness: str = ""
     plane_solver: str = ""
+    linear_solver: str = ""
     params: OptimizeParams = field(default_factory=OptimizeParams)
     conical_max_input: float = 0.0
     conical_max: float = 0.0
@@ -180,7 +181,7 @@ class OptimizeResult:
             "delta_p_max": self.delta_p_max, "delta_p_mean": self.delta_p_mean,
             "excluded_polylines": self.excluded.tolist(),
             "polylines": self.polylines.tolist(), "polyline_delta_p": self.polyline_delta_p.tolist(),
-            "fairness": self.fairness, "plane_solver": self.plane_solver,
+            "fairness": self.fairness, "plane_solver": self.plane_solver, "linear_solver": self.linear_solver,
             "quality": self.quality.as_dict(), "params": as_plain(self.params),
             "conical_max_input": self.conical_max_input, "conical_max": self.conical_max,
             "circular_max_input": self.circular_max_input, "circular_max": self.circular_max,
@@ -460,7 +461,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         skipped=prob.selection.skipped, quality=q_out, time=time.perf_counter() - t0,
         delta_f_max=dfm, delta_f_mean=dfa, delta_p_max=dpm, delta_p_mean=dpa,
         excluded=prob.selection.crossing, polyline_delta_p=per_line, fairness=prob.fairness,
-        plane_solver=prob.plane_solver, params=p,
+        plane_solver=prob.plane_solver, linear_solver=lm.cache.solver, params=p,
         conical_max_input=q_in.conical_max, conical_max=q_out.conical_max,
         circular_max_input=q_in.circular_max, circular_max=q_out.circular_max,
         node_angle_max_input=_cos_to_deviation(node_cos_in), node_angle_max=_cos_to_deviation(node_cos),
