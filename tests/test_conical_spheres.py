@@ -117,12 +117,53 @@ def test_profile_change_keeps_the_mesh_parallel_conical_and_p(plane):
         assert min(abs(dist.max()), abs(dist.min())) < 1e-5 and dist.max() * dist.min() >= -1e-10
 
 
-def test_profile_must_be_convex():
-    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
-    star = np.c_[(6 + 1.5 * np.cos(5 * t)) * np.cos(t), (6 + 1.5 * np.cos(5 * t)) * np.sin(t)]
-    with pytest.raises(DesignError, match="profile: is not strictly convex"):
-        build_construction("conical_spheres", {"spheres": WAVY.tolist(), "profile": star.tolist(),
-                                               "profile_closed": True})
+def angle_balance_of(v: np.ndarray) -> np.ndarray:
+    """``|α_0 − α_1 + α_2 − α_3|`` at the interior vertices of a grid ``(m, n, 3)``, the angles between
+    consecutive edges around each vertex (its own formula, for the conical property)."""
+    c = v[1:-1, 1:-1]
+    e = [v[1:-1, 2:] - c, v[2:, 1:-1] - c, v[1:-1, :-2] - c, v[:-2, 1:-1] - c]
+    unit = [x / np.linalg.norm(x, axis=-1, keepdims=True) for x in e]
+    ang = [np.arccos(np.clip(np.einsum("...i,...i->...", unit[k], unit[(k + 1) % 4]), -1, 1)) for k in range(4)]
+    return np.abs(ang[0] - ang[1] + ang[2] - ang[3])
+
+
+@pytest.mark.parametrize("shape", ["open wave", "closed flower"])
+def test_a_profile_with_inflections_gives_an_inscribed_conical_p_mesh(shape):
+    """Remark 4.2: a designed profile with inflections.  The mesh's row in W_k is the polygon inscribed in the
+    curve at equal arclength, its profile angles run to and fro, and the mesh is still planar-faced, P and
+    conical (measured here by an SVD per face and per row and the vertex angles)."""
+    if shape == "open wave":
+        q = np.linspace(-7.5, 7.5, 13)
+        pts = np.c_[5.5 - 0.05 * q ** 2 + 0.45 * np.cos(0.9 * q), q]
+        params = {"spheres": WAVY.tolist(), "faces_spine": 12, "faces_profile": 24, "profile": pts.tolist()}
+    else:
+        t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+        pts = np.c_[(6 + 1.5 * np.cos(5 * t)) * np.cos(t), (6 + 1.5 * np.cos(5 * t)) * np.sin(t)]
+        params = {"spheres": WAVY.tolist(), "faces_spine": 12, "faces_profile": 40, "profile": pts.tolist(),
+                  "profile_closed": True, "closed": True}
+    prof = PlanarCurve.from_points(pts, closed=shape != "open wave", name="profile")
+    grid = build_construction("conical_spheres", params)
+    v = grid.vertices
+    theta = grid.meta["theta_deg"]
+    turns = np.diff(np.sign(np.diff(theta)))
+    assert np.count_nonzero(turns) >= 2                              # the source profile runs to and fro
+    quads = np.stack([v[:-1, :-1], v[1:, :-1], v[1:, 1:], v[:-1, 1:]], axis=2).reshape(-1, 4, 3)
+    if grid.closed:
+        wrap = np.stack([v[:-1, -1], v[1:, -1], v[1:, 0], v[:-1, 0]], axis=1)
+        quads = np.concatenate([quads, wrap])
+    centred = quads - quads.mean(axis=1, keepdims=True)
+    assert (np.linalg.svd(centred, compute_uv=False)[:, 2]).max() < 1e-9       # planar faces
+    for row in v:
+        assert np.linalg.svd(row - row.mean(axis=0), compute_uv=False)[2] < 1e-9   # rows in planes (P)
+    ext = np.concatenate([v[:, -1:], v, v[:, :1]], axis=1) if grid.closed else v
+    assert angle_balance_of(ext).max() < 1e-9                         # conical
+    k = grid.meta["profile_plane"]
+    poly = grid.meta["profile_frame"].to2d(v[k])
+    dense = prof(np.linspace(prof.t0, prof.t1, 200001))
+    dist = np.min(np.linalg.norm(poly[:, None, :] - dense[None, :, :], axis=2), axis=1)
+    assert dist.max() < 1e-3                                          # the polygon is inscribed in the curve
+    seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
+    assert seg.max() < 1.5 * seg.min()                                # at (nearly) equal arclength
 
 
 def test_open_profile_must_cover_the_face_directions():

@@ -12,7 +12,12 @@ Step 3  Tangent planes ``T_{s,j}`` of one cone ``C_s`` (profile angle ``θ_j``) 
 Step 4  The circular profile in ``W_{k}`` is replaced by the polygon circumscribing a designer's
         convex profile curve with edges parallel to the original ones (each strip plane keeps its
         normal and moves to the profile's support line); propagated by the same ``σ_i`` the mesh
-        stays parallel to the channel mesh, hence conical and P.
+        stays parallel to the channel mesh, hence conical and P.  A profile with inflections
+        (Remark 4.2) gets the polygon *inscribed* in it instead: its vertices on the curve at equal
+        arclength, each edge in the tangent plane of the cone whose trace in ``W_k`` is parallel to it —
+        the profile angles ``θ_j`` of the channel mesh then run forwards and, past an inflection,
+        backwards (the source profile traversed to and fro), and the mesh is still parallel to a
+        channel mesh, conical and P.
 
 §4.2.4  With the sphere centres in a plane ``M`` and every sphere touching a plane ``T``, all cone
         vertices lie on ``M ∩ T``; every transverse polyline then lies in a plane through that line
@@ -71,6 +76,70 @@ def profile_angles(faces: int, angle_range: tuple[float, float], closed: bool) -
         step = 2 * np.pi / faces
         return a0 + step * ((np.arange(faces + 1) - 1) % faces)
     return a0 + (np.arange(-1, faces + 1) + 0.5) * (a1 - a0) / faces
+
+
+def _trace_angle(theta: np.ndarray, cone: tuple[np.ndarray, float, np.ndarray, np.ndarray], w: np.ndarray,
+                 frame: Frame) -> np.ndarray:
+    """Angle in the profile frame of the in-plane normal ``ν`` (the tangent plane's normal projected into
+    ``W_k``, normal ``w``) of the cone's tangent plane at profile angle ``θ`` (radians), ``(k,)``."""
+    a, cosb, b1, b2 = cone
+    sinb = np.sqrt(max(0.0, 1.0 - cosb * cosb))
+    n = cosb * a + sinb * (np.cos(theta)[:, None] * b1 + np.sin(theta)[:, None] * b2)
+    nu = n - (n @ w)[:, None] * w
+    return np.arctan2(nu @ frame.ey, nu @ frame.ex)
+
+
+def _chord_planes(profile: PlanarCurve, faces: int, closed: bool, frame: Frame, Wk: np.ndarray,
+                  cone: tuple[np.ndarray, float, np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Step 4 for a profile with inflections (Remark 4.2): the polygon inscribed in ``profile`` at equal
+    arclength (one point beyond each end for the ghost strips of an open profile), each edge in the tangent
+    plane of the cone whose trace in ``W_k`` is parallel to it.
+
+    Returns the strip planes ``T0`` (in the layout of :func:`profile_angles`) and their profile angles
+    ``θ`` (radians, not monotone past an inflection).  Raises :class:`GeometryError` when the cone's traces
+    do not turn through every direction once (the cone axis lies in ``W_k``) or two neighbouring points of
+    the polygon coincide."""
+    a, cosb, b1, b2 = cone
+    w = pl.normalize(Wk)[:3]
+    t_dense, s_dense = profile.arclength_table(8001)
+    total = float(s_dense[-1])
+    step = total / faces
+    if closed:
+        s = step * np.arange(faces + 1)
+    else:
+        s = step * np.arange(-1, faces + 2)                          # a ghost point beyond each end
+    t = np.interp(np.clip(s, 0.0, total), s_dense, t_dense)
+    if not closed:                                                    # beyond the ends: the speed there
+        t[0] = profile.t0 - step / float(profile.speed(np.array([profile.t0]))[0])
+        t[-1] = profile.t1 + step / float(profile.speed(np.array([profile.t1]))[0])
+    q = profile(t)                                                    # (P, 2) points in the frame
+    d = np.diff(q, axis=0)
+    length = np.linalg.norm(d, axis=1)
+    if np.any(length <= 1e-9 * total):
+        k = int(np.argmin(length))
+        raise GeometryError(f"profile points {k} and {k + 1} of the inscribed polygon coincide", element="profile")
+    right = np.stack([d[:, 1], -d[:, 0]], axis=1) / length[:, None]   # chord normal to the right of travel
+    crown = float(np.sign(right[:, 0].sum())) or 1.0                  # the side of the crown (frame e1)
+    psi = np.unwrap(np.arctan2(crown * right[:, 1], crown * right[:, 0]))
+    grid_t = np.linspace(-np.pi, np.pi, 4097)
+    table = np.unwrap(_trace_angle(grid_t, cone, w, frame))
+    slope = np.diff(table)
+    if not (np.all(slope > 0) or np.all(slope < 0)):
+        raise GeometryError("the cone's tangent planes do not meet the profile plane in every direction once: "
+                            "its axis lies too near the plane; choose another profile_plane", element="profile")
+    if slope[0] < 0:
+        grid_t, table = grid_t[::-1], table[::-1]
+    span = table[-1] - table[0]                                       # 2π
+    wrap = np.floor((psi - table[0]) / span)
+    theta = np.interp(psi - wrap * span, table, grid_t)
+    n = cosb * a + np.sqrt(max(0.0, 1.0 - cosb * cosb)) * (np.cos(theta)[:, None] * b1
+                                                          + np.sin(theta)[:, None] * b2)
+    x = frame.origin + q[:-1, :1] * frame.ex + q[:-1, 1:] * frame.ey   # each chord's first point, in space
+    T = np.concatenate([n, -np.einsum("ki,ki->k", n, x)[:, None]], axis=1)
+    if closed:
+        T = np.concatenate([T[-1:], T], axis=0)                       # column b is face (b − 1) mod faces
+        theta = np.concatenate([theta[-1:], theta])
+    return T, theta
 
 
 def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
@@ -140,13 +209,22 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     a, cosb, b1, b2 = cone_frame(Z[s0], Z[s0 + 1], up)
     sinb = np.sqrt(max(0.0, 1.0 - cosb * cosb))
     theta = profile_angles(faces_profile, angle_range, closed)
+    frame = _profile_frame(W[k0], Z[k0], cosb * a + sinb * b1, k0)
+    inscribed = profile is not None and has_inflection(profile)
+    if inscribed:
+        assert profile is not None
+        chords, theta = _chord_planes(profile, faces_profile, closed, frame, W[k0], (a, cosb, b1, b2))
     for attempt in range(2):
         th = theta if attempt == 0 else (-theta if closed else theta[::-1])
         n = cosb * a + sinb * (np.cos(th)[:, None] * b1 + np.sin(th)[:, None] * b2)
         T0 = np.concatenate([n, (-n @ Z[s0, :3] - Z[s0, 3])[:, None]], axis=1)
-        frame = _profile_frame(W[k0], Z[k0], cosb * a + sinb * b1, k0)
         reference = None
-        if profile is not None:
+        if inscribed:                      # Remark 4.2: the polygon inscribed in a profile with inflections
+            th = theta if attempt == 0 else (np.concatenate([theta[1:2], theta[1:][::-1]]) if closed
+                                             else theta[::-1])              # closed: column 0 is the last face
+            T0 = chords if attempt == 0 else (np.concatenate([chords[1:2], chords[1:][::-1]]) if closed
+                                              else chords[::-1])
+        elif profile is not None:
             reference = frame.to2d(_vertices(_propagate(T0, s0, sigma), W, closed)[k0])
             T0 = _profile_planes(T0, frame, W[k0], profile)
         E = _propagate(T0, s0, sigma)
@@ -167,10 +245,19 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
             "theta_deg": degrees, "profile_frame": frame, "profile_reference": reference,
             "planar_families": ("rows",)}
     grid = replace(grid, axes=axes, extended_face_planes=E, meta=meta)
-    if check:
-        check_folds(grid, strip_t, degrees, reference=inner, context="conical_spheres",
-                    names=("spine t", "profile angle"))
+    if check:                              # past an inflection the faces touch their spheres from the other
+        check_folds(grid, strip_t, degrees, reference=None if inscribed else inner,       # side: no reference
+                    context="conical_spheres", names=("spine t", "profile angle"))
     return grid
+
+
+def has_inflection(curve: PlanarCurve, samples: int = 4001) -> bool:
+    """Whether the curvature of ``curve`` changes sign or vanishes on ``[t0, t1]`` (Remark 4.2)."""
+    t = np.linspace(curve.t0, curve.t1, samples)
+    kappa = curve.curvature(t)
+    size = float(np.ptp(curve(t), axis=0).max())
+    ks = np.sign(np.median(kappa))
+    return bool(ks == 0 or np.any(ks * kappa <= 1e-9 / max(size, 1e-300)))
 
 
 def _vertices(E: np.ndarray, W: np.ndarray, closed: bool) -> np.ndarray:
@@ -251,8 +338,11 @@ class ConicalSpheresParams:
                                      length=2)
     closed: bool = param(False, doc="the profile runs once around (a tube); rows are closed loops")
     up: list[float] = param([0.0, 0.0, 1.0], doc="direction of the crown (profile angle 0)", length=3)
-    profile: list[list[float]] = param([], doc="Step 4: convex profile curve [p, q] in the frame of W_profile_plane "
-                                              "(origin at the circle's centre, p towards the crown); empty: circle")
+    profile: list[list[float]] = param([], doc="Step 4: profile curve [p, q] in the frame of W_profile_plane (origin "
+                                              "at the circle's centre, p towards the crown); a convex one gets the "
+                                              "circumscribed polygon at the profile angles, one with inflections the "
+                                              "inscribed polygon at equal arclength (Remark 4.2; angle_range is "
+                                              "then not used); empty: circle")
     profile_curve: str = param("interpolate", doc="interpolate: spline through the profile points; bspline: control points",
                                choices=("interpolate", "bspline"))
     profile_closed: bool = param(False, doc="the profile curve is closed (defaults to true for a closed mesh)")
