@@ -23,7 +23,7 @@ def stages(design_path: Path):
     q = st.stage_quality(g, p)
     s = st.stage_support(d, g, p)
     panels = st.stage_panels(d, g, p, q)
-    beams = st.stage_beams(d, s, p)
+    beams = st.stage_beams(d, s, p, panels)
     return beams, st.stage_glazing(d, s, panels, beams, p)
 
 

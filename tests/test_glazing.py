@@ -30,7 +30,7 @@ def _stages(name):
         geometry = stages.stage_geometry(design, p, False)
         support = stages.stage_support(design, geometry, p)
         panels = stages.stage_panels(design, geometry, p)
-        beams = stages.stage_beams(design, support, p)
+        beams = stages.stage_beams(design, support, p, panels)
         glazing = stages.stage_glazing(design, support, panels, beams, p)
         _CACHE[name] = (design, support, panels, beams, glazing)
     return _CACHE[name]
@@ -142,16 +142,22 @@ def test_every_split_beam_has_its_splice():
 
 @pytest.mark.parametrize("name", ["default", "pp_cauchy"])
 def test_cover_plates_keep_the_top_clearance_over_their_own_length(name):
-    """Each cover plate's top edge lies ``splices.top_clear`` under the beam's top edge where it is closest to it
-    and nowhere closer: that edge moved up (square to itself) by ``top_clear − 0.01`` mm stays inside the two
-    pieces' outlines, moved by ``top_clear + 0.05`` mm it leaves them (shapely).  pp_cauchy's plates were 7 mm
-    lower where a crossing slot lay a plate's length from the cut."""
+    """Each cover plate's top edge lies ``splices.top_clear`` under the beam's top edge where it is closest to it,
+    plus ``(t/2 + t_c)·tan λ`` under a glazing strip leaning by ``λ`` over the cut (its underside comes down that
+    far over the plate's outer face), and nowhere closer: that edge moved up (square to itself) by that much less
+    0.01 mm stays inside the two pieces' outlines, moved by 0.05 mm more it leaves them (shapely); λ from the
+    strips' solids' frames against the plate's plane.  pp_cauchy's plates were 7 mm lower where a crossing slot
+    lay a plate's length from the cut; conical_pp_rotational's strips stood 6.4 mm in its cover plates."""
     design, support, panels, beams, glazing = _stages(name)
     plates = {p.part_id: p for p in beams.plates}
-    clear = design.splices.top_clear
     assert glazing.splices
     for s in glazing.splices:
         a, b = plates[s.pieces[0]], plates[s.pieces[1]]
+        n = a.plane[:3] / np.linalg.norm(a.plane[:3])
+        over = [g for g in glazing.strips if {g.vertices[0], g.vertices[1]} & set(a.nodes.tolist())
+                and {g.vertices[0], g.vertices[1]} & set(b.nodes.tolist())]
+        lean = max((np.arcsin(abs(g.frame.normal @ n)) for g in over), default=0.0)
+        clear = design.splices.top_clear + (0.5 * a.thickness + s.thickness) * np.tan(lean)
         body = Polygon(a.outline).union(Polygon(a.frame.to2d(b.frame.to3d(b.outline)))).buffer(1e-6)
         ring = np.asarray(s.outline)
         edges = [(ring[k], ring[(k + 1) % len(ring)]) for k in range(len(ring))]

@@ -24,6 +24,9 @@ BLOCKED = ["build123d", "ezdxf", "matplotlib", "spyrrow", "rectpack", "fabricati
            "ifcopenshell", "rhino3dm"]
 STDLIB = set(sys.stdlib_module_names)
 CORE_THIRD_PARTY = {"numpy", "scipy"}
+# optional accelerators the core may load where it can do without them (arrays in, arrays out): MKL PARDISO for
+# the optimiser's factorisations, SuperLU when it is missing (tests/test_linear_solvers.py)
+CORE_OPTIONAL = {"ppfab.optimize.linsolve": {"pypardiso"}}
 # fabrication's layers, lowest first; a module may import its own layer and the ones below
 FAB_LAYERS = [
     {"model"},                      # the records of a finished build: data only, imports nothing of fabrication
@@ -102,7 +105,8 @@ def test_every_module_is_parsed():
 @pytest.mark.parametrize("module", sorted(m for m in MODULES if m.startswith("ppfab")))
 def test_core_imports_only_numpy_scipy_and_itself(module):
     bad = sorted(name for name in IMPORTS[module]
-                 if _top(name) not in STDLIB | CORE_THIRD_PARTY | {"ppfab", "__future__"})
+                 if _top(name) not in STDLIB | CORE_THIRD_PARTY | {"ppfab", "__future__"}
+                 | CORE_OPTIONAL.get(module, set()))
     assert bad == [], f"{module} imports {bad}"
 
 

@@ -46,7 +46,7 @@ class BeamSet:
 
 
 
-def with_splice_holes(plates: list[BeamPlate], splice_params) -> list[BeamPlate]:
+def with_splice_holes(plates: list[BeamPlate], splice_params, ups=None) -> list[BeamPlate]:
     """The plates with the bolt holes of every bolted splice (:func:`fabrication.glazing.splices.make_splices`) cut
     in the pieces it joins: each cover plate hole, mapped from the first piece's frame through 3D into each
     piece's own frame, in the piece whose outline holds it (the holes on its side of the cut), with the cover
@@ -59,7 +59,7 @@ def with_splice_holes(plates: list[BeamPlate], splice_params) -> list[BeamPlate]
 
     extra: dict[str, list[np.ndarray]] = {}
     by_id = {p.part_id: p for p in plates}
-    for s in make_splices(plates, splice_params):
+    for s in make_splices(plates, splice_params, ups):
         at3 = s.frame.to3d(s.holes)
         for pid in s.pieces:
             piece = by_id[pid]
@@ -73,7 +73,7 @@ def with_splice_holes(plates: list[BeamPlate], splice_params) -> list[BeamPlate]
 
 def build_beams(support: SupportStructure, params: BeamParams | None = None, strict: bool = True,
                 max_height: float = 0.0, splice_clearances: SpliceClearances = (("bolted", 0.0),),
-                splice_params=None) -> BeamSet:
+                splice_params=None, splice_ups=None) -> BeamSet:
     """Planar beam plates with joints for a mesh with a support structure.
 
     Parameters
@@ -90,6 +90,8 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         kind its cuts fit with (``meta["splice"]`` of its pieces)
     splice_params : the ``[splices]`` table; given, the bolt holes of the bolted splices are cut in the pieces
         they join (:func:`with_splice_holes`)
+    splice_ups : the glazing strips' ups by mesh edge (:data:`fabrication.glazing.splices.EdgeUps`), which lower
+        the cover plates under leaning strips (``None``: no glazing strips)
 
     Returns
     -------
@@ -108,7 +110,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     defects += jdef
     final = [apply_joints(p, trims.get(p.part_id, []), slots.get(p.part_id, []), params, defects) for p in plates]
     if splice_params is not None:
-        final = with_splice_holes(final, splice_params)
+        final = with_splice_holes(final, splice_params, splice_ups)
     for p in final:
         defects += plate_checks(p, params)
     types = type_ids(final)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
 from .params import GlazingParams
 from .slope import warn_flat_panes
-from .splices import Splice, SpliceParams, make_splices, welded_splices
+from .splices import Splice, SpliceParams, edge_ups, make_splices, welded_splices
 from .strips import Strip, make_strips
 from .welds import Weld, butt_welds, corner_welds, halflap_welds
 
@@ -54,7 +54,9 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
 
     from ..beams.plates import beam_ids
 
-    splices = make_splices(beams.plates, splice_params)
+    normals = edge_normals(panels, support.vertices, support.edges)
+    ups = edge_ups(support.edges, normals) if params.support != "none" else None
+    splices = make_splices(beams.plates, splice_params, ups)
     bad = [s for s in splices if not s.fits]
     if strict and bad:
         names = ", ".join(f"{s.pieces[0]}/{s.pieces[1]}" for s in bad[:8])
@@ -67,7 +69,6 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
              + welded_splices(beams.plates))
     if params.support == "none":
         return Glazing(params, splice_params, (), (), tuple(splices), tuple(welds), 0.0)
-    normals = edge_normals(panels, support.vertices, support.edges)
     strips = make_strips(support, beam_ids(support), params, normals)
     short = [s for s in strips if s.length <= 0]
     if short:

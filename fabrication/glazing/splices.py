@@ -27,6 +27,7 @@ thickness ``t_c`` with ``2 t_c ≥ t`` carry at least the beam plate's section.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -167,10 +168,66 @@ def welded_splices(plates) -> list[Weld]:
     return out
 
 
-def make_splices(plates, params: SpliceParams) -> list[Splice]:
+EdgeUps = Mapping[tuple[int, int], np.ndarray]
+"""The up of the glazing strip on each mesh edge ``(i, j)``, ``i < j``: the sum of the outside normals of the panes
+on it (:func:`fabrication.glazing.bite.edge_normals`)."""
+
+
+def edge_ups(edges: np.ndarray, normals: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
+    """:data:`EdgeUps` from the ``(E, 2)`` mesh edges and the ``(E, 3)`` sums of the pane normals on them (edges
+    without panes left out)."""
+    return {(min(int(i), int(j)), max(int(i), int(j))): n for (i, j), n in zip(edges.tolist(), normals)
+            if float(np.linalg.norm(n)) > 1e-9}
+
+
+DROP_SLACK = 0.25
+"""mm a leaning strip's underside may come down into a cover plate's top (the overlap ``ppfab verify`` accepts
+between parts in their final places, :data:`fabrication.verify.erection.TOLERANCE`): the drop under a leaning
+strip is rounded up to whole millimetres from this much less."""
+
+
+def strip_drop(thickness: float, cover: float, lean: float) -> float:
+    """How far (whole mm) a cover plate is lowered under a glazing strip leaning by ``lean`` (radians) off a beam
+    plate ``thickness`` thick: its underside comes ``(t/2 + t_c)·tan λ`` down over the cover plate's outer face
+    (``cover`` = ``t_c``); rounded up from :data:`DROP_SLACK` less to whole millimetres, so that the plates of
+    one cut size stay one type (their heights are whole millimetres apart) and none stands more than the slack
+    in the strip (0 for a drop under the slack)."""
+    exact = (0.5 * thickness + cover) * float(np.tan(lean))
+    return float(np.ceil(exact - DROP_SLACK - 1e-9)) if exact > DROP_SLACK else 0.0
+
+
+def strip_lean(a, b, ups: EdgeUps | None) -> float:
+    """The largest lean (radians) off the beam plate of the glazing strips over the cut between pieces ``a`` and
+    ``b``: the strips of the beam's edges with a node in each piece (their tops taken from the pieces), their up
+    made square to the edge as the strip's frame makes it (:mod:`fabrication.glazing.strips`), against the plate's
+    normal: ``sin λ = |up · n|``."""
+    if not ups:
+        return 0.0
+    n = np.asarray(a.plane[:3], dtype=float)
+    n = n / np.linalg.norm(n)
+    lean = 0.0
+    for i in (int(k) for k in a.nodes):
+        for j in (int(k) for k in b.nodes):
+            up = ups.get((min(i, j), max(i, j))) if i != j else None
+            if up is None:
+                continue
+            ex = b.frame.to3d(b.node_top(j)[None])[0] - a.frame.to3d(a.node_top(i)[None])[0]
+            ex = ex / np.linalg.norm(ex)
+            up = up - (up @ ex) * ex
+            lean = max(lean, float(np.arcsin(min(1.0, abs(float(up @ n)) / float(np.linalg.norm(up))))))
+    return lean
+
+
+def make_splices(plates, params: SpliceParams, ups: EdgeUps | None = None) -> list[Splice]:
     """The bolted splice at every cut between consecutive pieces of a beam split for bolted splices (closed
     beams: also last → first); ``fits`` says whether the cover plate lies on the two pieces' outlines (clear of
-    slots and ends)."""
+    slots and ends).
+
+    The cover plate's top edge lies ``top_clear`` under the beam's top edge over its own length, lowered further
+    by :func:`strip_drop` — ``(t/2 + t_c)·tan λ`` rounded up to whole millimetres — where the glazing strip over
+    the cut leans by ``λ`` off the plate (``ups``, from the panes: :func:`strip_lean`): the strip's underside
+    comes down that far over the cover plate's outer face on the side it leans to (conical_pp_rotational's
+    strips stood 6.4 mm in cover plates 15 mm under a top edge with strips leaning 21°)."""
     from shapely.geometry import LineString, Point, Polygon
     from shapely.ops import unary_union
 
@@ -220,15 +277,16 @@ def make_splices(plates, params: SpliceParams) -> list[Splice]:
         # the top clearance is kept over the plate's own top edge (a slot or notch beyond its end does not lower
         # it: a crossing slot a plate length from the cut lowered pp_cauchy's plates by 7 mm when the whole
         # depth's reach was sampled); the edge's stretch moves with its depth on a skew cut, so settle it
-        top = under_top_edge(params.top_clear)[0]
+        under_strip = strip_drop(a.thickness, params.plate_thickness, strip_lean(a, b, ups))
+        top = under_top_edge(params.top_clear + under_strip)[0]
         for _ in range(4):
-            again = under_top_edge(top + params.top_clear)[0]
+            again = under_top_edge(top + params.top_clear + under_strip)[0]
             if not np.isfinite(again) or again <= top + 1e-9:
                 break
             top = again
         bottom = under_top_edge(0.0, depth)[1]
         h = bottom - top
-        lo, hi = top + params.top_clear, bottom - params.bottom_clear
+        lo, hi = top + params.top_clear + under_strip, bottom - params.bottom_clear
         if hi - lo < 2 * params.e2:
             raise DesignError("splices", f"{beam}: a cover plate needs {2 * params.e2 + params.top_clear + params.bottom_clear:g} mm "
                                          f"of beam depth at the cut, the beam has {h:.0f} mm; lower splices.e2 "

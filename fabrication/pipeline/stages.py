@@ -58,7 +58,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         quality = stage_quality(geometry, p)
         support = stage_support(design, geometry, p)
         panels = stage_panels(design, geometry, p, quality)
-        beams = stage_beams(design, support, p)
+        beams = stage_beams(design, support, p, panels)
         glazing = stage_glazing(design, support, panels, beams, p)
         beams = notched_beams(beams, glazing)        # top edges cut down under the strips of other beams
         beams = bevelled_beams(beams, glazing)       # top edges raised and bevelled under leaning strips
@@ -198,11 +198,24 @@ def stage_panels(design: Design, geometry: Geometry, progress: Progress, quality
     return PanelSet(tuple(panels), types)
 
 
-def stage_beams(design: Design, support: SupportStructure, progress: Progress) -> BeamSet:
+def strip_ups(design: Design, support: SupportStructure, panels: PanelSet):
+    """The glazing strips' ups by mesh edge (:data:`fabrication.glazing.splices.EdgeUps`), ``None`` without strips
+    (``[glazing] support = "none"``)."""
+    from ..glazing.bite import edge_normals
+    from ..glazing.splices import edge_ups
+
+    if design.glazing.support == "none":
+        return None
+    return edge_ups(support.edges, edge_normals(panels.panels, support.vertices, support.edges))
+
+
+def stage_beams(design: Design, support: SupportStructure, progress: Progress,
+                panels: PanelSet | None = None) -> BeamSet:
     """Planar beam plates with joints; a degenerate plate stops the build naming its part id.  Cuts of split
     beams stay clear of the joints by what their splice needs (``[splices] kind``,
     :meth:`~fabrication.glazing.splices.SpliceParams.clearances`): half a cover plate plus half the depth for a
-    bolted splice, ``weld_clear`` for a welded one."""
+    bolted splice, ``weld_clear`` for a welded one; with the ``panels``, the bolted splices' cover plates (and so
+    their holes in the pieces) stand clear of the glazing strips leaning over them (:func:`strip_ups`)."""
     from ..beams import build_beams
     from ..beams.plates import beam_ids
     from .structure_gate import honour_structure, structure_change
@@ -223,7 +236,8 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress) -
                                               "set beams.max_length to at most the usable length")
     usable_width = min(sheet_len[2] - sheet_len[0], sheet_len[3] - sheet_len[1])
     beams = build_beams(support, params, strict=True, max_height=usable_width,
-                        splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices)
+                        splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices,
+                        splice_ups=strip_ups(design, support, panels) if panels is not None else None)
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
     return beams

@@ -15,7 +15,10 @@ Every cover plate solid is where the joined pieces put it (:func:`check_plate_pl
 are their cutting outlines (DXF) mapped back through placement and frame into the first piece's frame, the cut
 is the edge the two share (top point ``c``, down the cut ``s``), the top edge ``u`` the first piece's edge
 into ``c``; the plate lies flat on a face of the beam plate (``t/2 ≤ |z| ≤ t/2 + t_c``, one plate on each
-face), centred on the cut (its corners' mean on the cut line) and ``splices.top_clear`` under the top edge.
+face), centred on the cut (its corners' mean on the cut line) and ``splices.top_clear`` under the top edge,
+plus ``(t/2 + t_c)·tan λ`` rounded up to whole millimetres (:func:`fabrication.glazing.splices.strip_drop`)
+where the glazing strips over the cut lean by ``λ`` off the plate (bevels.csv; its three decimals of a degree
+are allowed for at a rounding boundary).
 The check runs after the dxf check (order 56), whose outlines it reads.
 
 Every per-type cover plate DXF (``splices/<type>.dxf``) holds one CUT outline whose XDATA names its type (the
@@ -29,10 +32,15 @@ import ast
 
 import numpy as np
 
+from ..glazing.splices import strip_drop
 from . import Verification, check, read_csv
 from ._shapes import boundary_distance, face_outline, frame_of, number, solid_points, to_frame
 
 PLACE_TOL = 0.01
+
+LEAN_STEP = float(np.radians(0.0005))
+"""Half the last place of bevels.csv's ``lean_deg`` (three decimals), radians: the lean read back may be this far
+from the build's, which moves the cover plate's whole-millimetre drop only at a rounding boundary."""
 """How far (mm) a cover plate may be from where the pieces put it (the build measures its clearances from the
 pieces' outlines grown by 1 µm)."""
 
@@ -205,36 +213,43 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     down = np.array([u[1], -u[0]])
     down = down if down @ s > 0 else -down
     clear = float(((q - c) @ down).min())
-    want = float(fab.get("splices", {}).get("top_clear", 0.0)) + _raise_at_cut(v, first, second)
-    if abs(clear - want) > PLACE_TOL:
+    raised, lean = _raise_at_cut(v, first, second)
+    base = float(fab.get("splices", {}).get("top_clear", 0.0)) + raised
+    drops = {strip_drop(t, tc, max(0.0, lean + k * LEAN_STEP)) for k in (-1, 0, 1)}     # bevels.csv's rounding
+    want = base + strip_drop(t, tc, lean)
+    if all(abs(clear - (base + d)) > PLACE_TOL for d in drops):
         v.error(rel, pid, f"cover plate is {clear:.4g} mm under the top edge of {first}, splices.top_clear is "
                           f"{want:g} mm")
 
 
-def _raise_at_cut(v: Verification, first: str, second: str) -> float:
-    """How far (mm) the cutting outline's top edge stands above the plate's at the cut between two pieces: the
-    ``delta_mm`` bevels.csv states for the strip over the cut (its ``edge_nodes`` one node of either piece) where
-    it bevels the top edge (:mod:`fabrication.beams.bevel_cut`), else 0."""
+def _raise_at_cut(v: Verification, first: str, second: str) -> tuple[float, float]:
+    """``(Δ, λ)`` at the cut between two pieces, from bevels.csv for the strips over the cut (their
+    ``edge_nodes`` one node of either piece): how far (mm) the cutting outline's top edge stands above the plate's
+    (the ``delta_mm`` of a strip that bevels the piece's top edge, :mod:`fabrication.beams.bevel_cut`, else 0) and
+    the largest lean (radians, ``lean_deg``) of those strips off the plate, whose underside comes down
+    ``(t/2 + t_c)·tan λ`` over a cover plate's outer face."""
     rel = v.data.get("manifest", {}).get("files", {}).get("bevels_csv")
     if rel is None or not (v.folder / rel).is_file():
-        return 0.0
+        return 0.0, 0.0
     parts = {r["part_id"]: r for r in v.data.get("parts", [])}
     try:
         a, b = ({int(k) for k in ast.literal_eval(parts[p].get("nodes", "[]"))} for p in (first, second))
     except (KeyError, ValueError, SyntaxError, TypeError):
-        return 0.0
-    if not number(parts[first].get("bevels"), 0.0):
-        return 0.0                                    # the piece is cut with a square top edge
+        return 0.0, 0.0
     over = set()
     for r in parts.values():
         if r.get("kind") == "strip":
             ends = {int(k) for k in r.get("edge_nodes", "").split(";") if k.strip().lstrip("-").isdigit()}
             if len(ends) == 2 and ends & a and ends & b:
                 over.add(r["part_id"])
+    bevelled = bool(number(parts[first].get("bevels"), 0.0))     # else the piece keeps a square top edge
+    raised, lean = 0.0, 0.0
     for row in read_csv(v.folder / rel):
-        if row.get("strip") in over and row.get("bevel", "square") != "square":
-            return number(row.get("delta_mm"), 0.0)
-    return 0.0
+        if row.get("strip") in over:
+            lean = max(lean, float(np.radians(number(row.get("lean_deg"), 0.0))))
+            if bevelled and row.get("bevel", "square") != "square" and not raised:
+                raised = number(row.get("delta_mm"), 0.0)
+    return raised, lean
 
 
 def _sides(ring: np.ndarray) -> np.ndarray:
