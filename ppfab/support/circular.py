@@ -69,21 +69,30 @@ def vertex_offset(mesh: QuadMesh | QuadGrid) -> VertexOffset:
     """Propagate unit offset vectors by the edge reflections (module docstring) and measure their closure."""
     qm = as_quadmesh(mesh)
     n = len(qm.vertices)
-    edges, eh = _edge_frames(qm)
+    edges, _ = _edge_frames(qm)                                 # (refuses a zero-length edge)
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n)).tocsr()
     parts, label = connected_components(graph, directed=False)
     if parts > 1:
         raise GeometryError(f"the mesh falls into {parts} separate pieces; the vertex offset of a circular mesh "
                             "is propagated over one connected mesh (build the pieces one by one)",
                             element="mesh", value=float(parts))
-    order, pred = breadth_first_order(graph, 0, directed=False, return_predecessors=True)
-    edge_of = {(int(a), int(b)): k for k, (a, b) in enumerate(edges.tolist())}
-    R = np.zeros((n, 3, 3))
-    R[order[0]] = np.eye(3)
-    for i in order[1:]:
-        p = int(pred[i])
-        e = eh[edge_of[(min(p, int(i)), max(p, int(i)))]]
-        R[i] = R[p] - 2.0 * np.outer(e, e @ R[p])               # H_e R_p
+    _, pred = breadth_first_order(graph, 0, directed=False, return_predecessors=True)
+    depth = np.zeros(n, dtype=np.int64)                         # tree depth, by pointer jumping
+    up = pred.copy()
+    while np.any(up >= 0):
+        depth += up >= 0
+        up = np.where(up >= 0, pred[np.maximum(up, 0)], -1)
+    child = np.flatnonzero(pred >= 0)
+    par = pred[child]
+    e = qm.vertices[child] - qm.vertices[par]                   # the tree edge from parent to child
+    e = e / np.linalg.norm(e, axis=1, keepdims=True)
+    step = np.zeros((n, 3))
+    step[child] = e
+    R = np.repeat(np.eye(3)[None], n, axis=0)
+    for level in range(1, int(depth.max(initial=0)) + 1):      # one vectorised step per level of the tree
+        i = np.flatnonzero(depth == level)
+        p, u = pred[i], step[i]
+        R[i] = R[p] - 2.0 * u[:, :, None] * np.einsum("kj,kjl->kl", u, R[p])[:, None, :]   # H_e R_p
     normals = vertex_normals(qm)
     seed = np.einsum("nji,nj->i", R, normals)                   # Σ R_iᵀ n_i
     length = float(np.linalg.norm(seed))
