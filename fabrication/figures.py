@@ -109,9 +109,9 @@ def save(fig: Figure, path: str | Path | None = None, fmt: str = "png") -> bytes
 
 def render_mesh_png(mesh, path: str | Path, title: str = "", **kw) -> None:
     """Render a :class:`~ppfab.mesh.QuadGrid` or :class:`~ppfab.mesh.QuadMesh` to a PNG file."""
-    from ppfab.mesh import QuadGrid
+    from ppfab.mesh import as_quadmesh
 
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     save(mesh_figure(qm.face_corners, title, **kw), path)
 
 

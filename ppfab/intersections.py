@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .mesh import QuadGrid, QuadMesh
+from .mesh import QuadGrid, QuadMesh, as_quadmesh
 
 _CHUNK = 100_000
 
@@ -37,7 +37,7 @@ def self_intersections(mesh: QuadMesh | QuadGrid, rtol: float = 1e-9) -> np.ndar
     mesh : any quad mesh, ``vertices (N, 3)``, ``faces (F, 4)``
     rtol : tolerance relative to the bounding-box diagonal (faces closer than this meet)
     """
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     v = np.asarray(qm.vertices, dtype=float)
     f = np.asarray(qm.faces, dtype=np.int64)
     if len(f) < 2:

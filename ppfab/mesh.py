@@ -308,3 +308,14 @@ class QuadMesh:
         (triangles ``(0, 1, 2)`` of all faces, then ``(0, 2, 3)``), for display and export."""
         f = self.faces
         return np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]], axis=0)
+
+
+def as_quadmesh(mesh: QuadMesh | QuadGrid) -> QuadMesh:
+    """A :class:`QuadMesh` view of either mesh type (a grid becomes its row-major quad mesh, keeping the grid).
+
+    Raises :class:`GeometryError` for anything else."""
+    if isinstance(mesh, QuadGrid):
+        return mesh.to_quadmesh()
+    if not isinstance(mesh, QuadMesh):
+        raise GeometryError(f"expected a QuadMesh or QuadGrid, got {type(mesh).__name__}")
+    return mesh

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ppfab import planes as pl
-from .mesh import QuadGrid, QuadMesh
+from .mesh import QuadGrid, QuadMesh, as_quadmesh
 from .topology import Polyline
 
 
@@ -201,7 +201,7 @@ def dihedral_angles(face_normals: np.ndarray, edge_faces: np.ndarray) -> np.ndar
 def mesh_dihedral_angles(mesh: QuadMesh | QuadGrid) -> np.ndarray:
     """Dihedral angles ``(E,)`` in degrees at the edges of ``mesh.edges`` (NaN on the boundary), from the
     diagonal normals ``(c2 − c0) × (c3 − c1)`` of the faces."""
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     return dihedral_angles(qm.face_planes[:, :3], qm.topology.edge_faces)
 
 
@@ -263,7 +263,7 @@ def conjugacy_defect(mesh: QuadMesh | QuadGrid) -> float:
     principal directions (a geodesic or S-net on a doubly curved surface), where planar faces with
     planar polylines need new polylines along conjugate curves.  0 for a mesh without curvature.
     """
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     c = qm.face_corners
     if not len(c):
         return 0.0
@@ -396,7 +396,7 @@ def family_planarity(mesh: QuadMesh, family: int) -> tuple[np.ndarray, int]:
 def quality(mesh: QuadMesh | QuadGrid, degenerate_tol: float = 1e-9) -> Quality:
     """All metrics of a mesh; a :class:`QuadGrid` is measured with its grid structure."""
     grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     corners = qm.face_corners
     df = face_planarity(corners)
     dev = face_deviation(corners)

@@ -16,7 +16,7 @@ import numpy as np
 
 from ppfab.errors import FabricationError
 from ppfab.finding import Finding
-from ppfab.mesh import QuadGrid, QuadMesh
+from ppfab.mesh import QuadGrid, QuadMesh, as_quadmesh
 from ppfab.metrics import mesh_dihedral_angles
 
 from .. import contract
@@ -46,7 +46,7 @@ def check_creases(mesh: QuadMesh | QuadGrid, limit_deg: float, part_ids: Sequenc
     ``part_ids[f]``: the panel id of face ``f`` of the mesh's face order (the output OBJ), used in the
     message; omitted, faces are named by index.
     """
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     angles = mesh_dihedral_angles(qm)
     with np.errstate(invalid="ignore"):
         bad = np.flatnonzero(np.isfinite(angles) & (angles > limit_deg))

@@ -19,7 +19,7 @@ import numpy as np
 
 from ppfab.errors import DesignError, GeometryError, NonPlanarPanelError
 from ppfab.geometry import Geometry, build_geometry
-from ppfab.mesh import QuadGrid, QuadMesh
+from ppfab.mesh import QuadGrid, QuadMesh, as_quadmesh
 from ppfab.metrics import Quality
 from ppfab.support.structure import SupportStructure
 
@@ -292,7 +292,7 @@ def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting:
     """Totals for the manifest, the report and ``--json``; the steel take-off adds the glazing strips and
     splice cover plates (their ``parts.csv`` masses) to the beam plates, and the weld length sums ``welds.csv``."""
     mesh = geometry.mesh
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     assert isinstance(qm, QuadMesh)
     v = qm.vertices
     bt = beams.report.totals()

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ppfab import __version__
-from ppfab.mesh import QuadGrid
+from ppfab.mesh import QuadGrid, as_quadmesh
 from ppfab.schema import as_plain
 
 from . import Files, writer
@@ -65,7 +65,7 @@ def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
                                   "planar_families": list(build.geometry.planar_families)}
     if grid is not None:
         mesh_entry.update(rows=int(grid.shape[0]), cols=int(grid.shape[1]), closed=bool(grid.closed))
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     mesh_entry.update(vertices=int(len(qm.vertices)), faces=int(len(qm.faces)))
     design = build.design
     geometry = as_plain(design.geometry)

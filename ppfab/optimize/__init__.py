@@ -37,7 +37,7 @@ import numpy as np
 
 from ppfab import planes as pl
 from ..errors import DesignError, GeometryError
-from ..mesh import QuadGrid, QuadMesh
+from ..mesh import QuadGrid, QuadMesh, as_quadmesh
 from ..metrics import (CreaseReport, Quality, conjugacy_defect, crease_report, dihedral_angles, face_planarity,
                        quality)
 from ..schema import as_plain, parse_params
@@ -281,7 +281,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     ``reference`` : ``(vertices (R, 3), faces (G, 3 or 4))`` in mesh units — the surface to stay close to (a
     designer's surface the mesh was made from); the input mesh itself when omitted."""
     p = _params(params, kw)
-    qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+    qm = as_quadmesh(mesh)
     if not isinstance(qm, QuadMesh):
         raise GeometryError(f"optimize needs a QuadMesh or QuadGrid, got {type(mesh).__name__}")
     v = np.asarray(qm.vertices, dtype=float)

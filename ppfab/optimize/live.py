@@ -36,7 +36,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import DesignError
-from ..mesh import QuadGrid, QuadMesh
+from ..mesh import QuadGrid, QuadMesh, as_quadmesh
 from .params import OptimizeParams
 from .solver import LevenbergMarquardt
 
@@ -86,7 +86,7 @@ class LiveRelaxation:
         from . import _params, build_problem, solver_control
 
         p = _params(params, {})
-        qm = mesh.to_quadmesh() if isinstance(mesh, QuadGrid) else mesh
+        qm = as_quadmesh(mesh)
         v_in = np.asarray(qm.vertices, dtype=float)
         held = {int(a[0]): [float(x) for x in a[1:4]] for a in p.anchors}
         for a in anchors:

@@ -39,7 +39,7 @@ import numpy as np
 from ppfab import planes as pl
 from ppfab.errors import GeometryError
 from ppfab.topology import FAMILY_NAMES
-from ppfab.mesh import QuadGrid, QuadMesh
+from ppfab.mesh import QuadGrid, QuadMesh, as_quadmesh  # noqa: F401  (as_quadmesh: imported from here by the methods)
 from ppfab.topology import Polyline
 
 
@@ -158,14 +158,6 @@ class SupportStructure:
 
 
 # -- basic measures ---------------------------------------------------------------------------------
-
-def as_quadmesh(mesh: QuadMesh | QuadGrid) -> QuadMesh:
-    """A :class:`QuadMesh` view (a grid becomes its row-major quad mesh, keeping the grid)."""
-    if isinstance(mesh, QuadGrid):
-        return mesh.to_quadmesh()
-    if not isinstance(mesh, QuadMesh):
-        raise GeometryError(f"expected a QuadMesh or QuadGrid, got {type(mesh).__name__}")
-    return mesh
 
 
 def vertex_normals(mesh: QuadMesh) -> np.ndarray:

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DesignError
-from ..mesh import QuadGrid
+from ..mesh import as_quadmesh
 from ..metrics import conjugacy_defect
 from .curvature import quad_twist
 from .heightfield import HeightField, fit_height_field
@@ -156,7 +156,7 @@ def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray
 
 def _corners(net: SectionsNet) -> np.ndarray:
     """``(F, 4, 3)`` world corners of the net's faces."""
-    qm = net.mesh.to_quadmesh() if isinstance(net.mesh, QuadGrid) else net.mesh
+    qm = as_quadmesh(net.mesh)
     return np.asarray(qm.vertices)[np.asarray(qm.faces)]
 
 
