@@ -334,6 +334,14 @@ class ConvexSection:
         return np.interp(phi, self.phi_table[order], self.t_table[order])
 
 
+def weak_curvature(curve: PlanarCurve, t: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """``(k,)`` bool at the parameters ``t`` (points ``pts``): the curvature vanishes there (relative to the
+    curve's size) or has the sign opposite to most of the curve — an inflection or a straight piece."""
+    kappa = curve.curvature(t)
+    ks = np.sign(np.median(kappa))
+    return ks * kappa <= 1e-9 / _size(pts)
+
+
 def _convex_samples(curve: PlanarCurve, samples: int) -> tuple[np.ndarray, np.ndarray]:
     """``t`` at ``samples`` points of ``[t0, t1]`` and ``c(t) (samples, 2)`` of a curve checked to be strictly
     convex there (kept on the curve: a construction asks for support values of one curve more than once)."""
@@ -341,10 +349,8 @@ def _convex_samples(curve: PlanarCurve, samples: int) -> tuple[np.ndarray, np.nd
     if samples not in cache:
         t = np.linspace(curve.t0, curve.t1, samples)
         pts = curve(t)
-        kappa = curve.curvature(t)
-        ks = np.sign(np.median(kappa))
-        weak = ks * kappa <= 1e-9 / _size(pts)
-        if ks == 0 or np.any(weak):
+        weak = weak_curvature(curve, t, pts)
+        if np.any(weak):
             k = int(np.argmax(weak))
             raise DesignError(curve.name, f"is not strictly convex: its curvature changes sign or vanishes near "
                                           f"({pts[k, 0]:.6g}, {pts[k, 1]:.6g}); the profile must be convex "

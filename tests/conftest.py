@@ -23,6 +23,18 @@ def shared_file(name: str) -> Path:
 FULL = bool(os.environ.get("PPFAB_FULL"))
 
 
+def write_patch_obj(vertices: np.ndarray, ids: np.ndarray, path: Path) -> Path:
+    """Write the patch of a recovered grid as an OBJ file: the ``vertices (N, 3)`` at the grid positions ``ids
+    (rows, cols)`` (a slice of ``QuadMesh.grid_ids``), row-major, one quad per grid cell; returns ``path``."""
+    rows, cols = ids.shape
+    v = np.asarray(vertices)[ids.reshape(-1)]
+    text = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in v]
+    text += [f"f {a} {a + cols} {a + cols + 1} {a + 1}" for i in range(rows - 1) for j in range(cols - 1)
+             for a in [i * cols + j + 1]]
+    path.write_text("\n".join(text) + "\n")
+    return path
+
+
 def wait_for(cond, timeout: float = 30.0, what: str = "condition", poll: float = 0.1):
     """The first truthy value of ``cond()``, polled every ``poll`` s; an AssertionError naming ``what`` after
     ``timeout`` s (the studio's tests wait on a server thread or a browser)."""

@@ -16,7 +16,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import shared_file
+from conftest import shared_file, write_patch_obj
 from ppfab.errors import GeometryError
 from ppfab.io import load_mesh
 from ppfab.mesh import QuadGrid
@@ -200,11 +200,7 @@ def test_a_circular_p_patch_of_a_real_mesh_builds_verifies_and_stays_circular_in
     assert mesh.grid_ids is not None
     ids = mesh.grid_ids[12:21, 10:18]
     rows, cols = ids.shape
-    v = mesh.vertices[ids.reshape(-1)]
-    text = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in v]
-    text += [f"f {a} {a + cols} {a + cols + 1} {a + 1}" for i in range(rows - 1) for j in range(cols - 1)
-             for a in [i * cols + j + 1]]
-    (tmp_path / "patch.obj").write_text("\n".join(text) + "\n")
+    write_patch_obj(mesh.vertices, ids, tmp_path / "patch.obj")
     design = (f'[design]\nname = "circular_patch"\n[geometry]\nmesh = "{(tmp_path / "patch.obj").as_posix()}"\n'
               'scale = 1500.0\n[optimize]\nfamilies = "rows"\nkeep_circular = true\ntarget_delta_f = 1e-7\n'
               'target_delta_p = 1e-7\ntarget_circular = 1e-7\n[support]\nmethod = "p"\nfamily = "rows"\n'

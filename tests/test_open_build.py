@@ -29,7 +29,7 @@ from fabrication.readers import BuildReadError
 from fabrication.writers.dxf import read_sheet_dxf
 from ppfab.errors import FabricationError
 
-from conftest import REPO, shared_file, small_vault
+from conftest import REPO, shared_file, small_vault, write_patch_obj
 
 LIGHT = "\n[output]\npanels_step = false\nreport = false\nifc = false\nrhino = false\nglb = false\n"
 """The exchange models and the report are not read back: leaving them out keeps the builds cheap."""
@@ -296,12 +296,8 @@ def test_a_patch_of_a_real_mesh_reads_back_as_the_build(tmp_path):
     mesh = load_mesh(shared_file("DOI__rot4_def1_sparse_rot.obj"))
     assert mesh.grid_ids is not None
     ids = mesh.grid_ids[10:16, 8:13]
-    v = mesh.vertices[ids.reshape(-1)]
     rows, cols = ids.shape
-    text = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in v]
-    text += [f"f {a} {a + cols} {a + cols + 1} {a + 1}" for i in range(rows - 1) for j in range(cols - 1)
-             for a in [i * cols + j + 1]]
-    (tmp_path / "patch.obj").write_text("\n".join(text) + "\n")
+    write_patch_obj(mesh.vertices, ids, tmp_path / "patch.obj")
     design = (f'[design]\nname = "rot_patch"\n[geometry]\nmesh = "{(tmp_path / "patch.obj").as_posix()}"\n'
               'scale = 7000.0\n[support]\nmethod = "pp"\n[beams]\njoint = "halflap"\ndepth = 150.0\n'
               'thickness = 12.0\nfallback = "segmented"\n[panels]\ngap = 16.0\n[nesting]\ntime_budget = 0.5\n[beam_nesting]\n'

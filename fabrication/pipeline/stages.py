@@ -293,7 +293,6 @@ def stage_summary(geometry: Geometry, panels: PanelSet, beams: BeamSet, nesting:
     splice cover plates (their ``parts.csv`` masses) to the beam plates, and the weld length sums ``welds.csv``."""
     mesh = geometry.mesh
     qm = as_quadmesh(mesh)
-    assert isinstance(qm, QuadMesh)
     v = qm.vertices
     bt = beams.report.totals()
     gn, bn = nesting.glass, nesting.plates

@@ -42,7 +42,7 @@ from ..folds import check_folds, orientation_sign
 from ..mesh import QuadGrid
 from ..schema import param
 from ..frame import Frame
-from ..curves import PlanarCurve, support_values
+from ..curves import PlanarCurve, support_values, weak_curvature
 from ppfab.conical.cones import cone_axes
 from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
 from .registry import construction
@@ -254,10 +254,7 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
 def has_inflection(curve: PlanarCurve, samples: int = 4001) -> bool:
     """Whether the curvature of ``curve`` changes sign or vanishes on ``[t0, t1]`` (Remark 4.2)."""
     t = np.linspace(curve.t0, curve.t1, samples)
-    kappa = curve.curvature(t)
-    size = float(np.ptp(curve(t), axis=0).max())
-    ks = np.sign(np.median(kappa))
-    return bool(ks == 0 or np.any(ks * kappa <= 1e-9 / max(size, 1e-300)))
+    return bool(np.any(weak_curvature(curve, t, curve(t))))
 
 
 def _vertices(E: np.ndarray, W: np.ndarray, closed: bool) -> np.ndarray:

@@ -281,9 +281,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
     ``reference`` : ``(vertices (R, 3), faces (G, 3 or 4))`` in mesh units — the surface to stay close to (a
     designer's surface the mesh was made from); the input mesh itself when omitted."""
     p = _params(params, kw)
-    qm = as_quadmesh(mesh)
-    if not isinstance(qm, QuadMesh):
-        raise GeometryError(f"optimize needs a QuadMesh or QuadGrid, got {type(mesh).__name__}")
+    qm = as_quadmesh(mesh)                                 # refuses anything else (GeometryError)
     v = np.asarray(qm.vertices, dtype=float)
     faces = np.asarray(qm.faces, dtype=np.int64)
     lengths = qm.edge_lengths()

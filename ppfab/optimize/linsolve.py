@@ -100,9 +100,10 @@ _LOCAL = threading.local()
 
 
 def _thread_pardiso() -> Any:
-    """This thread's ``pypardiso.PyPardisoSolver(mtype=2)`` (real SPD), made once: making one searches the
-    installation for the MKL library (a recursive glob, about 0.3 s).  One per thread, because PARDISO keeps
-    its factor in the solver's handle (the studio's live relaxation runs beside other solves)."""
+    """This thread's ``pypardiso.PyPardisoSolver(mtype=2)`` (real SPD), made once (making one loads MKL).  One
+    per thread, because PARDISO keeps its factor in the solver's handle (the studio's live relaxation runs beside
+    other solves); a cache whose factor another solve in the thread replaced gets it refactorised by pypardiso,
+    which compares the matrix before it solves."""
     solver = getattr(_LOCAL, "pardiso", None)
     if solver is None:
         from pypardiso import PyPardisoSolver

@@ -27,13 +27,13 @@ from typing import Callable
 
 import numpy as np
 
-from ..metrics import face_planarity, pad_polylines, polyline_planarity
+from ..metrics import circular_residual, face_planarity, pad_polylines, polyline_planarity
 from ..planes import fit_plane
 from ..topology import Polyline
 from .guard import StepGuard
 from .linsolve import DampedSystem, FactorCache
 from .residuals import Residuals
-from .terms import angle_balance, face_angle_balance
+from .terms import angle_balance
 
 
 @dataclass(frozen=True)
@@ -122,7 +122,7 @@ class PlanarityMetrics:
         """Largest circular residual ``|α_0 − α_1 + α_2 − α_3|`` (rad, corner angles) over the circles (0 without)."""
         if not len(self.circles):
             return 0.0
-        return float(np.abs(face_angle_balance(vertices, self.circles)[0]).max())
+        return float(circular_residual(vertices[self.circles]).max())
 
     def nodes_max(self, vertices: np.ndarray) -> float:
         """Largest ``|cos|`` of the angle between the least-squares planes of the row and the column crossing at a
