@@ -8,7 +8,8 @@ import sys
 
 NAME = "remesh"
 HELP = "remesh a surface (.3dm NURBS or a triangle mesh .obj/.off/.stl/.ply) into a quad net (sections: planar " \
-       "rows and their conjugate curves; principal: curvature lines; pp: two families of planar sections), " \
+       "rows and their conjugate curves; principal: curvature lines; conjugate: the conjugate net nearest two guide " \
+       "directions; pp: two families of planar sections), " \
        "written as a quad OBJ"
 ORDER = 6
 
@@ -17,11 +18,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("surface", help="the surface file (.3dm, .obj, .off, .stl, .ply)")
     p.add_argument("-o", "--out", required=True, help="the quad mesh to write (.obj)")
     p.add_argument("--spacing", type=float, default=1500.0, help="target panel size in mm (default 1500)")
-    p.add_argument("--net", default="sections", help="the net kind: sections, principal or pp (default sections)")
+    p.add_argument("--net", default="sections", help="the net kind: sections, principal, conjugate or pp (default sections)")
     p.add_argument("--plane-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
                    help="normal of the section planes (default: vertical planes across the longer plan direction)")
     p.add_argument("--second-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
                    help="pp net: normal of the column planes, horizontal (default: across --plane-normal in plan)")
+    p.add_argument("--guides", type=float, nargs=6, metavar=("X1", "Y1", "Z1", "X2", "Y2", "Z2"), default=None,
+                   help="conjugate net: the directions the rows and the columns should follow (default: the plan's "
+                        "axes)")
     p.add_argument("--units", default=None, help="units of a mesh file: mm, cm, m, in, ft (a .3dm states its own)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="knot spacing of the curvature fit as a fraction of the spacing (default 1.0)")
@@ -49,7 +53,8 @@ def run(args: argparse.Namespace) -> int:
     target = check_output_file(out, inputs=[args.surface], force=args.force)
     spec = parse_params(SurfaceSpec, {k: v for k, v in {
         "path": args.surface, "net": args.net, "spacing": args.spacing, "plane_normal": args.plane_normal,
-        "second_normal": args.second_normal, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
+        "second_normal": args.second_normal,
+        "guides": [args.guides[:3], args.guides[3:]] if args.guides is not None else None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
     surface = read_surface(args.surface, spec.units, spec.object)
     if surface.note:
@@ -58,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
     v = np.asarray(result.net.mesh.vertices).reshape(-1, 3)
     deviation = float(surface.distance(v).max())
     planar = {"rows": "rows are the planar sections", "both": "rows and columns are planar sections",
-              "none": "rows and columns are curvature lines"}[result.net.planar_family]
+              "none": ("rows and columns are curvature lines" if spec.net == "principal" else
+                       "rows and columns are conjugate curves")}[result.net.planar_family]
     header = (f"ppfab remesh: {spec.net} net of {surface.samples.source}, spacing {spec.spacing:g} mm, "
               f"units mm; {planar}")
     write_output(target, lambda tmp: write_obj(result.net.mesh, tmp, header))
@@ -74,7 +80,9 @@ def run(args: argparse.Namespace) -> int:
                                        else "") +
               f"; largest distance to the surface {deviation:.2f} mm; edges {result.panel_size_min:.2f}–"
               f"{result.panel_size_max:.2f} × spacing; twist median {summary['twist_median']:.3f}, max "
-              f"{summary['twist_max']:.3f} (0: conjugate)", file=sys.stderr)
+              f"{summary['twist_max']:.3f} (0: conjugate)" +
+              (f"; directions within {result.guide_deviation_deg:.1f}° of the guides"
+               if result.guide_deviation_deg is not None else ""), file=sys.stderr)
         for u in result.umbilics:
             print(f"ppfab: note: an umbilic near the outline at (x, y) = ({u[0]:.0f}, {u[1]:.0f}) mm: the "
                   "curvature lines turn around it", file=sys.stderr)

@@ -1,4 +1,5 @@
-"""A surface → a quad net on it: :func:`remesh` (``sections``, ``principal`` or ``pp``), with what it measured.
+"""A surface → a quad net on it: :func:`remesh` (``sections``, ``principal``, ``conjugate`` or ``pp``), with what it
+measured.
 
 Examples
 --------
@@ -25,6 +26,7 @@ import numpy as np
 from ..errors import DesignError
 from ..mesh import as_quadmesh
 from ..metrics import conjugacy_defect
+from .conjugate import conjugate_net
 from .curvature import quad_twist
 from .heightfield import HeightField, fit_height_field
 from .plan import PlanFrame, plan_frame
@@ -62,6 +64,8 @@ class RemeshResult:
         surface's second fundamental form: 0 for a conjugate net (how far a PP optimisation must move it)
     umbilics : (U, 3) umbilics found near the outline of a principal net (world, mm)
     warp : (F,) per kept face the normal part of its mixed difference ``c0 − c1 + c2 − c3``, mm (0: planar)
+    guide_deviation_deg : (conjugate net) the largest plan angle of a net direction from its guide inside the
+        outline; ``None`` for the other nets
     """
 
     net: SectionsNet
@@ -77,6 +81,7 @@ class RemeshResult:
     twist: np.ndarray = field(default_factory=lambda: np.zeros(0))
     umbilics: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     warp: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    guide_deviation_deg: float | None = None
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -93,6 +98,7 @@ class RemeshResult:
                 "twist_max": float(self.twist.max()) if len(self.twist) else 0.0,
                 "umbilics_mm": np.round(self.umbilics, 1).tolist(),
                 "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0,
+                "guide_deviation_deg": self.guide_deviation_deg,
                 "conjugacy_defect": conjugacy_defect(n.mesh)}
 
 
@@ -104,8 +110,8 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     GeometryError : the surface is not a height field over the plan of the sections, or the net degenerates
         (the message gives the place in mm)
     DesignError : a net kind that is not built
-    GeometryError : (principal) an umbilic inside the outline; (pp) the two plane families far from
-        conjugate
+    GeometryError : (principal) an umbilic inside the outline; (conjugate) the pair nearest the guides
+        closing up; (pp) the two plane families far from conjugate
     """
     t0 = time.process_time()
     if spec.net not in NETS:
@@ -115,9 +121,11 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     hf = fit_height_field(local, spec.spacing / CELL_PER_SPACING, spec.smoothing * spec.spacing)
     fit_dev = float(np.max(np.abs(hf.f(local[:, 0], local[:, 1]) - local[:, 2])))
     loops = [frame.to_local(b)[:, :2] for b in samples.boundary]
-    seeding, twist, found = "uniform", None, np.zeros((0, 3))
+    seeding, twist, found, off = "uniform", None, np.zeros((0, 3)), None
     if spec.net == "principal":
         net, twist, found, seeding = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
+    elif spec.net == "conjugate":
+        net, twist, seeding, off = conjugate_net(hf, frame, loops, spec.spacing, spec.min_face, spec.guides)
     elif spec.net == "pp":
         net, twist, _ = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal, spec.max_warp)
     else:
@@ -127,7 +135,7 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     planarity = planarity_mm(net)
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
-                        time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)))
+                        time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)), off)
 
 
 def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray],

@@ -16,8 +16,8 @@ from pathlib import Path
 from ..errors import DesignError
 from ..schema import param
 
-NETS = ("sections", "principal", "pp")
-"""The net kinds built (a general ``conjugate`` net is not)."""
+NETS = ("sections", "principal", "conjugate", "pp")
+"""The net kinds built."""
 
 UNITS = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 """Length units a mesh file may be declared in, and their size in millimetres."""
@@ -32,8 +32,9 @@ class SurfaceSpec:
     net: str = param("sections", doc="the net: sections (planar sections by parallel planes and their "
                                      "conjugate curves; the sections are the rows, planar before optimising), "
                                      "principal (curvature lines: conjugate and orthogonal; refused at an "
-                                     "umbilic) or pp (two families of planar sections, both planar before "
-                                     "optimising; refused when far from conjugate)",
+                                     "umbilic), conjugate (the conjugate net nearest two guide directions, "
+                                     "guides; also through umbilics) or pp (two families of planar sections, "
+                                     "both planar before optimising; refused when far from conjugate)",
                      choices=NETS)
     spacing: float = param(1500.0, doc="target panel size, mm (arc length along both families)",
                            exclusive_min=0.0)
@@ -42,6 +43,10 @@ class SurfaceSpec:
                                              length=3)
     second_normal: list[float] | None = param(None, doc="pp net: normal of the column planes, horizontal "
                                                         "(default: across plane_normal in plan)", length=3)
+    guides: list[list[float]] | None = param(None, doc="conjugate net: two directions [x, y, z] the rows and "
+                                                        "the columns should follow, projected on the plan "
+                                                        "(default: the plan's axes, x the longer plan "
+                                                        "direction)", length=2)
     max_warp: float = param(60.0, doc="pp net: largest warp of a quad before optimising, mm (the normal part "
                                       "of c0 - c1 + c2 - c3: about how far planar panels move off the surface); "
                                       "a net warped more is refused", exclusive_min=0.0)

@@ -1,0 +1,245 @@
+"""The ``conjugate`` net: the conjugate net of a height field nearest two guide directions.
+
+Two tangent directions ``a``, ``b`` are conjugate when ``II(a, b) = 0`` (§3.1 of the paper: the polylines of a
+mesh with planar quads discretise a conjugate net).  In plan coordinates of ``z = f(x, y)`` the second form is
+``II = ∇²f / sqrt(1 + |∇f|²)`` (:mod:`.curvature`), so the direction conjugate to ``u`` is the plan direction
+perpendicular to ``II u``:
+
+    w(u) = J II u,   J = [[0, −1], [1, 0]]   (the plan rotation by 90°),
+
+and every conjugate pair at a point is ``(u(θ), w(u(θ)))`` for one angle ``θ ∈ [0, π)``.  At each point the pair
+nearest the guides ``g1``, ``g2`` (unit plan directions; by default the plan frame's axes) minimises
+
+    E(θ) = sin²∠(u(θ), g1) + sin²∠(w(θ), g2) + OPEN · cos²∠(u, w) + TIE · max(0, −(u·g1)(u·g2))
+
+(plan angles of lines: the sign of a direction is free; :data:`OPEN` prefers the more open of pairs about as
+near the guides, :data:`TIE` takes mirror-image pairs the same way round everywhere).  Each pair is reached once with family 1 along
+``u(θ)`` and once with family 2 along it (so that a ruling of a parabolic part — ``II u = 0``, every direction
+conjugate to it — can be either family); ``E`` is sampled every ``π / SAMPLES`` and refined around the best
+sample, and where the whole second form vanishes (a flat part: every pair is conjugate) the guides themselves
+are the pair.  The field is
+pointwise: it is as smooth as the fitted second form, whose spline is already smoothed over the panel size.
+
+Where the chosen pair closes to less than :data:`MIN_PAIR_ANGLE_DEG` (near an asymptotic direction of a saddle
+part, where a direction is conjugate to itself) the quads would degenerate: :func:`conjugate_net` refuses with
+the place in mm.  The curves of the two families are traced and intersected by :mod:`.traced`, as the principal
+net's.  Liu et al. (2011) and Zadravec, Schiftner & Wallner (2010) optimise a smooth conjugate direction field
+over a triangle mesh; on a height-field roof the pointwise pair of the smoothed second form is that field
+without the solve.
+
+Examples
+--------
+>>> import numpy as np
+>>> I = np.eye(2)[None]; II = np.array([[[0.02, 0.0], [0.0, 0.01]]])      # principal axes along x and y
+>>> d1, d2, e = conjugate_pair(I, II, np.array([1.0, 0.0]), np.array([0.0, 1.0]))
+>>> np.round(np.abs(d1[0]), 6).tolist(), np.round(np.abs(d2[0]), 6).tolist(), float(np.round(e[0], 9))
+([1.0, 0.0], [0.0, 1.0], 0.0)
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..errors import DesignError, GeometryError
+from .curvature import forms
+from .heightfield import HeightField
+from .plan import PlanFrame
+from .sections import EDGE_MARGIN, FLAT, SectionsNet, _densify
+from .traced import DirectionField, traced_net
+from .trim import inside
+
+SAMPLES = 90
+"""Angles ``θ`` sampled over ``[0, π)`` (every 2°) before the best one is refined."""
+
+RULING = 0.05
+"""``u`` with ``|II u| < RULING · |II|`` (near the ruling of a parabolic point) is not a candidate."""
+
+OPEN = 0.5
+"""Weight of ``cos²∠(d1, d2)`` in ``E``: of pairs about as near the guides, the more open one (square panels)."""
+
+TIE = 0.1
+"""``E`` grows by ``TIE · max(0, −(d1·g1)(d1·g2))`` where the family-1 direction leaves the acute angle between the
+guides: of two pairs mirror images of each other with (nearly) equal ``E`` (a saddle whose guides are its
+asymptotic directions: the pairs ``(θ, π − θ)`` and ``(π − θ, θ)``, whose ``E`` the fit's noise sets apart by up
+to 1e-2) the same one is taken everywhere, so the two families do not trade places from point to point.  The
+term is continuous in ``d1``: it moves a pair near a guide by about ``TIE / 2`` rad, and never makes it jump."""
+
+MIN_PAIR_ANGLE_DEG = 15.0
+"""A conjugate pair closer than this (plan angle) refuses the net: its quads would be slivers."""
+
+MIN_GUIDE_ANGLE_DEG = 15.0
+"""The two guides must be at least this far apart in plan."""
+
+BALANCED = 0.25
+"""Edges within ``±BALANCED`` of the spacing need no re-seeding (:func:`~.traced.traced_net`)."""
+
+
+def _pair_cost(second: np.ndarray, theta: np.ndarray, g1: np.ndarray, g2: np.ndarray,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``E`` of the conjugate pairs at points ``second (k, 2, 2)`` for angles ``theta (k, s)``: cost ``(k, s)``,
+    ``d1`` and ``d2`` ``(k, s, 2)``.
+
+    ``theta`` in ``[0, π)`` stands for family 1 along ``u(θ)`` (family 2 its conjugate), ``θ + π`` in
+    ``[π, 2π)`` for family 2 along ``u(θ)`` (family 1 its conjugate): the second half reaches the pairs whose
+    family 1 is a ruling (every direction conjugate to it), which the first cannot.  A ``u`` with ``II u``
+    nearly 0 has no defined conjugate: cost ``inf``."""
+    second_half = theta >= np.pi
+    u = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+    iu = np.einsum("kij,ksj->ksi", second, u)
+    w = np.stack([-iu[..., 1], iu[..., 0]], axis=-1)                    # J II u
+    norm = np.linalg.norm(w, axis=-1)
+    size = np.linalg.norm(second, axis=(1, 2))[:, None]
+    ok = norm > RULING * size
+    w = w / np.where(ok, norm, 1.0)[..., None]
+    d1 = np.where(second_half[..., None], w, u)
+    d2 = np.where(second_half[..., None], u, w)
+    cost = (1.0 - (d1 @ g1) ** 2) + (1.0 - (d2 @ g2) ** 2) + OPEN * np.einsum("ksi,ksi->ks", d1, d2) ** 2 \
+        + TIE * np.maximum(0.0, -(d1 @ g1) * (d1 @ g2))
+    return np.where(ok, cost, np.inf), d1, d2
+
+
+def conjugate_pair(first: np.ndarray, second: np.ndarray, g1: np.ndarray, g2: np.ndarray,
+                   flat: float = FLAT) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The conjugate pair nearest the guides at each point.
+
+    Parameters
+    ----------
+    first, second : (k, 2, 2) the fundamental forms in plan coordinates (``first`` is not needed for
+        conjugacy, which depends on ``II`` alone; it is taken for a uniform signature with
+        :func:`~.curvature.principal`)
+    g1, g2 : (2,) unit plan guides of family 1 and family 2
+    flat : a second form smaller than this (Frobenius, 1/mm) is flat: the guides are the pair there
+
+    Returns
+    -------
+    d1, d2 : (k, 2) unit plan directions, ``d1ᵀ II d2 = 0``
+    cost : (k,) ``E`` of the pair (0: the guides themselves are conjugate)
+    """
+    del first
+    ii = np.asarray(second, dtype=float)
+    k = len(ii)
+    step = np.pi / SAMPLES
+    theta = np.broadcast_to(np.arange(2 * SAMPLES) * step, (k, 2 * SAMPLES))
+    cost, _, _ = _pair_cost(ii, theta, g1, g2)
+    centre = theta[np.arange(k), np.argmin(cost, axis=1)]
+    half = np.floor(centre / np.pi) * np.pi                 # stay in the half (the parametrisation) found
+    for _ in range(2):                                      # refine: finer sampling within one step either side
+        fine = centre[:, None] + np.linspace(-step, step, 21)[None, :]
+        fine = half[:, None] + np.mod(fine - half[:, None], np.pi)
+        c, _, _ = _pair_cost(ii, fine, g1, g2)
+        centre = fine[np.arange(k), np.argmin(c, axis=1)]
+        step /= 10.0
+    c, a, b = _pair_cost(ii, centre[:, None], g1, g2)
+    d1, d2, e = a[:, 0], b[:, 0], c[:, 0]
+    flat_pt = (np.linalg.norm(ii, axis=(1, 2)) < flat) | ~np.isfinite(e)
+    if flat_pt.any():
+        d1 = np.where(flat_pt[:, None], g1[None], d1)
+        d2 = np.where(flat_pt[:, None], g2[None], d2)
+        e = np.where(flat_pt, 0.0, e)
+    return d1, d2, e
+
+
+def plan_guides(frame: PlanFrame, guides: Sequence[Sequence[float]] | None) -> tuple[np.ndarray, np.ndarray]:
+    """The two guides as unit plan directions of ``frame``: world vectors projected on its plan (default: the
+    frame's ``x`` and ``y`` axes).
+
+    Raises
+    ------
+    DesignError : a guide that is not three finite numbers, is within 10° of vertical, or two guides closer
+        than :data:`MIN_GUIDE_ANGLE_DEG` in plan
+    """
+    if guides is None:
+        return np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    out = []
+    for g in guides:
+        v = np.asarray(g, dtype=float)
+        if v.shape != (3,) or not np.all(np.isfinite(v)) or not np.linalg.norm(v):
+            raise DesignError("surface.guides", "each guide must be three finite numbers, not all zero, e.g. "
+                                                "[[1, 0, 0], [0, 1, 0]]")
+        local = frame.axes @ (v / np.linalg.norm(v))
+        if np.hypot(local[0], local[1]) < np.sin(np.radians(10.0)):
+            raise DesignError("surface.guides", f"{list(g)} is within 10° of vertical: a guide is a direction "
+                                                "in plan, e.g. [1, 0, 0]")
+        out.append(local[:2] / np.hypot(local[0], local[1]))
+    g1, g2 = out
+    angle = float(np.degrees(np.arccos(min(1.0, abs(float(g1 @ g2))))))
+    if angle < MIN_GUIDE_ANGLE_DEG:
+        raise DesignError("surface.guides", f"the two guides are {angle:.1f}° apart in plan (at least "
+                                            f"{MIN_GUIDE_ANGLE_DEG:g}°): give two directions across each other")
+    return g1, g2
+
+
+def conjugate_field(hf: HeightField, g1: np.ndarray, g2: np.ndarray, flat: float = FLAT) -> DirectionField:
+    """The conjugate pair nearest the guides as a :data:`~.traced.DirectionField`."""
+    def field(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        first, second = forms(hf, p[:, 0], p[:, 1])
+        d1, d2, _ = conjugate_pair(first, second, g1, g2, flat)
+        return d1, d2
+    return field
+
+
+def _flat_limit(hf: HeightField) -> float:
+    """A second form below a thousandth of the surface's typical one (90th percentile on the fit's grid), or
+    below :data:`~.sections.FLAT`, is flat."""
+    X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
+    _, second = forms(hf, X.ravel(), Y.ravel())
+    return max(1e-3 * float(np.percentile(np.linalg.norm(second, axis=(1, 2)), 90)), FLAT)
+
+
+def pair_survey(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], margin: float, g1: np.ndarray,
+                g2: np.ndarray, flat: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pair on the fit's grid inside the outline and ``margin`` mm or more from it: plan points ``(k, 2)``,
+    the plan angle between the two directions ``(k,)`` and the largest angle of either from its guide
+    ``(k,)``, degrees."""
+    X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
+    pts = np.stack([X.ravel(), Y.ravel()], axis=1)
+    ins = inside(pts, loops) if len(loops) else np.ones(len(pts), dtype=bool)
+    if len(loops) and margin > 0:
+        edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
+        ins &= cKDTree(edge).query(pts)[0] >= margin
+    p = pts[ins]
+    first, second = forms(hf, p[:, 0], p[:, 1])
+    d1, d2, _ = conjugate_pair(first, second, g1, g2, flat)
+
+    def line_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.degrees(np.arccos(np.clip(np.abs(np.einsum("ki,ki->k", a, b)), 0.0, 1.0)))
+    pair = line_angle(d1, d2)
+    off = np.maximum(line_angle(d1, np.broadcast_to(g1, d1.shape)), line_angle(d2, np.broadcast_to(g2, d2.shape)))
+    return p, pair, off
+
+
+def conjugate_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
+                  min_face: float = 0.25, guides: Sequence[Sequence[float]] | None = None,
+                  ) -> tuple[SectionsNet, np.ndarray, str, float]:
+    """Build the conjugate net nearest the guides, trimmed to the plan region.
+
+    Returns
+    -------
+    net : rows along family 1 (nearest the first guide), columns along family 2 (``planar_family = "none"``)
+    twist : (F,) float — per kept face (row-major), ``|II(a, b)| / (|a||b| max|κ|)``, about 0
+    seeding : ``"uniform"`` or ``"strips"`` (:func:`~.traced.traced_net`)
+    guide_deviation_deg : the largest plan angle of a direction of the pair from its guide inside the outline
+
+    Raises
+    ------
+    DesignError : bad guides (:func:`plan_guides`)
+    GeometryError : the pair closes to less than :data:`MIN_PAIR_ANGLE_DEG` inside the outline (the place in mm)
+    """
+    loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
+    g1, g2 = plan_guides(frame, guides)
+    flat = _flat_limit(hf)
+    p, pair, off = pair_survey(hf, frame, loops, EDGE_MARGIN * spacing, g1, g2, flat)
+    if len(pair) and float(pair.min()) < MIN_PAIR_ANGLE_DEG:
+        k = int(np.argmin(pair))
+        w = frame.to_world(np.array([p[k, 0], p[k, 1], float(hf.f(p[k, 0], p[k, 1]))]))
+        raise GeometryError(
+            f"conjugate net: the conjugate pair nearest the guides closes to {pair[k]:.1f}° at (x, y) = "
+            f"({w[0]:.0f}, {w[1]:.0f}) mm (a guide near an asymptotic direction of a saddle part); turn the "
+            "guides ([surface] guides) or use net = 'sections'", element=f"({w[0]:.0f}, {w[1]:.0f})",
+            value=float(pair[k]))
+    net, twist, seeding = traced_net(hf, frame, loops, spacing, min_face, conjugate_field(hf, g1, g2, flat),
+                                     "conjugate", BALANCED)
+    return net, twist, seeding, float(off.max()) if len(off) else 0.0
