@@ -404,13 +404,15 @@ def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]
         ext = ext * 1000.0
     rel = os.path.relpath(Path(source).resolve(), out_dir).replace(os.sep, "/")
     spacing = float(min(1500.0, max(300.0, np.round(ext[:2].min() / 4.0, -2))))
-    surface: dict[str, Any] = {"path": rel, "net": "sections", "spacing": spacing}
+    surface: dict[str, Any] = {"path": rel, "net": "sections", "spacing": spacing, "search_planes": True}
     if units:
         surface["units"] = units
     try:
-        r = remesh(sf.samples, SurfaceSpec(path=rel, spacing=spacing, units=units))
+        r = remesh(sf.samples, SurfaceSpec(path=rel, spacing=spacing, units=units, search_planes=True))
+        n = np.round(r.frame.axes[0], 3).tolist()
         found = (f"the sections net at {spacing:g} mm has {int(r.net.grid_faces.sum())} panels, edges "
-                 f"{r.panel_size_min:.2f}–{r.panel_size_max:.2f} × spacing")
+                 f"{r.panel_size_min:.2f}–{r.panel_size_max:.2f} × spacing (section planes with normal {n}, the "
+                 f"best of {r.planes_tried} directions)")
     except GeometryError as exc:
         found = f"the sections net refuses: {exc}"
     given: dict[str, dict[str, Any]] = {

@@ -62,7 +62,7 @@ def test_surface_design_refuses_an_unknown_net():
     from ppfab.errors import DesignError
 
     with pytest.raises(DesignError, match="sections"):
-        parse_design({"surface": {"path": "roof.3dm", "net": "conjugate"}})
+        parse_design({"surface": {"path": "roof.3dm", "net": "asymptotic"}})
 
 
 @pytest.mark.slow
@@ -99,6 +99,7 @@ def test_new_on_a_surface_proposes_a_surface_design(tmp_path):
     assert "the sections net at 1500 mm has" in text
     d = load_design(out)
     assert d.surface is not None and d.surface.path == "dome.3dm" and d.optimize is not None
+    assert d.surface.search_planes and "the best of 2" in text             # 20-odd directions tried
     assert d.support.method == "p" and d.optimize.families == "rows"
     # a construction's starter keeps [surface] commented out
     other = tmp_path / "bisector.toml"

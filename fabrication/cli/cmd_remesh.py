@@ -26,6 +26,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--guides", type=float, nargs=6, metavar=("X1", "Y1", "Z1", "X2", "Y2", "Z2"), default=None,
                    help="conjugate net: the directions the rows and the columns should follow (default: the plan's "
                         "axes)")
+    p.add_argument("--search-planes", action="store_true",
+                   help="sections and conjugate nets: try section planes every 15° then 2.5° in plan and keep the "
+                        "net whose edges stay nearest the spacing")
     p.add_argument("--units", default=None, help="units of a mesh file: mm, cm, m, in, ft (a .3dm states its own)")
     p.add_argument("--smoothing", type=float, default=1.0,
                    help="knot spacing of the curvature fit as a fraction of the spacing (default 1.0)")
@@ -54,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
     spec = parse_params(SurfaceSpec, {k: v for k, v in {
         "path": args.surface, "net": args.net, "spacing": args.spacing, "plane_normal": args.plane_normal,
         "second_normal": args.second_normal,
-        "guides": [args.guides[:3], args.guides[3:]] if args.guides is not None else None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
+        "guides": [args.guides[:3], args.guides[3:]] if args.guides is not None else None,
+        "search_planes": args.search_planes or None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
     surface = read_surface(args.surface, spec.units, spec.object)
     if surface.note:
@@ -82,7 +86,9 @@ def run(args: argparse.Namespace) -> int:
               f"{result.panel_size_max:.2f} × spacing; twist median {summary['twist_median']:.3f}, max "
               f"{summary['twist_max']:.3f} (0: conjugate)" +
               (f"; directions within {result.guide_deviation_deg:.1f}° of the guides"
-               if result.guide_deviation_deg is not None else ""), file=sys.stderr)
+               if result.guide_deviation_deg is not None else "") +
+              (f"; section planes: the best of {result.planes_tried} directions, normal "
+               f"{np.round(result.frame.axes[0], 3).tolist()}" if result.planes_tried else ""), file=sys.stderr)
         for u in result.umbilics:
             print(f"ppfab: note: an umbilic near the outline at (x, y) = ({u[0]:.0f}, {u[1]:.0f}) mm: the "
                   "curvature lines turn around it", file=sys.stderr)

@@ -19,11 +19,11 @@ Examples
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import DesignError
+from ..errors import DesignError, GeometryError
 from ..mesh import as_quadmesh
 from ..metrics import conjugacy_defect
 from .conjugate import conjugate_net
@@ -66,6 +66,8 @@ class RemeshResult:
     warp : (F,) per kept face the normal part of its mixed difference ``c0 − c1 + c2 − c3``, mm (0: planar)
     guide_deviation_deg : (conjugate net) the largest plan angle of a net direction from its guide inside the
         outline; ``None`` for the other nets
+    planes_tried : with ``search_planes``: how many section plane normals were tried, refused ones included
+        (0: none searched)
     """
 
     net: SectionsNet
@@ -82,6 +84,7 @@ class RemeshResult:
     umbilics: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     warp: np.ndarray = field(default_factory=lambda: np.zeros(0))
     guide_deviation_deg: float | None = None
+    planes_tried: int = 0
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -98,7 +101,7 @@ class RemeshResult:
                 "twist_max": float(self.twist.max()) if len(self.twist) else 0.0,
                 "umbilics_mm": np.round(self.umbilics, 1).tolist(),
                 "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0,
-                "guide_deviation_deg": self.guide_deviation_deg,
+                "guide_deviation_deg": self.guide_deviation_deg, "planes_tried": self.planes_tried,
                 "conjugacy_defect": conjugacy_defect(n.mesh)}
 
 
@@ -116,6 +119,9 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     t0 = time.process_time()
     if spec.net not in NETS:
         raise DesignError("surface.net", f"{spec.net!r} is not a net ppfab builds; use one of {', '.join(NETS)}")
+    if spec.search_planes and spec.net in SEARCHED:
+        best = search_planes(samples, spec)
+        return replace(best, seconds=time.process_time() - t0)
     frame = plan_frame(samples.points, spec.plane_normal)
     local = frame.to_local(samples.points)
     hf = fit_height_field(local, spec.spacing / CELL_PER_SPACING, spec.smoothing * spec.spacing)
@@ -136,6 +142,78 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
                         time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)), off)
+
+
+SEARCHED = ("sections", "conjugate")
+"""The nets whose section planes (or guides) ``search_planes`` turns."""
+
+SEARCH_COARSE_DEG = 15.0
+"""First pass of :func:`search_planes`: plane normals this far apart in plan over half a turn."""
+
+SEARCH_FINE_DEG = 2.5
+"""Second pass: this far apart within one coarse step either side of the best."""
+
+
+def search_planes(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
+    """The net of ``spec`` (``sections`` or ``conjugate``) whose edges stay nearest the spacing, over vertical
+    section planes turned in plan (the conjugate net's guides turned with them).
+
+    Every :data:`SEARCH_COARSE_DEG` over half a turn from the start direction (``plane_normal``, or the longer
+    plan direction), then every :data:`SEARCH_FINE_DEG` within one coarse step of the best.  A net is better
+    when its worst edge ``max |log(edge / spacing)|`` is smaller, among the nets with at least four fifths of
+    the most quads any of them kept (a net that keeps its edges by dropping panels is not better).  Nets
+    that refuse (a degenerate direction) are skipped.
+
+    Raises
+    ------
+    GeometryError : every direction refused (the first refusal's message)
+    """
+    start = plan_frame(samples.points, spec.plane_normal).axes
+    base = float(np.degrees(np.arctan2(start[0, 1], start[0, 0])))
+    turn0 = None
+    if spec.guides is not None and spec.net == "conjugate":
+        g = [np.asarray(v, dtype=float) for v in spec.guides]
+        turn0 = [float(np.degrees(np.arctan2(v[1], v[0]))) - base for v in g]
+    found: dict[float, RemeshResult] = {}
+    tried: set[float] = set()
+    first_error: GeometryError | None = None
+
+    def attempt(angle: float) -> None:
+        nonlocal first_error
+        key = round(angle % 180.0, 6)
+        if key in tried:
+            return
+        tried.add(key)
+        a = np.radians(base + key)
+        normal = [float(np.cos(a)), float(np.sin(a)), 0.0]
+        guides = None
+        if spec.net == "conjugate":
+            offsets = turn0 if turn0 is not None else [0.0, 90.0]
+            guides = [[float(np.cos(np.radians(base + key + o))), float(np.sin(np.radians(base + key + o))), 0.0]
+                      for o in offsets]
+        try:
+            found[key] = remesh(samples, replace(spec, plane_normal=normal, guides=guides, search_planes=False))
+        except GeometryError as exc:
+            first_error = first_error or exc
+
+    def best() -> tuple[float, RemeshResult] | None:
+        if not found:
+            return None
+        most = max(int(r.net.grid_faces.sum()) for r in found.values())
+        ok = [(k, r) for k, r in found.items() if r.net.grid_faces.sum() >= 0.8 * most]
+        return min(ok, key=lambda kr: (_worst(kr[1].net, spec.spacing), kr[0]))
+
+    for k in np.arange(0.0, 180.0, SEARCH_COARSE_DEG):
+        attempt(float(k))
+    first = best()
+    if first is None:
+        assert first_error is not None
+        raise first_error
+    for k in np.arange(-SEARCH_COARSE_DEG + SEARCH_FINE_DEG, SEARCH_COARSE_DEG, SEARCH_FINE_DEG):
+        attempt(first[0] + float(k))
+    chosen = best()
+    assert chosen is not None
+    return replace(chosen[1], planes_tried=len(tried))
 
 
 def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray],

@@ -41,6 +41,10 @@ class SurfaceSpec:
     plane_normal: list[float] | None = param(None, doc="normal of the parallel section planes (default: "
                                                        "vertical planes across the longer plan direction)",
                                              length=3)
+    search_planes: bool = param(False, doc="sections and conjugate nets: try vertical section planes (and guides "
+                                           "turned with them) every 15° in plan, then every 2.5° near the best, "
+                                           "and keep the net whose edges stay nearest the spacing (a few "
+                                           "seconds); plane_normal and guides are then the start, not fixed")
     second_normal: list[float] | None = param(None, doc="pp net: normal of the column planes, horizontal "
                                                         "(default: across plane_normal in plan)", length=3)
     guides: list[list[float]] | None = param(None, doc="conjugate net: two directions [x, y, z] the rows and "
