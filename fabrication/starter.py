@@ -196,7 +196,8 @@ def propose(s: MeshSurvey) -> Proposal:
         reasons.append(f"conjugacy defect {s.conjugacy:.2f} (twist over normal curvature; a conjugate net has about "
                        f"0): the net is far from conjugate, so planar quads lie only far from this surface and "
                        f"ppfab build refuses to optimise it above {CONJUGACY_LIMIT:g}; remesh along conjugate curves "
-                       "(e.g. principal curvature lines) first, or raise [optimize] max_conjugacy_defect")
+                       "first (ppfab remesh MESH -o NET.obj --search-planes; ppfab new on a surface file writes "
+                       "such a design), or raise [optimize] max_conjugacy_defect")
     elif not planar_now:
         reasons.append(f"conjugacy defect {s.conjugacy:.2f} (at most {CONJUGACY_LIMIT:g}): close enough to a "
                        "conjugate net for planar quads near the surface")

@@ -335,3 +335,24 @@ def test_remesh_command_searches_the_planes(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["planes_tried"] >= 20 and summary["guide_deviation_deg"] is not None
     assert 0.75 <= summary["panel_size_min"] and summary["panel_size_max"] <= 1.25
+
+
+@pytest.mark.parametrize("name, units", [("DOS__pillow_1.obj", "m"), ("DOS__conical1.obj", "m")])
+def test_a_surface_that_is_no_height_field_is_refused_with_the_place(tmp_path, capsys, name, units):
+    """A closed pillow and an overhanging cone (WWmore/DOS, shared data) are no roofs over their plan: every net
+    is refused in one line naming a point of the surface (checked to be one of its samples' places), no file
+    written — the conjugate net built one 31 m off the surface before."""
+    from fabrication.cli import main
+    from fabrication.surfacefile import read_surface
+
+    src = shared_file(name)
+    pts = read_surface(src, units=units).samples.points
+    for net in ("sections", "conjugate", "principal"):
+        out = tmp_path / f"{net}.obj"
+        code = main(["remesh", str(src), "-o", str(out), "--units", units, "--net", net])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code != 0 and not out.exists() and len(err) == 1 and "Traceback" not in err[0]
+        m = re.search(r"not a height field .* up to (\d+) mm \(at \((-?\d+), (-?\d+), (-?\d+)\) mm", err[0])
+        assert m is not None, err[0]
+        where = np.array([float(m.group(k)) for k in (2, 3, 4)])
+        assert np.linalg.norm(pts - where, axis=1).min() < 1.0 and float(m.group(1)) > 225.0

@@ -79,5 +79,6 @@ def refuse_far_from_conjugate(defect: float, limit: float) -> None:
             f"the mesh's net is far from a conjugate net (defect {defect:.2f}; a conjugate net has about 0, the "
             f"limit is {limit:g}): planar quads with planar polylines exist near it only far from the surface, so "
             "optimising would run long and miss its targets or move the surface by tens of per cent. Remesh the "
-            "surface along conjugate curves (e.g. its principal curvature lines) and build that mesh, or raise "
+            "surface along conjugate curves (ppfab remesh MESH -o NET.obj --search-planes: planar sections and "
+            "their conjugate curves; --net principal | conjugate) and build that mesh, or raise "
             "[optimize] max_conjugacy_defect to try anyway"))

@@ -42,6 +42,10 @@ CELL_PER_SPACING = 8
 BALANCED = 0.25
 """Panel edges within ``±BALANCED`` of the spacing need no re-seeding."""
 
+MAX_FIT_DEVIATION = 0.15
+"""A height field whose fit misses a sample by more than this many ``spacing`` is refused: the surface overhangs
+or closes on itself (a real funicular shell with steep sides: 0.07; an overhanging or closed one: 0.9–70)."""
+
 
 @dataclass(frozen=True)
 class RemeshResult:
@@ -110,8 +114,9 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
 
     Raises
     ------
-    GeometryError : the surface is not a height field over the plan of the sections, or the net degenerates
-        (the message gives the place in mm)
+    GeometryError : the surface is not a height field over the plan of the sections (its fit misses a sample
+        by more than :data:`MAX_FIT_DEVIATION` × spacing), or the net degenerates (the message gives the place
+        in mm)
     DesignError : a net kind that is not built
     GeometryError : (principal) an umbilic inside the outline; (conjugate) the pair nearest the guides
         closing up; (pp) the two plane families far from conjugate
@@ -125,7 +130,16 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     frame = plan_frame(samples.points, spec.plane_normal)
     local = frame.to_local(samples.points)
     hf = fit_height_field(local, spec.spacing / CELL_PER_SPACING, spec.smoothing * spec.spacing)
-    fit_dev = float(np.max(np.abs(hf.f(local[:, 0], local[:, 1]) - local[:, 2])))
+    miss = np.abs(hf.f(local[:, 0], local[:, 1]) - local[:, 2])
+    fit_dev = float(np.max(miss))
+    if fit_dev > MAX_FIT_DEVIATION * spec.spacing:
+        w = samples.points[int(np.argmax(miss))]
+        raise GeometryError(
+            f"the surface is not a height field over its plan: the fitted heights miss its points by up to "
+            f"{fit_dev:.0f} mm (at ({w[0]:.0f}, {w[1]:.0f}, {w[2]:.0f}) mm; more than {MAX_FIT_DEVIATION:g} × "
+            f"the spacing): it overhangs or closes on itself there; remesh a part of it that is a roof over its "
+            "plan (crop it) or turn it so that its top faces up", element=f"({w[0]:.0f}, {w[1]:.0f}, {w[2]:.0f})",
+            value=fit_dev)
     loops = [frame.to_local(b)[:, :2] for b in samples.boundary]
     seeding, twist, found, off = "uniform", None, np.zeros((0, 3)), None
     if spec.net == "principal":
