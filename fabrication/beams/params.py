@@ -28,8 +28,9 @@ class BeamParams:
     density: float = param(7850.0, doc="material density, kg/m³ (steel 7850, glulam 470)", exclusive_min=0)
     joint: str = param("halflap", doc="'halflap' (PP: slots from above in rows, from below in columns), "
                                       "'segmented' (P: one family continuous, the other cut into segments "
-                                      "between crossings), 'none' (plain intersecting plates, to study a structure: a build refuses it where "
-                                      "plates of two beams meet); see fabrication.beams.joint_types")
+                                      "between crossings), 'none' (plain intersecting plates, to study a "
+                                      "structure: a build refuses it where plates of two beams meet); see "
+                                      "fabrication.beams.joint_types")
     clearance: float | str = param("auto", doc="extra slot width, mm, or 'auto': slots are cut for the thickest "
                                                "plate EN 10029 class A allows (nominal + upper deviation, e.g. "
                                                "15 → 16.3 mm) plus slot_fit; ends that butt against another plate "
