@@ -13,7 +13,9 @@ so the strip is the rectangle ``x0 ≤ x ≤ x1, |y| ≤ w/2`` at ``0 ≤ z ≤ 
 ``t_s ≤ z ≤ t_s + t_g``), drawn in 2D and extruded once.
 
 At every node one polyline *runs through*: the one with two spans there, of the lowest family (rows before
-columns); at a corner where no polyline continues, the lowest family.  Its strips end at the node, set back by
+columns); where no polyline has two spans, the two spans of one family most nearly straight on if they kink by
+at most 45° (a re-entrant corner of a trimmed boundary, where the mesh's polylines stop but the beams go on),
+else — at a corner — the span of the lowest family (:func:`running_spans`).  Its strips end at the node, set back by
 ``t_s · tan(κ/2)`` (κ the kink between the two spans in the beam plane) so that their top faces do not
 overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
 ``|distance| ≤ w/2`` by the clearance ``c``: with ``θ`` the angle between the two spans,
@@ -70,6 +72,42 @@ def _in_plane(v: np.ndarray, n: np.ndarray) -> np.ndarray:
     return v - np.outer(v @ n, n) if v.ndim == 2 else v - (v @ n) * n
 
 
+STRAIGHT_ON_DEG = 45.0
+"""At a node where no polyline has two spans (a re-entrant corner of a trimmed boundary, where the mesh's
+polylines stop), two spans of one family that kink by at most this much run through as one line."""
+
+
+def running_spans(node: int, spans: list[int], line_of: np.ndarray, family: np.ndarray, edges: np.ndarray,
+                  direction: np.ndarray) -> set[int]:
+    """The spans (edge indices) at ``node`` whose strips run through it: those of the polyline with two spans
+    there (of the lowest family, rows before columns); where no polyline has two (a corner, a re-entrant corner
+    of a trimmed boundary), the two spans of one family most nearly straight on, when they kink by at most
+    :data:`STRAIGHT_ON_DEG`; else the span of the lowest family.  ``direction (E, 3)``: unit ``b − a`` of each
+    edge ``(a, b)``; ``family (E,)``: 0 rows, 1 columns, 9 none."""
+    count: dict[int, int] = {}
+    for e in spans:
+        count[int(line_of[e])] = count.get(int(line_of[e]), 0) + 1
+    through = [k for k, m in count.items() if m >= 2 and k >= 0]
+    if through:
+        fam_of = {int(line_of[e]): int(family[e]) for e in spans}
+        k = min(through, key=lambda q: (fam_of[q], q))
+        return {e for e in spans if int(line_of[e]) == k}
+    best: tuple[float, int, int, int] | None = None
+    for a_i, e in enumerate(spans):
+        for f in spans[a_i + 1:]:
+            if family[e] != family[f] or family[e] == 9:
+                continue
+            oe = direction[e] if edges[e, 0] == node else -direction[e]
+            of = direction[f] if edges[f, 0] == node else -direction[f]
+            kink = float(np.degrees(np.arccos(np.clip(-(oe @ of), -1.0, 1.0))))
+            if kink <= STRAIGHT_ON_DEG and (best is None or (kink, int(family[e]), min(e, f)) < best[:3]):
+                best = (kink, int(family[e]), min(e, f), max(e, f))
+    if best is not None:
+        return {best[2], best[3]}
+    first = min(spans, key=lambda e: (int(family[e]), int(line_of[e])))
+    return {e for e in spans if int(line_of[e]) == int(line_of[first])}
+
+
 def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingParams,
                 edge_normals: np.ndarray | None = None) -> list[Strip]:
     """One :class:`Strip` per mesh edge (see the module docstring); ``beam_ids`` per polyline;
@@ -87,16 +125,11 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
     for e, (i, j) in enumerate(edges.tolist()):
         at.setdefault(i, []).append(e)
         at.setdefault(j, []).append(e)
-    running: dict[int, int] = {}                       # node -> polyline that runs through it
-    for node, es in at.items():
-        count: dict[int, int] = {}
-        for e in es:
-            count[int(line_of[e])] = count.get(int(line_of[e]), 0) + 1
-        through = [k for k, m in count.items() if m >= 2 and k >= 0]
-        pool = through or [int(line_of[e]) for e in es]
-        running[node] = min(pool, key=lambda k: (lines[k].family if k >= 0 else 9, k))
     direction = v[edges[:, 1]] - v[edges[:, 0]]
     direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    running: dict[int, set[int]] = {}                  # node -> the spans that run through it
+    for node, es in at.items():
+        running[node] = running_spans(node, es, line_of, family, edges, direction)
     counters: dict[str, int] = {}
     out: list[Strip] = []
     for e, (i, j) in enumerate(edges.tolist()):
@@ -118,8 +151,8 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
         runs = []
         for node, sign in ((i, 1.0), (j, -1.0)):
             own = sign * direction[e]                   # from the node into this span
-            if running[node] == line_of[e]:
-                other = [f for f in at[node] if f != e and line_of[f] == line_of[e]]
+            if e in running[node]:
+                other = [f for f in running[node] if f != e]
                 setback = 0.0
                 for f in other:
                     of = direction[f] if edges[f, 0] == node else -direction[f]
@@ -129,9 +162,7 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
                 runs.append(True)
             else:
                 x = 0.0
-                for f in at[node]:
-                    if line_of[f] != running[node]:
-                        continue
+                for f in sorted(running[node]):
                     of = direction[f] if edges[f, 0] == node else -direction[f]
                     cos = float(np.clip(own @ of, -1.0, 1.0))
                     sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)

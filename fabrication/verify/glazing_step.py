@@ -7,7 +7,8 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
   ``ex`` towards ``b`` so brought, ``up`` the sum of the outside normals of the panes on the edge (the faces of
   ``mesh.obj``, least-squares planes, outside as the build chooses it: the side the gaskets are on) made square
   to ``ex`` — or, on an edge without panes, against the node axes in the plane — and ``ey = up × ex``;
-* its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns),
+* its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns;
+  where none has two, the two spans of one family most nearly straight on within 45°),
   set back by ``t_s · tan(κ/2)``; where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
   against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
@@ -24,6 +25,10 @@ import numpy as np
 from ..contract import RETENTION_PREFIXES, gasket_id
 from . import Verification, check
 from ._shapes import literal, number, set_distance, solid_points
+
+STRAIGHT_ON_DEG = 45.0
+"""Where no polyline has two spans at a node (a re-entrant corner of a trimmed boundary), two spans of one family
+kinking by at most this much run through as one line (the build's rule, restated here)."""
 
 GLAZING_TOL = 0.05
 """How far (mm) a strip's or gasket's vertex may be from the recomputed box (pane normals are least-squares
@@ -79,13 +84,31 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
     fam = [_FAMILY.get(r.get("family", ""), 9) for r, _, _ in spans]
     direction = np.array([verts[j] - verts[i] for _, i, j in spans]).reshape(-1, 3)
     direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
-    running: dict[int, str] = {}
+    running: dict[int, set[int]] = {}
     for node, es in at.items():
         count: dict[str, int] = {}
         for e in es:
             count[line[e]] = count.get(line[e], 0) + 1
-        pool = [e for e in es if count[line[e]] >= 2] or es
-        running[node] = line[min(pool, key=lambda e: (fam[e], line[e]))]
+        pool = [e for e in es if count[line[e]] >= 2]
+        if pool:
+            first = line[min(pool, key=lambda e: (fam[e], line[e]))]
+            running[node] = {e for e in es if line[e] == first}
+            continue
+        # no polyline with two spans: the straightest same-family pair within STRAIGHT_ON_DEG runs through
+        pairs = []
+        for s1 in es:
+            for s2 in es:
+                if s1 < s2 and fam[s1] == fam[s2] != 9:
+                    o1 = direction[s1] if spans[s1][1] == node else -direction[s1]
+                    o2 = direction[s2] if spans[s2][1] == node else -direction[s2]
+                    kink = float(np.degrees(np.arccos(np.clip(-(o1 @ o2), -1.0, 1.0))))
+                    if kink <= STRAIGHT_ON_DEG:
+                        pairs.append((kink, fam[s1], s1, s2))
+        if pairs:
+            running[node] = set(min(pairs)[2:])
+        else:
+            first = line[min(es, key=lambda e: (fam[e], line[e]))]
+            running[node] = {e for e in es if line[e] == first}
     out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for e, (r, i, j) in enumerate(spans):
         plane = next((p for nodes, p in plates.get(r.get("beam", ""), []) if i in nodes and j in nodes),
@@ -111,19 +134,18 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
         for node, sgn in ((i, 1.0), (j, -1.0)):
             own = sgn * direction[e]
             x = 0.0
-            if running[node] == line[e]:
-                for f in at[node]:
-                    if f != e and line[f] == line[e]:
+            if e in running[node]:
+                for f in sorted(running[node]):
+                    if f != e:
                         of = direction[f] if spans[f][1] == node else -direction[f]
                         kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
                         x = max(x, ts * float(np.tan(0.5 * kink)))
             else:
-                for f in at[node]:
-                    if line[f] == running[node]:
-                        of = direction[f] if spans[f][1] == node else -direction[f]
-                        cos = float(np.clip(own @ of, -1.0, 1.0))
-                        sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)
-                        x = max(x, (b + c_clear + b * abs(cos)) / sin)
+                for f in sorted(running[node]):
+                    of = direction[f] if spans[f][1] == node else -direction[f]
+                    cos = float(np.clip(own @ of, -1.0, 1.0))
+                    sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)
+                    x = max(x, (b + c_clear + b * abs(cos)) / sin)
             ends.append(x)
         x0, x1 = ends[0], span - ends[1]
         rect = np.array([[x0, -b], [x1, -b], [x1, b], [x0, b]])

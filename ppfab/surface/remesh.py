@@ -72,6 +72,9 @@ class RemeshResult:
         outline; ``None`` for the other nets
     planes_tried : with ``search_planes``: how many section plane normals were tried, refused ones included
         (0: none searched)
+    tilt_max_deg : the largest angle between a vertex's section plane and the fitted surface's normal there
+        (rows, and columns of a pp net); ``None`` for a net with no planar family.  A P support leaves rows
+        further than :data:`SECTION_TILT_DEG` out of the planar beams
     """
 
     net: SectionsNet
@@ -89,6 +92,7 @@ class RemeshResult:
     warp: np.ndarray = field(default_factory=lambda: np.zeros(0))
     guide_deviation_deg: float | None = None
     planes_tried: int = 0
+    tilt_max_deg: float | None = None
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -106,6 +110,7 @@ class RemeshResult:
                 "umbilics_mm": np.round(self.umbilics, 1).tolist(),
                 "warp_mm_max": float(self.warp.max()) if len(self.warp) else 0.0,
                 "guide_deviation_deg": self.guide_deviation_deg, "planes_tried": self.planes_tried,
+                "tilt_max_deg": self.tilt_max_deg,
                 "conjugacy_defect": conjugacy_defect(n.mesh)}
 
 
@@ -155,7 +160,32 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     planarity = planarity_mm(net)
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
-                        time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)), off)
+                        time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)), off,
+                        tilt_max_deg=section_tilt_deg(net, frame, hf))
+
+
+SECTION_TILT_DEG = 30.0
+"""A section plane further than this from the surface normal at a vertex makes a row the P support leaves out of
+the planar beams (``[support] max_normal_angle_deg``, default 30°): :func:`search_planes` prefers nets within it."""
+
+
+def section_tilt_deg(net: SectionsNet, frame: PlanFrame, hf: HeightField) -> float | None:
+    """The largest angle (degrees) between a vertex's section plane and the fitted surface's normal there, over
+    the planar families of ``net``; ``None`` when it has none."""
+    v = np.asarray(net.mesh.vertices).reshape(-1, 3)
+    local = frame.to_local(v)
+    up = np.stack([-hf.fx(local[:, 0], local[:, 1]), -hf.fy(local[:, 0], local[:, 1]), np.ones(len(v))], axis=1)
+    normal = up @ frame.axes
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    worst: float | None = None
+    for planes, index in ((net.planes, net.row_of_vertex), (net.planes_cols, net.col_of_vertex)):
+        if planes is None or index is None:
+            continue
+        n = planes[index][:, :3]
+        s = np.abs(np.einsum("ij,ij->i", n, normal)) / np.linalg.norm(n, axis=1)
+        tilt = float(np.degrees(np.arcsin(np.clip(s, 0.0, 1.0))).max())
+        worst = tilt if worst is None else max(worst, tilt)
+    return worst
 
 
 SEARCHED = ("sections", "conjugate")
@@ -173,9 +203,11 @@ def search_planes(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     section planes turned in plan (the conjugate net's guides turned with them).
 
     Every :data:`SEARCH_COARSE_DEG` over half a turn from the start direction (``plane_normal``, or the longer
-    plan direction), then every :data:`SEARCH_FINE_DEG` within one coarse step of the best.  A net is better
-    when its worst edge ``max |log(edge / spacing)|`` is smaller, among the nets with at least four fifths of
-    the most quads any of them kept (a net that keeps its edges by dropping panels is not better).  Nets
+    plan direction), then every :data:`SEARCH_FINE_DEG` within one coarse step of the best.  Among the nets with
+    at least four fifths of the most quads any of them kept (a net that keeps its edges by dropping panels is
+    not better), one whose section planes stay within :data:`SECTION_TILT_DEG` of the surface normals (rows
+    a P support keeps as planar beams) is better than one that does not (the less beyond, the better), and then
+    the one with the smaller worst edge ``max |log(edge / spacing)|``.  Nets
     that refuse (a degenerate direction) are skipped.
 
     Raises
@@ -215,7 +247,8 @@ def search_planes(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
             return None
         most = max(int(r.net.grid_faces.sum()) for r in found.values())
         ok = [(k, r) for k, r in found.items() if r.net.grid_faces.sum() >= 0.8 * most]
-        return min(ok, key=lambda kr: (_worst(kr[1].net, spec.spacing), kr[0]))
+        return min(ok, key=lambda kr: (max((kr[1].tilt_max_deg or 0.0) - SECTION_TILT_DEG, 0.0),
+                                       _worst(kr[1].net, spec.spacing), kr[0]))
 
     for k in np.arange(0.0, 180.0, SEARCH_COARSE_DEG):
         attempt(float(k))
