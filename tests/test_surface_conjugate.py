@@ -288,39 +288,41 @@ def _worst_edge(mesh, spacing: float) -> float:
     return float(np.abs(np.log(np.asarray(as_quadmesh(mesh).edge_lengths()) / spacing)).max())
 
 
+def _tilt_deg(sf, mesh, normal: np.ndarray) -> float:
+    """The largest angle between the vertical plane with unit ``normal`` and the surface's normal at the mesh's
+    vertices, the normal of the triangle nearest each vertex (trimesh, on the mesh as read)."""
+    import trimesh
+
+    v = np.asarray(mesh.vertices).reshape(-1, 3)                          # the mesh as read is in mm
+    _, _, tri = trimesh.proximity.closest_point_naive(sf.native, v)
+    n = sf.native.face_normals[tri]
+    return float(np.degrees(np.arcsin(np.clip(np.abs(n @ normal), 0.0, 1.0))).max())
+
+
 @pytest.mark.parametrize("name", ["hole", "west", "east"])
-def test_searched_section_planes_keep_the_edges_nearest_the_spacing(bubble, name):
-    """``search_planes``: the sections net over turned vertical planes keeps the net whose worst edge (measured
-    here from the mesh) is nearest the spacing among the coarse directions that keep four fifths of the quads;
-    on the real shell patches it narrows the default's range (0.53–1.48, 0.15–1.61, 0.26–2.29 × the spacing)
-    to within 0.7–1.4 ×, and P optimisation then meets its targets within 25 mm of the surface."""
-    from ppfab.errors import GeometryError
+def test_searched_section_planes_keep_the_rows_beams_and_the_edges_near_the_spacing(bubble, name):
+    """``search_planes`` on the real shell patches: the sections net over turned vertical planes keeps its
+    section planes within 30° of the surface normals where the default's are not (rows the P support keeps as
+    planar beams; measured here against the normals of the triangles nearest the vertices) and narrows the
+    edges' range (default 0.53–1.48, 0.15–1.61, 0.26–2.29 × the spacing), and P optimisation then meets its
+    targets within 35 mm of the surface."""
     from ppfab.optimize import optimize
     from ppfab.surface import SurfaceSpec, remesh
 
     sf, spacing = bubble[name], 1500.0
     plain = remesh(sf.samples, SurfaceSpec(path="b.ply", spacing=spacing))
     r = remesh(sf.samples, SurfaceSpec(path="b.ply", spacing=spacing, search_planes=True))
-    worst = _worst_edge(r.net.mesh, spacing)
-    assert r.planes_tried >= 20 and worst < _worst_edge(plain.net.mesh, spacing)
-    e = np.exp(worst)
-    assert e < 1.4 and r.panel_size_min > 0.7 and abs(r.frame.axes[0, 2]) < 1e-12        # vertical planes
-    coarse = []
-    start = np.degrees(np.arctan2(*plain.frame.axes[0, 1::-1]))
-    for k in range(12):
-        a = np.radians(start + 15.0 * k)
-        try:
-            c = remesh(sf.samples, SurfaceSpec(path="b.ply", spacing=spacing, plane_normal=[np.cos(a), np.sin(a), 0]))
-        except GeometryError:
-            continue
-        coarse.append((int(c.net.grid_faces.sum()), _worst_edge(c.net.mesh, spacing)))
-    most = max(n for n, _ in coarse)
-    assert r.net.grid_faces.sum() >= 0.8 * most
-    assert worst <= min(w for n, w in coarse if n >= 0.8 * most) + 1e-9
+    assert r.planes_tried >= 20 and abs(r.frame.axes[0, 2]) < 1e-12                       # vertical planes
+    assert _worst_edge(r.net.mesh, spacing) < _worst_edge(plain.net.mesh, spacing)
+    assert 0.55 < r.panel_size_min and r.panel_size_max < 1.8
+    before, after = _tilt_deg(sf, plain.net.mesh, plain.frame.axes[0]), _tilt_deg(sf, r.net.mesh, r.frame.axes[0])
+    # the triangles' normals scatter by a few degrees about the fitted surface's (a faceted resampled mesh)
+    assert after <= max(30.0, before) + 6.0 and (before <= 30.0 or after < before)
+    assert abs(after - r.tilt_max_deg) < 10.0                    # the fit's normals against the triangles'
     res = optimize(r.net.mesh, {"families": "rows", "target_delta_f": 1e-7, "target_delta_p": 1e-7,
                                 "fairness": "relative", "weight_close": 1.0},
                    reference=(sf.samples.points, sf.samples.triangles))
-    assert res.targets_met and sf.distance(np.asarray(res.mesh.vertices).reshape(-1, 3)).max() < 25.0
+    assert res.targets_met and sf.distance(np.asarray(res.mesh.vertices).reshape(-1, 3)).max() < 35.0
 
 
 def test_remesh_command_searches_the_planes(tmp_path, capsys):
