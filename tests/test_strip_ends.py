@@ -19,7 +19,7 @@ def _node(directions: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     return edges, d
 
 
-def test_a_reentrant_corner_runs_its_straightest_same_family_pair_through():
+def test_a_reentrant_corner_runs_a_nearly_straight_pair_through_rows_first():
     from fabrication.glazing.strips import running_spans
 
     a = np.radians(0.4)
@@ -29,7 +29,12 @@ def test_a_reentrant_corner_runs_its_straightest_same_family_pair_through():
     line_of = np.array([10, 11, 12, 13])                  # four polylines: none with two spans here
     family = np.array([0, 0, 1, 1])
     assert running_spans(0, [0, 1, 2, 3], line_of, family, edges, d) == {0, 1}
-    # the same with the rows kinked by 60° (no straight-on pair of rows): the columns, 2.1° off, run through
+    # the columns straighter than the rows: still the rows (rows before columns, as where polylines run through)
+    c = np.radians(5.0)
+    edges_c, d_c = _node([np.array([1.0, 0, 0]), np.array([-np.cos(c), np.sin(c), 0]),
+                          np.array([0, 1.0, 0]), np.array([0, -1.0, 0])])
+    assert running_spans(0, [0, 1, 2, 3], line_of, family, edges_c, d_c) == {0, 1}
+    # the rows kinked by 60° (no straight-on pair of rows): the columns, 2.1° off, run through
     b = np.radians(60.0)
     edges, d = _node([np.array([1.0, 0, 0]), np.array([-np.cos(b), np.sin(b), 0]),
                       np.array([0, 1.0, 0]), np.array([np.sin(np.radians(2.1)), -np.cos(np.radians(2.1)), 0])])

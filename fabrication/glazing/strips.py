@@ -13,8 +13,8 @@ so the strip is the rectangle ``x0 ≤ x ≤ x1, |y| ≤ w/2`` at ``0 ≤ z ≤ 
 ``t_s ≤ z ≤ t_s + t_g``), drawn in 2D and extruded once.
 
 At every node one polyline *runs through*: the one with two spans there, of the lowest family (rows before
-columns); where no polyline has two spans, the two spans of one family most nearly straight on if they kink by
-at most 45° (a re-entrant corner of a trimmed boundary, where the mesh's polylines stop but the beams go on),
+columns); where no polyline has two spans, two spans of one family that kink by at most 30°, rows before columns (a
+re-entrant corner of a trimmed boundary, where the mesh's polylines stop but the beams go on),
 else — at a corner — the span of the lowest family (:func:`running_spans`).  Its strips end at the node, set back by
 ``t_s · tan(κ/2)`` (κ the kink between the two spans in the beam plane) so that their top faces do not
 overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
@@ -72,7 +72,7 @@ def _in_plane(v: np.ndarray, n: np.ndarray) -> np.ndarray:
     return v - np.outer(v @ n, n) if v.ndim == 2 else v - (v @ n) * n
 
 
-STRAIGHT_ON_DEG = 45.0
+STRAIGHT_ON_DEG = 30.0
 """At a node where no polyline has two spans (a re-entrant corner of a trimmed boundary, where the mesh's
 polylines stop), two spans of one family that kink by at most this much run through as one line."""
 
@@ -81,8 +81,8 @@ def running_spans(node: int, spans: list[int], line_of: np.ndarray, family: np.n
                   direction: np.ndarray) -> set[int]:
     """The spans (edge indices) at ``node`` whose strips run through it: those of the polyline with two spans
     there (of the lowest family, rows before columns); where no polyline has two (a corner, a re-entrant corner
-    of a trimmed boundary), the two spans of one family most nearly straight on, when they kink by at most
-    :data:`STRAIGHT_ON_DEG`; else the span of the lowest family.  ``direction (E, 3)``: unit ``b − a`` of each
+    of a trimmed boundary), two spans of one family that kink by at most :data:`STRAIGHT_ON_DEG` (rows before
+    columns, then the straighter pair); else the span of the lowest family.  ``direction (E, 3)``: unit ``b − a`` of each
     edge ``(a, b)``; ``family (E,)``: 0 rows, 1 columns, 9 none."""
     count: dict[int, int] = {}
     for e in spans:
@@ -92,7 +92,7 @@ def running_spans(node: int, spans: list[int], line_of: np.ndarray, family: np.n
         fam_of = {int(line_of[e]): int(family[e]) for e in spans}
         k = min(through, key=lambda q: (fam_of[q], q))
         return {e for e in spans if int(line_of[e]) == k}
-    best: tuple[float, int, int, int] | None = None
+    best: tuple[int, float, int, int] | None = None
     for a_i, e in enumerate(spans):
         for f in spans[a_i + 1:]:
             if family[e] != family[f] or family[e] == 9:
@@ -100,8 +100,8 @@ def running_spans(node: int, spans: list[int], line_of: np.ndarray, family: np.n
             oe = direction[e] if edges[e, 0] == node else -direction[e]
             of = direction[f] if edges[f, 0] == node else -direction[f]
             kink = float(np.degrees(np.arccos(np.clip(-(oe @ of), -1.0, 1.0))))
-            if kink <= STRAIGHT_ON_DEG and (best is None or (kink, int(family[e]), min(e, f)) < best[:3]):
-                best = (kink, int(family[e]), min(e, f), max(e, f))
+            if kink <= STRAIGHT_ON_DEG and (best is None or (int(family[e]), kink, min(e, f)) < best[:3]):
+                best = (int(family[e]), kink, min(e, f), max(e, f))
     if best is not None:
         return {best[2], best[3]}
     first = min(spans, key=lambda e: (int(family[e]), int(line_of[e])))

@@ -8,7 +8,7 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
   ``mesh.obj``, least-squares planes, outside as the build chooses it: the side the gaskets are on) made square
   to ``ex`` — or, on an edge without panes, against the node axes in the plane — and ``ey = up × ex``;
 * its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns;
-  where none has two, the two spans of one family most nearly straight on within 45°),
+  where none has two, two spans of one family kinking by at most 30°, rows before columns),
   set back by ``t_s · tan(κ/2)``; where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
   against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
@@ -26,7 +26,7 @@ from ..contract import RETENTION_PREFIXES, gasket_id
 from . import Verification, check
 from ._shapes import literal, number, set_distance, solid_points
 
-STRAIGHT_ON_DEG = 45.0
+STRAIGHT_ON_DEG = 30.0
 """Where no polyline has two spans at a node (a re-entrant corner of a trimmed boundary), two spans of one family
 kinking by at most this much run through as one line (the build's rule, restated here)."""
 
@@ -94,7 +94,8 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
             first = line[min(pool, key=lambda e: (fam[e], line[e]))]
             running[node] = {e for e in es if line[e] == first}
             continue
-        # no polyline with two spans: the straightest same-family pair within STRAIGHT_ON_DEG runs through
+        # no polyline with two spans: a same-family pair kinking by at most STRAIGHT_ON_DEG runs through, rows
+        # before columns, then the straighter
         pairs = []
         for s1 in es:
             for s2 in es:
@@ -103,7 +104,7 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
                     o2 = direction[s2] if spans[s2][1] == node else -direction[s2]
                     kink = float(np.degrees(np.arccos(np.clip(-(o1 @ o2), -1.0, 1.0))))
                     if kink <= STRAIGHT_ON_DEG:
-                        pairs.append((kink, fam[s1], s1, s2))
+                        pairs.append((fam[s1], kink, s1, s2))
         if pairs:
             running[node] = set(min(pairs)[2:])
         else:
