@@ -11,6 +11,8 @@ import math
 import re
 from typing import Any
 
+from .model.part import NOT_ON_A_SHEET as NOT_ON_A_SHEET  # ``sheet`` of a part on no cutting sheet (0)
+
 # -- parts.csv / parts.json -----------------------------------------------------------------------------
 
 PARTS_CONTRACT_COLUMNS = ["part_id", "kind", "sheet", "x", "y", "rotation_deg", "nest_tag", "area_mm2"]
@@ -114,7 +116,9 @@ top face, its screws at ``x`` = each of ``screw_stations_mm`` on the centre line
 
 SHEET_KINDS = ("panel", "beam")
 """The kinds nested on the cutting sheets (``sheet``, ``x``, ``y``, ``rotation_deg`` set, one CUT outline on
-``sheet_file``); rows of the other kinds leave those cells empty."""
+``sheet_file``); rows of the other kinds have ``sheet`` = :data:`NOT_ON_A_SHEET` and leave the placement cells
+empty."""
+
 
 # -- nodes.csv / nodes.json ------------------------------------------------------------------------------
 

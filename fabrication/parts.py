@@ -20,7 +20,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .contract import (GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS,
+from .contract import (GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, NOT_ON_A_SHEET, ORDER_COLUMNS, PARTS_CONTRACT_COLUMNS,
                        PARTS_KNOWN_COLUMNS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, csv_cell, json_safe, sheet_files)
 from .flatpart import FlatPart, Placement
 from .model import PartsTable
@@ -76,7 +76,7 @@ def part_rows(parts: list[FlatPart], placements: list[Placement] | None = None,
         row: dict = {
             "part_id": part.part_id,
             "kind": part.kind,
-            "sheet": pl.sheet + 1 if pl else "",
+            "sheet": pl.sheet + 1 if pl else NOT_ON_A_SHEET,
             "x": _num(pl.x, 8) if pl else "",
             "y": _num(pl.y, 8) if pl else "",
             "rotation_deg": _num(pl.rotation_deg, 10) if pl else "",

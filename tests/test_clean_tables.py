@@ -126,3 +126,29 @@ def test_verify_reads_builds_written_before_the_rename(built, tmp_path):
     assert old.startswith("{'") and literal(old) == ast.literal_eval(old) == json.loads(row["frame"])
     a, b = frame_of({"frame": old}), frame_of(row)
     assert a is not None and b is not None and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_the_sheet_column_is_an_integer_column(built):
+    """``sheet`` is 1-based on the cutting-sheet parts (panels, beam plates) and 0 on every other part, so a typed
+    reader gets integers (pandas: int64, where empty cells made it float64); the open_build reader gives a
+    placement exactly to the parts on a sheet."""
+    from fabrication import open_build
+    from fabrication.contract import NOT_ON_A_SHEET, SHEET_KINDS
+
+    rows = _rows(built / "parts.csv")
+    kinds = {r["kind"] for r in rows}
+    assert kinds - set(SHEET_KINDS)                                  # strips, retention parts … are there
+    for r in rows:
+        assert r["sheet"].isdigit(), (r["part_id"], r["sheet"])
+        on_sheet = int(r["sheet"]) != NOT_ON_A_SHEET
+        assert on_sheet == (r["kind"] in SHEET_KINDS), r["part_id"]
+        assert bool(r["x"]) == on_sheet and bool(r["sheet_file"]) == on_sheet
+    try:
+        import pandas
+    except ImportError:
+        pandas = None
+    if pandas is not None:
+        assert str(pandas.read_csv(built / "parts.csv")["sheet"].dtype) == "int64"
+    package = open_build(built)
+    placed = {p.part_id for p in package.parts if p.placement is not None}
+    assert placed == {r["part_id"] for r in rows if r["kind"] in SHEET_KINDS}

@@ -23,6 +23,7 @@ import numpy as np
 from ppfab.metrics import polygon_area
 from ppfab.topology import FAMILY_NAMES
 
+from ..contract import NOT_ON_A_SHEET
 from .cutlist import cut_bars
 
 
@@ -55,7 +56,7 @@ def strip_rows(glazing, beams) -> list[dict]:
     rows = []
     for s, c in zip(glazing.strips, cuts):
         rows.append({
-            "part_id": s.part_id, "kind": "strip", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "part_id": s.part_id, "kind": "strip", "sheet": NOT_ON_A_SHEET, "x": "", "y": "", "rotation_deg": "",
             "nest_tag": c.nest_tag, "area_mm2": _r(s.length * s.width), "mirrored": "", "sheet_file": "",
             "type_id": "", "material": p.material, "thickness_mm": p.thickness, "width_mm": _r(s.width),
             "height_mm": _r(s.length), "length_mm": _r(s.length), "family": family.get(s.beam_id, ""),
@@ -81,7 +82,7 @@ def splice_rows(glazing, beams) -> list[dict]:
         net = gross - len(s.holes) * math.pi * 0.25 * s.hole ** 2
         for side, pid in zip("AB", s.part_ids):
             rows.append({
-                "part_id": pid, "kind": "splice", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+                "part_id": pid, "kind": "splice", "sheet": NOT_ON_A_SHEET, "x": "", "y": "", "rotation_deg": "",
                 "nest_tag": f"J{k + 1:0{width}d}-{side}", "area_mm2": _r(gross), "mirrored": "", "sheet_file": "",
                 "type_id": types[pid], "material": sp.material, "thickness_mm": s.thickness, "width_mm": _r(w),
                 "height_mm": _r(h), "family": family.get(s.beam_id, ""), "beam": s.beam_id,
@@ -121,7 +122,7 @@ def retention_part_rows(retention) -> list[dict]:
     for part in retention.parts:
         origin, x, y, n = part.box_frame()
         rows.append({
-            "part_id": part.part_id, "kind": part.kind, "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "part_id": part.part_id, "kind": part.kind, "sheet": NOT_ON_A_SHEET, "x": "", "y": "", "rotation_deg": "",
             "nest_tag": part.part_id, "area_mm2": _r(part.length * part.width, 6), "mirrored": "",
             "sheet_file": "", "type_id": "", "material": material_of(part.kind, p), "thickness_mm": _r(part.height, 6),
             "owner": part.owner, "strip": part.strip, "beam": part.beam, "length_mm": _r(part.length, 6),
@@ -133,7 +134,7 @@ def retention_part_rows(retention) -> list[dict]:
         f = sc.frame
         origin = f.to3d(np.array([[sc.x0, 0.0]]))[0] + sc.z0 * f.normal
         rows.append({
-            "part_id": sc.part_id, "kind": "screw", "sheet": "", "x": "", "y": "", "rotation_deg": "",
+            "part_id": sc.part_id, "kind": "screw", "sheet": NOT_ON_A_SHEET, "x": "", "y": "", "rotation_deg": "",
             "nest_tag": sc.part_id, "area_mm2": "", "mirrored": "", "sheet_file": "", "type_id": "",
             "material": material_of("screw", p), "thickness_mm": "", "owner": sc.plate, "strip": sc.strip,
             "beam": sc.beam, "length_mm": _r(sc.length, 6), "diameter_mm": _r(sc.diameter, 6),

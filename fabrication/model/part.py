@@ -16,6 +16,12 @@ from typing import Any, Callable, Mapping
 
 from . import values as v
 
+NOT_ON_A_SHEET = 0
+"""``parts.csv`` ``sheet`` of a part not nested on a cutting sheet (strips are cut from bars, cover plates from
+their type's DXF, retention parts bought): the sheets are numbered from 1, so the column stays an integer column
+for a typed reader (pandas reads it as ``int64``; empty cells made it ``float64``).  An empty cell (folders
+written before this) reads the same."""
+
 Point2 = tuple[float, float]
 Point3 = tuple[float, float, float]
 
@@ -248,7 +254,7 @@ class Part:
         if not part_id:
             raise ColumnError("part_id", "empty part id")
         placement = None
-        if not v.empty(cols.get("sheet")):
+        if not v.empty(cols.get("sheet")) and get("sheet", v.opt_int) != NOT_ON_A_SHEET:
             xy = [get(k, v.opt_float) for k in ("x", "y", "rotation_deg")]
             if any(c is None for c in xy):
                 missing = next(k for k, c in zip(("x", "y", "rotation_deg"), xy) if c is None)
