@@ -312,3 +312,32 @@ def test_bad_parameters():
         parse_params(BeamParams, {"max_length": 5.0}, "beams")
     with pytest.raises(DesignError, match=r"beams\.thikness: unknown key \(did you mean 'thickness'"):
         parse_params(BeamParams, {"thikness": 5.0}, "beams")
+
+
+def test_congruent_plates_astride_a_rounding_boundary_share_a_type():
+    """Two plates congruent to 1e-6 mm whose principal-axes coordinates straddle a rounding boundary of the
+    0.1 mm grid the types were keyed by (``congruence_key`` splits them: the default's columns became two types
+    that way under another numpy) are one type, turned, shifted or mirrored; a plate 0.2 mm longer, or one with
+    holes, is another."""
+    from types import SimpleNamespace
+
+    from fabrication.beams.flat import _poses, type_ids
+
+    o = np.array([[0.0, 0.0], [1486.3, 0.0], [1486.3, 150.0], [700.0, 180.0], [0.0, 150.0]])
+    pose = _poses(o, True)[0]
+    j = int(np.argmax(np.abs(pose[:, 0])))
+    target = (np.floor(pose[j, 0] / 0.1) + 0.5) * 0.1                    # a rounding boundary of the grid
+    a = pose * [(target - 1e-7) / pose[j, 0], 1.0]
+    b = pose * [(target + 1e-7) / pose[j, 0], 1.0]
+    assert np.abs(a - b).max() < 1e-6 and congruence_key(a) != congruence_key(b)
+
+    def plate(pid, outline, holes=0):
+        return SimpleNamespace(part_id=pid, flat_outline=outline, holes=np.zeros((holes, 3)), bevels=())
+
+    t = np.radians(31.0)
+    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    longer = a * [1.0 + 0.2 / 1486.3, 1.0]
+    ids = type_ids([plate("a", a), plate("b", b @ rot.T + [500.0, -80.0]), plate("c", (a * [-1, 1])[::-1]),
+                    plate("d", longer), plate("e", a, holes=4)])
+    assert ids["a"] == ids["b"] == ids["c"]
+    assert len({ids["a"], ids["d"], ids["e"]}) == 3

@@ -109,17 +109,70 @@ def congruence_key(outline: np.ndarray, mirror: bool = True, grid: float = 0.1) 
     return min(keys)
 
 
+CONGRUENT_MM = 0.05
+"""Two plate outlines are one type when, in their principal-axes poses, every vertex of one lies within this of
+the matching vertex of the other (mm, each coordinate): half the 0.1 mm grid the types were once rounded to,
+compared without rounding, so two congruent plates whose coordinates straddle a rounding boundary (743.149…
+and 743.150… mm) are not split into two types."""
+
+
+def _poses(outline: np.ndarray, mirror: bool) -> list[np.ndarray]:
+    """The outline moved to its centroid and turned to its principal axes, in its 2 (or 4 with reflections)
+    remaining poses, each counter-clockwise: ``(n, 2)`` arrays."""
+    p = np.asarray(outline, dtype=float)
+    c = p - p.mean(axis=0)
+    _, vecs = np.linalg.eigh(c.T @ c)
+    vecs = vecs[:, ::-1]
+    if np.linalg.det(vecs) < 0:
+        vecs[:, 1] *= -1
+    base = c @ vecs
+    out = []
+    for sx, sy in ((1, 1), (-1, -1)) + (((-1, 1), (1, -1)) if mirror else ()):
+        q = base * np.array([sx, sy])
+        out.append(q[::-1] if polygon_area(q) < 0 else q)
+    return out
+
+
+def congruent(a: np.ndarray, b_poses: list[np.ndarray], tol: float = CONGRUENT_MM) -> bool:
+    """Whether the pose ``a (n, 2)`` matches one of ``b_poses`` vertex for vertex, up to where the vertex list
+    starts, within ``tol`` in each coordinate."""
+    n = len(a)
+    shifts = (np.arange(n)[:, None] + np.arange(n)[None, :]) % n          # (shift, vertex)
+    for b in b_poses:
+        if len(b) != n:
+            return False
+        if float(np.abs(b[shifts] - a[None]).max(axis=(1, 2)).min()) <= tol:
+            return True
+    return False
+
+
 def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
-    """``part_id → type id`` (``BT001``, …); identical plates share a type."""
-    keys: dict[tuple, str] = {}
-    out = {}
+    """``part_id → type id`` (``BT001``, … in order of first appearance); congruent plates (:func:`congruent`,
+    reflections included with ``mirror``) with the same splice holes and bevels share a type.
+
+    Candidates are found by vertex count and area (to within a bucket either side, so no tolerance is cut by a
+    rounding boundary), then compared vertex for vertex."""
+    area_bucket = 1000.0                                     # mm²: far above what 0.05 mm per vertex changes
+    buckets: dict[tuple, list[tuple[np.ndarray, str]]] = {}
+    out: dict[str, str] = {}
+    count = 0
     for p in plates:
-        # a piece with splice holes is its own type, and so is one with other bevels
-        k = (congruence_key(p.flat_outline, mirror), len(p.holes),
-             tuple(sorted((round(b.delta, 1), b.side) for b in p.bevels)))
-        if k not in keys:
-            keys[k] = f"BT{len(keys) + 1:03d}"
-        out[p.part_id] = keys[k]
+        extra = (len(p.holes), tuple(sorted((round(b.delta, 1), b.side) for b in p.bevels)))
+        poses = _poses(p.flat_outline, mirror)
+        k = int(np.floor(abs(float(polygon_area(p.flat_outline))) / area_bucket))
+        found = None
+        for kk in (k - 1, k, k + 1):
+            for rep, tid in buckets.get((len(poses[0]), extra, kk), []):
+                if congruent(rep, poses):
+                    found = tid
+                    break
+            if found:
+                break
+        if found is None:
+            count += 1
+            found = f"BT{count:03d}"
+            buckets.setdefault((len(poses[0]), extra, k), []).append((poses[0], found))
+        out[p.part_id] = found
     return out
 
 
