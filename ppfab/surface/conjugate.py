@@ -41,15 +41,13 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import DesignError, GeometryError
 from .curvature import forms
 from .heightfield import HeightField
 from .plan import PlanFrame
-from .sections import EDGE_MARGIN, FLAT, SectionsNet, _densify
+from .sections import EDGE_MARGIN, FLAT, SectionsNet, grid_inside
 from .traced import DirectionField, traced_net
-from .trim import inside
 
 SAMPLES = 90
 """Angles ``θ`` sampled over ``[0, π)`` (every 2°) before the best one is refined (three times, each over one step
@@ -173,21 +171,29 @@ def plan_guides(frame: PlanFrame, guides: Sequence[Sequence[float]] | None) -> t
     return g1, g2
 
 
-def conjugate_field(hf: HeightField, g1: np.ndarray, g2: np.ndarray, flat: float = FLAT) -> DirectionField:
-    """The conjugate pair nearest the guides as a :data:`~.traced.DirectionField`.
-
-    The pair is computed once on the fit's plan grid (:func:`conjugate_pair`, ``spacing / 8`` cells) and
-    interpolated bilinearly as doubled-angle vectors ``(cos 2φ, sin 2φ)`` (a line field: ``φ`` and ``φ + π`` are
-    one line), so tracing a curve costs an interpolation per step rather than a search over angles."""
-    from scipy.interpolate import RegularGridInterpolator
-
+def grid_pair(hf: HeightField, g1: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The conjugate pair nearest the guides at the nodes of the fit's plan grid: ``d1, d2`` ``(N, 2)``, in the
+    order of :func:`~.sections.grid_inside`.  A second form below a thousandth of the surface's typical one (the
+    90th percentile on the grid), or below :data:`~.sections.FLAT`, is flat: the guides are the pair there."""
     X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
     first, second = forms(hf, X.ravel(), Y.ravel())
+    flat = max(1e-3 * float(np.percentile(np.linalg.norm(second, axis=(1, 2)), 90)), FLAT)
     d1, d2, _ = conjugate_pair(first, second, g1, g2, flat)
+    return d1, d2
+
+
+def conjugate_field(hf: HeightField, d1: np.ndarray, d2: np.ndarray) -> DirectionField:
+    """The pair of :func:`grid_pair` as a :data:`~.traced.DirectionField`: interpolated bilinearly between the
+    grid's nodes (``spacing / 8`` apart) as doubled-angle vectors ``(cos 2φ, sin 2φ)`` (a line field: ``φ`` and
+    ``φ + π`` are one line), so tracing a curve costs an interpolation per step rather than a search over
+    angles."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    shape = (len(hf.x), len(hf.y), 2)
     doubled = []
     for d in (d1, d2):
         phi = np.arctan2(d[:, 1], d[:, 0])
-        doubled.append(np.stack([np.cos(2 * phi), np.sin(2 * phi)], axis=-1).reshape(X.shape + (2,)))
+        doubled.append(np.stack([np.cos(2 * phi), np.sin(2 * phi)], axis=-1).reshape(shape))
     table = RegularGridInterpolator((hf.x, hf.y), np.concatenate(doubled, axis=-1), bounds_error=False,
                                     fill_value=None)
 
@@ -201,34 +207,14 @@ def conjugate_field(hf: HeightField, g1: np.ndarray, g2: np.ndarray, flat: float
     return field
 
 
-def _flat_limit(hf: HeightField) -> float:
-    """A second form below a thousandth of the surface's typical one (90th percentile on the fit's grid), or
-    below :data:`~.sections.FLAT`, is flat."""
-    X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
-    _, second = forms(hf, X.ravel(), Y.ravel())
-    return max(1e-3 * float(np.percentile(np.linalg.norm(second, axis=(1, 2)), 90)), FLAT)
-
-
-def pair_survey(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], margin: float, g1: np.ndarray,
-                g2: np.ndarray, flat: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pair on the fit's grid inside the outline and ``margin`` mm or more from it: plan points ``(k, 2)``,
-    the plan angle between the two directions ``(k,)`` and the largest angle of either from its guide
-    ``(k,)``, degrees."""
-    X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
-    pts = np.stack([X.ravel(), Y.ravel()], axis=1)
-    ins = inside(pts, loops) if len(loops) else np.ones(len(pts), dtype=bool)
-    if len(loops) and margin > 0:
-        edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
-        ins &= cKDTree(edge).query(pts)[0] >= margin
-    p = pts[ins]
-    first, second = forms(hf, p[:, 0], p[:, 1])
-    d1, d2, _ = conjugate_pair(first, second, g1, g2, flat)
-
+def pair_survey(d1: np.ndarray, d2: np.ndarray, g1: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per point of the pair ``d1, d2 (k, 2)``: the plan angle between its two directions ``(k,)`` and the
+    larger angle of either from its guide ``(k,)``, degrees."""
     def line_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.degrees(np.arccos(np.clip(np.abs(np.einsum("ki,ki->k", a, b)), 0.0, 1.0)))
     pair = line_angle(d1, d2)
     off = np.maximum(line_angle(d1, np.broadcast_to(g1, d1.shape)), line_angle(d2, np.broadcast_to(g2, d2.shape)))
-    return p, pair, off
+    return pair, off
 
 
 def conjugate_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
@@ -250,8 +236,10 @@ def conjugate_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
     """
     loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
     g1, g2 = plan_guides(frame, guides)
-    flat = _flat_limit(hf)
-    p, pair, off = pair_survey(hf, frame, loops, EDGE_MARGIN * spacing, g1, g2, flat)
+    d1, d2 = grid_pair(hf, g1, g2)
+    pts, ins = grid_inside(hf, loops, EDGE_MARGIN * spacing)
+    p = pts[ins]
+    pair, off = pair_survey(d1[ins], d2[ins], g1, g2)
     if len(pair) and float(pair.min()) < MIN_PAIR_ANGLE_DEG:
         k = int(np.argmin(pair))
         w = frame.to_world(np.array([p[k, 0], p[k, 1], float(hf.f(p[k, 0], p[k, 1]))]))
@@ -260,6 +248,6 @@ def conjugate_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray]
             f"({w[0]:.0f}, {w[1]:.0f}) mm (a guide near an asymptotic direction of a saddle part); turn the "
             "guides ([surface] guides) or use net = 'sections'", element=f"({w[0]:.0f}, {w[1]:.0f})",
             value=float(pair[k]))
-    net, twist, seeding = traced_net(hf, frame, loops, spacing, min_face, conjugate_field(hf, g1, g2, flat),
+    net, twist, seeding = traced_net(hf, frame, loops, spacing, min_face, conjugate_field(hf, d1, d2),
                                      "conjugate", BALANCED)
     return net, twist, seeding, float(off.max()) if len(off) else 0.0

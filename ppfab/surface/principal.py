@@ -16,15 +16,13 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import GeometryError
 from .curvature import forms, principal
 from .heightfield import HeightField
 from .plan import PlanFrame
-from .sections import EDGE_MARGIN, FLAT, SectionsNet, _densify
+from .sections import EDGE_MARGIN, FLAT, SectionsNet, grid_inside
 from .traced import DirectionField, traced_net
-from .trim import inside
 
 BALANCED = 0.25
 """Edges within ``±BALANCED`` of the spacing need no re-seeding (:func:`~.traced.traced_net`)."""
@@ -50,11 +48,8 @@ def umbilics(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], mar
     k1, k2, _, _ = principal(*forms(hf, X, Y))
     gap = k1 - k2
     kmax = np.maximum(np.abs(k1), np.abs(k2))
-    pts = np.stack([X.ravel(), Y.ravel()], axis=1)
-    ins = inside(pts, loops).reshape(X.shape) if len(loops) else np.ones(X.shape, dtype=bool)
-    if len(loops) and margin > 0:
-        edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
-        ins &= (cKDTree(edge).query(pts)[0] >= margin).reshape(X.shape)
+    _, inside_flat = grid_inside(hf, loops, margin)
+    ins = inside_flat.reshape(X.shape)
     if not ins.any():
         return np.zeros((0, 3))
     scale = float(np.percentile(kmax[ins], 90))

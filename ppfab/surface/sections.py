@@ -87,17 +87,25 @@ def conjugate_slope(hf: HeightField, x: np.ndarray, y: np.ndarray, floor: float,
     return np.clip(-fxy * fyy / (fyy * fyy + floor * floor), -limit, limit)
 
 
-def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], limit: float,
-                      margin: float) -> float:
-    """Refuse when the conjugate direction comes within ``90° − MAX_ANGLE_DEG`` of the sections inside the
-    region, ``margin`` mm or more from its boundary (the fit is least sure at its edge); return the curvature
-    floor used to regularise the slope."""
+def grid_inside(hf: HeightField, loops: Sequence[np.ndarray], margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes of the fit's plan grid, ``(N, 2)`` in row-major order of ``(hf.x, hf.y)``, and ``(N,)`` whether
+    each lies inside the region ``loops`` and ``margin`` mm or more from its boundary (the fit is least sure at
+    its edge); every node without loops."""
     X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
     pts = np.stack([X.ravel(), Y.ravel()], axis=1)
     ins = inside(pts, loops) if len(loops) else np.ones(len(pts), dtype=bool)
     if len(loops) and margin > 0:
         edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
         ins &= cKDTree(edge).query(pts)[0] >= margin
+    return pts, ins
+
+
+def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], limit: float,
+                      margin: float) -> float:
+    """Refuse when the conjugate direction comes within ``90° − MAX_ANGLE_DEG`` of the sections inside the
+    region, ``margin`` mm or more from its boundary (the fit is least sure at its edge); return the curvature
+    floor used to regularise the slope."""
+    pts, ins = grid_inside(hf, loops, margin)
     p = pts[ins]
     fxx, fxy, fyy = hf.fxx(p[:, 0], p[:, 1]), hf.fxy(p[:, 0], p[:, 1]), hf.fyy(p[:, 0], p[:, 1])
     scale = float(np.max(np.abs(np.concatenate([fxx, fxy, fyy])))) if len(p) else 0.0
