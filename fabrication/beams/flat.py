@@ -80,40 +80,11 @@ def axis_marks(plate: BeamPlate, min_length: float = 1.0) -> tuple[np.ndarray, .
     return tuple(out)
 
 
-def _signature(q: np.ndarray, grid: float) -> tuple:
-    r = np.round(q / grid).astype(np.int64)
-    start = min(range(len(r)), key=lambda k: (r[k, 0], r[k, 1]))
-    r = np.roll(r, -start, axis=0)
-    return (len(r),) + tuple(r.ravel().tolist())
-
-
-def congruence_key(outline: np.ndarray, mirror: bool = True, grid: float = 0.1) -> tuple:
-    """A key equal for congruent outlines (rigid motions, and reflections with ``mirror``).
-
-    The outline is moved to its centroid and turned to its principal axes; of the
-    2 (or 4 with reflections) remaining poses the smallest rounded signature is kept.
-    """
-    p = np.asarray(outline, dtype=float)
-    c = p - p.mean(axis=0)
-    _, vecs = np.linalg.eigh(c.T @ c)
-    vecs = vecs[:, ::-1]
-    if np.linalg.det(vecs) < 0:          # a rotation, so that only the reflections below mirror
-        vecs[:, 1] *= -1
-    base = c @ vecs
-    keys = []
-    for sx, sy in ((1, 1), (-1, -1)) + (((-1, 1), (1, -1)) if mirror else ()):
-        q = base * np.array([sx, sy])
-        if polygon_area(q) < 0:
-            q = q[::-1]
-        keys.append(_signature(q, grid))
-    return min(keys)
-
-
 CONGRUENT_MM = 0.05
 """Two plate outlines are one type when, in their principal-axes poses, every vertex of one lies within this of
-the matching vertex of the other (mm, each coordinate): half the 0.1 mm grid the types were once rounded to,
-compared without rounding, so two congruent plates whose coordinates straddle a rounding boundary (743.149…
-and 743.150… mm) are not split into two types."""
+the matching vertex of the other (mm, each coordinate): half the 0.1 mm grid the types were once keyed by, compared
+without rounding, so two congruent plates whose coordinates straddle a rounding boundary (743.149… and 743.150…
+mm) are not split into two types."""
 
 
 def _poses(outline: np.ndarray, mirror: bool) -> list[np.ndarray]:
@@ -123,7 +94,7 @@ def _poses(outline: np.ndarray, mirror: bool) -> list[np.ndarray]:
     c = p - p.mean(axis=0)
     _, vecs = np.linalg.eigh(c.T @ c)
     vecs = vecs[:, ::-1]
-    if np.linalg.det(vecs) < 0:
+    if np.linalg.det(vecs) < 0:          # a rotation, so that only the reflections below mirror
         vecs[:, 1] *= -1
     base = c @ vecs
     out = []
@@ -144,6 +115,12 @@ def congruent(a: np.ndarray, b_poses: list[np.ndarray], tol: float = CONGRUENT_M
         if float(np.abs(b[shifts] - a[None]).max(axis=(1, 2)).min()) <= tol:
             return True
     return False
+
+
+def congruent_outlines(a: np.ndarray, b: np.ndarray, mirror: bool = True, tol: float = CONGRUENT_MM) -> bool:
+    """Whether two outlines ``(n, 2)`` are congruent (rigid motions, and reflections with ``mirror``) within
+    ``tol`` per vertex coordinate in their principal-axes poses: the test :func:`type_ids` groups plates by."""
+    return congruent(_poses(a, mirror)[0], _poses(b, mirror), tol)
 
 
 def type_ids(plates: list[BeamPlate], mirror: bool = True) -> dict[str, str]:
