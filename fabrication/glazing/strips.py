@@ -15,9 +15,18 @@ so the strip is the rectangle ``x0 ≤ x ≤ x1, |y| ≤ w/2`` at ``0 ≤ z ≤ 
 At every node one polyline *runs through*: the one with two spans there, of the lowest family (rows before
 columns); where no polyline has two spans, two spans of one family that kink by at most 30°, rows before columns (a
 re-entrant corner of a trimmed boundary, where the mesh's polylines stop but the beams go on),
-else — at a corner — the span of the lowest family (:func:`running_spans`).  Its strips end at the node, set back by
-``t_s · tan(κ/2)`` (κ the kink between the two spans in the beam plane) so that their top faces do not
-overlap.  Every other strip at the node *stops* where its rectangle clears the running strips' band
+else — at a corner — the span of the lowest family (:func:`running_spans`).  Its strips end at the node, each
+on its own side of the *mitre plane* of the two spans (through the node, normal ``o_e − o_f``, the unit
+directions from the node into the two spans), strip and gasket alike (:func:`mitre_setback`): square-cut,
+set back by
+
+    s = (max(0, H·(up·o_f)) + (w/2)·|ey·o_f|) / (1 − o_e·o_f),     H = t_s + t_g,
+
+which is ``H·tan(κ/2)`` where the polyline kinks by κ towards the glass (a valley: the two boxes' top corners
+meet on the mitre plane) and 0 where it kinks away (a ridge: their bottom edges meet at the node).  Before,
+the setback was ``t_s·tan(κ/2)`` either way, and in a valley each gasket ran ``t_g·tan(κ/2)`` into the
+next span's strip (0.73 mm on ``smallest_roof``).  Every other strip at the node *stops* where its rectangle
+clears the running strips' band
 ``|distance| ≤ w/2`` by the clearance ``c``: with ``θ`` the angle between the two spans,
 
     x_stop = (w/2 + c + (w/2)·|cos θ|) / sin θ.
@@ -108,6 +117,19 @@ def running_spans(node: int, spans: list[int], line_of: np.ndarray, family: np.n
     return {e for e in spans if int(line_of[e]) == int(line_of[first])}
 
 
+def mitre_setback(own: np.ndarray, other: np.ndarray, up: np.ndarray, ey: np.ndarray, height: float,
+                  half_width: float) -> float:
+    """How far (mm) a running strip and its gasket, the box ``|y| ≤ half_width, 0 ≤ z ≤ height`` of the frame
+    ``(own, ey, up)`` from the node, must start from the node to lie on its side of the mitre plane with the next
+    span (unit direction ``other`` from the node): a point ``x·own + y·ey + z·up`` has ``(·)·(own − other)
+    = x(1 − own·other) − y(ey·other) − z(up·other)``, so the box stays on its side from
+    ``x = (max(0, height·up·other) + half_width·|ey·other|) / (1 − own·other)``.  Two strips so cut do not
+    overlap (the mitre plane separates them); the square-cut ends leave a wedge between them that opens away
+    from the kink."""
+    return (max(0.0, height * float(up @ other)) + half_width * abs(float(ey @ other))) \
+        / max(1.0 - float(own @ other), 1e-9)
+
+
 def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingParams,
                 edge_normals: np.ndarray | None = None) -> list[Strip]:
     """One :class:`Strip` per mesh edge (see the module docstring); ``beam_ids`` per polyline;
@@ -130,8 +152,7 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
     running: dict[int, set[int]] = {}                  # node -> the spans that run through it
     for node, es in at.items():
         running[node] = running_spans(node, es, line_of, family, edges, direction)
-    counters: dict[str, int] = {}
-    out: list[Strip] = []
+    frames: list[tuple[Frame, float]] = []
     for e, (i, j) in enumerate(edges.tolist()):
         plane = pl.normalize(support.edge_planes[e])
         n, d = plane[:3], plane[3]
@@ -146,18 +167,22 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
         up = up - (up @ ex) * ex
         up = up / np.linalg.norm(up)
         ey = np.cross(up, ex)
-        frame = Frame(pa, ex, ey)
+        frames.append((Frame(pa, ex, ey), span))
+    height = ts + params.gasket_thickness
+    counters: dict[str, int] = {}
+    out: list[Strip] = []
+    for e, (i, j) in enumerate(edges.tolist()):
+        frame, span = frames[e]
         ends = []
         runs = []
         for node, sign in ((i, 1.0), (j, -1.0)):
             own = sign * direction[e]                   # from the node into this span
             if e in running[node]:
-                other = [f for f in running[node] if f != e]
                 setback = 0.0
-                for f in other:
-                    of = direction[f] if edges[f, 0] == node else -direction[f]
-                    kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
-                    setback = max(setback, ts * float(np.tan(0.5 * kink)))
+                into = sign * frame.ex                  # the frame's own axis (the span brought into its plane)
+                for f in running[node] - {e}:
+                    of = frames[f][0].ex if edges[f, 0] == node else -frames[f][0].ex
+                    setback = max(setback, mitre_setback(into, of, frame.normal, frame.ey, height, b))
                 ends.append(setback)
                 runs.append(True)
             else:

@@ -9,8 +9,9 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
   to ``ex`` — or, on an edge without panes, against the node axes in the plane — and ``ey = up × ex``;
 * its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns;
   where none has two, two spans of one family kinking by at most 30°, rows before columns),
-  set back by ``t_s · tan(κ/2)``; where it *stops*, at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node
-  against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
+  each square-cut on its side of the mitre plane of the two spans (through the node, normal ``o_e − o_f``),
+  strip and gasket together (``H = t_s + t_g``): ``H·tan(κ/2)`` in a valley, 0 on a ridge; where it *stops*,
+  at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
   ``t_s ≤ z ≤ t_s + t_g``: every vertex of each solid within :data:`GLAZING_TOL` of that box's corners.
 
@@ -136,11 +137,14 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
             own = sgn * direction[e]
             x = 0.0
             if e in running[node]:
-                for f in sorted(running[node]):
-                    if f != e:
-                        of = direction[f] if spans[f][1] == node else -direction[f]
-                        kink = np.arccos(np.clip(-(own @ of), -1.0, 1.0))
-                        x = max(x, ts * float(np.tan(0.5 * kink)))
+                # square-cut on its side of the mitre plane (normal own − other through the node): the box's end
+                # face at x from the node has its corners c = z·up + y·ey at x·own + c; each must have
+                # (x·own + c)·(own − other) ≥ 0, so x ≥ c·other / (1 − own·other) for every corner
+                into = sgn * ex
+                corners = [z * up + y * ey for z in (0.0, ts + tg) for y in (-b, b)]
+                for f in sorted(running[node] - {e}):
+                    of = direction[f] if spans[f][1] == node else -direction[f]
+                    x = max(x, max(float(c @ of) for c in corners) / max(1.0 - float(into @ of), 1e-9))
             else:
                 for f in sorted(running[node]):
                     of = direction[f] if spans[f][1] == node else -direction[f]
