@@ -82,6 +82,9 @@ def test_sequence_is_verified_by_an_independent_sweep(built):
     # and notched under the strips, none overlaps its plate in place by more than the tolerance)
     assert any(p.part.startswith("GS-") and p.through.startswith("B-") for p in passes)
     assert max(p.static for p in passes if p.part.startswith("GS-") and p.through.startswith("B-")) <= TOLERANCE
+    # ... and no two parts stand in one another in their final places (the running strips' gaskets of a valley
+    # node did, by 0.73 mm, before they met on the mitre plane)
+    assert max(p.static for p in passes) <= TOLERANCE
     # ... and only a plate named as having no single direction passes deeper than it overlaps in place
     assert [p for p in passes if p.excess > TOLERANCE and p.part not in blocked] == []
 
@@ -201,3 +204,22 @@ def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_t
         assert bool(deep) == passes, (above, hand)
         if passes:
             assert deep[0].depth == pytest.approx(10.0, abs=1e-6)      # through the pane's whole thickness
+
+
+def test_parts_overlapping_in_their_final_places_are_named(tmp_path, monkeypatch):
+    """A tampered build of ``smallest_roof`` (panes kinking by up to 20°): running strips cut square at the node
+    with no set-back (a gasket of a valley node then stands in the next span's strip). The check names each
+    overlap in place with the pair and its depth; the build as made has none (test above). A strip moved into its
+    own plate is the bevels check's (tests/test_plate_bevel.py)."""
+    import fabrication.glazing.strips as strips
+
+    monkeypatch.setattr(strips, "mitre_setback", lambda *a: 0.0)
+    v = _check(_write(tmp_path / "square", design_path=ROOT / "examples" / "smallest_roof.toml"))
+    found = [f for f in v.findings if "in its final place by" in f.message and "deeper than half" not in f.message]
+    assert found, [str(f) for f in v.findings[:5]]
+    pairs = [re.search(r"^(G[SK]-\S+) overlaps (G[SK]-\S+) in its final place by ([0-9.]+) mm", f"{f.element} "
+                       + f.message) for f in found]
+    assert all(pairs), [str(f) for f in found]
+    # the kink of smallest_roof's valleys is about 20°: strip + gasket, 11 mm, set back by nothing reach about
+    # 11·tan(10°) ≈ 1.9 mm past the mitre plane; the gasket stands in the next strip by up to that
+    assert 0.25 < max(float(m.group(3)) for m in pairs) < 2.5
