@@ -28,12 +28,16 @@ step  kind          insertion direction (the part moves along it from far away i
 ====  ============  =====================================================================================
 
 Empty steps are left out and the rest numbered 1, 2, …; the retention parts are those of
-:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).  A plate's common slot direction is the bisector of its extreme slot directions (as
-:func:`fabrication.beams.joints.assembly_check`); where the slots' directions spread so far that sliding through
-them moves the mating plate sideways by more than the joint clearance, the plate cannot be put in along any
-single direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming
-the part, the angle spread and the sideways travel (``ppfab verify``'s erection check then measures the sweep).
-A plate without slots goes in along the mean of its node axes (top edge → bottom edge).
+:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).  The rows go in first, into nothing, along the bisector of their slots' and end axes' directions.  A column
+goes in along the middle of the directions its slots and end cuts admit (:mod:`fabrication.beams.insertion`): a
+slot admits the directions within ``asin(c/L)`` of its own (``c`` the joint clearance, ``L`` the slot's length),
+an end cut butting against a row the half-plane of directions that bring the end towards it (the gap closes to
+its final ``c`` as the part arrives).  Where none is left, the plate cannot be put in along any single
+direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming the part,
+the angle spread and the sideways travel (``ppfab verify``'s erection check then measures the sweep;
+``[beams] segment = ["blocked"]`` cuts such columns into one-edge segments, which always go in).  Before, an
+end cut counted as a guide on both sides of its axis, and every one-edge segment between two rows was blocked
+by the angle between its two end axes.
 
 Nothing here measures a collision: ``fabrication/verify/erection.py`` proves the order on the written solids.
 """
@@ -45,6 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .beams.insertion import Blocked, blocked_plate, guide_bisector, plate_direction
 from .contract import gasket_id, node_id
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -96,23 +101,6 @@ class Insertion:
 
 
 @dataclass(frozen=True)
-class Blocked:
-    """A plate that cannot slide along one direction through all its slots: the angle spread of its slot
-    directions (degrees), the largest sideways travel of a mating plate in its slot (mm) and the clearance (mm)."""
-
-    part_id: str
-    spread_deg: float
-    play_mm: float
-    clearance_mm: float
-
-    def __str__(self) -> str:
-        return (f"{self.part_id}: the directions of its slots and end cuts spread {self.spread_deg:.2f}°, "
-                f"sliding it in moves a mating "
-                f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm): no "
-                f"single insertion direction")
-
-
-@dataclass(frozen=True)
 class ErectionPlan:
     """The sequence: ``insertions`` in step order, ``steps`` the kind of each step (index 0 is step 1) and the
     plates that no single direction puts in (``blocked``)."""
@@ -141,44 +129,6 @@ def _unit(v: np.ndarray) -> tuple[float, float, float]:
     return float(u[0]), float(u[1]), float(u[2])
 
 
-def _constraints(plate: "BeamPlate") -> tuple[np.ndarray, np.ndarray]:
-    """The in-plane directions (2D, top edge down, as angles unwrapped) a plate must slide along, and the length
-    over which each guides it: its slots (the slot length) and the node axes where it ends (an end cut parallel
-    to the axis slides past the plate it butts against only along that axis; the plate's depth)."""
-    dirs = [np.asarray(s.direction, dtype=float) for s in plate.slots]
-    lengths = [float(s.length) for s in plate.slots]
-    for v, _ in plate.trims:
-        dirs.append(plate.node_axis(int(v)))
-        lengths.append(float(plate.depth))
-    ang = np.unwrap(np.array([np.arctan2(d[1], d[0]) for d in dirs])) if dirs else np.zeros(0)
-    return ang, np.array(lengths)
-
-
-def plate_direction(plate: "BeamPlate") -> np.ndarray:
-    """``(3,)`` unit direction a beam plate is lowered along, in its plane: the bisector of the extreme directions
-    of :func:`_constraints` (slots and end axes); without either, the mean of its node axes top → bottom."""
-    ang, _ = _constraints(plate)
-    if len(ang):
-        mid = 0.5 * (ang.max() + ang.min())
-        return np.asarray(_unit(plate.frame.vec3d(np.array([np.cos(mid), np.sin(mid)]))))
-    down = (np.asarray(plate.bottom, dtype=float) - np.asarray(plate.top, dtype=float)).mean(axis=0)
-    return np.asarray(_unit(plate.frame.vec3d(down)))
-
-
-def blocked_plate(plate: "BeamPlate", clearance: float) -> Blocked | None:
-    """The :class:`Blocked` record of a plate whose slots and end cuts, slid along their bisector, move a mating
-    plate sideways by more than ``clearance`` (``L·|sin Δ|`` for a guide of length ``L`` at angle ``Δ``), else
-    ``None``."""
-    ang, length = _constraints(plate)
-    if len(ang) < 2:
-        return None
-    mid = 0.5 * (ang.max() + ang.min())
-    play = float((length * np.abs(np.sin(ang - mid))).max())
-    if play <= clearance + 1e-9:
-        return None
-    return Blocked(plate.part_id, float(np.degrees(ang.max() - ang.min())), play, clearance)
-
-
 def weld_id(part: str, to: str, vertex: int) -> str:
     """The erection row of a weld: ``weld:B-W03/B-U02@N0042`` (node), ``weld:B-U03-S01/B-U03-S02`` (a splice)."""
     return f"weld:{part}/{to}" + (f"@{node_id(vertex)}" if vertex >= 0 else "")
@@ -194,7 +144,9 @@ def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Pa
     blocked = []
     for plate in beams.plates:
         kind = "row" if plate.family == 0 else "column"
-        by_kind[kind].append((plate.part_id, _unit(plate_direction(plate))))
+        # the rows go in first, into nothing, along their slots' bisector; the columns onto them
+        way = guide_bisector(plate) if kind == "row" else plate_direction(plate, clearance)
+        by_kind[kind].append((plate.part_id, _unit(way)))
         if kind == "column":                       # the rows go in first, into nothing
             b = blocked_plate(plate, clearance)
             if b is not None:
@@ -203,7 +155,7 @@ def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Pa
         for w in glazing.welds:
             by_kind["weld"].append((weld_id(w.part, w.to, w.vertex), (0.0, 0.0, 0.0)))
         for sp in glazing.splices:
-            lower = plate_direction(plates[sp.pieces[0]])  # lowered beside the beam's face, as its first piece
+            lower = guide_bisector(plates[sp.pieces[0]])  # lowered beside the beam's face, as its first piece
             n = sp.frame.normal
             for pid in sp.part_ids:
                 by_kind["splice"].append((pid, _unit(lower - (lower @ n) * n)))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -13,9 +13,10 @@ from ppfab.support.structure import SupportStructure
 from ppfab.topology import FAMILY_NAMES
 
 from .flat import flat_parts, type_ids
+from .insertion import blocked_plate
 from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
 from .params import BeamParams
-from .plates import BeamPlate, SpliceClearances, layout_plates
+from .plates import BLOCKED_RULE, BeamPlate, SpliceClearances, layout_plates
 from .report import BeamRecord, BeamReport
 from .torsion import check_torsion
 
@@ -102,13 +103,12 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
         raise DesignError("beams", f"expected BeamParams, got {type(params).__name__}")
     if strict:
         check_torsion(support, params)
-    plates, defects = layout_plates(support, params, max_height, splice_clearances)
-    ids = [p.part_id for p in plates]
-    if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
-        raise DesignError("beams", "duplicate part ids")
-    joints, trims, slots, jdef = analyse_nodes(plates, support, params)
-    defects += jdef
-    final = [apply_joints(p, trims.get(p.part_id, []), slots.get(p.part_id, []), params, defects) for p in plates]
+    plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances)
+    if BLOCKED_RULE in params.segment:
+        blocked = sorted({p.polyline for p in final if p.family == 1 and blocked_plate(p, params.clearance_mm)})
+        if blocked:
+            params = replace(params, segment=[*params.segment, *blocked])
+            plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances)
     if splice_params is not None:
         final = with_splice_holes(final, splice_params, splice_ups)
     for p in final:
@@ -130,6 +130,19 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
 
 
 # root causes first: a self-intersecting outline is usually the consequence of crossing axes
+def _laid_out(support: SupportStructure, params: BeamParams, max_height: float, splice_clearances: SpliceClearances
+              ) -> tuple[list[BeamPlate], list[Finding], list[NodeJoint], list[BeamPlate]]:
+    """The plates as laid out, the defects so far, the node joints and the plates with their joints cut."""
+    plates, defects = layout_plates(support, params, max_height, splice_clearances)
+    ids = [p.part_id for p in plates]
+    if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
+        raise DesignError("beams", "duplicate part ids")
+    joints, trims, slots, jdef = analyse_nodes(plates, support, params)
+    defects += jdef
+    final = [apply_joints(p, trims.get(p.part_id, []), slots.get(p.part_id, []), params, defects) for p in plates]
+    return plates, defects, joints, final
+
+
 _PRIORITY = {"not_planar": 0, "axis_crossing": 1, "small_angle": 2, "short_segment": 3, "too_long": 4, "outline": 5}
 
 

@@ -57,8 +57,10 @@ class BeamParams:
     segment: list[int | str] = param([], doc="polylines cut into beams of one edge each at every node, in "
                                              "their planes: polyline ids (`ppfab check --polylines`) and rules "
                                              "'boundary', 'closed', 'singular', 'closed-singular' (see [support] "
-                                             "exclude) and 'nonplanar' (further than plane_tolerance from its "
-                                             "plane)")
+                                             "exclude), 'nonplanar' (further than plane_tolerance from its "
+                                             "plane) and 'blocked' (the column plates that no single direction "
+                                             "puts into their half-lap slots: cut into segments, each goes in "
+                                             "from the side its ends open to)")
     tool_radius: float = param(0.0, doc="radius of the cutting tool, mm: each inner corner at a slot's closed "
                                         "end gets a dog-bone relief, a circle of this radius through the corner, "
                                         "so that the mating plate seats fully; 0 = sharp corners (laser). Kerf "
@@ -89,7 +91,7 @@ class BeamParams:
         get_joint_type(self.joint, "joint")
         from ppfab.support.lines import RULES
 
-        rules = [r for r in RULES if r != "tangent"]
+        rules = [*(r for r in RULES if r != "tangent"), "blocked"]        # blocked: plates.BLOCKED_RULE
         for k, s in enumerate(self.segment):
             if isinstance(s, str) and s not in rules:
                 from ppfab.schema import suggest

@@ -242,14 +242,40 @@ def _in_plane_axes(axes: np.ndarray, n: np.ndarray, where: str) -> np.ndarray:
     return a / length[:, None]
 
 
-def make_plate(part_id: str, beam_id: str, polyline: int, family: int, piece: int, n_pieces: int,
-               plane: np.ndarray, chain_points: np.ndarray, chain_axes: np.ndarray, nodes: np.ndarray,
-               through: np.ndarray, chain: np.ndarray, params: BeamParams, node_points: np.ndarray) -> BeamPlate:
-    """A plate from its chain of top points ``(p, 3)`` and axes ``(p, 3)`` in ``plane`` (see module doc)."""
+@dataclass(frozen=True, eq=False)
+class PlateChain:
+    """What a plate is drawn through: its chain of top points ``points (p, 3)`` with their axes ``axes (p, 3)``
+    (the nodes' top points and, where a piece ends at a cut inside an edge, the cut's point and interpolated
+    axis); the mesh vertices it holds ``nodes (k,)``, their places in the chain ``chain (k,)`` and their top
+    points ``node_points (k, 3)``; ``through (k,)``: the polyline goes on past that node (else it ends there)."""
+
+    points: np.ndarray
+    axes: np.ndarray
+    nodes: np.ndarray
+    chain: np.ndarray
+    node_points: np.ndarray
+    through: np.ndarray
+
+
+@dataclass(frozen=True)
+class PlateName:
+    """Who a plate is: part id, beam id, polyline index and family, and its place among the beam's pieces."""
+
+    part_id: str
+    beam_id: str
+    polyline: int
+    family: int
+    piece: int = 0
+    n_pieces: int = 1
+
+
+def make_plate(name: PlateName, plane: np.ndarray, chain: PlateChain, params: BeamParams) -> BeamPlate:
+    """A plate drawn through ``chain`` in ``plane`` ``(4,)`` (see module doc)."""
+    part_id = name.part_id
     pln = pl.normalize(plane)
     n, d = pln[:3], pln[3]
-    top3 = chain_points - np.outer(chain_points @ n + d, n)
-    ahat = _in_plane_axes(chain_axes, n, part_id)
+    top3 = chain.points - np.outer(chain.points @ n + d, n)
+    ahat = _in_plane_axes(chain.axes, n, part_id)
     chord = top3[-1] - top3[0]
     if np.linalg.norm(chord) < 1e-9 * max(1.0, float(np.abs(top3).max())):
         chord = top3[1] - top3[0]
@@ -262,9 +288,10 @@ def make_plate(part_id: str, beam_id: str, polyline: int, family: int, piece: in
     top = frame.to2d(top3)
     bottom = top + params.depth * frame.vec2d(ahat)
     raw = _ccw(np.concatenate([top, bottom[::-1]], axis=0))
-    dev = float(np.abs(node_points @ n + d).max())
-    return BeamPlate(part_id, beam_id, polyline, family, piece, n_pieces, np.asarray(nodes, dtype=np.int64),
-                     np.asarray(through, dtype=bool), np.asarray(chain, dtype=np.int64), top, bottom,
+    dev = float(np.abs(chain.node_points @ n + d).max())
+    return BeamPlate(part_id, name.beam_id, name.polyline, name.family, name.piece, name.n_pieces,
+                     np.asarray(chain.nodes, dtype=np.int64), np.asarray(chain.through, dtype=bool),
+                     np.asarray(chain.chain, dtype=np.int64), top, bottom,
                      pln, frame, params.depth, params.thickness, dev, raw, raw)
 
 
@@ -272,6 +299,12 @@ def _continuous_family(support: SupportStructure, params: BeamParams) -> int:
     if params.continuous_family is not None:
         return params.continuous_family
     return support.planar_families[0] if support.planar_families else 0
+
+
+BLOCKED_RULE = "blocked"
+"""The ``[beams] segment`` rule for the column plates no single direction puts into their half-lap slots
+(:mod:`fabrication.beams.insertion`), applied by :func:`fabrication.beams.build.build_beams` once the slots are
+known."""
 
 
 def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.ndarray:
@@ -283,7 +316,7 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
     out = np.zeros(len(mesh.polylines), dtype=bool)
     if "nonplanar" in params.segment:
         out |= support.polyline_deviation > params.plane_tolerance
-    rest = [s for s in params.segment if s != "nonplanar"]
+    rest = [s for s in params.segment if s not in ("nonplanar", BLOCKED_RULE)]   # blocked: the beams stage's
     if rest:
         out |= select_polylines(mesh, rest, "beams.segment")
     return out
@@ -349,9 +382,9 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
             for k, (va, vb, e) in enumerate(zip(a, b, eids)):
                 pid = ids[l] if len(a) == 1 else contract.piece_id(ids[l], k, w)
                 pts = v[[va, vb]]
-                plate = make_plate(pid, ids[l], l, line.family, k, len(a), support.edge_planes[e], pts,
-                                   axes[[va, vb]], np.array([va, vb]), np.array([False, False]),
-                                   np.array([0, 1]), params, pts)
+                plate = make_plate(PlateName(pid, ids[l], l, line.family, k, len(a)), support.edge_planes[e],
+                                   PlateChain(pts, axes[[va, vb]], nodes=np.array([va, vb]), chain=np.array([0, 1]),
+                                              node_points=pts, through=np.array([False, False])), params)
                 plate.meta["segment"] = True        # one edge in its own support plane
                 plates.append(plate)
     return plates, defects
@@ -484,6 +517,7 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
         # a node is an end only where the polyline itself ends (pieces end at cuts inside edges)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
         pid = beam_id if len(pieces) == 1 else contract.piece_id(beam_id, r, w)
-        out.append(make_plate(pid, beam_id, l, line.family, r, len(pieces), plane, np.asarray(cp), ca_unit, vs[idx],
-                              through, np.asarray(chain), params, pts[idx]))
+        out.append(make_plate(PlateName(pid, beam_id, l, line.family, r, len(pieces)), plane,
+                              PlateChain(np.asarray(cp), ca_unit, nodes=vs[idx], chain=np.asarray(chain),
+                                         node_points=pts[idx], through=through), params))
     return out

@@ -239,8 +239,16 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress,
                         splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices,
                         splice_ups=strip_ups(design, support, panels) if panels is not None else None)
     refuse_crossing_plates(beams)
+    added = [k for k in beams.params.segment if isinstance(k, int) and k not in params.segment]
+    if added:
+        ids = beam_ids(support)
+        logging.getLogger("ppfab").warning(
+            "[beams] segment = [\"blocked\"]: %d column beam(s) that no single direction puts into their half-lap "
+            "slots are cut into one-edge segments welded between the rows (%s)", len(added),
+            ", ".join(ids[k] for k in added[:8]) + (" …" if len(added) > 8 else ""))
     t = beams.report.totals()
-    progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m")
+    progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m"
+                  + (f", {len(added)} blocked column beams segmented" if added else ""))
     return beams
 
 
