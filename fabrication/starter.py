@@ -392,17 +392,13 @@ def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]
     from ppfab.errors import GeometryError
     from ppfab.surface import SurfaceSpec, remesh
 
-    from .surfacefile import read_surface
+    from .surfacefile import METRES_BELOW, read_surface
 
     if not Path(source).is_file():
         raise DesignError("new", f"{source}: no such surface file (.3dm, .obj, .off, .stl, .ply)")
     sf = read_surface(source)
     ext = sf.samples.points.max(axis=0) - sf.samples.points.min(axis=0)
-    units = None
-    if sf.kind == "mesh" and ext.max() < 500.0:              # a roof a few hundred mm wide is in metres
-        units = "m"
-        sf = read_surface(source, units="m")
-        ext = ext * 1000.0
+    units = sf.samples.units if sf.kind == "mesh" else None   # the reader's guess, written down
     rel = os.path.relpath(Path(source).resolve(), out_dir).replace(os.sep, "/")
     spacing = float(min(1500.0, max(300.0, np.round(ext[:2].min() / 4.0, -2))))
     surface: dict[str, Any] = {"path": rel, "net": "sections", "spacing": spacing, "search_planes": True}
@@ -425,8 +421,9 @@ def _surface_start(source: str, out_dir: Path) -> tuple[dict[str, dict[str, Any]
         "beams": {"joint": "segmented", "continuous": "rows", "fallback": "segmented"},
     }
     head = [f"# Starter design for the surface {Path(source).name}, written by `ppfab new`.",
-            f"# Read: {sf.samples.source}, in {units or sf.samples.units}"
-            + (" (no units in the file: a mesh under 500 units wide is taken as metres)" if units else "")
+            f"# Read: {sf.samples.source}, in {sf.samples.units}"
+            + (f" (no units in the file: a mesh under {METRES_BELOW:g} units wide is taken as metres, a wider one "
+               "as mm)" if units else "")
             + f"; {ext[0] / 1000:.1f} × {ext[1] / 1000:.1f} × {ext[2] / 1000:.1f} m.",
             f"# Measured: {found}.",
             "# Proposed: rows = the planar sections, made P by [optimize] close to the surface (relative fairness",

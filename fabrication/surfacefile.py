@@ -200,6 +200,11 @@ def _read_3dm(p: Path, units: str | None, name: str | None) -> SurfaceFile:
     return SurfaceFile("nurbs", SurfaceSamples(pts, tri, tuple(loops), unit_name, source), srf, factor)
 
 
+METRES_BELOW = 500.0
+"""A triangle mesh that states no units and is narrower than this (in its own units) is read as metres: a roof
+under half a metre wide is not one (the same guess for ``ppfab new``, ``ppfab remesh`` and a build)."""
+
+
 def _read_mesh(p: Path, units: str | None) -> SurfaceFile:
     import trimesh
 
@@ -210,12 +215,17 @@ def _read_mesh(p: Path, units: str | None) -> SurfaceFile:
                                     f"{str(exc).splitlines()[0] if str(exc) else 'no detail'})") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise MeshFileError(str(p), "holds no faces; give a triangle (or polygon) mesh of the surface")
-    factor = UNITS[units or "mm"]
-    mesh = trimesh.Trimesh(np.asarray(loaded.vertices, dtype=float) * factor, np.asarray(loaded.faces),
-                           process=False)
+    raw = np.asarray(loaded.vertices, dtype=float)
+    note = ""
+    if units is None:
+        wide = float(np.ptp(raw, axis=0).max())
+        guess = "m" if wide < METRES_BELOW else "mm"
+        note = (f"{p.name} states no units: {wide:.4g} units wide, read as {guess} (a mesh under "
+                f"{METRES_BELOW:g} units wide is taken as metres; declare [surface] units or --units otherwise)")
+    factor = UNITS[units or guess]
+    mesh = trimesh.Trimesh(raw * factor, np.asarray(loaded.faces), process=False)
     loops = tuple(mesh.vertices[lp] for lp in boundary_loops(mesh))
-    note = "" if units else f"{p.name} states no units: read as mm (declare [surface] units otherwise)"
-    samples = SurfaceSamples(mesh.vertices, mesh.faces, loops, units or "mm", f"{p.name}: triangle mesh")
+    samples = SurfaceSamples(mesh.vertices, mesh.faces, loops, units or guess, f"{p.name}: triangle mesh")
     return SurfaceFile("mesh", samples, mesh, factor, note)
 
 

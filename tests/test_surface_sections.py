@@ -212,9 +212,16 @@ def test_units_of_a_mesh_are_declared_and_a_3dm_disagreeing_is_refused(tmp_path)
     tri = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0.2]], [[0, 1, 2]])
     p = tmp_path / "t.stl"
     tri.export(p)
-    in_m, in_mm = read_surface(p, units="m"), read_surface(p)
+    in_m, in_mm, guessed = read_surface(p, units="m"), read_surface(p, units="mm"), read_surface(p)
     assert np.allclose(in_m.samples.points, 1000.0 * in_mm.samples.points)
-    assert in_mm.note and not in_m.note
+    assert not in_mm.note and not in_m.note
+    # no units stated: a mesh 1 unit wide is no roof in mm, so it is read as metres and the note says so
+    assert guessed.samples.units == "m" and np.allclose(guessed.samples.points, in_m.samples.points)
+    assert "read as m " in guessed.note
+    wide = tmp_path / "wide.stl"
+    trimesh.Trimesh([[0, 0, 0], [12000, 0, 0], [0, 9000, 2000]], [[0, 1, 2]]).export(wide)
+    w = read_surface(wide)
+    assert w.samples.units == "mm" and "read as mm" in w.note and np.ptp(w.samples.points[:, 0]) == 12000
     src = tmp_path / "dome.3dm"
     write_nurbs(src, DOME, 12.0, 9.0, "Meters")
     with pytest.raises(DesignError, match="disagrees"):
