@@ -14,8 +14,7 @@ from typing import Any, Callable, Protocol
 
 import numpy as np
 
-from ppfab.errors import DesignError
-from ppfab.schema import suggest
+from ppfab.registry import Registry
 
 
 class Filler(Protocol):
@@ -56,39 +55,27 @@ class Strategy:
     runs: Callable[[Any, Any], list[Run]]
 
 
-STRATEGIES: dict[str, Strategy] = {}
+_TABLE: Registry[Strategy] = Registry("nesting mode", "fabrication.nesting.strategies")
+STRATEGIES: dict[str, Strategy] = _TABLE.entries
+"""The strategies registered so far (:func:`load_all` imports them all)."""
 
 
 def strategy(name: str, summary: str, rank: int) -> Callable:
     """Decorator registering ``runs(catalog, params) -> list[Run]`` as strategy ``name``."""
     def register(fn: Callable[[Any, Any], list[Run]]) -> Callable[[Any, Any], list[Run]]:
-        if name in STRATEGIES:
-            raise RuntimeError(f"nesting strategy {name!r} registered twice")
-        STRATEGIES[name] = Strategy(name, summary, rank, fn)
+        _TABLE.add(name, Strategy(name, summary, rank, fn))
         return fn
     return register
 
 
 def load_all() -> dict[str, Strategy]:
     """Import every strategy module (once) and return the registry."""
-    import importlib
-    import pkgutil
-
-    from . import strategies
-
-    for info in pkgutil.iter_modules(strategies.__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{strategies.__name__}.{info.name}")
-    return STRATEGIES
+    return _TABLE.load()
 
 
 def get_strategy(name: str, key: str = "nesting.mode") -> Strategy:
     """Look a strategy up by name; an unknown name lists the valid ones."""
-    load_all()
-    if name not in STRATEGIES:
-        raise DesignError(key, f"unknown nesting mode {name!r}{suggest(name, list(STRATEGIES))}; "
-                               f"valid modes: {', '.join(sorted(STRATEGIES))}")
-    return STRATEGIES[name]
+    return _TABLE.get(name, key)
 
 
 def rank_of(mode: str) -> int:
