@@ -518,10 +518,11 @@ def test_marking_and_drawings_on_a_real_mesh(dome_build):
 def test_the_real_dome_as_built_has_no_clash_and_every_pane_bears(dome_build, tmp_path):
     """The assembly checks of tests/test_assembly_clash.py on a second real mesh (DOS quad_dome, PP with four
     valence-3 vertices, half-lap joints, one-edge beams where the support leaves polylines out), as written:
-    no pane enters a strip or gasket (the kernel's common) and rays from every pane edge's underside land on a
+    no pane enters a strip or gasket, no strip, gasket or beam plate another (the kernel's common) and rays from every pane edge's underside land on a
     gasket across the bite (trimesh)."""
-    from test_assembly_clash import (no_pane_enters_a_strip_or_gasket,
+    from test_assembly_clash import (no_pane_enters_a_strip_or_gasket, no_strip_gasket_or_beam_plate_enters_another,
                                      rays_from_every_pane_edge_land_on_a_gasket_within_the_bite)
 
     no_pane_enters_a_strip_or_gasket(dome_build)
+    no_strip_gasket_or_beam_plate_enters_another(dome_build)
     rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(dome_build, tmp_path)

@@ -430,6 +430,17 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
     return out
 
 
+def _below_gasket(part: Prism, strip: Frame, underside: float) -> Prism:
+    """``part`` (a setting block or stop, a prism along its pane's normal ``N``) no higher than
+    :data:`BLOCK_BELOW_TOP` under the pressure gasket's underside, the plane ``underside`` mm along the strip
+    frame's normal ``n``: each top corner ``P + h·N`` needs ``(P + h·N − o)·n ≤ underside − BLOCK_BELOW_TOP``."""
+    n, N = strip.normal, part.frame.normal
+    feet = part.frame.to3d(part.outline) + part.z0 * N
+    room = (underside - BLOCK_BELOW_TOP - (feet - strip.origin) @ n) / max(float(N @ n), 1e-9)
+    cap = float(room.min())
+    return part if cap >= part.height else replace(part, height=max(cap, 1.0))
+
+
 def screw_clearance(axes: np.ndarray, diameter: float, panes: Sequence[tuple["Panel", int, float]]) -> float:
     """How far (mm) the glass beside the clamping screws' joint could move towards them, in the pane's plane, before
     it touches one; negative: the screw is in the glass, and the pane's edge would have to move back that much —
@@ -670,6 +681,19 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             # each pane's share of the plate's screws: by the tributary of its edge (half a joint each side)
             for panel, _ in on:
                 screws[panel.part_id] = screws.get(panel.part_id, 0.0) + len(xs) / len(on)
+    # a block or stop in the joint stands clear of the pressure gasket over it, not only of its own pane's top:
+    # beside a ridge the pane's top plane, carried past its edge into the joint, rises above the gasket's
+    # underside (the highest glass top under it) by the gap's share times tan(κ/2) — 0.37 mm into it on a real
+    # dome whose panes kink by 22°
+    under_gasket = {x.strip: x.z0 for x in parts if x.kind == "pressure_gasket"}
+    frame_of = {x.part_id: x.frame for x in strips}
+    parts = [_below_gasket(x, frame_of[x.strip], under_gasket[x.strip])
+             if x.kind in ("setting_block", "stop") and x.strip in under_gasket else x for x in parts]
+    for panel in panels:
+        seat = seat_of.get(panel.part_id, 0.0)
+        contact[panel.part_id] = min((min(b.z0 + b.height, seat + panel.thickness_mm) - max(b.z0, seat)
+                                      for b in parts if b.kind == "setting_block" and b.owner == panel.part_id),
+                                     default=contact[panel.part_id])
     out = []
     for panel in panels:
         k, strip, slope = down[panel.part_id]
