@@ -277,7 +277,6 @@ def bevelled_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
     """The beam set with every plate's top edge raised and bevelled under the glazing strips that lean more than
     ``glazing.bevel_min_deg`` off it (new plate records; type ids and report records follow: a bevelled plate
     is its own type unless another has the same outline and bevels)."""
-    from .build import BeamSet
     from .flat import type_ids
 
     if glazing is None or not glazing.strips:
@@ -306,4 +305,4 @@ def bevelled_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
             area = float(polygon_area(p.cut_outline))
             r = replace(r, area_mm2=area, mass_kg=area * p.thickness * density * 1e-9)
         records.append(replace(r, type_id=types.get(r.part_id, r.type_id)))
-    return BeamSet(beams.support, beams.params, plates, beams.joints, replace(beams.report, records=tuple(records)), types)
+    return replace(beams, plates=plates, report=replace(beams.report, records=tuple(records)), types=types)

@@ -31,6 +31,8 @@ class BeamSet:
     joints: tuple[NodeJoint, ...]
     report: BeamReport
     types: dict
+    blocked_segmented: tuple[int, ...] = ()
+    """The column polylines ``[beams] segment = ["blocked"]`` cut into one-edge segments (none were asked by id)."""
 
     @cached_property
     def by_id(self) -> dict[str, BeamPlate]:
@@ -104,6 +106,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     if strict:
         check_torsion(support, params)
     plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances)
+    blocked: list[int] = []
     if BLOCKED_RULE in params.segment:
         blocked = sorted({p.polyline for p in final if p.family == 1 and blocked_plate(p, params.clearance_mm)})
         if blocked:
@@ -126,7 +129,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
                         float(np.degrees(support.torsion.max())) if len(support.edges) else 0.0, float(off.max()))
     if strict:
         report.raise_if_defects()
-    return BeamSet(support, params, tuple(final), tuple(joints), report, types)
+    return BeamSet(support, params, tuple(final), tuple(joints), report, types, tuple(blocked))
 
 
 # root causes first: a self-intersecting outline is usually the consequence of crossing axes

@@ -274,8 +274,6 @@ def _notched(plate: BeamPlate, strips: Sequence["Strip"], clearance: float, delt
 def notched_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
     """The beam set with every plate notched under the strips of other beams that run over it
     (:func:`notch_plate`; area and mass of the report's records follow the notched outline)."""
-    from .build import BeamSet
-
     if glazing is None or not glazing.strips:
         return beams
     at_node: dict[int, list] = {}
@@ -297,5 +295,4 @@ def notched_beams(beams: "BeamSet", glazing: "Glazing | None") -> "BeamSet":
             area = float(polygon_area(q.outline))
             r = replace(r, area_mm2=area, mass_kg=area * q.thickness * density * 1e-9)
         records.append(r)
-    return BeamSet(beams.support, beams.params, tuple(plates), beams.joints,
-                   replace(beams.report, records=tuple(records)), beams.types)
+    return replace(beams, plates=tuple(plates), report=replace(beams.report, records=tuple(records)))

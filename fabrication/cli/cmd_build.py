@@ -84,8 +84,7 @@ def structure_counts(result: "Build") -> dict[str, object]:
     plates = result.beams.plates
     planar = result.support.polyline_planar
     ids = beam_ids(result.support)
-    asked = result.design.beams.segment
-    blocked = [k for k in result.beams.params.segment if isinstance(k, int) and k not in asked]
+    blocked = result.beams.blocked_segmented
     return {"planar_polylines": int(planar.sum()) if planar is not None else 0,
             "left_out": [{"beam": b, "polyline": k, "reason": why} for b, k, why in change.left_out],
             "segmented_blocked": [{"beam": ids[k], "polyline": k} for k in blocked],

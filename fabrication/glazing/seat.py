@@ -7,10 +7,12 @@ is the outline moved along ``N`` by its *seat* ``h``: the underside at ``z = h``
 
 The gasket tops are not parallel to the pane: each is tilted by half the kink between the panes on its edge.
 So no single height makes the whole underside touch.  The seat is the lowest height at which the pane
-penetrates no gasket: for every gasket whose top face, projected along ``N`` into the pane's plane, overlaps
-the pane's outline (the overlap polygon, by shapely), the height along ``N`` of the gasket's top plane above
-each vertex of the overlap; the pane's underside and a plane meet in a line, so the highest of these vertices
-is the highest point of the gasket under the pane,
+penetrates no gasket: for every face of a strip with its gasket that faces the pane (the gasket's top, and a
+side where it leans under the pane: a running strip's square end beside a node can reach under the corner of
+the next pane by a fraction of a millimetre, 0.17 mm on a real grid when only the tops counted) whose
+projection along ``N`` into the pane's plane overlaps the pane's outline (the overlap polygon, by shapely),
+the height along ``N`` of the face's plane above each vertex of the overlap; the pane's underside and a plane
+meet in a line, so the highest of these vertices is the highest point of the box under the pane,
 
     z(v) = ((T − O − v₃)·u) / (N·u),    h = max over overlaps and their vertices of z(v),
 
@@ -70,9 +72,19 @@ class PaneSeat:
         return max((c.gap for c in self.contacts), default=0.0)
 
 
-def _gasket_top(strip: Strip, gasket: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(4, 3)`` corners of a gasket's top face and its unit normal (the strip's up)."""
-    return strip.top_corners(gasket), strip.frame.normal
+def _faces(strip: Strip, gasket: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The faces a pane can come down on of the strip with its gasket, the box ``x0 ≤ x ≤ x1, |y| ≤ w/2,
+    0 ≤ z ≤ t_s + t_g`` of the strip frame: the gasket's top and the four sides, each as ``(4, 3)`` corners and
+    its outward unit normal."""
+    f = strip.frame
+    flat = f.to3d(strip.outline())                       # counter-clockwise: x0,-b  x1,-b  x1,b  x0,b
+    up = f.normal
+    top = flat + (strip.thickness + gasket) * up
+    out = [(top, up)]
+    for k, normal in enumerate((-f.ey, f.ex, f.ey, -f.ex)):
+        a, b = k, (k + 1) % 4
+        out.append((np.array([flat[a], flat[b], top[b], top[a]]), normal))
+    return out
 
 
 def seat_pane(panel: "Panel", strips: Sequence[Strip], gasket: float, nominal: float) -> PaneSeat:
@@ -85,17 +97,21 @@ def seat_pane(panel: "Panel", strips: Sequence[Strip], gasket: float, nominal: f
     pane = Polygon(np.asarray(panel.outline, dtype=float))
     tops: list[tuple[str, float, float]] = []
     for s in strips:
-        top, u = _gasket_top(s, gasket)
-        denom = float(N @ u)
-        if denom <= 1e-6:                            # a gasket facing away from the pane cannot carry it
-            continue
-        under = Polygon(f.to2d(top)).convex_hull.intersection(pane)
-        if under.is_empty or under.area <= 1e-9:
-            continue
-        ring = np.array(getattr(under, "exterior", under.convex_hull.exterior).coords)[:-1]
-        v3 = f.to3d(ring)
-        z = ((top[0] - v3) @ u) / denom
-        tops.append((s.part_id, float(under.area), float(z.max())))
+        area, highest = 0.0, -np.inf
+        for k, (face, u) in enumerate(_faces(s, gasket)):
+            denom = float(N @ u)
+            if denom <= 1e-6:                        # a face turned away from the pane cannot carry it
+                continue
+            under = Polygon(f.to2d(face)).convex_hull.intersection(pane)
+            if under.is_empty or under.area <= 1e-9:
+                continue
+            ring = np.array(getattr(under, "exterior", under.convex_hull.exterior).coords)[:-1]
+            v3 = f.to3d(ring)
+            highest = max(highest, float((((face[0] - v3) @ u) / denom).max()))
+            if k == 0:
+                area = float(under.area)
+        if np.isfinite(highest):
+            tops.append((s.part_id, area, highest))
     if not tops:
         return PaneSeat(panel.part_id, float(nominal), ())
     h = max(z for _, _, z in tops)

@@ -239,7 +239,7 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress,
                         splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices,
                         splice_ups=strip_ups(design, support, panels) if panels is not None else None)
     refuse_crossing_plates(beams)
-    added = [k for k in beams.params.segment if isinstance(k, int) and k not in params.segment]
+    added = list(beams.blocked_segmented)
     if added:
         ids = beam_ids(support)
         logging.getLogger("ppfab").warning(

@@ -10,7 +10,8 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
 * its ends: where its polyline *runs through* a node (the polyline with two spans there, rows before columns;
   where none has two, two spans of one family kinking by at most 30°, rows before columns),
   each square-cut on its side of the mitre plane of the two spans (through the node, normal ``o_e − o_f``),
-  strip and gasket together (``H = t_s + t_g``): ``H·tan(κ/2)`` in a valley, 0 on a ridge; where it *stops*,
+  strip and gasket together (``H = t_s + t_g``), and at least ``t_s·tan(κ/2)``: ``H·tan(κ/2)`` in a valley,
+  ``t_s·tan(κ/2)`` on a ridge; where it *stops*,
   at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
   ``t_s ≤ z ≤ t_s + t_g``: every vertex of each solid within :data:`GLAZING_TOL` of that box's corners.
@@ -144,7 +145,8 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
                 corners = [z * up + y * ey for z in (0.0, ts + tg) for y in (-b, b)]
                 for f in sorted(running[node] - {e}):
                     of = direction[f] if spans[f][1] == node else -direction[f]
-                    x = max(x, max(float(c @ of) for c in corners) / max(1.0 - float(into @ of), 1e-9))
+                    x = max(x, max(float(c @ of) for c in corners) / max(1.0 - float(into @ of), 1e-9),
+                            ts * float(np.tan(0.5 * np.arccos(np.clip(-(into @ of), -1.0, 1.0)))))
             else:
                 for f in sorted(running[node]):
                     of = direction[f] if spans[f][1] == node else -direction[f]
