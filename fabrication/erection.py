@@ -28,8 +28,9 @@ step  kind          insertion direction (the part moves along it from far away i
 ====  ============  =====================================================================================
 
 Empty steps are left out and the rest numbered 1, 2, …; the retention parts are those of
-:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).  The rows go in first, into nothing, along the bisector of their slots' and end axes' directions.  A column
-goes in along the middle of the directions its slots and end cuts admit (:mod:`fabrication.beams.insertion`): a
+:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).
+The rows go in first, into nothing, along the bisector of their slots' and end axes' directions.  A column goes
+in along the middle of the directions its slots and end cuts admit (:mod:`fabrication.beams.insertion`): a
 slot admits the directions within ``asin(c/L)`` of its own (``c`` the joint clearance, ``L`` the slot's length),
 an end cut butting against a row the half-plane of directions that bring the end towards it (the gap closes to
 its final ``c`` as the part arrives).  Where none is left, the plate cannot be put in along any single
@@ -54,7 +55,6 @@ from .contract import gasket_id, node_id
 
 if TYPE_CHECKING:  # pragma: no cover
     from .beams import BeamSet
-    from .beams.plates import BeamPlate
     from .glazing import Glazing
     from .glazing.retention import Retention
     from .panels import Panel

@@ -7,9 +7,9 @@ slot ``c`` wider than it); an end cut along a node axis, butting against the pla
 node, admits the half-plane of directions that bring the end towards that plate (widened by ``asin(c/D)``
 over the depth ``D``).  A plate going onto plates already standing goes in along the middle of the arc all of
 them admit nearest its mean axis (:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One
-going in first, into nothing, goes along the bisector of its guides (:func:`guide_bisector`).  Used by the erection sequence
-(:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]`` rule, which cuts such
-column plates into one-edge segments (each admits the side its two ends open to).
+going in first, into nothing, goes along the bisector of its guides (:func:`guide_bisector`).  Used by the
+erection sequence (:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]``
+rule, which cuts such column plates into one-edge segments (each admits the side its two ends open to).
 """
 
 from __future__ import annotations
@@ -38,7 +38,6 @@ class Blocked:
                 f"sliding it in moves a mating "
                 f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm): no "
                 f"single insertion direction")
-
 
 
 def _unit3(v: np.ndarray) -> np.ndarray:
