@@ -207,8 +207,9 @@ def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_t
 
 
 def test_parts_overlapping_in_their_final_places_are_named(tmp_path, monkeypatch):
-    """A tampered build of ``smallest_roof`` (panes kinking by up to 20°): running strips cut square at the node
-    with no set-back (a gasket of a valley node then stands in the next span's strip). The check names each
+    """A tampered build of ``smallest_roof`` (panes kinking by up to 20°): running strips ending without the mitre
+    rule, set back by ``t_s·tan(κ/2)`` only as before it (a gasket of a valley node then stands in the next span's
+    strip). The check names each
     overlap in place with the pair and its depth; the build as made has none (test above). A strip moved into its
     own plate is the bevels check's (tests/test_plate_bevel.py)."""
     import fabrication.glazing.strips as strips
@@ -220,6 +221,6 @@ def test_parts_overlapping_in_their_final_places_are_named(tmp_path, monkeypatch
     pairs = [re.search(r"^(G[SK]-\S+) overlaps (G[SK]-\S+) in its final place by ([0-9.]+) mm", f"{f.element} "
                        + f.message) for f in found]
     assert all(pairs), [str(f) for f in found]
-    # the kink of smallest_roof's valleys is about 20°: strip + gasket, 11 mm, set back by nothing reach about
-    # 11·tan(10°) ≈ 1.9 mm past the mitre plane; the gasket stands in the next strip by up to that
+    # the kink of smallest_roof's valleys is about 20°: the gasket's top, 3 mm above the strip's, reaches about
+    # 3·tan(10°) past the mitre plane on each side; it stood 0.73 mm in the next strip
     assert 0.25 < max(float(m.group(3)) for m in pairs) < 2.5
