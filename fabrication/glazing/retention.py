@@ -614,8 +614,6 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         seat = seat_of.get(panel.part_id, 0.0)
         blocks = setting_blocks(panel, seat, strip, k, p, stops, across)
         parts += blocks
-        contact[panel.part_id] = min(min(b.z0 + b.height, seat + panel.thickness_mm) - max(b.z0, seat)
-                                     for b in blocks if b.kind == "setting_block")
         down[panel.part_id] = (k, strip, slope)
         if strip is not None:
             r = 0.5 * (bolt.diameter if bolt else 0.0) + JOINT_SPARE
@@ -689,11 +687,11 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
     frame_of = {x.part_id: x.frame for x in strips}
     parts = [_below_gasket(x, frame_of[x.strip], under_gasket[x.strip])
              if x.kind in ("setting_block", "stop") and x.strip in under_gasket else x for x in parts]
-    for panel in panels:
-        seat = seat_of.get(panel.part_id, 0.0)
-        contact[panel.part_id] = min((min(b.z0 + b.height, seat + panel.thickness_mm) - max(b.z0, seat)
-                                      for b in parts if b.kind == "setting_block" and b.owner == panel.part_id),
-                                     default=contact[panel.part_id])
+    for b in parts:                                  # the height over which each pane bears on its blocks
+        if b.kind == "setting_block":
+            base = seat_of.get(b.owner, 0.0)
+            bears = min(b.z0 + b.height, base + panel_of[b.owner].thickness_mm) - max(b.z0, base)
+            contact[b.owner] = min(contact.get(b.owner, bears), bears)
     out = []
     for panel in panels:
         k, strip, slope = down[panel.part_id]

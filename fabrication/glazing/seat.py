@@ -78,9 +78,8 @@ def _faces(strip: Strip, gasket: float) -> list[tuple[np.ndarray, np.ndarray]]:
     its outward unit normal."""
     f = strip.frame
     flat = f.to3d(strip.outline())                       # counter-clockwise: x0,-b  x1,-b  x1,b  x0,b
-    up = f.normal
-    top = flat + (strip.thickness + gasket) * up
-    out = [(top, up)]
+    top = strip.top_corners(gasket)
+    out = [(top, f.normal)]
     for k, normal in enumerate((-f.ey, f.ex, f.ey, -f.ex)):
         a, b = k, (k + 1) % 4
         out.append((np.array([flat[a], flat[b], top[b], top[a]]), normal))

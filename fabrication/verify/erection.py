@@ -472,8 +472,7 @@ def _bodies(v: Verification, files: dict[str, Any], wanted: set[str]) -> dict[st
 def _overlap_hint(a: str, b: str) -> str:
     """What to look at when parts of kinds ``a`` and ``b`` overlap in place."""
     pair = {a, b}
-    steel = {"row", "column", "beam", "splice"}
-    if pair & {"strip", "gasket"} and pair & steel:
+    if pair & {"strip", "gasket"} and pair & {"row", "column", "splice"}:
         return ("; the plate's bevel or notch does not clear the strip (docs/glazing.md): a splice cut keeps its "
                 "plate's full top edge, so a cut beside a node may need another beams.max_length")
     if pair <= {"strip", "gasket"}:
