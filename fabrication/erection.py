@@ -36,7 +36,8 @@ an end cut butting against a row the half-plane of directions that bring the end
 its final ``c`` as the part arrives).  Where none is left, the plate cannot be put in along any single
 direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming the part,
 the angle spread and the sideways travel (``ppfab verify``'s erection check then measures the sweep;
-``[beams] segment = ["blocked"]`` cuts such columns into one-edge segments, which always go in).  Before, an
+``[beams] segment = ["blocked"]`` cuts such columns across the node axis at the nodes a greedy scan finds to
+give every part a way in, :func:`fabrication.beams.insertion.node_breaks`; a one-edge part always goes in).  Before, an
 end cut counted as a guide on both sides of its axis, and every one-edge segment between two rows was blocked
 by the angle between its two end axes.
 

@@ -86,10 +86,14 @@ def node_records(beams: Any) -> list[dict]:
         plates = []
         for pid, role in zip(parts, j.roles if j else ()):
             p = by_id[pid]
-            seq = p.nodes if p.meta.get("segment") else support.polylines[p.polyline].vertices
+            line = support.polylines[p.polyline]
+            seq = line.vertices
             pos = int(np.flatnonzero(seq == k)[0])
-            nbrs = [int(seq[q % len(seq)]) for q in (pos - 1, pos + 1)
-                    if 0 <= q < len(seq) or (support.polylines[p.polyline].closed and not p.meta.get("segment"))]
+            at = int(np.flatnonzero(p.nodes == k)[0])
+            c = int(p.chain[at])
+            # a plate ending at the node has its edges on its own side only (segments, parts cut at nodes)
+            steps = (-1, 1) if bool(p.through[at]) else (1,) if c == 0 else (-1,) if c == len(p.top) - 1 else (-1, 1)
+            nbrs = [int(seq[(pos + d) % len(seq)]) for d in steps if 0 <= pos + d < len(seq) or line.closed]
             faces: set[int] = set()
             for w in nbrs:
                 e = edge_id.get((min(k, w), max(k, w)))

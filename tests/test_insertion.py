@@ -1,10 +1,14 @@
 """How a beam plate goes into its place (``fabrication.beams.insertion``): the directions its half-lap slots and
-end cuts admit, and ``[beams] segment = ["blocked"]``, which cuts the column plates no direction puts in into
-one-edge segments.
+end cuts admit, and ``[beams] segment = ["blocked"]``, which cuts the column plates no direction puts in across
+their node axes at the nodes a greedy scan finds, each part then welded to the row there.
 
 The window is checked against a brute-force search over 7,200 directions that tests each constraint as a dot
-product; the segmented build against ``ppfab verify``'s erection check, which sweeps the written solids along
-the written directions with manifold3d (no code shared with the window)."""
+product (a slot admits a direction whose sideways travel over its length stays within half the clearance, an end
+cut one that does not pull the end away from its row faster than half the clearance over the depth allows); the
+cut builds against that search on every column plate, and against ``ppfab verify``'s erection check, which
+sweeps the written solids along the written directions with manifold3d (no code shared with the window).
+Inputs: ``smallest_roof``, ``conical_spheres_pp`` and the DOS quad_dome (WWmore/DOS, objs/obj_pq/quad_dome.obj,
+in ``tests/data/meshes``) optimised to PP."""
 
 from __future__ import annotations
 
@@ -59,17 +63,18 @@ def _unit(deg: float) -> np.ndarray:
     return np.array([np.cos(np.radians(deg)), np.sin(np.radians(deg))])
 
 
-def _admitted_brute(plate: _Plate, clearance: float) -> np.ndarray:
-    """The admitted directions among 7,200 on the circle: within asin(c/L) of every slot (its sine), and not moving
-    any end away from its butting plate faster than the clearance over the depth allows."""
-    t = np.radians(np.arange(7200) * 0.05)
+def _admitted_brute(plate: _Plate, clearance: float, n: int = 7200) -> np.ndarray:
+    """The admitted directions among ``n`` on the circle: within asin(c/2L) of every slot (its sine; the mating
+    plate is centred, with half the clearance each side), and not moving any end away from its butting plate faster
+    than the half clearance it stands off over the depth allows."""
+    t = np.arange(n) * (2.0 * np.pi / n)
     d = np.stack([np.cos(t), np.sin(t)], axis=1)
     ok = np.ones(len(t), dtype=bool)
     for s in plate.slots:
         u = np.asarray(s.direction) / np.linalg.norm(s.direction)
-        ok &= (d @ u > 0) & (np.abs(d[:, 0] * u[1] - d[:, 1] * u[0]) * s.length <= clearance + 1e-9)
+        ok &= (d @ u > 0) & (np.abs(d[:, 0] * u[1] - d[:, 1] * u[0]) * s.length <= 0.5 * clearance + 1e-9)
     for n in plate.outward.values():
-        ok &= d @ n >= -clearance / plate.depth - 1e-9
+        ok &= d @ n >= -0.5 * clearance / plate.depth - 1e-9
     return d[ok]
 
 
@@ -88,7 +93,7 @@ def test_a_segment_between_two_plates_comes_in_from_the_side_its_ends_open_to(sp
     d = _unit(np.degrees(mid))
     brute = _admitted_brute(plate, CLEARANCE)
     assert len(brute)
-    assert d @ left >= -CLEARANCE / plate.depth - 1e-9 and d @ right >= -CLEARANCE / plate.depth - 1e-9
+    assert d @ left >= -0.5 * CLEARANCE / plate.depth - 1e-9 and d @ right >= -0.5 * CLEARANCE / plate.depth - 1e-9
     near = brute[brute @ d > np.cos(np.radians(30.0))]     # the admitted arc it chose (parallel ends admit two)
     centre = near.mean(axis=0)
     assert np.degrees(np.arccos(np.clip(d @ (centre / np.linalg.norm(centre)), -1, 1))) < 0.1
@@ -124,9 +129,9 @@ def test_random_plates_agree_with_the_brute_force_search():
         found += 1
         d = _unit(np.degrees(mid))
         for s in slots:
-            assert abs(d[0] * s.direction[1] - d[1] * s.direction[0]) * s.length <= CLEARANCE + 1e-6
+            assert abs(d[0] * s.direction[1] - d[1] * s.direction[0]) * s.length <= 0.5 * CLEARANCE + 1e-6
         for n in outward.values():
-            assert d @ n >= -CLEARANCE / plate.depth - 1e-9
+            assert d @ n >= -0.5 * CLEARANCE / plate.depth - 1e-9
         assert len(brute) > 0
     assert found > 40 and blocked > 40
 
@@ -160,10 +165,11 @@ def _rows(folder: Path, name: str) -> list[dict[str, str]]:
     return read_csv(folder / name)
 
 
-def test_blocked_columns_become_segments_that_the_sweep_lets_in(roofs):
-    """As built, three interior columns of ``smallest_roof`` are blocked (their slots spread 20–76°); with the
-    rule they, and only they, are one-edge segments, nothing is blocked, and the erection check's sweep of every
-    written solid along its written direction passes through nothing (and so proves the order)."""
+def test_blocked_columns_are_cut_and_the_sweep_lets_them_in(roofs):
+    """As built, three interior columns of ``smallest_roof`` are blocked (their slots spread 20–76°, so no part
+    of two edges admits a direction either); with the rule they, and only they, are cut at every node, nothing is
+    blocked, and the erection check's sweep of every written solid along its written direction passes through
+    nothing (and so proves the order)."""
     from fabrication.verify import Verification
     from fabrication.verify.erection import TOLERANCE, check_erection
 
@@ -201,3 +207,133 @@ def test_the_terminal_and_json_say_which_beams_were_segmented(tmp_path, capsys, 
     assert [g["beam"] for g in got] == ["B-W01", "B-W02", "B-W03"]
     said = [r.getMessage() for r in caplog.records if r.name == "ppfab"]
     assert any('segment = ["blocked"]: 3 column beam(s)' in m for m in said), said
+
+
+def test_a_polyline_is_read_in_runs_between_its_breaks():
+    """Open: the runs share their break node and the polyline's ends never break it; closed: read from the first
+    break round to it, one run per break."""
+    from fabrication.beams.plates import _spans
+
+    vs = np.array([10, 11, 12, 13, 14, 15])
+    assert [(list(p), c) for p, c in _spans(vs, False, {12, 14, 10})] == [([0, 1, 2], False), ([2, 3, 4], False),
+                                                                          ([4, 5], False)]
+    assert [(list(p), c) for p, c in _spans(vs, False, set())] == [([0, 1, 2, 3, 4, 5], False)]
+    assert [(list(p), c) for p, c in _spans(vs, True, set())] == [([0, 1, 2, 3, 4, 5], True)]
+    got = [list(vs[p]) for p, _ in _spans(vs, True, {13, 10})]
+    assert got == [[10, 11, 12, 13], [13, 14, 15, 10]]
+    assert [list(vs[p]) for p, _ in _spans(vs, True, {12})] == [[12, 13, 14, 15, 10, 11, 12]]
+
+
+def _beams_stage(design, blocked: bool):
+    from dataclasses import replace
+
+    from fabrication.pipeline.progress import Progress
+    from fabrication.pipeline.stages import stage_beams, stage_geometry, stage_panels, stage_quality, stage_support
+
+    p = Progress(quiet=True)
+    g = stage_geometry(design, p, False)
+    support = stage_support(design, g, p)
+    panels = stage_panels(design, g, p, stage_quality(g, p))
+    out = []
+    for rule in ([], ["blocked"]) if blocked else ([],):
+        beams = replace(design.beams, segment=[*design.beams.segment, *rule])
+        out.append(stage_beams(replace(design, sections={**design.sections, "beams": beams}), support, p, panels))
+    return support, out
+
+
+def _brute_admits(plate, clearance: float) -> bool:
+    """A direction among 360,000 (0.001° apart: two slots' arcs of ±0.5° can leave a few hundredths of a degree)
+    that every slot and end cut of the written plate record admits."""
+    fake = _Plate([_Slot(np.asarray(sl.direction, dtype=float), float(sl.length)) for sl in plate.slots],
+                  {int(v): -np.asarray(plate.body_direction(int(v)), dtype=float) for v, _ in plate.trims},
+                  depth=float(plate.depth))
+    return len(_admitted_brute(fake, clearance, 360_000)) > 0
+
+
+def _dome_design(tmp_path_factory):
+    from fabrication import parse_design
+    from ppfab.io import load_mesh, write_obj
+    from ppfab.optimize import optimize
+
+    res = optimize(load_mesh(ROOT / "tests" / "data" / "meshes" / "DOS__quad_dome.obj"), {"families": "both"})
+    assert res.targets_met
+    path = tmp_path_factory.mktemp("dome") / "dome.obj"
+    write_obj(res.mesh, path)
+    import tomllib
+
+    return parse_design(tomllib.loads(
+        f'[design]\nname = "dome"\n[geometry]\nmesh = "{path.as_posix()}"\nscale = 1000.0\n[support]\n'
+        'method = "pp"\n[beams]\njoint = "halflap"\ndepth = 200.0\nthickness = 15.0\nfallback = "segmented"\n'))
+
+
+@pytest.mark.parametrize("which", ["conical_spheres_pp", "quad_dome"])
+def test_blocked_columns_are_cut_only_where_no_direction_puts_them_in(which, tmp_path_factory):
+    """Without the rule some column plates admit no direction (brute force); with it every column plate admits
+    one, the cuts are at nodes of the beams that were blocked, and those beams keep continuous parts through
+    some of their nodes (the one-edge rule cut them all: 285 → 0 interior nodes on ``conical_spheres_pp``)."""
+    from fabrication import load_design
+
+    design = (load_design(ROOT / "examples" / "conical_spheres_pp.toml") if which == "conical_spheres_pp"
+              else _dome_design(tmp_path_factory))
+    support, (plain, cut) = _beams_stage(design, blocked=True)
+    c = design.beams.clearance_mm
+    was = {p.polyline for p in plain.plates if p.family == 1 and not _brute_admits(p, c)}
+    assert was, "the example no longer has blocked columns"
+    assert all(_brute_admits(p, c) for p in cut.plates if p.family == 1)
+    breaks = dict(cut.node_breaks)
+    assert set(breaks) <= was                                   # only beams that were blocked are cut
+    for l, nodes in breaks.items():
+        interior = set(int(k) for k in support.polylines[l].vertices[1:-1])
+        assert set(nodes) <= interior
+        parts = sorted((p for p in cut.plates if p.polyline == l), key=lambda p: p.piece)
+        for k in nodes:                                         # both parts end there, neither runs through
+            at = [p for p in parts if k in p.nodes.tolist()]
+            assert len(at) == 2 and not any(bool(p.through[p.nodes.tolist().index(k)]) for p in at)
+    kept = sum(int(p.through.sum()) for p in cut.plates if p.polyline in breaks)
+    assert kept > 0                                             # not every node cut, as one-edge segments are
+    assert sum(len(v) for v in breaks.values()) < sum(len(support.polylines[l].vertices) - 2 for l in breaks)
+
+
+@pytest.mark.slow
+def test_a_column_cut_at_nodes_is_welded_there_not_spliced_and_goes_in(tmp_path_factory, capsys):
+    """``conical_spheres_pp`` with the rule, written and verified: ``ppfab verify`` passes (splices, welds, STEP,
+    erection); every part meeting another at a break node has its weld to the row running through it in
+    welds.csv and no splice cover plate joins two parts that meet at a node; the erection sweep of the written
+    solids passes through nothing deeper than its tolerance."""
+    from fabrication.cli import main
+    from fabrication.verify import Verification
+    from fabrication.verify.erection import TOLERANCE, check_erection
+
+    text = (ROOT / "examples" / "conical_spheres_pp.toml").read_text()
+    assert '[beams]\njoint = "halflap"\n' in text
+    text = text.replace('[beams]\njoint = "halflap"\n', '[beams]\njoint = "halflap"\nsegment = ["blocked"]\n', 1)
+    folder = _write(tmp_path_factory.mktemp("cut") / "out", text)
+    assert main(["verify", str(folder), "--quiet"]) == 0, capsys.readouterr()
+    parts = _rows(folder, "parts.csv")
+    beams = [r for r in parts if r["kind"] == "beam" and r["beam_id"].startswith("B-W")]
+    nodes = {r["part_id"]: json.loads(r["nodes"]) for r in beams}
+    by_beam: dict[str, list[dict[str, str]]] = {}
+    for r in beams:
+        by_beam.setdefault(r["beam_id"], []).append(r)
+    welds = {(r["node"], r["part"]) for r in _rows(folder, "welds.csv") if r["joint"] == "T"}
+    meets = 0
+    for rows in by_beam.values():
+        rows.sort(key=lambda r: int(r["piece"]))
+        for a, b in zip(rows, rows[1:]):
+            shared = set(nodes[a["part_id"]]) & set(nodes[b["part_id"]])
+            if shared:
+                (k,) = shared
+                meets += 1
+                assert (str(k), a["part_id"]) in welds and (str(k), b["part_id"]) in welds
+    assert meets >= 40
+    for r in parts:
+        if r["kind"] == "splice":
+            a, _, b = r["joins"].partition(";")
+            assert not set(nodes.get(a, [])) & set(nodes.get(b, [])), r["part_id"]
+    v = Verification(folder)
+    v.data["manifest"] = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    v.data["parts"] = parts
+    check_erection(v)
+    assert v.findings == []
+    assert [x for x in v.data["erection_passes"] if x.excess > TOLERANCE] == []
+    assert not any(r["blocked_spread_deg"] for r in _rows(folder, "erection.csv"))

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -13,7 +13,7 @@ from ppfab.support.structure import SupportStructure
 from ppfab.topology import FAMILY_NAMES
 
 from .flat import flat_parts, type_ids
-from .insertion import blocked_plate
+from .insertion import blocked_plate, node_breaks
 from .joints import NodeJoint, analyse_nodes, apply_joints, assembly_check, plate_checks
 from .params import BeamParams
 from .plates import BLOCKED_RULE, BeamPlate, SpliceClearances, layout_plates
@@ -31,8 +31,9 @@ class BeamSet:
     joints: tuple[NodeJoint, ...]
     report: BeamReport
     types: dict
-    blocked_segmented: tuple[int, ...] = ()
-    """The column polylines ``[beams] segment = ["blocked"]`` cut into one-edge segments (none were asked by id)."""
+    node_breaks: tuple[tuple[int, tuple[int, ...]], ...] = ()
+    """``(polyline, vertices)`` of every column beam ``[beams] segment = ["blocked"]`` cut across its node axes,
+    and where (:func:`fabrication.beams.insertion.node_breaks`)."""
 
     @cached_property
     def by_id(self) -> dict[str, BeamPlate]:
@@ -106,12 +107,16 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
     if strict:
         check_torsion(support, params)
     plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances)
-    blocked: list[int] = []
+    breaks: dict[int, set[int]] = {}
     if BLOCKED_RULE in params.segment:
-        blocked = sorted({p.polyline for p in final if p.family == 1 and blocked_plate(p, params.clearance_mm)})
-        if blocked:
-            params = replace(params, segment=[*params.segment, *blocked])
-            plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances)
+        for _ in range(_BREAK_ROUNDS):
+            more = {(p.polyline, k) for p in final if p.family == 1
+                    for k in node_breaks(p, params.clearance_mm) if k not in breaks.get(p.polyline, ())}
+            if not more:
+                break
+            for l, k in more:
+                breaks.setdefault(l, set()).add(k)
+            plates, defects, joints, final = _laid_out(support, params, max_height, splice_clearances, breaks)
     if splice_params is not None:
         final = with_splice_holes(final, splice_params, splice_ups)
     for p in final:
@@ -129,14 +134,24 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
                         float(np.degrees(support.torsion.max())) if len(support.edges) else 0.0, float(off.max()))
     if strict:
         report.raise_if_defects()
-    return BeamSet(support, params, tuple(final), tuple(joints), report, types, tuple(blocked))
+    return BeamSet(support, params, tuple(final), tuple(joints), report, types,
+                   tuple((l, tuple(sorted(breaks[l]))) for l in sorted(breaks)))
+
+
+_BREAK_ROUNDS = 8
+"""How often the ``blocked`` rule lays the plates out again.  A beam cut at nodes has its splice cuts planned
+again between the breaks, which can make new pieces that no direction puts in; those are cut in the next round
+(fig16_conical1_pp_conical: 88, 48, 24 and 4 new breaks in four rounds, then none).  What is still blocked
+after the last round is said by the erection sequence (:mod:`fabrication.erection`)."""
 
 
 # root causes first: a self-intersecting outline is usually the consequence of crossing axes
-def _laid_out(support: SupportStructure, params: BeamParams, max_height: float, splice_clearances: SpliceClearances
+def _laid_out(support: SupportStructure, params: BeamParams, max_height: float, splice_clearances: SpliceClearances,
+              breaks: dict[int, set[int]] | None = None
               ) -> tuple[list[BeamPlate], list[Finding], list[NodeJoint], list[BeamPlate]]:
-    """The plates as laid out, the defects so far, the node joints and the plates with their joints cut."""
-    plates, defects = layout_plates(support, params, max_height, splice_clearances)
+    """The plates as laid out (``breaks``: polyline → vertices it is cut at), the defects so far, the node joints
+    and the plates with their joints cut."""
+    plates, defects = layout_plates(support, params, max_height, splice_clearances, breaks)
     ids = [p.part_id for p in plates]
     if len(set(ids)) != len(ids):  # pragma: no cover - naming is by construction unique
         raise DesignError("beams", "duplicate part ids")

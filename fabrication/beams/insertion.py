@@ -2,14 +2,16 @@
 direction puts in.
 
 A plate moves in its own plane.  A half-lap slot along ``s`` guiding over a length ``L`` admits the directions
-within ``asin(c/L)`` of ``s`` (``c`` the joint clearance: the mating plate moves ``L·|sin Δ|`` sideways in a
-slot ``c`` wider than it); an end cut along a node axis, butting against the plate that runs through that
-node, admits the half-plane of directions that bring the end towards that plate (widened by ``asin(c/D)``
-over the depth ``D``).  A plate going onto plates already standing goes in along the middle of the arc all of
+within ``asin(c/2L)`` of ``s`` (``c`` the joint clearance: the mating plate, centred in a slot ``c`` wider than
+it, moves ``L·|sin Δ|`` sideways and has ``c/2`` on either side); an end cut along a node axis, set back
+``c/2`` from the plate that runs through that node, admits the half-plane of directions that bring the end
+towards that plate (widened by ``asin(c/2D)`` over the depth ``D``).  Measured on the nominal plates, as the
+written solids are; a plate at its upper thickness deviation leaves half the fit alone.  A plate going onto plates already standing goes in along the middle of the arc all of
 them admit nearest its mean axis (:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One
 going in first, into nothing, goes along the bisector of its guides (:func:`guide_bisector`).  Used by the
 erection sequence (:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]``
-rule, which cuts such column plates into one-edge segments (each admits the side its two ends open to).
+rule, which cuts such column plates at the nodes a greedy scan finds to give every part a way in (:func:`node_breaks`; a
+one-edge part admits the side its two ends open to).
 """
 
 from __future__ import annotations
@@ -36,7 +38,8 @@ class Blocked:
     def __str__(self) -> str:
         return (f"{self.part_id}: the directions of its slots and end cuts spread {self.spread_deg:.2f}°, "
                 f"sliding it in moves a mating "
-                f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm): no "
+                f"plate {self.play_mm:.2f} mm sideways in its slot (clearance {self.clearance_mm:.2f} mm, half "
+                f"each side): no "
                 f"single insertion direction")
 
 
@@ -71,26 +74,36 @@ def _guides(plate: "BeamPlate") -> tuple[np.ndarray, np.ndarray]:
     return np.array([_angle(d, ref) for d in dirs]), np.array(lengths)
 
 
-def _window(plate: "BeamPlate", clearance: float) -> float | None:
-    """The angle (plate frame) of the direction a plate is moved along into its place: the middle of the arc of
-    directions its slots and end cuts all admit nearest its mean axis (top → bottom); ``None`` where none is
-    admitted by all, or nothing constrains it.
+Arc = tuple[float, float]
+"""A set of directions on the circle: ``(centre, half-width)``, radians in the plate's frame."""
 
-    A slot along ``s`` guiding over a length ``L`` admits the directions within ``asin(c/L)`` of ``s`` (the
-    mating plate moves ``L·|sin Δ|`` sideways in a slot ``c`` wider than it).  An end cut along the node axis
-    faces the plate it butts against on one side only: coming in along ``d`` its gap to that plate is
-    ``c + h·(d·n)`` at ``h`` before its place (``n`` the end's outward normal in the plate's plane), so it admits
-    the half-plane ``d·n ≥ 0``, widened by ``asin(c/D)`` over the depth ``D``.  A piece between two plates so
-    comes in from the side its ends open to — from below where the axes spread downwards — where a guide on both
-    sides of each axis would have to be parallel to both."""
-    arcs: list[tuple[float, float]] = []             # (centre, half-width) on the circle of directions
-    for sl in plate.slots:
-        w = float(np.arcsin(min(1.0, clearance / max(float(sl.length), 1e-9))))
-        arcs.append((float(np.arctan2(sl.direction[1], sl.direction[0])), w))
-    for v, _ in plate.trims:
-        out = -np.asarray(plate.body_direction(int(v)), dtype=float)
-        arcs.append((float(np.arctan2(out[1], out[0])),
-                     0.5 * np.pi + float(np.arcsin(min(1.0, clearance / max(float(plate.depth), 1e-9))))))
+
+def _slot_arc(slot, clearance: float) -> Arc:
+    """The directions a slot along ``s`` guiding over a length ``L`` admits: within ``asin(c/2L)`` of ``s`` (the
+    mating plate, centred, has half the clearance on either side)."""
+    w = float(np.arcsin(min(1.0, 0.5 * clearance / max(float(slot.length), 1e-9))))
+    return float(np.arctan2(slot.direction[1], slot.direction[0])), w
+
+
+def _end_arc(outward: np.ndarray, clearance: float, depth: float) -> Arc:
+    """The directions an end cut with the in-plane outward normal ``outward`` admits: the half-plane
+    ``d·n ≥ 0`` widened by ``asin(c/2D)`` over the depth ``D`` (the end stands ``c/2`` off the plate it butts
+    against, :func:`fabrication.beams.joints.end_setback`)."""
+    return (float(np.arctan2(outward[1], outward[0])),
+            0.5 * np.pi + float(np.arcsin(min(1.0, 0.5 * clearance / max(float(depth), 1e-9)))))
+
+
+def _arcs(plate: "BeamPlate", clearance: float) -> list[Arc]:
+    """The arcs of every slot and end cut of a plate (:func:`_window`)."""
+    arcs = [_slot_arc(sl, clearance) for sl in plate.slots]
+    arcs += [_end_arc(-np.asarray(plate.body_direction(int(v)), dtype=float), clearance, plate.depth)
+             for v, _ in plate.trims]
+    return arcs
+
+
+def _middle(arcs: list[Arc], ref: float) -> float | None:
+    """The middle of the arc of directions every one of ``arcs`` admits nearest the angle ``ref``; ``None`` where
+    they admit none in common, or nothing constrains."""
     arcs = [(c, w) for c, w in arcs if w < np.pi]
     if not arcs:
         return None
@@ -102,7 +115,6 @@ def _window(plate: "BeamPlate", clearance: float) -> float | None:
         return all(abs(off(c, t) if off(c, t) <= np.pi else off(c, t) - 2.0 * np.pi) <= w + 1e-12 for c, w in arcs)
 
     ends = [c + w for c, w in arcs]
-    ref = _reference(plate)
     best: tuple[float, float] | None = None
     for start in (c - w for c, w in arcs):
         if not admitted(start):
@@ -113,6 +125,70 @@ def _window(plate: "BeamPlate", clearance: float) -> float | None:
         if best is None or away < best[0]:
             best = (away, mid)
     return None if best is None else best[1]
+
+
+def _window(plate: "BeamPlate", clearance: float) -> float | None:
+    """The angle (plate frame) of the direction a plate is moved along into its place: the middle of the arc of
+    directions its slots and end cuts all admit nearest its mean axis (top → bottom); ``None`` where none is
+    admitted by all, or nothing constrains it.
+
+    A slot along ``s`` guiding over a length ``L`` admits the directions within ``asin(c/2L)`` of ``s`` (the
+    mating plate, centred in a slot ``c`` wider than it, moves ``L·|sin Δ|`` sideways).  An end cut along the
+    node axis faces the plate it butts against on one side only: coming in along ``d`` its gap to that plate is
+    ``c/2 + h·(d·n)`` at ``h`` before its place (``n`` the end's outward normal in the plate's plane), so it
+    admits the half-plane ``d·n ≥ 0``, widened by ``asin(c/2D)`` over the depth ``D``.  A piece between two plates so
+    comes in from the side its ends open to — from below where the axes spread downwards — where a guide on both
+    sides of each axis would have to be parallel to both."""
+    return _middle(_arcs(plate, clearance), _reference(plate))
+
+
+def _run_arcs(plate: "BeamPlate", clearance: float, a: int, b: int) -> list[Arc]:
+    """The arcs of the part of ``plate`` from its node ``a`` to its node ``b`` (indices into ``plate.nodes``,
+    ``a < b``) were it cut across the node axis at each of them that is not the plate's first or last node: the
+    slots and end cuts of the nodes between, and at each new end the end cut butting against the plate that
+    runs through that node (its outward normal away from the run's next node, square to the node's axis)."""
+    last = len(plate.nodes) - 1
+    nodes = [int(k) for k in plate.nodes]
+    cut = {nodes[a]} if a > 0 else set()
+    if b < last:
+        cut.add(nodes[b])
+    keep = set(nodes[a:b + 1]) - cut
+    arcs = [_slot_arc(sl, clearance) for sl in plate.slots if int(sl.node) in keep]
+    arcs += [_end_arc(-np.asarray(plate.body_direction(int(v)), dtype=float), clearance, plate.depth)
+             for v, _ in plate.trims if int(v) in keep]
+    for k, toward in ((a, a + 1), (b, b - 1)):
+        if nodes[k] not in cut:
+            continue
+        s = plate.node_axis(nodes[k])
+        into = plate.top[plate.chain[toward]] - plate.top[plate.chain[k]]
+        into = into - (into @ s) * s
+        arcs.append(_end_arc(-into / np.linalg.norm(into), clearance, plate.depth))
+    return arcs
+
+
+def node_breaks(plate: "BeamPlate", clearance: float) -> list[int]:
+    """The nodes (vertex ids) at which to cut a plate no single direction puts in (:func:`blocked_plate`) so that
+    every part admits one: scanning from its first node, each part runs to the furthest node whose run
+    (:func:`_run_arcs`) still admits a direction, and is cut there; each part ends against the plate that runs through its end node as one-edge segments do.  Empty for a plate that is
+    not blocked or has no node to cut at."""
+    n = len(plate.nodes)
+    if n < 3 or blocked_plate(plate, clearance) is None:
+        return []
+    ref = _reference(plate)
+
+    def admits(a: int, b: int) -> bool:
+        arcs = _run_arcs(plate, clearance, a, b)
+        return b == a + 1 or not arcs or _middle(arcs, ref) is not None
+
+    out: list[int] = []
+    a = 0
+    while not admits(a, n - 1):
+        b = a + 1
+        while b + 1 < n - 1 and admits(a, b + 1):
+            b += 1
+        out.append(int(plate.nodes[b]))
+        a = b
+    return out
 
 
 def guide_bisector(plate: "BeamPlate") -> np.ndarray:

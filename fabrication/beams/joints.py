@@ -268,21 +268,28 @@ def plate_checks(plate: BeamPlate, params: BeamParams) -> list[Finding]:
 
 
 def assembly_check(plate: BeamPlate, clearance: float) -> tuple[float, float, float, bool]:
-    """Can the plate slide into place through all its slots along one direction?
-
-    The best common direction bisects the extreme slot directions; sliding the slot length ``L``
-    along it moves the mating plate sideways by ``L·|sin Δ|`` in a slot at angle ``Δ``.
+    """Can the plate slide into place through all its slots and past the plates its ends butt against along one
+    direction?  The report's view of :mod:`fabrication.beams.insertion`, which the erection sequence uses too.
 
     Returns
     -------
-    spread_deg, play_mm (largest sideways travel), extra_mm (beyond ``clearance``), slidable
+    spread_deg : the angle spread of its slot directions
+    play_mm : the largest sideways travel ``L·|sin Δ|`` of a mating plate in its slot (guiding length ``L``, angle
+        ``Δ`` to the direction the plate goes in: :func:`~fabrication.beams.insertion.plate_direction`)
+    extra_mm : how far that exceeds the half clearance each side of the mating plate
+    slidable : some direction puts it in (:func:`~fabrication.beams.insertion.blocked_plate` finds none)
     """
-    if not plate.slots:
+    from .insertion import blocked_plate, plate_direction
+
+    if not plate.slots and not plate.trims:
         return 0.0, 0.0, 0.0, True
-    ang = np.array([np.arctan2(s.direction[1], s.direction[0]) for s in plate.slots])
-    ang = np.unwrap(ang)
-    mid = 0.5 * (ang.max() + ang.min())
-    length = np.array([s.cut_length for s in plate.slots])
-    play = float((length * np.abs(np.sin(ang - mid))).max())
-    extra = max(0.0, play - clearance)
-    return float(np.degrees(ang.max() - ang.min())), play, extra, extra <= 1e-9
+    ok = blocked_plate(plate, clearance) is None
+    if not plate.slots:
+        return 0.0, 0.0, 0.0, ok
+    ang = np.unwrap(np.array([np.arctan2(s.direction[1], s.direction[0]) for s in plate.slots]))
+    way = np.asarray(plate.frame.vec2d(plate_direction(plate, clearance)), dtype=float)
+    length = np.array([float(s.length) for s in plate.slots])
+    unit = np.array([[np.cos(a), np.sin(a)] for a in ang])
+    play = float((length * np.abs(unit[:, 0] * way[1] - unit[:, 1] * way[0])).max())
+    extra = max(0.0, play - 0.5 * clearance)
+    return float(np.degrees(ang.max() - ang.min())), play, extra, ok

@@ -59,8 +59,9 @@ class BeamParams:
                                              "'boundary', 'closed', 'singular', 'closed-singular' (see [support] "
                                              "exclude), 'nonplanar' (further than plane_tolerance from its "
                                              "plane) and 'blocked' (the column plates that no single direction "
-                                             "puts into their half-lap slots: cut into segments, each goes in "
-                                             "from the side its ends open to)")
+                                             "puts into their half-lap slots: cut across the node axis only at "
+                                             "the nodes that give every part a way in, each part welded to the "
+                                             "row there)")
     tool_radius: float = param(0.0, doc="radius of the cutting tool, mm: each inner corner at a slot's closed "
                                         "end gets a dog-bone relief, a circle of this radius through the corner, "
                                         "so that the mating plate seats fully; 0 = sharp corners (laser). Kerf "

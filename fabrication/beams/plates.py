@@ -21,6 +21,7 @@ Long or closed planar polylines are cut into pieces inside edges, clear of the j
 
 from __future__ import annotations
 
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -323,7 +324,8 @@ def segmented_polylines(support: SupportStructure, params: BeamParams) -> np.nda
 
 
 def layout_plates(support: SupportStructure, params: BeamParams, max_height: float = 0.0,
-                  splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> tuple[list[BeamPlate], list[Finding]]:
+                  splice_clearances: SpliceClearances = (("bolted", 0.0),),
+                  node_breaks: Mapping[int, Collection[int]] | None = None) -> tuple[list[BeamPlate], list[Finding]]:
     """All plates of the structure before joints, and the problems found on the way.
 
     A polyline becomes continuous plates when its plane is a support plane
@@ -335,7 +337,9 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
     ``splice_clearances``: the splice kinds a split beam may get, in order of preference, each with how much
     further (mm) than the joints need its cuts stay from a node (a bolted splice: half its cover plate; a
     welded one: room for the weld preparation); a beam takes the first kind its cuts fit with, and its pieces
-    carry it in ``meta["splice"]``.  With half-lap
+    carry it in ``meta["splice"]``.  ``node_breaks``: polyline → the vertices at which its continuous plates are
+    cut across the node axis, each part ending there against the plate that runs through (the
+    ``[beams] segment = ["blocked"]`` rule, :func:`fabrication.beams.insertion.node_breaks`).  With half-lap
     joints every polyline must be planar; with segmented joints every polyline of the
     continuous family — a polyline that is not is reported (``not_planar``) and cut
     into edge plates so the rest can still be inspected.
@@ -371,7 +375,8 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
             defects.append(Finding("not_planar", "", ids[l], dev, params.plane_tolerance,
                                   f"{ids[l]}: {why}; {jt.planar_requirement}"))
         if planar and not segmented:
-            plates.extend(_continuous(support, params, l, ids[l], defects, max_height, splice_clearances))
+            breaks = frozenset(int(k) for k in (node_breaks or {}).get(l, ()))
+            plates.extend(_continuous(support, params, l, ids[l], defects, max_height, splice_clearances, breaks))
         else:
             a, b = vs[:-1], vs[1:]
             if line.closed and len(vs) > 2:
@@ -424,39 +429,66 @@ def _node_clearance(support: SupportStructure, params: BeamParams, l: int) -> np
     return out
 
 
+def _spans(vs: np.ndarray, closed: bool, breaks: Collection[int]) -> list[tuple[np.ndarray, bool]]:
+    """The runs of a polyline between the vertices of ``breaks``: ``(positions into vs, closed)``, in order,
+    consecutive runs sharing their break node; without a break inside, the polyline itself.  A closed polyline
+    cut at breaks is read from its first break round to it."""
+    n = len(vs)
+    at = [q for q in range(n) if int(vs[q]) in breaks and (closed or 0 < q < n - 1)]
+    if not at:
+        return [(np.arange(n), closed)]
+    seq = [(at[0] + q) % n for q in range(n + 1)] if closed else list(range(n))
+    out: list[tuple[np.ndarray, bool]] = []
+    start = 0
+    for i in range(1, len(seq)):
+        if seq[i] in at or i == len(seq) - 1:
+            out.append((np.asarray(seq[start:i + 1]), False))
+            start = i
+    return out
+
+
 def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
                 defects: list[Finding], max_height: float = 0.0,
-                splice_clearances: SpliceClearances = (("bolted", 0.0),)) -> list[BeamPlate]:
+                splice_clearances: SpliceClearances = (("bolted", 0.0),),
+                breaks: Collection[int] = frozenset()) -> list[BeamPlate]:
     """The pieces of a planar polyline, cut where :func:`~fabrication.beams.splitting.plan_cuts` finds
     room: anywhere inside an edge, clear of the joints, each piece's flat length (extent along its chord,
     bottom-edge overhang at the ends included) at most ``max_length`` and its height across at most
-    ``max_height``.  The splice kinds of ``splice_clearances`` are tried in order; the beam takes the first
-    whose clearance leaves room for its cuts (a beam in one piece takes none)."""
+    ``max_height``, and across the node axis at each vertex of ``breaks`` (:func:`_spans`; pieces meeting there
+    end against the plate running through, not spliced).  The splice kinds of ``splice_clearances`` are tried in
+    order; the beam takes the first whose clearance leaves room for all its cuts (a beam whose pieces meet only
+    at breaks takes none)."""
     line = support.polylines[l]
     vs = line.vertices
-    closed = bool(line.closed and len(vs) > 2)
+    spans = _spans(vs, bool(line.closed and len(vs) > 2), breaks)
     joints = _node_clearance(support, params, l)
     # a plate's top edge raised by a bevel under its strips (fabrication.beams.bevel_cut) meets its end cuts
     # further out: the pieces are planned one thickness shorter (a conical example's piece grew 4.7 mm)
     max_length = max(params.max_length - params.thickness, 0.5 * params.max_length) if params.max_length else 0.0
     tried: list[str] = []
+    problem, long_x, high_y = None, 0.0, 0.0
+    pieces: list[BeamPlate] = []
     for kind, extra in splice_clearances:
-        plan = plan_cuts(support.vertices[vs], support.axes[vs], support.polyline_planes[l], closed, params.depth,
-                         max_length, joints + extra, max_height)
-        pieces = _pieces(support, params, l, beam_id, list(plan.cuts), closed)
+        plans = [plan_cuts(support.vertices[vs[pos]], support.axes[vs[pos]], support.polyline_planes[l], closed,
+                           params.depth, max_length, joints[pos] + extra, max_height) for pos, closed in spans]
+        counts = [len(plan.cuts) if closed else len(plan.cuts) + 1 for plan, (_, closed) in zip(plans, spans)]
+        pieces = []
+        for plan, (pos, closed) in zip(plans, spans):
+            pieces += _pieces(support, params, l, beam_id, list(plan.cuts), closed, pos, len(pieces), sum(counts))
         sizes = [(float(np.ptp(p.raw_outline[:, 0])), float(np.ptp(p.raw_outline[:, 1]))) for p in pieces]
-        long_x = max(x for x, _ in sizes)
-        high_y = max(y for _, y in sizes)
+        long_x = max((x for x, _ in sizes), default=0.0)
+        high_y = max((y for _, y in sizes), default=0.0)
+        problem = next((plan.problem for plan in plans if plan.problem), None)
         over = ((max_length > 0 and long_x > max_length + 1e-6)
                 or (max_height > 0 and high_y > max_height + 1e-6))
-        if not (plan.problem or over):
-            if len(pieces) > 1:
+        if not (problem or over):
+            if any(plan.cuts for plan in plans):
                 for p in pieces:
                     p.meta["splice"] = kind
             return pieces
         tried.append(f"{kind} splices {extra:.0f} mm")
     limit = f"{params.max_length:g} mm" + (f" × {max_height:g} mm" if max_height > 0 else "")
-    why = plan.problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
+    why = problem or f"its largest piece is {long_x:.0f} × {high_y:.0f} mm"
     clear = f" (cuts kept from the joints by {' or '.join(tried)} more)" if any(e for _, e in splice_clearances) \
         else ""
     welded = "" if any(k == "welded" for k, _ in splice_clearances) else \
@@ -469,9 +501,12 @@ def _continuous(support: SupportStructure, params: BeamParams, l: int, beam_id: 
 
 
 def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str, cuts: list[Cut],
-            closed: bool) -> list[BeamPlate]:
+            closed: bool, pos: np.ndarray, first: int, total: int) -> list[BeamPlate]:
+    """The plates of one run of polyline ``l`` (``pos``: positions into its vertices, :func:`_spans`) between
+    its ``cuts`` (inside edges of the run), numbered ``first, first + 1, …`` of the beam's ``total`` pieces; a
+    node is an end only where the run ends (the polyline's end or a break)."""
     line = support.polylines[l]
-    vs = line.vertices
+    vs = line.vertices[pos]
     pts = support.vertices[vs]
     plane = support.polyline_planes[l]
     axes = support.axes[vs]
@@ -490,13 +525,13 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
             hi = nn - 1 if e is None else e.edge
             pieces.append((s, list(range(lo, hi + 1)), e))
     out = []
-    w = contract.digits(len(pieces))
+    w = contract.digits(total)
 
     def cut_point(c: Cut) -> tuple[np.ndarray, np.ndarray]:
         i, j = c.edge, (c.edge + 1) % nn
         return (1 - c.t) * pts[i] + c.t * pts[j], (1 - c.t) * axes[i] + c.t * axes[j]
 
-    for r, (s, idx, e) in enumerate(pieces):
+    for r, (s, idx, e) in enumerate(pieces, start=first):
         cp: list[np.ndarray] = []
         ca: list[np.ndarray] = []
         chain: list[int] = []
@@ -514,10 +549,9 @@ def _pieces(support: SupportStructure, params: BeamParams, l: int, beam_id: str,
             ca.append(axis)
         ca_unit = np.asarray(ca)
         ca_unit /= np.linalg.norm(ca_unit, axis=1, keepdims=True)
-        # a node is an end only where the polyline itself ends (pieces end at cuts inside edges)
         through = np.array([closed or (0 < k < nn - 1) for k in idx])
-        pid = beam_id if len(pieces) == 1 else contract.piece_id(beam_id, r, w)
-        out.append(make_plate(PlateName(pid, beam_id, l, line.family, r, len(pieces)), plane,
+        pid = beam_id if total == 1 else contract.piece_id(beam_id, r, w)
+        out.append(make_plate(PlateName(pid, beam_id, l, line.family, r, total), plane,
                               PlateChain(np.asarray(cp), ca_unit, nodes=vs[idx], chain=np.asarray(chain),
                                          node_points=pts[idx], through=through), params))
     return out

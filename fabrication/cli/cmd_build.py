@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
 
 def structure_counts(result: "Build") -> dict[str, object]:
     """What ``--json`` says of the structure: planar beams kept, polylines left out of the requested planar
-    families (and why), the column beams ``[beams] segment = ["blocked"]`` cut into segments, and the one-edge
+    families (and why), the column beams ``[beams] segment = ["blocked"]`` cut at nodes (and at which), and the one-edge
     plates the build made."""
     from ..beams.plates import beam_ids
     from ..pipeline.structure_gate import structure_change
@@ -84,9 +84,9 @@ def structure_counts(result: "Build") -> dict[str, object]:
     plates = result.beams.plates
     planar = result.support.polyline_planar
     ids = beam_ids(result.support)
-    blocked = result.beams.blocked_segmented
+    blocked = result.beams.node_breaks
     return {"planar_polylines": int(planar.sum()) if planar is not None else 0,
             "left_out": [{"beam": b, "polyline": k, "reason": why} for b, k, why in change.left_out],
-            "segmented_blocked": [{"beam": ids[k], "polyline": k} for k in blocked],
+            "segmented_blocked": [{"beam": ids[l], "polyline": l, "nodes": list(k)} for l, k in blocked],
             "one_edge_plates": sum(1 for p in plates if p.meta.get("segment")),
             "plates": len(plates)}

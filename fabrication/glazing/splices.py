@@ -139,8 +139,9 @@ class Splice:
 
 def cut_pairs(plates, kind: str) -> list[tuple]:
     """``(a, b)`` for every cut between consecutive pieces ``a``, ``b`` of a beam split for ``kind`` splices
-    (``meta["splice"]``), in beam and piece order; a closed beam's last piece joins its first.  One-edge
-    segments are left out: they meet at nodes and are welded there (:func:`~fabrication.glazing.welds.butt_welds`)."""
+    (``meta["splice"]``), in beam and piece order; a closed beam's last piece joins its first.  Pieces that share
+    a node meet there and are welded to the plate running through it (one-edge segments, and the parts of a
+    column cut at nodes by ``[beams] segment = ["blocked"]``; :func:`~fabrication.glazing.welds.butt_welds`)."""
     by_beam: dict[str, list] = {}
     for p in plates:
         if p.n_pieces > 1 and not p.meta.get("segment") and p.meta.get("splice", "bolted") == kind:
@@ -148,11 +149,12 @@ def cut_pairs(plates, kind: str) -> list[tuple]:
     out: list[tuple] = []
     for pieces in by_beam.values():
         pieces = sorted(pieces, key=lambda p: p.piece)
-        out.extend(zip(pieces[:-1], pieces[1:]))
+        pairs = [(a, b) for a, b in zip(pieces[:-1], pieces[1:]) if b.piece == a.piece + 1]
         first3 = pieces[0].frame.to3d(pieces[0].top[0])
         last3 = pieces[-1].frame.to3d(pieces[-1].top[-1])
         if np.linalg.norm(first3 - last3) < 1e-6:                 # closed beam: the last cut joins back
-            out.append((pieces[-1], pieces[0]))
+            pairs.append((pieces[-1], pieces[0]))
+        out.extend((a, b) for a, b in pairs if not set(a.nodes.tolist()) & set(b.nodes.tolist()))
     return out
 
 

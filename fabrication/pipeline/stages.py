@@ -239,16 +239,17 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress,
                         splice_clearances=design.splices.clearances(params.depth), splice_params=design.splices,
                         splice_ups=strip_ups(design, support, panels) if panels is not None else None)
     refuse_crossing_plates(beams)
-    added = list(beams.blocked_segmented)
+    added = beams.node_breaks
     if added:
         ids = beam_ids(support)
+        cuts = sum(len(k) for _, k in added)
         logging.getLogger("ppfab").warning(
             "[beams] segment = [\"blocked\"]: %d column beam(s) that no single direction puts into their half-lap "
-            "slots are cut into one-edge segments welded between the rows (%s)", len(added),
-            ", ".join(ids[k] for k in added[:8]) + (" …" if len(added) > 8 else ""))
+            "slots are cut across the node axis at %d node(s), each part welded to the row there (%s)", len(added),
+            cuts, ", ".join(f"{ids[l]} at {len(k)}" for l, k in added[:8]) + (" …" if len(added) > 8 else ""))
     t = beams.report.totals()
     progress.done(f"{t['plates']} plates, {t['slots']} slots, {t['length_m']:.0f} m"
-                  + (f", {len(added)} blocked column beams segmented" if added else ""))
+                  + (f", {len(added)} blocked column beams cut at nodes" if added else ""))
     return beams
 
 

@@ -40,8 +40,9 @@ def write_erection(build: "Build", out: Path, files: Files) -> str:
             "erection: %d plate(s) have no single insertion direction, their slots and end cuts spreading up to "
             "%.1f° (%s): slid in as one piece each would push a mating plate further sideways in its slot than its "
             "clearance; the erector fits them in pieces, or before the plates they cross (erection.csv "
-            "blocked_spread_deg); [beams] segment = [\"blocked\"] cuts them into one-edge segments that go in "
-            "one by one, shorter pieces (beams.max_length) or more slot play (beams.clearance) ease it",
+            "blocked_spread_deg); [beams] segment = [\"blocked\"] cuts them across the node axis at the "
+            "nodes that give every part a way in, each part welded to the row there; shorter pieces "
+            "(beams.max_length) or more slot play (beams.clearance) ease it",
             len(worst), worst[0].spread_deg, ", ".join(f"{b.part_id} {b.spread_deg:.1f}°" for b in worst[:6]))
     return f"{len(plan.steps)} steps, {len(plan.insertions)} rows" + \
         (f", {len(plan.blocked)} plates with no single insertion direction" if plan.blocked else "")
