@@ -18,7 +18,8 @@ DESIGN = small_vault("README excerpt: 6 x 4 PP vault")
 
 def main() -> None:
     import fabrication
-    from fabrication.drawings import node_sheet_svg, view_svg
+    from fabrication.drawings import view_svg
+    from fabrication.node_sheets import node_sheet_svg
     from fabrication.nodetypes import node_types
     from fabrication.paper import SheetInfo
 

@@ -354,7 +354,7 @@ BEVEL_COLUMNS = ["strip", "plate", "lean_deg", "overlap_mm", "delta_mm", "bevel"
 RETENTION_CSV, RESTRAINT_CSV = "retention.csv", "restraint.csv"
 """The retention parts of ``glazing.step`` (one row each: :data:`RETENTION_COLUMNS`) and the restraint check of
 every pane (:data:`RESTRAINT_COLUMNS`), see ``docs/glazing.md``.  A pressure plate's row carries its bending
-between the screws (:class:`fabrication.glazing.retention.PlateBending`: design line load, largest span and end
+between the screws (:class:`fabrication.glazing.retention_strength.PlateBending`: design line load, largest span and end
 overhang, stress and its limit ``f/γ``, deflection under the characteristic load and its limit); a pane's
 ``plate_utilisation`` is the largest of the plates over it."""
 RETENTION_COLUMNS = ["part_id", "kind", "owner", "strip", "beam", "length_mm", "width_mm", "height_mm", "material",

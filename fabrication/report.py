@@ -151,7 +151,7 @@ def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], dra
                                                  "</figcaption></figure>" for rel in sheets) + "</div>")
     rep.heading("Cutting processes", 3)
     r = build.design.beams.tool_radius
-    rep.paragraph(f"Outlines are nominal (no kerf offset): the CAM applies its kerf compensation. Slot corners: "
+    rep.paragraph("Outlines are nominal (no kerf offset): the CAM applies its kerf compensation. Slot corners: "
                   + (f"dog-bone reliefs for a tool of radius {r:g} mm (beams.tool_radius)." if r > 0 else
                      "sharp (beams.tool_radius = 0, laser)."), "muted")
     rep.table(["process", "note"], list(KERF_NOTES.items()), left=(0, 1))

@@ -234,7 +234,7 @@ def propose(s: MeshSurvey) -> Proposal:
         sections["panels"] = {"gap": gap}
         reasons.append(f"neighbouring faces kink by up to {s.kink_max_deg:.1f}°: where a kink closes a joint towards "
                        f"the glass's top, the clamping screws of a 10 mm joint would stand in the glass, which the "
-                       f"build refuses; [panels] gap = {gap:g} clears them (fabrication.glazing.retention."
+                       f"build refuses; [panels] gap = {gap:g} clears them (fabrication.glazing.screws."
                        "joint_clearing_screws, a bound: narrow it where the build's check allows)")
         glazing = _glazing_for_joint(gap)
         if glazing:
@@ -270,7 +270,8 @@ def _joint_for_screws(kink_deg: float) -> float | None:
     """The ``[panels] gap`` (mm, whole) whose default-sized clamping screws clear the glass at a kink of
     ``kink_deg`` with the default strip, gasket and make-up, or ``None`` when the default joint does."""
     from .glazing.params import GlazingParams
-    from .glazing.retention import RetentionBolt, joint_clearing_screws
+    from .glazing.retention_strength import RetentionBolt
+    from .glazing.screws import joint_clearing_screws
     from .panels.params import PanelParams
 
     panels, glazing = PanelParams(), GlazingParams()
@@ -442,7 +443,6 @@ def starter_text(source: str | None, out: str | os.PathLike) -> str:
     source = source or DEFAULT_METHOD
     out_dir = Path(out).resolve().parent
     given: dict[str, dict[str, Any]] = {}
-    why: dict[str, dict[str, str]] = {}
     head: list[str]
     suffix = Path(source).suffix.lower()
     is_surface = suffix in (".3dm", ".stl", ".ply") or (suffix in (".obj", ".off") and _is_triangle_mesh(source))

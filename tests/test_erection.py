@@ -188,7 +188,8 @@ def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_t
     a pane within that reach is still passed through."""
     import numpy as np
 
-    from fabrication.verify.erection import HAND_APPROACH_MM, Body, sweep_passes
+    from fabrication.verify._bodies import Body
+    from fabrication.verify.erection import HAND_APPROACH_MM, sweep_passes
 
     def box(z0: float, size: float = 100.0, thick: float = 10.0) -> Body:
         c = np.array([[x, y, z] for x in (0.0, size) for y in (0.0, size) for z in (z0, z0 + thick)])

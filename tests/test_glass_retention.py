@@ -233,7 +233,7 @@ def test_screws_are_at_most_a_pitch_apart_and_clear_of_the_blocks(built):
 
 
 def test_screw_stations_leave_the_keep_out_and_stay_within_a_pitch():
-    from fabrication.glazing.retention import screw_stations
+    from fabrication.glazing.screws import screw_stations
 
     xs = screw_stations(1000.0, 250.0, [(100.0, 260.0), (700.0, 800.0)])
     assert not any(100.0 < x < 260.0 or 700.0 < x < 800.0 for x in xs)

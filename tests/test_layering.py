@@ -31,8 +31,8 @@ CORE_OPTIONAL = {"ppfab.optimize.linsolve": {"pypardiso"}}
 FAB_LAYERS = [
     {"model"},                      # the records of a finished build: data only, imports nothing of fabrication
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
-     "htmlreport", "report", "marking", "drawings", "nodetypes", "examples", "starter", "glazing", "repetition",
-     "report_glazing", "erection", "erection_drawing", "surfacefile", "paper"},
+     "htmlreport", "report", "marking", "drawings", "node_sheets", "nodetypes", "examples", "starter", "glazing",
+     "repetition", "report_glazing", "erection", "erection_drawing", "surfacefile", "paper"},
     {"writers", "verify", "readers"},
     {"pipeline"},
     {"cli", "studio", "sweep"},

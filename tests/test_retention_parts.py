@@ -228,7 +228,7 @@ def retention_findings(folder: Path) -> list[str]:
 
 
 def test_a_plate_bent_beyond_its_limit_is_refused_by_the_check_and_named_by_verify(built, tmp_path):
-    from fabrication.glazing.retention import PLATE_MATERIALS, plate_bending
+    from fabrication.glazing.retention_strength import PLATE_MATERIALS, plate_bending
 
     weak = plate_bending("CP-X", 10.0, (125.0, 375.0, 625.0), 750.0, 50.0, 8.0,
                          PLATE_MATERIALS["EN AW-6060 T66"], 1.5)
@@ -322,7 +322,7 @@ def test_a_real_mesh_patch_lists_models_and_erects_its_retention(tmp_path):
 def test_a_plate_material_without_a_strength_is_refused_naming_the_key():
     from ppfab.errors import DesignError
 
-    from fabrication.glazing.retention import plate_material
+    from fabrication.glazing.retention_strength import plate_material
 
     assert plate_material("EN AW-6060 T66 anodised") == (150.0, 1.1, 70000.0)
     assert plate_material("S355J2") == (355.0, 1.0, 210000.0)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fabrication.glazing.retention import screw_clearance
+from fabrication.glazing.screws import screw_clearance
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -14,8 +14,8 @@ import pytest
 from conftest import built_folder, small_vault
 from fabrication.verify import Verification
 from fabrication.verify._step_read import kernel_sample, read_or_report, read_step_solids, sample_file
-from fabrication.verify._step_text_read import Ref, StepTextError, Typed, parse_params, read_entities, \
-    read_text_solids
+from fabrication.verify._step_part21 import Ref, StepTextError, Typed, parse_params, read_entities
+from fabrication.verify._step_text_read import read_text_solids
 
 built = built_folder("step_text", small_vault("step text", max_length=3000.0))
 

@@ -231,7 +231,7 @@ def studio(default):
 
 
 def test_studio_server_survives_bad_input_and_binds_loopback(studio):
-    from fabrication.studio.app import _parse_list
+    from fabrication.studio.values import parse_list as _parse_list
 
     assert studio.server.get_host() == "127.0.0.1"
     studio._guard(lambda: studio._set("g", _parse_list("[[0.0, 1", "g")))

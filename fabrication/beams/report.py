@@ -19,10 +19,11 @@ from ppfab.finding import Finding
 class BeamRecord:
     """One plate in the report (lengths mm, area mm², mass kg, angles degrees).
 
-    ``slidable``: the plate can be put in place by sliding along one direction
-    through all its half-lap slots; ``sliding_play_mm`` is the lateral play that
-    needs (slot length × sine of the largest angle between a slot and the best
-    common direction) and ``extra_clearance_mm`` what it needs beyond ``clearance``.
+    ``slidable``: the plate can be put in place along one direction through all its half-lap slots and past the
+    plates its ends butt against (:func:`fabrication.beams.joints.assembly_check`, as ``erection.csv`` says); a
+    row plate always is, going in first, into nothing.  ``sliding_play_mm`` is the largest sideways travel of a
+    mating plate in its slot along the way the plate goes in (slot length × sine of the angle between them) and
+    ``extra_clearance_mm`` how far that exceeds half the clearance, each side of the mating plate (0 for a row).
     """
 
     part_id: str

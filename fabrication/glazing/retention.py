@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import logging
 import math
-import re
 import weakref
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Sequence
@@ -59,6 +58,8 @@ from ppfab.frame import Frame
 from ..contract import (cover_cap_id, pressure_gasket_id, pressure_plate_id, screw_set_id, setting_block_id,
                         stop_id)
 from .params import GlazingParams
+from .retention_strength import PlateBending, RetentionBolt, plate_bending, plate_material
+from .screws import SCREWS_IN_GLASS_MM, screw_spacing, clearing_gap, screw_clearance, screw_stations
 from .seat import PaneSeat
 from .slope import pane_slope_deg
 from .strips import Strip
@@ -78,12 +79,6 @@ PLATE_END_GAP = 20.0
 at the node begin, and a kink lifts the corner of the next span's pane)."""
 JOINT_SPARE = 2.0
 """mm: the least room left in the joint beside setting block and stop, and beside a screw."""
-STRESS_AREA = {"M5": 14.2, "M6": 20.1, "M8": 36.6, "M10": 58.0, "M12": 84.3}
-"""Tensile stress area ``A_s`` of a metric thread, mm² (ISO 898-1)."""
-ULTIMATE = {"A2-70": 700.0, "A4-70": 700.0, "A4-80": 800.0, "8.8": 800.0}
-"""Ultimate tensile strength ``f_ub`` of the screw's grade, N/mm² (ISO 3506-1, ISO 898-1)."""
-K2, GAMMA_M2 = 0.9, 1.25
-"""EN 1993-1-8 Table 3.4 and Table 2.1: tension resistance factor and partial factor of a bolt."""
 NUT_HEIGHT = 0.8
 """A clamping screw's length above the plate, in diameters: the nut (ISO 4032: ``m ≈ 0.8·d``)."""
 DENSITY = {"setting_block": 1300.0, "stop": 7850.0, "pressure_gasket": 1200.0, "pressure_plate": 2700.0,
@@ -93,121 +88,12 @@ DENSITY = {"setting_block": 1300.0, "stop": 7850.0, "pressure_gasket": 1200.0, "
 CAP_WALL = 2.0
 """mm: the wall of a cover cap, an extruded channel over the plate: its mass is ``(width + 2·height)·wall``
 per mm of length (the model draws the cap as the prism it fills)."""
-PLATE_MATERIALS = {"EN AW-6060 T66": (150.0, 1.1, 70000.0), "EN AW-6063 T6": (170.0, 1.1, 70000.0),
-                   "EN AW-6082 T6": (260.0, 1.1, 70000.0), "S235": (235.0, 1.0, 210000.0),
-                   "S355": (355.0, 1.0, 210000.0), "1.4401": (220.0, 1.1, 200000.0),
-                   "1.4404": (220.0, 1.1, 200000.0), "1.4301": (210.0, 1.1, 200000.0)}
-"""A pressure plate's material → (``f_y`` or ``f_o`` N/mm², partial factor, ``E`` N/mm²): steel EN 1993-1-1
-(``γ_M0`` 1.0), stainless steel EN 1993-1-4 (``γ_M0`` 1.1), aluminium EN 1999-1-1 Table 3.2b (``f_o`` for 5–25 mm
-extrusions, ``γ_M1`` 1.1)."""
-PLATE_DEFLECTION_RATIO = 200.0
-"""A pressure plate may bend between its screws by at most span/200 under the characteristic wind suction (the
-gasket under it must stay compressed; a cantilever end counts at twice its length)."""
 
 
 def material_of(kind: str, p: GlazingParams) -> str:
     """The material cell (retention.csv, parts.csv) of a retention part of ``kind``."""
     return {"setting_block": p.setting_block_material, "stop": "S355", "pressure_gasket": "EPDM 70 Shore A",
             "screw": f"stainless steel {p.retention_bolt}"}.get(kind, p.pressure_plate_material)
-
-
-def plate_material(text: str) -> tuple[float, float, float]:
-    """``(strength, partial factor, E)`` of the pressure plate material ``text`` (:data:`PLATE_MATERIALS`, the
-    first key the text contains); raises :class:`~ppfab.errors.DesignError` naming the key for any other."""
-    for key, value in PLATE_MATERIALS.items():
-        if key.lower() in text.lower():
-            return value
-    raise DesignError("pressure_plate_material", f"{text!r} is not a plate material ppfab can check for bending: "
-                                                 f"name one of {', '.join(PLATE_MATERIALS)}")
-
-
-@dataclass(frozen=True)
-class PlateBending:
-    """A pressure plate between its screws under the wind suction of the panes it clamps.
-
-    ``load`` is the design line load (N/mm): each pane's ``γ_Q·q·A`` over its perimeter (its edges share it by
-    length), summed over the panes on the strip; ``span`` the largest distance between screws and ``end`` the
-    longer overhang past the end screws (mm).  The moment is the larger of a simply supported span's
-    ``w·s²/8`` and a cantilever's ``w·a²/2``; the stress ``M / (b·t²/6)`` is checked against ``f/γ``
-    (:data:`PLATE_MATERIALS`) and the deflection under the characteristic load ``w/γ_Q`` —
-    ``5·w·s⁴/(384·E·I)`` over a span, ``w·a⁴/(8·E·I)`` at an end, ``I = b·t³/12`` — against
-    :data:`PLATE_DEFLECTION_RATIO` (the governing of the two is reported)."""
-
-    plate: str
-    load: float
-    span: float
-    end: float
-    stress: float
-    stress_limit: float
-    deflection: float
-    deflection_limit: float
-
-    @property
-    def utilisation(self) -> float:
-        """The larger of stress over its limit and deflection over its limit."""
-        return max(self.stress / self.stress_limit, self.deflection / max(self.deflection_limit, 1e-12))
-
-    def failures(self) -> list[str]:
-        out = []
-        if self.stress > self.stress_limit + 1e-9:
-            out.append(f"pressure plate {self.plate} bends to {self.stress:.0f} N/mm² between its screws, above "
-                       f"f/γ = {self.stress_limit:.0f} N/mm²")
-        if self.deflection > self.deflection_limit + 1e-9:
-            out.append(f"pressure plate {self.plate} deflects {self.deflection:.2f} mm between its screws, above "
-                       f"span/{PLATE_DEFLECTION_RATIO:g} = {self.deflection_limit:.2f} mm")
-        return out
-
-
-def plate_bending(plate: str, load: float, stations: Sequence[float], length: float, width: float,
-                  thickness: float, material: tuple[float, float, float], load_factor: float) -> PlateBending:
-    """The :class:`PlateBending` of a plate ``length`` long with screws at ``stations`` (mm from its start).
-
-    >>> b = plate_bending("CP", 1.0, (125.0, 375.0), 500.0, 50.0, 8.0, (150.0, 1.1, 70000.0), 1.5)
-    >>> round(b.stress, 3), b.span, b.end
-    (14.648, 250.0, 125.0)
-    """
-    f, gamma, e = material
-    xs = sorted(stations)
-    span = max([b - a for a, b in zip(xs, xs[1:])], default=0.0) if xs else length
-    end = max(xs[0], length - xs[-1]) if xs else 0.0
-    moment = max(load * span ** 2 / 8.0, load * end ** 2 / 2.0)
-    stress = moment / (width * thickness ** 2 / 6.0)
-    inertia = width * thickness ** 3 / 12.0
-    wk = load / load_factor
-    d_span, l_span = 5.0 * wk * span ** 4 / (384.0 * e * inertia), span / PLATE_DEFLECTION_RATIO
-    d_end, l_end = wk * end ** 4 / (8.0 * e * inertia), 2.0 * end / PLATE_DEFLECTION_RATIO
-    d, lim = (d_span, l_span) if d_span * max(l_end, 1e-12) >= d_end * max(l_span, 1e-12) else (d_end, l_end)
-    return PlateBending(plate, load, span, end, stress, f / gamma, d, lim)
-
-
-@dataclass(frozen=True)
-class RetentionBolt:
-    """A clamping screw as ``retention_bolt`` names it: ``"M8 A4-70"`` → size ``M8`` (diameter 8 mm), grade."""
-
-    size: str
-    grade: str
-
-    @property
-    def diameter(self) -> float:
-        return float(self.size[1:])
-
-    @property
-    def tension_resistance_kN(self) -> float:
-        """``F_t,Rd = k₂ · f_ub · A_s / γ_M2`` in kN.
-
-        >>> round(RetentionBolt("M8", "A4-70").tension_resistance_kN, 2)
-        18.45
-        """
-        return K2 * ULTIMATE[self.grade] * STRESS_AREA[self.size] / GAMMA_M2 / 1000.0
-
-    @classmethod
-    def parse(cls, text: str) -> "RetentionBolt":
-        m = re.fullmatch(r"\s*(M\d+)\s+(\S+)\s*", text)
-        if m is None or m.group(1) not in STRESS_AREA or m.group(2) not in ULTIMATE:
-            raise DesignError("retention_bolt", f"{text!r} is not a clamping screw ppfab can check: write "
-                                                f"'<size> <grade>' with size one of {', '.join(STRESS_AREA)} and grade "
-                                                f"one of {', '.join(ULTIMATE)} (e.g. 'M8 A4-70')")
-        return cls(m.group(1), m.group(2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -441,74 +327,6 @@ def _below_gasket(part: Prism, strip: Frame, underside: float) -> Prism:
     return part if cap >= part.height else replace(part, height=max(cap, 1.0))
 
 
-def screw_clearance(axes: np.ndarray, diameter: float, panes: Sequence[tuple["Panel", int, float]]) -> float:
-    """How far (mm) the glass beside the clamping screws' joint could move towards them, in the pane's plane, before
-    it touches one; negative: the screw is in the glass, and the pane's edge would have to move back that much —
-    ``[panels] gap`` widened by twice it.  The screws are cylinders of ``diameter`` on ``axes (n, 2, 3)`` (foot,
-    top).
-
-    ``panes``: each pane on the strip, its outline edge ``k`` over the strip and its seat (mm above its face plane).
-    Seen along the edge, in coordinates ``p = ((x − a)·m, (x − a)·N)`` about the edge's point ``a`` (``m`` the
-    outward unit normal of the edge in the pane's plane, ``N`` the pane's normal), the glass is the half-strip
-    ``p_m ≤ 0, 0 ≤ p_N − seat ≤ t``.  Moved by ``c`` along ``m`` it touches the screw's axis thickened by ``r`` when
-    ``c = p_m − r·√(u_m² + u_N²)/|u_N|`` at the axis's point on the glass's underside or top (``u`` the axis's
-    direction: the disc of radius ``r`` across the tilted axis reaches that far along ``m`` at one level of
-    ``N``), whichever is less; ``c`` is linear along the axis, so these two ends of its part in the glass's slab
-    bound it.  A kink that tilts the edge face over the joint (a valley) closes it at the glass's top by about
-    ``t·tan(κ/2)``."""
-    axes = np.asarray(axes, dtype=float).reshape(-1, 2, 3)
-    r = 0.5 * diameter
-    least = math.inf
-    for panel, k, seat in panes:
-        N = panel.frame.normal
-        ring = panel.outline_3d()
-        a, b = ring[k], ring[(k + 1) % len(ring)]
-        edge = float(np.linalg.norm(b - a))
-        e = (b - a) / edge
-        m = np.cross(e, N)
-        m /= np.linalg.norm(m)
-        t = panel.thickness_mm
-        for foot, top in axes:
-            if not 0.0 <= float((foot - a) @ e) <= edge:
-                continue                              # this screw is beside another pane of the strip
-            u = top - foot
-            length = float(np.linalg.norm(u))
-            u = u / length
-            u_m, u_N = float(u @ m), float(u @ N)
-            if abs(u_N) < 1e-9:
-                continue
-            h0 = float((foot - a) @ N) - seat
-            reach = r * math.hypot(u_m, u_N) / abs(u_N)
-            for level in (0.0, t):
-                s = min(max((level - h0) / u_N, 0.0), length)
-                x = foot + s * u
-                if -1e-9 <= float((x - a) @ N) - seat <= t + 1e-9:
-                    least = min(least, float((x - a) @ m) - reach)
-    return least
-
-
-def joint_clearing_screws(kink_deg: float, pane_thickness: float, seat: float, diameter: float,
-                          spare: float = 2.0) -> float:
-    """mm: a joint width (``[panels] gap``) at which clamping screws of ``diameter`` in the joint's centre line stay
-    out of the glass where two panes kink by ``kink_deg`` (a valley: it closes the joint towards the glass's top).
-
-    Each pane's edge face leans over the joint by ``(seat + t)·tan(κ/2)`` at the glass's top, and the screw, at
-    ``κ/2`` to the pane, takes ``r / cos(κ/2)`` of the half-joint in the pane's plane:
-    ``gap = 2·((seat + t)·tan(κ/2) + r / cos(κ/2)) + spare``, with ``spare`` the flat joint's fit (10 mm for M8).
-    ``seat``: the pane's underside above the strip's underside (strip + gasket thickness), an upper bound of
-    the screw's foot below the glass.  :func:`screw_clearance` measures the real geometry; this bound is for
-    proposing a design before there is one (``ppfab new``): ``smallest_roof`` (20° kinks, 17.52 mm glass,
-    8 + 3 mm seat, M8) gives 20.2 mm, where 18 mm clears its screws by 0.20 mm.
-
-    >>> round(joint_clearing_screws(0.0, 17.52, 11.0, 8.0), 6)
-    10.0
-    >>> round(joint_clearing_screws(20.0, 17.52, 11.0, 8.0), 1)
-    20.2
-    """
-    b = math.radians(0.5 * max(float(kink_deg), 0.0))
-    return 2.0 * ((seat + pane_thickness) * math.tan(b) + 0.5 * diameter / math.cos(b)) + spare
-
-
 def _pane_top_under(strip_frame: Frame, rect: np.ndarray, panel: "Panel", top: float) -> tuple[float, float] | None:
     """Over the footprint ``rect`` (strip frame), the highest point (along the strip's normal) of the pane's top
     face ``top`` mm above its face plane, and the clamp bite (area over length along the strip); ``None`` when
@@ -528,47 +346,6 @@ def _pane_top_under(strip_frame: Frame, rect: np.ndarray, panel: "Panel", top: f
     x0, _, x1, _ = under.bounds
     z = ((ring[0] - strip_frame.to3d(xy)) @ N) / denom
     return float(z.max()), float(under.area / max(x1 - x0, 1e-9))
-
-
-def screw_stations(length: float, pitch: float, keep_out: Sequence[tuple[float, float]]) -> tuple[float, ...]:
-    """Screw positions along a plate ``[0, length]``: evenly at most ``pitch`` apart and ``pitch/2`` from the ends,
-    each moved out of the ``keep_out`` intervals to the nearer side, then a screw added midway in every gap still
-    wider than ``pitch`` (while one fits outside the intervals).
-
-    >>> screw_stations(1000.0, 250.0, [])
-    (125.0, 375.0, 625.0, 875.0)
-    """
-    n = max(1, math.ceil(length / pitch - 1e-9))
-    xs = [(k + 0.5) * length / n for k in range(n)]
-
-    def free(x: float) -> float:
-        for lo, hi in keep_out:
-            if lo < x < hi:
-                return lo if x - lo <= hi - x else hi
-        return x
-
-    xs = sorted(free(x) for x in xs)
-    for _ in range(64):
-        pts = [0.0 if not xs or xs[0] > 0.5 * pitch else xs[0]] + xs
-        gaps = [(pts[k + 1] - pts[k], k) for k in range(len(pts) - 1)]
-        wide = [(g, k) for g, k in gaps if g > pitch + 1e-6]
-        if not wide:
-            break
-        _, k = max(wide)
-        x = free(0.5 * (pts[k] + pts[k + 1]))
-        if any(abs(x - y) < 1e-6 for y in xs):
-            break
-        xs = sorted(xs + [x])
-    return tuple(round(x, 3) for x in xs if 0.0 <= x <= length)
-
-
-def _spacing(stations: Sequence[float], length: float) -> float:
-    """The largest distance between neighbouring screws, with each end counting at twice its distance (a screw
-    ``pitch/2`` from an end spaces like a neighbour ``pitch`` away)."""
-    if not stations:
-        return math.inf
-    inner = [b - a for a, b in zip(stations, stations[1:])]
-    return max(inner + [2.0 * stations[0], 2.0 * (length - stations[-1])])
 
 
 def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips: Sequence[Strip],
@@ -675,7 +452,7 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             for panel, _ in on:
                 u = under[panel.part_id]
                 bites.setdefault(panel.part_id, []).append(u[1] if u is not None else 0.0)
-                spacing.setdefault(panel.part_id, []).append(_spacing(xs, x1 - x0))
+                spacing.setdefault(panel.part_id, []).append(screw_spacing(xs, x1 - x0))
             # each pane's share of the plate's screws: by the tributary of its edge (half a joint each side)
             for panel, _ in on:
                 screws[panel.part_id] = screws.get(panel.part_id, 0.0) + len(xs) / len(on)
@@ -765,36 +542,6 @@ def build_retention(build: "Build") -> Retention | None:
                            float(build.design.panels.gap), bites)
         _CACHE[g] = r
     return r
-
-
-SCREWS_IN_GLASS_MM = 0.25
-"""mm: how far a clamping screw may stand in the glass beside its joint before the build refuses (the tolerance
-of the erection check for parts in place, :data:`fabrication.verify.erection.TOLERANCE`)."""
-
-
-def clearing_gap(gap: float, clearance: float) -> int:
-    """The whole-millimetre joint (mm) that gives a screw standing ``−clearance`` mm in the glass beside a ``gap``
-    joint half a millimetre of room: the joint widened by twice the depth, each pane's edge moving half of it."""
-    return math.ceil(gap - 2.0 * clearance + 0.5)
-
-
-def refuse_screws_in_glass(retention: Retention | None, gap: float) -> None:
-    """Raise :class:`~ppfab.errors.DesignError` (``panels.gap``) naming the pressure plates whose clamping screws
-    stand more than :data:`SCREWS_IN_GLASS_MM` in the glass (a kink closing the joint towards the glass's top)
-    and the joint that clears them: before any file is written, where the build's verify would refuse them
-    after writing every file (glass takes no steel)."""
-    from ppfab.errors import DesignError
-
-    if retention is None:
-        return
-    deep = sorted((x for x in retention.screws if -x.clearance_mm > SCREWS_IN_GLASS_MM), key=lambda x: x.clearance_mm)
-    if deep:
-        raise DesignError("panels.gap", f"{len(deep)} pressure plate(s) have clamping screws standing in the glass "
-                                        "beside their joint, where a kink closes it towards the glass's top: "
-                                        + ", ".join(f"{x.part_id} ({-x.clearance_mm:.2f} mm)" for x in deep[:6])
-                                        + f"; glass takes no steel: widen [panels] gap to at least "
-                                        f"{clearing_gap(gap, deep[0].clearance_mm):.0f} mm (from {gap:g}), "
-                                        "or clamp with a smaller [glazing] retention_bolt")
 
 
 def retention_mass_kg(build: "Build") -> float:

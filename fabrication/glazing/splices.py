@@ -230,7 +230,7 @@ def make_splices(plates, params: SpliceParams, ups: EdgeUps | None = None) -> li
     the cut leans by ``λ`` off the plate (``ups``, from the panes: :func:`strip_lean`): the strip's underside
     comes down that far over the cover plate's outer face on the side it leans to (conical_pp_rotational's
     strips stood 6.4 mm in cover plates 15 mm under a top edge with strips leaning 21°)."""
-    from shapely.geometry import LineString, Point, Polygon
+    from shapely.geometry import LineString, Polygon
     from shapely.ops import unary_union
 
     out: list[Splice] = []

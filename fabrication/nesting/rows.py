@@ -71,7 +71,6 @@ class SheetFiller:
 
         Poses are kept sorted by (part, width, −height) once, so a call is one pass over them.
         """
-        c = self.cat
         srt = self.order
         fit = rem[self.o_part_s] & (self.o_h_s <= hc + 1e-9) & (self.o_w_s <= cap + 1e-9)
         self.work.add(COST_SCAN * len(srt))

@@ -71,7 +71,8 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
               times=p.times)
 
-    from ..glazing.retention import build_retention, refuse_screws_in_glass, retention_mass_kg
+    from ..glazing.retention import build_retention, retention_mass_kg
+    from ..glazing.screws import refuse_screws_in_glass
     from ..parts import parts_table
 
     refuse_screws_in_glass(build_retention(b), design.panels.gap)   # placed on the built panes and strips

@@ -23,88 +23,16 @@ import numpy as np
 
 from .figures import face_corners
 from .model import METRICS, StudioModel, face_metric
+from .gizmos import draw_handles, move_handles
+from .scene import FOLD_RGB, legend_html, quat_matrix, ramp
 from .table_editor import TableEditor, is_table
+from .values import field_value, parse_list, plain
 
 log = logging.getLogger("ppfab")
-
-# a perceptual ramp (viridis at five stops), blue = low, yellow = high
-_RAMP = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
-FOLD_RGB = (230, 30, 30)
 
 SEND_PAUSE = 0.003
 """Seconds a redraw yields (Python's GIL) after the status and figures, so the server's event loop sends them
 before the scene's messages are built: the figures reach the page first (``benchmarks/studio_latency.py``)."""
-
-
-def ramp(values: np.ndarray, bounds: tuple[float, float] | None = None) -> np.ndarray:
-    """``(k, 3)`` uint8 colours of ``values (k,)`` on the ramp, scaled from ``bounds`` (default: their min and
-    max)."""
-    x = np.asarray(values, dtype=float)
-    finite = np.isfinite(x)
-    lo, hi = (float(x[finite].min()), float(x[finite].max())) if finite.any() else (0.0, 1.0)
-    if bounds is not None:
-        lo, hi = bounds
-    t = np.clip((np.nan_to_num(x, nan=lo) - lo) / (hi - lo if hi > lo else 1.0), 0, 1) * (len(_RAMP) - 1)
-    k = np.minimum(t.astype(int), len(_RAMP) - 2)
-    f = (t - k)[:, None]
-    return ((1 - f) * _RAMP[k] + f * _RAMP[k + 1]).astype(np.uint8)
-
-
-METRIC_UNITS = {"planarity": ("δ_f (§3.3)", ""), "panel area": ("panel area", " m²"),
-                "corner angle": ("smallest corner angle", "°"), "type": ("panel type", "")}
-"""What each colouring shows and its unit."""
-
-
-def legend_html(metric: str, values: np.ndarray, folds: bool = False) -> str:
-    """The colour legend of the panels: the ramp from its low to its high end with the values there (the fixed
-    0 … 1e-3 scale of δ_f), the number of types for ``type``, and the fold colour when faces fold."""
-    label, unit = METRIC_UNITS.get(metric, (metric, ""))
-    x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
-    if metric == "type":
-        body = f"{label}: {int(x.max()) + 1 if x.size else 0} types, one colour each"
-    else:
-        lo, hi = (0.0, 1e-3) if metric == "planarity" else ((float(x.min()), float(x.max())) if x.size else (0, 0))
-        stops = ", ".join(f"rgb({int(r)},{int(g)},{int(b)})" for r, g, b in _RAMP)
-        top = " and above" if metric == "planarity" else ""
-        body = (f"{label}<div style='height:10px;margin:2px 0;background:linear-gradient(to right,{stops})'></div>"
-                f"<span style='float:left'>{lo:.3g}{unit}</span><span style='float:right'>{hi:.3g}{unit}{top}</span>"
-                "<div style='clear:both'></div>")
-    if folds:
-        r, g, b = FOLD_RGB
-        body += f"<div><span style='color:rgb({r},{g},{b})'>&#9632;</span> folded faces</div>"
-    return f"<div style='font-size:12px'>{body}</div>"
-
-
-def plane_square(centre: np.ndarray, normal: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
-    """A square ``2·half`` wide in the plane through ``centre (3,)`` with ``normal (3,)``: vertices ``(4, 3)``
-    float32 and two triangles ``(2, 3)``."""
-    n = np.asarray(normal, dtype=float) / max(float(np.linalg.norm(normal)), 1e-300)
-    a = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
-    a /= np.linalg.norm(a)
-    b = np.cross(n, a)
-    c = np.asarray(centre, dtype=float)
-    verts = np.array([c - half * a - half * b, c + half * a - half * b, c + half * a + half * b,
-                      c - half * a + half * b], dtype=np.float32)
-    return verts, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
-
-
-def quat_matrix(wxyz: Any) -> np.ndarray:
-    """The rotation matrix ``(3, 3)`` of a unit quaternion ``(w, x, y, z)``."""
-    w, x, y, z = np.asarray(wxyz, dtype=float) / max(float(np.linalg.norm(wxyz)), 1e-300)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
-def _parse_list(text: str, label: str) -> list:
-    try:
-        value = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{label}: not a list of numbers ({exc.msg} at character {exc.pos})") from None
-    if not isinstance(value, list):
-        raise ValueError(f"{label}: give a list such as [[0.0, 1.0], [2.0]]")
-    return value
 
 
 class Studio:
@@ -263,10 +191,10 @@ class Studio:
             h = gui.add_text(key, json.dumps(value), multiline=False, hint=hint)
 
             def on_text(e: Any, key: str = key) -> None:
-                self._guard(lambda: self._set(key, _parse_list(str(e.target.value), key)), field=key)
+                self._guard(lambda: self._set(key, parse_list(str(e.target.value), key)), field=key)
             h.on_update(on_text)
             return h
-        h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, _plain(e.target.value)), field=key))
+        h.on_update(lambda e, key=key: self._guard(lambda: self._set(key, plain(e.target.value)), field=key))
         return h
 
     def _sync_controls(self) -> None:
@@ -327,7 +255,7 @@ class Studio:
         if not field or not text or control is None:
             return
         handle = control[0]
-        shown = _field_value(handle.value)
+        shown = field_value(handle.value)
         with self.params_folder:
             self.field_message = self.server.gui.add_markdown(
                 f"**not applied:** {text} — {field.removeprefix('geometry.')} stays {shown}",
@@ -565,56 +493,16 @@ class Studio:
             item.remove()
 
     def _draw_handles(self) -> None:
-        scene: Any = self.server.scene
         v = self.model.state.placed.vertices / 1000.0
         size = 0.08 * float(np.linalg.norm(v.reshape(-1, 3).max(0) - v.reshape(-1, 3).min(0)))
         wanted = self.model.handles()
-        if self._move_handles(wanted, size):
+        scene: Any = self.server.scene
+        if move_handles(scene, self.model.method, self._handles, wanted, size, getattr(self, "handle_scale", None)):
             return
         for item in self._handles.values():
             item.remove()
-        self._handles = {}
         self.handle_scale = size
-        for h in wanted:
-            g = scene.add_transform_controls(f"/handles/{h.key}", scale=size, position=tuple(h.position),
-                                             disable_rotations=not h.rotatable, disable_sliders=True)
-            g.on_update(self._gizmo_callback(h.key))
-            self._handles[h.key] = g
-            label = scene.add_label(f"/handles/{h.key}-label", h.label, position=tuple(h.position))
-            self._handles[f"{h.key}-label"] = label
-            if h.normal is not None:                 # a plane handle: its plane, translucent, in its colour
-                verts, faces = plane_square(np.asarray(h.position, float), h.normal, 0.6 * size)
-                self._handles[f"{h.key}-plane"] = scene.add_mesh_simple(
-                    f"/handles/{h.key}-plane", verts, faces, color=h.color, opacity=0.25, side="double")
-        if self.model.method == "conical_spheres":
-            s, R, t = _placement(self.model.geometry)
-            for k, sph in enumerate(self.model.params.get("spheres", [])):
-                c = (s * R @ np.asarray(sph[:3], dtype=float) + t) / 1000.0
-                ico = scene.add_icosphere(f"/handles/sphere{k}", radius=abs(float(sph[3])) * s / 1000.0,
-                                          color=(200, 60, 160), opacity=0.12, position=tuple(c), subdivisions=2)
-                self._handles[f"sphere{k}"] = ico
-
-    def _move_handles(self, wanted: list, size: float) -> bool:
-        """Move the drawn handles to ``wanted`` when they are the same handles at the same scale (a position
-        message each, instead of removing and creating every gizmo); ``False`` when they must be drawn anew."""
-        keys = [h.key for h in wanted]
-        if self.model.method == "conical_spheres" or not keys or getattr(self, "handle_scale", None) != size or \
-                set(self._handles) != {k for h in wanted for k in (h.key, f"{h.key}-label")} | {
-                    f"{h.key}-plane" for h in wanted if h.normal is not None}:
-            return False
-        scene: Any = self.server.scene
-        for h in wanted:
-            gizmo = self._handles[h.key]
-            if np.array_equal(np.asarray(gizmo.position, dtype=float), np.asarray(h.position, dtype=float)):
-                continue                             # not moved: no message
-            gizmo.position = tuple(h.position)
-            self._handles[f"{h.key}-label"].position = tuple(h.position)
-            if h.normal is not None:
-                self._handles[f"{h.key}-plane"].remove()
-                verts, faces = plane_square(np.asarray(h.position, float), h.normal, 0.6 * size)
-                self._handles[f"{h.key}-plane"] = scene.add_mesh_simple(
-                    f"/handles/{h.key}-plane", verts, faces, color=h.color, opacity=0.25, side="double")
-        return True
+        self._handles = draw_handles(scene, self.model, wanted, size, self._gizmo_callback)
 
     def _gizmo_callback(self, key: str) -> Any:
         """The gizmo's callback: ``async`` so that the phases of one drag (start, update…, end) arrive in order."""
@@ -672,22 +560,6 @@ def _no_share(verbose: bool = True) -> None:
     return None
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, tuple):
-        return [float(x) for x in value]
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (np.floating,)):
-        return float(value)
-    return value
-
-
-def _placement(geometry: dict) -> tuple[float, np.ndarray, np.ndarray]:
-    from .handles import placement
-
-    return placement(geometry)
-
-
 def serve(model: StudioModel, host: str, port: int, open_browser: bool, design_path: str = "") -> int:
     """Run the studio until Ctrl-C."""
     import contextlib
@@ -706,10 +578,3 @@ def serve(model: StudioModel, host: str, port: int, open_browser: bool, design_p
             time.sleep(1.0)
     finally:
         studio.stop()
-
-
-def _field_value(value: Any) -> str:
-    """A control's value as the message under it quotes it (``1000``, ``0.25``, ``(1, 2)``)."""
-    if isinstance(value, float):
-        return f"{value:g}"
-    return str(value)

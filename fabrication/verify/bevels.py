@@ -102,7 +102,6 @@ def _ccw(q: np.ndarray) -> np.ndarray:
 
 def plate_faces(solid, frame: dict[str, np.ndarray]) -> PlateFaces | None:
     """The :class:`PlateFaces` of a beam plate solid in its ``parts.csv`` frame, ``None`` without two faces."""
-    from shapely.geometry import Polygon
 
     from ._shapes import to_frame
 

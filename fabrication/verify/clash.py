@@ -86,7 +86,7 @@ def pane_manifold(solid: Any) -> tuple[Any, np.ndarray]:
 
 def measure_pair(pane: Any, n: np.ndarray, other: Any, pane_id: str, part_id: str) -> PairMeasure:
     """Depth and gap of one pane (a manifold with unit normal ``n``) against one part (a manifold)."""
-    from .erection import depth_of
+    from ._bodies import depth_of
 
     common = pane ^ other
     if not common.is_empty() and common.volume() > 1e-9:

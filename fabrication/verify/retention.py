@@ -25,7 +25,7 @@ parallel to the pane.  Then:
   (1e-3 mm), and every pressure plate the row of its screws (``SC-…``: quantity and stations as retention.csv);
 * **plate bending**: each pressure plate between its screws under the suction of the panes its gasket covers
   (area over perimeter of each, parts.csv), stress against ``f/γ`` and deflection against span/200 recomputed
-  (:class:`fabrication.glazing.retention.PlateBending`), a finding where either is exceeded.
+  (:class:`fabrication.glazing.retention_strength.PlateBending`), a finding where either is exceeded.
 
 That no retention solid enters the glass is the clash check's (it measures every solid of glazing.step).
 """
@@ -100,7 +100,7 @@ def _projected_hull(points: np.ndarray, origin: np.ndarray, ex: np.ndarray, ey: 
 def check_retention(v: Verification) -> None:
     from shapely.geometry import Point
 
-    from ..glazing.retention import RetentionBolt
+    from ..glazing.retention_strength import RetentionBolt
     from ._step_read import read_or_report
 
     m = v.data.get("manifest", {})
@@ -311,14 +311,14 @@ def _same_stations(a: str, b: str) -> bool:
 def _check_plate_bending(v: Verification, rel_r: str, plates: dict[str, dict[str, str]],
                          covers: dict[str, set[str]], panels: dict[str, dict[str, str]], suction: float,
                          load_factor: float, material: str) -> None:
-    """Each pressure plate bent between its screws (:class:`~fabrication.glazing.retention.PlateBending`)
+    """Each pressure plate bent between its screws (:class:`~fabrication.glazing.retention_strength.PlateBending`)
     recomputed: its line load from the panes its gasket covers (measured on the STEP files above), each pane's
     design suction times its ``area_mm2`` over its ``perimeter_mm`` (parts.csv); the span and end overhang from
     its stations; stress ``M/(b·t²/6)`` against ``f/γ`` of its material and the deflection against span/200.
     A finding where either is exceeded, or where retention.csv states other figures (beyond 1 %)."""
     from ppfab.errors import DesignError
 
-    from ..glazing.retention import plate_bending, plate_material
+    from ..glazing.retention_strength import plate_bending, plate_material
 
     if not plates:
         return

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contract import BOLTS_CSV, STOCK_HEADER_VARS, csv_value, stock_title, thickness_text
+from ..contract import STOCK_HEADER_VARS, csv_value, stock_title, thickness_text
 from ..glazing.bolts import BOLT_COLUMNS, BoltSpec, bolt_set
 from . import Verification, check
 from ._shapes import frame_of, to_frame

@@ -22,7 +22,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 @writer("drawings", order=75)
 def write_drawings(build: "Build", out: Path, files: Files) -> str:
-    from ..drawings import VIEW_TITLES, node_sheet_svg, view_svg
+    from ..drawings import VIEW_TITLES, view_svg
+    from ..node_sheets import node_sheet_svg
     from ..nodetypes import node_types
 
     folder = out / DRAWINGS_DIR
@@ -65,7 +66,8 @@ def sheet_register(build: "Build") -> dict[str, RegisteredSheet]:
     """Every sheet of the drawing set in its order, by file (relative to the output folder): the key plan, the two
     elevations, the erection drawing, then the node sheets (a node type whose list does not fit one sheet has
     ``node_type_<id>-2.svg`` … after it), each numbered of the total, on ``[output] paper``."""
-    from ..drawings import VIEW_TITLES, node_pages
+    from ..drawings import VIEW_TITLES
+    from ..node_sheets import node_pages
     from ..erection import ERECTION_SVG
     from ..nodetypes import node_types
     from ..paper import issue_date
