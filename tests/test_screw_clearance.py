@@ -138,8 +138,10 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
     doc = tomllib.loads(example.read_text(encoding="utf-8"))
     doc["panels"]["gap"] = 10.0
     import fabrication.glazing.retention as retention
+    import fabrication.glazing.screws as screws
 
-    monkeypatch.setattr(retention, "SCREWS_IN_GLASS_MM", float("inf"))     # built and written, for verify to judge
+    for module in (retention, screws):                  # built and written, for verify to judge
+        monkeypatch.setattr(module, "SCREWS_IN_GLASS_MM", float("inf"))
     b = build(parse_design(doc, source="<smallest_roof, 10 mm joints>", base_dir=example.parent))
     ret = build_retention(b)
     assert ret is not None and ret.screws
