@@ -148,7 +148,9 @@ def build_geometry(spec: GeometrySpec, optimize: Any = None, base_dir: Path | No
             note("optimising…")
         result = run_optimize(mesh, optimize, callback=on_iteration)
         if not result.targets_met:
-            log.warning("optimisation did not meet its targets: %s", result.message)
+            from .optimize.outcome import UNMET_NEXT
+
+            log.warning("optimisation did not meet its targets: %s; %s", result.message, UNMET_NEXT)
         mesh = result.mesh
     check_size(vertex_count(mesh), spec.max_vertices, allow_large)
     mesh = transform(mesh, spec.scale, spec.rotate_z_deg, spec.translate, spec.flip_orientation)

@@ -55,3 +55,19 @@ def test_a_pp_construction_is_made_conical_and_stays_pp():
     # the shape has to change (a translational net is not principal), but stays the same vault
     assert 1e-3 * diagonal < moved.mean() < 2e-2 * diagonal
     assert made.planar_families == ("rows", "cols")
+
+
+def test_an_optimisation_that_stops_short_says_whether_it_matters_and_which_keys_change_it(caplog):
+    """Two iterations cannot make the translational net conical: the warning gives the residual, says the build
+    goes on and which checks judge the result, and names the keys that change it."""
+    from dataclasses import replace
+
+    design = load_design(EXAMPLE)
+    with caplog.at_level("WARNING", logger="ppfab"):
+        g = build_geometry(design.geometry, replace(design.optimize, max_iterations=2))
+    assert g.optimize_result is not None and not g.optimize_result.targets_met
+    said = [r.getMessage() for r in caplog.records if "did not meet its targets" in r.getMessage()]
+    assert len(said) == 1
+    for key in ("panels.planarity_tolerance", "beams.max_torsion_mm", "optimize.max_iterations",
+                "optimize.target_delta_f", "targets NOT met"):
+        assert key in said[0], key

@@ -54,7 +54,9 @@ def surface_geometry(design: Design, progress: Progress, allow_large: bool,
         result = optimize(mesh, design.optimize, callback=progress.iteration,
                           reference=(surface.samples.points, surface.samples.triangles))
         if not result.targets_met:
-            log.warning("optimisation did not meet its targets: %s", result.message)
+            from ppfab.optimize.outcome import UNMET_NEXT
+
+            log.warning("optimisation did not meet its targets: %s; %s", result.message, UNMET_NEXT)
         mesh = result.mesh
     v = np.asarray(mesh.vertices).reshape(-1, 3)
     deviation = float(surface.distance(v).max())

@@ -171,6 +171,15 @@ def _fmt_rejected(rejected: dict[str, int]) -> str:
     return ", ".join(f"{k} {v}" for k, v in sorted(rejected.items(), key=lambda kv: -kv[1]))
 
 
+UNMET_NEXT = ("the build goes on with the mesh as far as it got, and the stages after it judge whether that is "
+              "buildable: a face corner further than panels.planarity_tolerance from its plane or a torsion above "
+              "beams.max_torsion_mm stops it by name, a polyline further than beams.plane_tolerance from its beam "
+              "plane too (or becomes one-edge plates where beams.fallback accepts them); raise "
+              "optimize.max_iterations to go further, or loosen optimize.target_delta_f / target_delta_p when those "
+              "checks pass")
+"""What a build says after an optimisation that missed its targets: whether it matters and which keys change it."""
+
+
 def message(o: Outcome) -> str:
     """One line saying how the run ended and what the caller should know (see module docstring)."""
     refused = sum(o.rejected.values())
