@@ -143,7 +143,7 @@ def build_beams(support: SupportStructure, params: BeamParams | None = None, str
 _BREAK_ROUNDS = 8
 """How often the ``blocked`` rule lays the plates out again.  A beam cut at nodes has its splice cuts planned
 again between the breaks, which can make new pieces that no direction puts in; those are cut in the next round
-(fig16_conical1_pp_conical: 88, 48, 24 and 4 new breaks in four rounds, then none).  What is still blocked
+(fig16_conical1_pp_conical: 141, 82, 8 and 4 new breaks in four rounds, then none).  What is still blocked
 after the last round is said by the erection sequence (:mod:`fabrication.erection`)."""
 
 
