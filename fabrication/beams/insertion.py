@@ -6,9 +6,10 @@ within ``asin(c/2L)`` of ``s`` (``c`` the joint clearance: the mating plate, cen
 it, moves ``L·|sin Δ|`` sideways and has ``c/2`` on either side); an end cut along a node axis, set back
 ``c/2`` from the plate that runs through that node, admits the half-plane of directions that bring the end
 towards that plate (widened by ``asin(c/2D)`` over the depth ``D``).  Measured on the nominal plates, as the
-written solids are; a plate at its upper thickness deviation leaves half the fit alone.  A plate going onto plates already standing goes in along the middle of the arc all of
-them admit nearest its mean axis (:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One
-going in first, into nothing, goes along the bisector of its guides (:func:`guide_bisector`).  Used by the
+written solids are; a plate at its upper thickness deviation leaves only half the fit on either side.  A plate going onto
+plates already standing goes in along the middle of the arc all of them admit nearest its mean axis
+(:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One going in first, into nothing, goes
+along the bisector of its guides (:func:`guide_bisector`).  Used by the
 erection sequence (:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]``
 rule, which cuts such column plates at the nodes a greedy scan finds to give every part a way in (:func:`node_breaks`; a
 one-edge part admits the side its two ends open to).
@@ -136,9 +137,9 @@ def _window(plate: "BeamPlate", clearance: float) -> float | None:
     mating plate, centred in a slot ``c`` wider than it, moves ``L·|sin Δ|`` sideways).  An end cut along the
     node axis faces the plate it butts against on one side only: coming in along ``d`` its gap to that plate is
     ``c/2 + h·(d·n)`` at ``h`` before its place (``n`` the end's outward normal in the plate's plane), so it
-    admits the half-plane ``d·n ≥ 0``, widened by ``asin(c/2D)`` over the depth ``D``.  A piece between two plates so
-    comes in from the side its ends open to — from below where the axes spread downwards — where a guide on both
-    sides of each axis would have to be parallel to both."""
+    admits the half-plane ``d·n ≥ 0``, widened by ``asin(c/2D)`` over the depth ``D``.  A piece between two
+    plates so comes in from the side its ends open to — from below where the axes spread downwards — where a
+    guide on both sides of each axis would have to be parallel to both."""
     return _middle(_arcs(plate, clearance), _reference(plate))
 
 
@@ -169,8 +170,9 @@ def _run_arcs(plate: "BeamPlate", clearance: float, a: int, b: int) -> list[Arc]
 def node_breaks(plate: "BeamPlate", clearance: float) -> list[int]:
     """The nodes (vertex ids) at which to cut a plate no single direction puts in (:func:`blocked_plate`) so that
     every part admits one: scanning from its first node, each part runs to the furthest node whose run
-    (:func:`_run_arcs`) still admits a direction, and is cut there; each part ends against the plate that runs through its end node as one-edge segments do.  Empty for a plate that is
-    not blocked or has no node to cut at."""
+    (:func:`_run_arcs`) still admits a direction, and is cut there; each part ends against the plate that runs
+    through its end node, as a one-edge segment does.  Empty for a plate that is not blocked or has no node to
+    cut at."""
     n = len(plate.nodes)
     if n < 3 or blocked_plate(plate, clearance) is None:
         return []

@@ -1,6 +1,7 @@
 """Where the clamping screws of a pressure plate go and whether they stay out of the glass: their stations along
 the plate, their clear distance to the panes beside the joint, the joint width that clears them, and the build's
-refusal of screws standing in the glass (:mod:`.retention` places the plates and their :class:`~.retention.ScrewSet`)."""
+refusal of screws standing in the glass (:mod:`.retention` places the plates and their
+:class:`~.retention.ScrewSet`)."""
 
 from __future__ import annotations
 
