@@ -6,8 +6,8 @@ within ``asin(c/2L)`` of ``s`` (``c`` the joint clearance: the mating plate, cen
 it, moves ``L·|sin Δ|`` sideways and has ``c/2`` on either side); an end cut along a node axis, set back
 ``c/2`` from the plate that runs through that node, admits the half-plane of directions that bring the end
 towards that plate (widened by ``asin(c/2D)`` over the depth ``D``).  Measured on the nominal plates, as the
-written solids are; a plate at its upper thickness deviation leaves only half the fit on either side.  A plate going onto
-plates already standing goes in along the middle of the arc all of them admit nearest its mean axis
+written solids are; a plate at its upper thickness deviation leaves only half the fit on either side.  A plate
+going onto plates already standing goes in along the middle of the arc all of them admit nearest its mean axis
 (:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One going in first, into nothing, goes
 along the bisector of its guides (:func:`guide_bisector`).  Used by the
 erection sequence (:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]``
