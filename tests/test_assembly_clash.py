@@ -8,8 +8,9 @@ and from the clash check of ppfab verify (manifold3d):
   its normal, at stations along every edge and across the first ``min_bite`` millimetres of glass;
 * a pane lifted or lowered in panels.step (manifest resealed) is named by ``ppfab verify`` with its gap or depth.
 
-On three builds, as the writers leave them: a small PP vault, the example ``smallest_roof`` (kinks of up to 20°:
-its gaskets tilt by 10° under the panes) and a patch of a real mesh (DOI rot4_def1_sparse_rot).
+On four builds, as the writers leave them: a small PP vault, the example ``smallest_roof`` (kinks of up to 20°:
+its gaskets tilt by 10° under the panes) and patches of two real meshes of the shared data: DOI rot4_def1_sparse_rot
+(conical PP) and DOS conical1 optimised to P (WWmore/DOS, objs/obj_pq/conical1.obj).
 """
 
 from __future__ import annotations
@@ -74,7 +75,26 @@ def real(tmp_path_factory) -> Path:
     return written(root / "d.toml", root / "out")
 
 
-BUILDS = ["vault", "example", "real"]
+@pytest.fixture(scope="module")
+def real_p(tmp_path_factory) -> Path:
+    """A 9 × 8 patch of DOS conical1 (shared data; a conical planar-quad mesh whose polylines are not planar)
+    optimised to P in its rows, on a P support with segmented columns, glass in structural silicone."""
+    from ppfab.io import load_mesh, write_obj
+    from ppfab.mesh import QuadGrid
+
+    root = tmp_path_factory.mktemp("clash_real_p")
+    grid = load_mesh(shared_file("DOS__conical1.obj")).to_grid()
+    write_obj(QuadGrid(np.ascontiguousarray(grid.vertices[12:21, 10:18])), root / "patch.obj")
+    (root / "d.toml").write_text(
+        f'[design]\nname = "conical1 patch"\n[geometry]\nmesh = "{(root / "patch.obj").as_posix()}"\n'
+        'scale = 1500.0\n[optimize]\nfamilies = "rows"\ntarget_delta_f = 1e-7\ntarget_delta_p = 1e-7\n'
+        '[support]\nmethod = "p"\nfamily = "rows"\n[beams]\njoint = "segmented"\ncontinuous = "rows"\n'
+        'fallback = "segmented"\n[panels]\ngap = 24.0\n[glazing]\nretention = "silicone"\nmax_tilt_deg = 13.5\n'
+        "[nesting]\ntime_budget = 0.5\n[beam_nesting]\ntime_budget = 0.5\n")
+    return written(root / "d.toml", root / "out")
+
+
+BUILDS = ["vault", "example", "real", "real_p"]
 
 
 def points(solid) -> np.ndarray:
