@@ -5,6 +5,9 @@
 * :mod:`.splices` — bolted cover-plate splices where a beam is cut into pieces;
 * :mod:`.welds` — weld length, dihedral angle and preparation of the butt joints;
 * :mod:`.cutlist` — the strips cut from stock bars.
+* :mod:`.retention` — setting blocks, stops, pressure plates and their screws holding every pane, with
+  :mod:`.retention_strength` (the plates' bending and the screws' tension resistance) and :mod:`.screws` (the
+  screws' stations and their clearance to the glass).
 
 :func:`make_glazing` runs them for a build (the ``glazing`` stage of :mod:`fabrication.pipeline.stages`).
 """
