@@ -31,14 +31,15 @@ Empty steps are left out and the rest numbered 1, 2, …; the retention parts ar
 :func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).
 The rows go in first, into nothing, along the bisector of their slots' and end axes' directions.  A column goes
 in along the middle of the directions its slots and end cuts admit (:mod:`fabrication.beams.insertion`): a
-slot admits the directions within ``asin(c/L)`` of its own (``c`` the joint clearance, ``L`` the slot's length),
-an end cut butting against a row the half-plane of directions that bring the end towards it (the gap closes to
-its final ``c`` as the part arrives).  Where none is left, the plate cannot be put in along any single
-direction: the plan keeps it in its step with the bisector and records a :class:`Blocked` entry naming the part,
-the angle spread and the sideways travel (``ppfab verify``'s erection check then measures the sweep;
+slot admits the directions within ``asin(c/2L)`` of its own (``c`` the joint clearance, half of it on either
+side of the mating plate, ``L`` the slot's length), an end cut butting against a row the half-plane of directions
+that bring the end towards it (the gap closes to its final ``c/2`` as the part arrives).  Where none is left,
+the plate cannot be put in along any single direction: the plan keeps it in its step with the bisector and
+records a :class:`Blocked` entry naming the part, the angle spread and the sideways travel (``ppfab verify``'s
+erection check then measures the sweep;
 ``[beams] segment = ["blocked"]`` cuts such columns across the node axis at the nodes a greedy scan finds to
-give every part a way in, :func:`fabrication.beams.insertion.node_breaks`; a one-edge part always goes in).  Before, an
-end cut counted as a guide on both sides of its axis, and every one-edge segment between two rows was blocked
+give every part a way in, :func:`fabrication.beams.insertion.node_breaks`; a one-edge part always goes in).
+Before, an end cut counted as a guide on both sides of its axis, and every one-edge segment between two rows was blocked
 by the angle between its two end axes.
 
 Nothing here measures a collision: ``fabrication/verify/erection.py`` proves the order on the written solids.
@@ -51,7 +52,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .beams.insertion import Blocked, blocked_plate, guide_bisector, plate_direction
+from .beams.insertion import Blocked, guide_bisector, way_in
 from .contract import gasket_id, node_id
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -146,12 +147,13 @@ def erection_plan(beams: "BeamSet", glazing: "Glazing | None", panels: "tuple[Pa
     for plate in beams.plates:
         kind = "row" if plate.family == 0 else "column"
         # the rows go in first, into nothing, along their slots' bisector; the columns onto them
-        way = guide_bisector(plate) if kind == "row" else plate_direction(plate, clearance)
-        by_kind[kind].append((plate.part_id, _unit(way)))
-        if kind == "column":                       # the rows go in first, into nothing
-            b = blocked_plate(plate, clearance)
+        if kind == "row":                          # the rows go in first, into nothing
+            way = guide_bisector(plate)
+        else:
+            way, b = way_in(plate, clearance)
             if b is not None:
                 blocked.append(b)
+        by_kind[kind].append((plate.part_id, _unit(way)))
     if glazing is not None:
         for w in glazing.welds:
             by_kind["weld"].append((weld_id(w.part, w.to, w.vertex), (0.0, 0.0, 0.0)))

@@ -8,7 +8,7 @@ it, moves ``L·|sin Δ|`` sideways and has ``c/2`` on either side); an end cut a
 towards that plate (widened by ``asin(c/2D)`` over the depth ``D``).  Measured on the nominal plates, as the
 written solids are; a plate at its upper thickness deviation leaves only half the fit on either side.  A plate
 going onto plates already standing goes in along the middle of the arc all of them admit nearest its mean axis
-(:func:`plate_direction`); where they admit none it is :class:`Blocked`.  One going in first, into nothing, goes
+(:func:`way_in`); where they admit none it is :class:`Blocked`.  One going in first, into nothing, goes
 along the bisector of its guides (:func:`guide_bisector`).  Used by the
 erection sequence (:mod:`fabrication.erection`) and by the beams stage's ``[beams] segment = ["blocked"]``
 rule, which cuts such column plates at the nodes a greedy scan finds to give every part a way in (:func:`node_breaks`; a
@@ -158,12 +158,9 @@ def _run_arcs(plate: "BeamPlate", clearance: float, a: int, b: int) -> list[Arc]
     arcs += [_end_arc(-np.asarray(plate.body_direction(int(v)), dtype=float), clearance, plate.depth)
              for v, _ in plate.trims if int(v) in keep]
     for k, toward in ((a, a + 1), (b, b - 1)):
-        if nodes[k] not in cut:
-            continue
-        s = plate.node_axis(nodes[k])
-        into = plate.top[plate.chain[toward]] - plate.top[plate.chain[k]]
-        into = into - (into @ s) * s
-        arcs.append(_end_arc(-into / np.linalg.norm(into), clearance, plate.depth))
+        if nodes[k] in cut:
+            into = plate.body_direction(nodes[k], towards=nodes[toward])
+            arcs.append(_end_arc(-np.asarray(into, dtype=float), clearance, plate.depth))
     return arcs
 
 
@@ -174,11 +171,11 @@ def node_breaks(plate: "BeamPlate", clearance: float) -> list[int]:
     through its end node, as a one-edge segment does.  Empty for a plate that is not blocked or has no node to
     cut at."""
     n = len(plate.nodes)
-    if n < 3 or blocked_plate(plate, clearance) is None:
+    if n < 3:
         return []
     ref = _reference(plate)
 
-    def admits(a: int, b: int) -> bool:
+    def admits(a: int, b: int) -> bool:          # (0, n − 1): the plate's own arcs, admitted unless blocked
         arcs = _run_arcs(plate, clearance, a, b)
         return b == a + 1 or not arcs or _middle(arcs, ref) is not None
 
@@ -202,25 +199,29 @@ def guide_bisector(plate: "BeamPlate") -> np.ndarray:
     return _unit3(plate.frame.vec3d(np.array([np.cos(mid), np.sin(mid)])))
 
 
-def plate_direction(plate: "BeamPlate", clearance: float) -> np.ndarray:
-    """``(3,)`` unit direction a plate is put in along, in its plane, onto plates already standing: the middle of
-    the directions its slots and end cuts admit (:func:`_window`); where they admit none, :func:`guide_bisector`."""
-    mid = _window(plate, clearance)
-    if mid is None:
-        return guide_bisector(plate)
-    return _unit3(plate.frame.vec3d(np.array([np.cos(mid), np.sin(mid)])))
-
-
-def blocked_plate(plate: "BeamPlate", clearance: float) -> Blocked | None:
-    """The :class:`Blocked` record of a plate that no direction moves into its place through its slots and past
-    the plates its ends butt against (:func:`_window`), else ``None``; it gives the spread of its slots' and end
-    axes' directions and the sideways travel ``L·|sin Δ|`` of a guide of length ``L`` at angle ``Δ`` from their
-    bisector."""
-    if _window(plate, clearance) is not None:
-        return None
+def _blocked(plate: "BeamPlate", clearance: float) -> Blocked | None:
+    """The :class:`Blocked` record of a plate whose slots and end cuts admit no common direction (:func:`_window`
+    found none): the spread of their directions and the sideways travel ``L·|sin Δ|`` of a guide of length ``L``
+    at angle ``Δ`` from their bisector; ``None`` with fewer than two guides."""
     ang, length = _guides(plate)
     if len(ang) < 2:
         return None
     mid = 0.5 * (ang.max() + ang.min())
     play = float((length * np.abs(np.sin(ang - mid))).max())
     return Blocked(plate.part_id, float(np.degrees(ang.max() - ang.min())), play, clearance)
+
+
+def way_in(plate: "BeamPlate", clearance: float) -> tuple[np.ndarray, Blocked | None]:
+    """``(3,)`` unit direction a plate is put in along, in its plane, onto plates already standing, and its
+    :class:`Blocked` record (``None`` where it has a way in), from one :func:`_window`: the middle of the
+    directions its slots and end cuts admit; where they admit none, :func:`guide_bisector`."""
+    mid = _window(plate, clearance)
+    if mid is None:
+        return guide_bisector(plate), _blocked(plate, clearance)
+    return _unit3(plate.frame.vec3d(np.array([np.cos(mid), np.sin(mid)]))), None
+
+
+def blocked_plate(plate: "BeamPlate", clearance: float) -> Blocked | None:
+    """The :class:`Blocked` record of a plate that no direction moves into its place through its slots and past
+    the plates its ends butt against (:func:`_window`), else ``None``."""
+    return None if _window(plate, clearance) is not None else _blocked(plate, clearance)

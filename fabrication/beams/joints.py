@@ -275,19 +275,20 @@ def assembly_check(plate: BeamPlate, clearance: float) -> tuple[float, float, fl
     -------
     spread_deg : the angle spread of its slot directions
     play_mm : the largest sideways travel ``L·|sin Δ|`` of a mating plate in its slot (guiding length ``L``, angle
-        ``Δ`` to the direction the plate goes in: :func:`~fabrication.beams.insertion.plate_direction`)
+        ``Δ`` to the direction the plate goes in: :func:`~fabrication.beams.insertion.way_in`)
     extra_mm : how far that exceeds the half clearance each side of the mating plate
-    slidable : some direction puts it in (:func:`~fabrication.beams.insertion.blocked_plate` finds none)
+    slidable : some direction puts it in (:func:`~fabrication.beams.insertion.way_in` finds one)
     """
-    from .insertion import blocked_plate, plate_direction
+    from .insertion import way_in
 
     if not plate.slots and not plate.trims:
         return 0.0, 0.0, 0.0, True
-    ok = blocked_plate(plate, clearance) is None
+    direction, blocked = way_in(plate, clearance)
+    ok = blocked is None
     if not plate.slots:
         return 0.0, 0.0, 0.0, ok
     ang = np.unwrap(np.array([np.arctan2(s.direction[1], s.direction[0]) for s in plate.slots]))
-    way = np.asarray(plate.frame.vec2d(plate_direction(plate, clearance)), dtype=float)
+    way = np.asarray(plate.frame.vec2d(direction), dtype=float)
     length = np.array([float(s.length) for s in plate.slots])
     unit = np.array([[np.cos(a), np.sin(a)] for a in ang])
     play = float((length * np.abs(unit[:, 0] * way[1] - unit[:, 1] * way[0])).max())

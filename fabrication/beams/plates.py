@@ -197,13 +197,16 @@ class BeamPlate:
         d = self.bottom[c] - self.top[c]
         return d / np.linalg.norm(d)
 
-    def body_direction(self, vertex: int) -> np.ndarray:
+    def body_direction(self, vertex: int, towards: int | None = None) -> np.ndarray:
         """Unit 2D direction from a node into the plate, perpendicular to the node's axis
-        (for an end node: the side the plate lies on)."""
+        (for an end node: the side the plate lies on; ``towards``: the side of that neighbouring node)."""
         k = int(np.flatnonzero(self.nodes == vertex)[0])
         c = int(self.chain[k])
         s = self.node_axis(vertex)
-        b = self.top[c + 1] - self.top[c] if c + 1 < len(self.top) else self.top[c - 1] - self.top[c]
+        if towards is not None:
+            b = self.node_top(towards) - self.top[c]
+        else:
+            b = self.top[c + 1] - self.top[c] if c + 1 < len(self.top) else self.top[c - 1] - self.top[c]
         b = b - (b @ s) * s
         return b / np.linalg.norm(b)
 
