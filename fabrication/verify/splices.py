@@ -1,8 +1,9 @@
 """parts.csv and welds.csv: every cut of a split beam has its splice, and the splice files hold them.
 
 Consecutive pieces of one beam (``beam_id``, ``piece`` of ``parts.csv``) that share no node were cut inside an
-edge (one-edge segments of a segmented beam share their node and are welded there, :mod:`.welds` of the
-glazing package).  Each such cut is spliced either way, never both and never neither:
+edge (one-edge segments of a segmented beam, and the parts of a column ``[beams] segment = ["blocked"]`` cut at
+a node, share their node and are welded there, :mod:`.welds` of the glazing package).  Each such cut is
+spliced either way, never both and never neither:
 
 * bolted: two rows of kind ``splice`` join the pieces (``joins = "<piece k>;<piece k+1>"``), and every cover
   plate has a solid in ``splices.step`` with ``holes`` bolt holes;
@@ -89,7 +90,7 @@ def check_splices(v: Verification) -> None:
             pairs.append((pieces[-1], pieces[0]))                # a closed beam's last cut
         for a, b in pairs:
             if _nodes(a) & _nodes(b):
-                continue                                 # one-edge segments meeting at a node: welded
+                continue                                 # pieces meeting at a node: welded there
             wanted += 1
             key = frozenset((a["part_id"], b["part_id"]))
             cuts.add(key)
