@@ -46,7 +46,7 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None) ->
 
     from fabrication import parse_design
     from fabrication.design import DEFAULT_DESIGN
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
 
     fu, fv = (int(x) for x in size.split("x"))
     path = Path(design_path) if design_path else DEFAULT_DESIGN

@@ -26,7 +26,7 @@ def table() -> str:
     from fabrication import load_design
     from fabrication.nodes import node_records
     from fabrication.pipeline import stages
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.repetition import NODE_TOLERANCES, PANEL_TOLERANCES, node_type_counts, panel_type_counts
 
     head = ("| design | panels | " + " | ".join(f"types at {t:g} mm" for t in PANEL_TOLERANCES) + " | nodes | "

@@ -22,14 +22,14 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # pragma: no cover
     from .design import Design, load_design, parse_design
     from .pipeline.stages import build
-    from .pipeline.progress import Progress
+    from .progress import Progress
     from .pipeline.records import Build
     from .verify import verify
     from .model import Package
     from .readers import open_build, package_of
 
 _API = {"Design": "design", "load_design": "design", "parse_design": "design",
-        "build": "pipeline.stages", "Build": "pipeline.records", "Progress": "pipeline.progress", "verify": "verify",
+        "build": "pipeline.stages", "Build": "pipeline.records", "Progress": "progress", "verify": "verify",
         "open_build": "readers", "package_of": "readers", "Package": "model"}
 
 __all__ = ["Build", "Design", "Package", "Progress", "build", "load_design", "open_build", "package_of", "parse_design",

@@ -28,7 +28,7 @@ step  kind          insertion direction (the part moves along it from far away i
 ====  ============  =====================================================================================
 
 Empty steps are left out and the rest numbered 1, 2, …; the retention parts are those of
-:func:`fabrication.glazing.retention.build_retention` (none without glazing or with ``retention = "none"``).
+:attr:`fabrication.records.BuildRecord.retention` (none without glazing or with ``retention = "none"``).
 The rows go in first, into nothing, along the bisector of their slots' and end axes' directions.  A column goes
 in along the middle of the directions its slots and end cuts admit (:mod:`fabrication.beams.insertion`): a
 slot admits the directions within ``asin(c/2L)`` of its own (``c`` the joint clearance, half of it on either

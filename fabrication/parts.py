@@ -26,7 +26,7 @@ from .flatpart import FlatPart, Placement
 from .model import PartsTable
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .pipeline.records import Build
+    from .records import BuildRecord
 
 
 
@@ -35,7 +35,7 @@ def _num(v: float, digits: int) -> float:
     return 0.0 if r == 0 else r
 
 
-def parts_table(build: "Build") -> PartsTable:
+def parts_table(build: "BuildRecord") -> PartsTable:
     """The parts list of a build (made once, by the pipeline, before any file is written): glass panels, then
     beam plates, each with its placement and the file of its cutting sheet (:func:`~fabrication.contract.
     sheet_files`, the names the DXF writer writes); then the glazing strips, splice cover plates and retention
@@ -48,7 +48,6 @@ def parts_table(build: "Build") -> PartsTable:
     g = build.glazing
     if g is None:
         return PartsTable(tuple(rows))
-    from .glazing.retention import build_retention
     from .glazing.rows import beam_joins, retention_part_rows, splice_rows, strip_rows
 
     joins = beam_joins(g)
@@ -61,7 +60,7 @@ def parts_table(build: "Build") -> PartsTable:
         elif row["kind"] == "panel" and row["part_id"] in bite:
             row["bite_min_mm"] = round(bite[row["part_id"]], 3)
             row["setting_blocks"] = f"2 x {g.params.setting_block_length:g} mm"
-    retention = build_retention(build) if g.strips else None
+    retention = build.retention
     extra = retention_part_rows(retention) if retention is not None else []
     return PartsTable(tuple(rows + strip_rows(g, build.beams) + splice_rows(g, build.beams) + extra))
 

@@ -20,7 +20,7 @@ from .flatpart import place_points
 from .htmlreport import HtmlReport, esc
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .pipeline.records import Build
+    from .records import BuildRecord
 
 log = logging.getLogger("ppfab")
 
@@ -118,7 +118,7 @@ def _svg_img(svg: str, alt: str) -> str:
     return f'<img alt="{esc(alt)}" style="width:100%;height:auto" src="data:image/svg+xml;base64,{data}"/>'
 
 
-def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], drawings: dict[str, str]) -> None:
+def drawings_section(rep: HtmlReport, build: "BuildRecord", files: dict[str, Any], drawings: dict[str, str]) -> None:
     """The installers' drawings (key plan, elevations, node sheets, :mod:`fabrication.drawings`) embedded, the
     node types, and the kerf notes per cutting process."""
     from .contract import KERF_NOTES, node_sheet_file
@@ -157,7 +157,7 @@ def drawings_section(rep: HtmlReport, build: "Build", files: dict[str, Any], dra
     rep.table(["process", "note"], list(KERF_NOTES.items()), left=(0, 1))
 
 
-def build_report(build: "Build", files: dict[str, Any], parts_rows: list[dict],
+def build_report(build: "BuildRecord", files: dict[str, Any], parts_rows: list[dict],
                  drawings: dict[str, str] | None = None) -> str:
     """The report page of a build, listing the files written so far (``files``) and the parts table;
     ``drawings``: relative path → SVG text of the drawings written (embedded)."""

@@ -8,10 +8,10 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from .htmlreport import HtmlReport
-    from .pipeline.records import Build
+    from .records import BuildRecord
 
 
-def glazing_sections(rep: "HtmlReport", build: "Build", repetition: dict[str, Any]) -> None:
+def glazing_sections(rep: "HtmlReport", build: "BuildRecord", repetition: dict[str, Any]) -> None:
     """Append the sections to ``rep``."""
     g = build.glazing
     if g is not None and g.strips:

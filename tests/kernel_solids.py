@@ -15,7 +15,7 @@ def stages(design_path: Path):
     """``(beams, glazing)``: the beams and glazing stages of the design at ``design_path`` (nothing written)."""
     from fabrication.design import load_design
     from fabrication.pipeline import stages as st
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
 
     d = load_design(design_path)
     p = Progress(quiet=True)

@@ -39,7 +39,7 @@ def written(design: Path, out: Path) -> Path:
     deliver, before its own self-check: these tests measure the glass themselves)."""
     from fabrication import build
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     b = build(load_design(design))

@@ -79,7 +79,7 @@ def test_a_conjugate_net_passes_the_gate():
     assert conjugacy_defect(load_mesh(CONICAL1)) < 0.01
     text = (REPO / "examples" / "p_optimised_conical1.toml").read_text()
     design = parse_design(tomllib.loads(text), base_dir=REPO / "examples")
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_geometry
 
     geometry = stage_geometry(design, Progress(quiet=True), False)

@@ -36,7 +36,7 @@ def test_the_refused_plates_do_intersect():
     from fabrication import parse_design
     from fabrication.beams import build_beams
     from fabrication.pipeline.stages import refuse_crossing_plates, stage_geometry, stage_support
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from ppfab.errors import DesignError
     import tomllib
 

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _write(folder: Path, design_text: str | None = None, design_path: Path | None = None) -> Path:
     from fabrication import build, load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     if design_path is None:

@@ -26,7 +26,7 @@ EXAMPLES = sorted((REPO / "examples").glob("*.toml"))
 def test_example_geometry(path):
     design = load_design(path)
     if design.surface is not None:                      # a surface: read, remeshed, optimised by the stage
-        from fabrication.pipeline.progress import Progress
+        from fabrication.progress import Progress
         from fabrication.pipeline.stages import stage_geometry
 
         g = stage_geometry(design, Progress(quiet=True), True)

@@ -22,7 +22,7 @@ from conftest import REPO
 def built(tmp_path_factory) -> Path:
     """examples/smallest_roof.toml (24 of its 40 strips lean more than 2° off their plates) built and written."""
     from fabrication import build, load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     out = tmp_path_factory.mktemp("exchange_bevel") / "out"

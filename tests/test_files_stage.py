@@ -43,7 +43,7 @@ def test_parallel_and_serial_writing_give_identical_files(tmp_path, small_build)
     assert len(serial) > 20 and "beams.step" in serial and "manifest.json" in serial
     assert serial == parallel
 
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     tables = []

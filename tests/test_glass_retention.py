@@ -37,7 +37,7 @@ def written(design: Path, out: Path):
     """The build of ``design`` and the folder its writers filled."""
     from fabrication import build
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     b = build(load_design(design))
@@ -256,11 +256,10 @@ def test_more_wind_than_the_screws_hold_is_stated_per_pane(vault):
     from dataclasses import replace
 
     from fabrication.glazing.bite import pane_edges
-    from fabrication.glazing.retention import build_retention, make_retention
-    from fabrication.glazing.seat import build_seats
+    from fabrication.glazing.retention import make_retention
 
     b = vault[0]
-    r = build_retention(b)
+    r = b.retention
     assert r is not None and all(not p.failures(r.params) for p in r.panes)
     g = b.glazing
     by_edge = {s.edge: s for s in g.strips}
@@ -268,7 +267,7 @@ def test_more_wind_than_the_screws_hold_is_stated_per_pane(vault):
            if e in by_edge}
     worst = max(p.uplift_kN / p.resistance_kN for p in r.panes)
     storm = replace(g.params, wind_suction=1.2 / worst)       # 20 % above what the weakest pane's screws hold
-    r2 = make_retention(b.panels.panels, build_seats(b), g.strips, pes, storm, float(b.design.panels.gap))
+    r2 = make_retention(b.panels.panels, b.seats, g.strips, pes, storm, float(b.design.panels.gap))
     failing = [p for p in r2.panes if any("wind uplift" in f for f in p.failures(storm))]
     # the rest of the panes fail, if at all, only by the plates bending under the storm between their screws
     assert failing and all(all("wind uplift" in f or "pressure plate" in f for f in p.failures(storm))
@@ -367,7 +366,6 @@ def test_structural_silicone_makes_no_plates_and_states_the_etag_bite(vault):
 
     from fabrication.glazing.bite import pane_edges
     from fabrication.glazing.retention import make_retention
-    from fabrication.glazing.seat import build_seats
 
     b = vault[0]
     g = b.glazing
@@ -378,7 +376,7 @@ def test_structural_silicone_makes_no_plates_and_states_the_etag_bite(vault):
     for x in g.bites:
         bites[x.panel] = min(bites.get(x.panel, np.inf), x.bite)
     sil = replace(g.params, retention="silicone")
-    r = make_retention(b.panels.panels, build_seats(b), g.strips, pes, sil, float(b.design.panels.gap), bites)
+    r = make_retention(b.panels.panels, b.seats, g.strips, pes, sil, float(b.design.panels.gap), bites)
     assert {p.kind for p in r.parts} == {"setting_block", "stop"} and not r.stations
     for panel, pr in zip(b.panels.panels, r.panes):
         rect = Polygon(panel.outline).minimum_rotated_rectangle
@@ -387,5 +385,5 @@ def test_structural_silicone_makes_no_plates_and_states_the_etag_bite(vault):
         assert pr.silicone_bite_mm == pytest.approx(1.5 * 1.0e-3 * a / (2 * 0.14), rel=0.02)   # ETAG 002, N/mm
         assert pr.failures(sil) == []                       # ~10 mm bead on bites of some 20 mm
     thin = replace(sil, silicone_design_stress=0.01)        # a bead 14 times as wide no longer fits on the strip
-    r2 = make_retention(b.panels.panels, build_seats(b), g.strips, pes, thin, float(b.design.panels.gap), bites)
+    r2 = make_retention(b.panels.panels, b.seats, g.strips, pes, thin, float(b.design.panels.gap), bites)
     assert all("structural silicone bite" in p.failures(thin)[0] for p in r2.panes)

@@ -15,7 +15,7 @@ from shapely.geometry import LineString, Point, Polygon
 from conftest import REPO
 from fabrication import load_design, parse_design
 from fabrication.pipeline import stages
-from fabrication.pipeline.progress import Progress
+from fabrication.progress import Progress
 
 DESIGNS = {"default": None, "pp_cauchy": REPO / "examples" / "pp_cauchy.toml",
            "pp_translational": REPO / "examples" / "pp_translational.toml",

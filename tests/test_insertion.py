@@ -138,7 +138,7 @@ def test_random_plates_agree_with_the_brute_force_search():
 
 def _write(folder: Path, text: str) -> Path:
     from fabrication import build, load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     design = folder.parent / f"{folder.name}.toml"
@@ -227,7 +227,7 @@ def test_a_polyline_is_read_in_runs_between_its_breaks():
 def _beams_stage(design, blocked: bool):
     from dataclasses import replace
 
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_beams, stage_geometry, stage_panels, stage_quality, stage_support
 
     p = Progress(quiet=True)

@@ -6,7 +6,8 @@
   verify → build → cli;
 * no two modules import each other, directly or through others.
 
-Imports under ``if TYPE_CHECKING:`` are annotations only (never executed) and are left out of the graph.
+Imports under ``if TYPE_CHECKING:`` count for the layers too (an annotation that names a higher layer is a
+dependency on it all the same); only the search for import cycles leaves them out, since they never run.
 """
 
 from __future__ import annotations
@@ -30,9 +31,10 @@ CORE_OPTIONAL = {"ppfab.optimize.linsolve": {"pypardiso"}}
 # fabrication's layers, lowest first; a module may import its own layer and the ones below
 FAB_LAYERS = [
     {"model"},                      # the records of a finished build: data only, imports nothing of fabrication
-    {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "parts", "glassorder", "figures",
-     "htmlreport", "report", "marking", "drawings", "node_sheets", "nodetypes", "examples", "starter", "glazing",
-     "repetition", "report_glazing", "erection", "erection_drawing", "surfacefile", "paper"},
+    {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "figures",
+     "htmlreport", "marking", "drawings", "node_sheets", "nodetypes", "examples", "starter", "glazing",
+     "repetition", "erection", "erection_drawing", "surfacefile", "paper", "progress"},
+    {"records", "parts", "glassorder", "report", "report_glazing"},   # the stages' records of one build, and what reads them whole
     {"writers", "verify", "readers"},
     {"pipeline"},
     {"cli", "studio", "sweep"},
@@ -65,11 +67,12 @@ def _type_checking_lines(tree: ast.AST) -> set[int]:
     return lines
 
 
-def _imports(module: str) -> set[str]:
-    """Absolute names of every module imported by ``module`` at run time (any depth in the file)."""
+def _imports(module: str, annotations: bool = False) -> set[str]:
+    """Absolute names of every module imported by ``module`` at run time (any depth in the file); with
+    ``annotations`` also those imported under ``if TYPE_CHECKING:``."""
     path = MODULES[module]
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    skip = _type_checking_lines(tree)
+    skip = set() if annotations else _type_checking_lines(tree)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     found: set[str] = set()
     for node in ast.walk(tree):
@@ -91,6 +94,7 @@ def _imports(module: str) -> set[str]:
 
 
 IMPORTS = {m: _imports(m) for m in MODULES}
+TYPED_IMPORTS = {m: _imports(m, annotations=True) for m in MODULES}
 
 
 def _top(name: str) -> str:
@@ -104,8 +108,8 @@ def test_every_module_is_parsed():
 
 @pytest.mark.parametrize("module", sorted(m for m in MODULES if m.startswith("ppfab")))
 def test_core_imports_only_numpy_scipy_and_itself(module):
-    bad = sorted(name for name in IMPORTS[module]
-                 if _top(name) not in STDLIB | CORE_THIRD_PARTY | {"ppfab", "__future__"}
+    bad = sorted(name for name in TYPED_IMPORTS[module]
+                 if _top(name) not in STDLIB | CORE_THIRD_PARTY | {"ppfab", "__future__", "_typeshed"}
                  | CORE_OPTIONAL.get(module, set()))
     assert bad == [], f"{module} imports {bad}"
 
@@ -123,7 +127,7 @@ def _layer(module: str) -> int:
 @pytest.mark.parametrize("module", sorted(m for m in MODULES if m.startswith("fabrication")))
 def test_fabrication_layers_run_one_way(module):
     mine = _layer(module)
-    upward = sorted(name for name in IMPORTS[module]
+    upward = sorted(name for name in TYPED_IMPORTS[module]
                     if _top(name) == "fabrication" and name in MODULES and _layer(name) > mine)
     assert upward == [], f"{module} (layer {mine}) imports higher layers: {upward}"
 

@@ -11,7 +11,7 @@ import pytest
 
 from fabrication import load_design
 from fabrication.glazing.welds import CORNER_PREPARATION, HALFLAP_RUNS, corner_welds, halflap_welds, preparation
-from fabrication.pipeline.progress import Progress
+from fabrication.progress import Progress
 from fabrication.pipeline.stages import stage_beams, stage_geometry, stage_support
 
 from conftest import REPO

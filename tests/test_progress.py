@@ -13,7 +13,7 @@ import warnings
 import pytest
 
 from fabrication.cli import main
-from fabrication.pipeline.progress import Event, Progress
+from fabrication.progress import Event, Progress
 
 from conftest import small_design
 

@@ -416,7 +416,7 @@ def test_default_design_beams_fit_the_stock_at_finer_meshes(faces):
     stage cuts them (strict, cuts clear of the joints by what their splice needs: bolted at 22 × 15 and
     44 × 30, welded at 88 × 60 where the edges are too short for a cover plate), to max_length (5900 mm)
     without any change to it."""
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_beams
 
     d = default_at(*faces)

@@ -31,7 +31,7 @@ def built(tmp_path_factory) -> Path:
     """A 4 × 3 vault with pressure plates, written with its exchange models (one build for the module)."""
     from fabrication import build
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.writers import write_all
 
     root = tmp_path_factory.mktemp("retention_parts")

@@ -93,7 +93,6 @@ def test_screws_in_the_glass_stop_the_build_before_any_file_with_the_joint_that_
     from fabrication import build
     from fabrication.cli import main
     from fabrication.design import parse_design
-    from fabrication.glazing.retention import build_retention
 
     example = REPO / "examples" / "smallest_roof.toml"
     doc = tomllib.loads(example.read_text(encoding="utf-8"))
@@ -110,8 +109,7 @@ def test_screws_in_the_glass_stop_the_build_before_any_file_with_the_joint_that_
     assert found, err
     assert not (tmp_path / "out").exists()
     doc["panels"]["gap"] = float(found.group(2))
-    ret = build_retention(build(parse_design(doc, source="<smallest_roof, the joint it names>",
-                                             base_dir=example.parent)))
+    ret = build(parse_design(doc, source="<smallest_roof, the joint it names>", base_dir=example.parent)).retention
     assert ret is not None and min(s.clearance_mm for s in ret.screws) >= 0.0
 
 
@@ -127,14 +125,13 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
 
     from fabrication import build, load_design
     from fabrication.design import parse_design
-    from fabrication.glazing.retention import build_retention
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.verify import Verification, read_csv
     from fabrication.verify.erection import check_erection
     from fabrication.writers import write_all
 
     example = REPO / "examples" / "smallest_roof.toml"
-    assert all(s.clearance_mm >= 0.0 for s in build_retention(build(load_design(example))).screws)
+    assert all(s.clearance_mm >= 0.0 for s in build(load_design(example)).retention.screws)
     doc = tomllib.loads(example.read_text(encoding="utf-8"))
     doc["panels"]["gap"] = 10.0
     import fabrication.glazing.retention as retention
@@ -143,7 +140,7 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
     for module in (retention, screws):                  # built and written, for verify to judge
         monkeypatch.setattr(module, "SCREWS_IN_GLASS_MM", float("inf"))
     b = build(parse_design(doc, source="<smallest_roof, 10 mm joints>", base_dir=example.parent))
-    ret = build_retention(b)
+    ret = b.retention
     assert ret is not None and ret.screws
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"

@@ -186,7 +186,7 @@ def built(tmp_path_factory):
     """The small vault (bolted splices) with glazing.min_slope_deg = 5°, built and written (the checks of this
     file are run on it one by one), with the warnings of the build."""
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import build
     from fabrication.writers import write_all
 
@@ -340,7 +340,7 @@ def test_panes_flatter_than_the_minimum_slope_are_named(built):
 
 def test_the_default_has_two_near_flat_panes():
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_geometry, stage_panels, stage_quality
 
     d = load_design(None)

@@ -69,7 +69,7 @@ def stages_to_beams(design):
     """The build's stages up to the beams (what :func:`structure_counts` reads), without nesting and files."""
     from types import SimpleNamespace
 
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_beams, stage_geometry, stage_support
 
     p = Progress(quiet=True)

@@ -199,7 +199,7 @@ def test_figures_count_what_the_build_counts(example):
     vault, whose construction's cone axes are 14 mm off), and its glass area that of the panes as the build
     cuts them: both against the build's own stages (geometry, support, panels, summary's definition)."""
     from fabrication.design import load_design
-    from fabrication.pipeline.progress import Progress
+    from fabrication.progress import Progress
     from fabrication.pipeline.stages import stage_geometry, stage_panels, stage_support
 
     path = REPO / "examples" / f"{example}.toml"

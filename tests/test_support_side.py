@@ -10,7 +10,7 @@ import pytest
 
 from conftest import small_vault
 from fabrication.design import parse_design
-from fabrication.pipeline.progress import Progress
+from fabrication.progress import Progress
 from fabrication.pipeline.stages import stage_geometry, stage_panels, stage_support
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from fabrication.cli import main
 from fabrication.design import load_design
-from fabrication.pipeline.progress import Progress
+from fabrication.progress import Progress
 from fabrication.pipeline.stages import stage_geometry, stage_support
 from fabrication.writers.mesh import grid_with_support
 from ppfab.io import grid_to_json

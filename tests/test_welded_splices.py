@@ -18,7 +18,7 @@ from fabrication import parse_design
 from fabrication.beams.splitting import plan_cuts
 from fabrication.cli import main
 from fabrication.pipeline import stages
-from fabrication.pipeline.progress import Progress
+from fabrication.progress import Progress
 from ppfab.errors import FabricationError
 
 WELDED = small_vault("welded", max_length=2500.0, joint="halflap") + """

@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline.folder import check_target
     from ..pipeline.lock import OutputLock
     from ..pipeline.stages import build
-    from ..pipeline.progress import Progress
+    from ..progress import Progress
 
     if args.example and args.design:
         raise DesignError("--example", f"give a design file or --example, not both ({args.design!r} and "

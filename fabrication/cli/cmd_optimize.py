@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     from ppfab.optimize import optimize
 
     from ..pipeline.overwrite import check_output_file, write_output
-    from ..pipeline.progress import Progress
+    from ..progress import Progress
 
     out = Path(args.out)
     if out.is_dir():

@@ -46,9 +46,8 @@ from __future__ import annotations
 
 import logging
 import math
-import weakref
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -66,7 +65,9 @@ from .strips import Strip
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..panels import Panel
-    from ..pipeline.records import Build
+    from ppfab.support.structure import SupportStructure
+
+    from . import Glazing
 
 log = logging.getLogger("ppfab")
 
@@ -517,37 +518,28 @@ def _shortest_width(outline: np.ndarray) -> float:
     return float((proj.max(axis=0) - proj.min(axis=0)).min())
 
 
-_CACHE: "weakref.WeakKeyDictionary[Any, Retention]" = weakref.WeakKeyDictionary()
-
-
-def build_retention(build: "Build") -> Retention | None:
-    """The :class:`Retention` of a build, computed once per build's glazing; ``None`` without glazing strips or
-    with ``retention = "none"``."""
+def retention_of(panels: Sequence["Panel"], seats: Sequence[PaneSeat], glazing: "Glazing | None",
+                 support: "SupportStructure", gap: float) -> Retention | None:
+    """The :class:`Retention` of a build's panes (``seats``: where each rests, in panel order) on the glazing
+    strips over the support structure's edges; ``None`` without glazing strips or with ``retention = "none"``.
+    ``gap``: the joint width between panes (mm)."""
     from .bite import pane_edges
-    from .seat import build_seats
 
-    g = build.glazing
+    g = glazing
     if g is None or not g.strips or g.params.retention == "none":
         return None
-    r = _CACHE.get(g)
-    if r is None:
-        by_edge = {s.edge: s for s in g.strips}
-        support = build.support
-        pes = {(panel.part_id, q): by_edge[e] for panel, q, e in pane_edges(build.panels.panels, support.vertices,
-                                                                            support.edges) if e in by_edge}
-        bites: dict[str, float] = {}
-        for b in g.bites:
-            bites[b.panel] = min(bites.get(b.panel, math.inf), b.bite)
-        r = make_retention(build.panels.panels, build_seats(build), g.strips, pes, g.params,
-                           float(build.design.panels.gap), bites)
-        _CACHE[g] = r
-    return r
+    by_edge = {s.edge: s for s in g.strips}
+    pes = {(panel.part_id, q): by_edge[e] for panel, q, e in pane_edges(panels, support.vertices, support.edges)
+           if e in by_edge}
+    bites: dict[str, float] = {}
+    for b in g.bites:
+        bites[b.panel] = min(bites.get(b.panel, math.inf), b.bite)
+    return make_retention(panels, tuple(seats), g.strips, pes, g.params, float(gap), bites)
 
 
-def retention_mass_kg(build: "Build") -> float:
-    """kg: every retention part of a build (its prisms and screws, as their ``parts.csv`` rows give them); 0
-    without retention."""
-    r = build_retention(build)
-    if r is None:
+def retention_mass_kg(retention: Retention | None) -> float:
+    """kg: every retention part (its prisms and screws, as their ``parts.csv`` rows give them); 0 without
+    retention."""
+    if retention is None:
         return 0.0
-    return float(sum(p.mass_kg for p in r.parts) + sum(s.mass_kg for s in r.screws))
+    return float(sum(p.mass_kg for p in retention.parts) + sum(s.mass_kg for s in retention.screws))

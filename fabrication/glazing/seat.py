@@ -28,9 +28,8 @@ Nominal seat ``t_s + t_g`` (the pane parallel to its face, on a gasket parallel 
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -38,7 +37,6 @@ from .strips import Strip
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..panels import Panel
-    from ..pipeline.records import Build
 
 SEAT_TOLERANCE = 0.1
 """mm: how far a placed pane may penetrate a gasket or strip, or stand off the gasket it bears on, in the
@@ -136,27 +134,3 @@ def seat_panes(panels: Sequence["Panel"], strips: Sequence[Strip], gasket: float
         near = [strips[k] for k in sorted(tree.query_ball_point(c, r + reach))]
         out.append(seat_pane(p, near, gasket, nominal))
     return tuple(out)
-
-
-_SEATS: "weakref.WeakKeyDictionary[Any, tuple[PaneSeat, ...]]" = weakref.WeakKeyDictionary()
-
-
-def build_seats(build: "Build") -> tuple[PaneSeat, ...]:
-    """The :class:`PaneSeat` of every pane of a build, in panel order, computed once per build's glazing (the
-    writers of panels.step and of the exchange models ask for them): empty without glazing strips."""
-    g = build.glazing
-    if g is None or not g.strips:
-        return ()
-    seats = _SEATS.get(g)
-    if seats is None:
-        seats = seat_panes(build.panels.panels, g.strips, g.params.gasket_thickness)
-        _SEATS[g] = seats
-    return seats
-
-
-def pane_offsets(build: "Build") -> dict[str, float]:
-    """Part id → the height (mm) of each pane's underside above its face's plane along its outside normal, as
-    every model places it (``panels.step``, IFC, Rhino, glTF): the seat on the gaskets, 0 (on the mesh face)
-    for a build without glazing strips (``[glazing] support = "none"``)."""
-    seats = {s.panel: s.offset for s in build_seats(build)}
-    return {p.part_id: float(seats.get(p.part_id, 0.0)) for p in build.panels.panels}

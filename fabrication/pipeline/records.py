@@ -1,33 +1,24 @@
-"""The typed results of the build stages, and :class:`Build`, which holds them all.
+"""What ``build(design)`` returns: :class:`Build`, the stages' records (:mod:`fabrication.records`) with the
+output folder's writing and verifying.
 
-Each stage of :mod:`fabrication.pipeline.stages` returns one frozen record; nothing passes between stages
-in an untyped dictionary.  The support structure (node axes and support planes) exists once, in
-:attr:`Build.support`: the beams, the node table, ``mesh.json``, ``nodes.csv`` and the report all read it
-from there.
+The records themselves are data, one layer down, so that the writers, the parts list and the report type
+against them without reaching up into the pipeline.
 """
 
 from __future__ import annotations
 
 import errno
 import html
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..model import PartsTable
+from ..records import BuildRecord, NestingSet, NodeTable, PanelSet, Summary
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ppfab.geometry import Geometry
-    from ppfab.metrics import Quality
-    from ppfab.support.structure import SupportStructure
+    from ..progress import Progress
 
-    from ..beams import BeamSet
-    from ..flatpart import FlatPart
-    from ..glazing import Glazing
-    from ..nesting import Nesting
-    from ..panels import Panel
-    from ..design import Design
-    from .progress import Progress
+__all__ = ["Build", "BuildRecord", "NestingSet", "NodeTable", "PanelSet", "Summary"]
 
 
 def _output_error(exc: OSError, tmp: Path, out: Path) -> Exception:
@@ -40,93 +31,13 @@ def _output_error(exc: OSError, tmp: Path, out: Path) -> Exception:
     return FabricationError(f"cannot write {where}: {exc.strerror or exc}{hint} (nothing was written)")
 
 
-@dataclass(frozen=True)
-class PanelSet:
-    """Glass panels (in face order) and their congruence types: ``types[type_id] = [part_id, …]``."""
-
-    panels: tuple["Panel", ...]
-    types: dict[str, list[str]]
-
-
-@dataclass(frozen=True)
-class NestingSet:
-    """The flat parts of glass and beam plates and their nestings on stock sheets."""
-
-    glass_parts: tuple["FlatPart", ...]
-    beam_parts: tuple["FlatPart", ...]
-    glass: "Nesting"
-    plates: "Nesting"
-
-
-@dataclass(frozen=True)
-class NodeTable:
-    """One record per mesh vertex, in vertex order: the rows of ``nodes.json`` (see :mod:`fabrication.nodes`)."""
-
-    records: tuple[dict[str, Any], ...]
-
-
-@dataclass(frozen=True)
-class Summary:
-    """Totals for the manifest, the report and ``ppfab build --json`` (mm, m, m², kg).  ``beam_mass_kg`` is the
-    beam plates alone; ``steel_mass_kg`` the whole steel take-off (beam plates, glazing strips, splice cover
-    plates); ``weld_length_m`` every weld of ``welds.csv``; ``retention_mass_kg`` the glass retention (setting
-    blocks, stops, pressure gaskets and plates, cover caps, screws: their ``parts.csv`` masses)."""
-
-    extent_mm: list[float]
-    panels: int
-    panel_types: int
-    glass_area_m2: float
-    glass_weight_kg: float
-    beams: int
-    beam_plates: int
-    beam_types: int
-    beam_length_m: float
-    beam_mass_kg: float
-    plate_area_m2: float
-    nodes: int
-    glass_sheets: int
-    glass_utilisation: float
-    glass_lower_bound: int
-    plate_sheets: int
-    plate_utilisation: float
-    plate_lower_bound: int
-    torsion_max_deg: float
-    steel_mass_kg: float = 0.0
-    weld_length_m: float = 0.0
-    retention_mass_kg: float = 0.0
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain values in field order (the manifest's ``summary``)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-
 @dataclass(frozen=True, eq=False)
-class Build:
-    """Everything a build computed, stage by stage; :meth:`write` turns it into the output folder.
+class Build(BuildRecord):
+    """What ``build(design)`` returns: every stage's record (:class:`~fabrication.records.BuildRecord`, the data
+    the writers read) and what is done with it — :meth:`write` turns it into the output folder, :meth:`verify`
+    re-reads a folder it wrote, :meth:`_repr_html_` shows it in a notebook."""
 
-    Made by :func:`fabrication.pipeline` (``build(design) -> Build``).  ``parts`` is the parts list, made once
-    from the other records (:func:`fabrication.parts.parts_table`) for every writer that lists parts.
-    ``times`` holds the seconds each stage took (not written to any file, so builds stay byte-reproducible).
-    """
-
-    design: "Design"
-    geometry: "Geometry"
-    quality: "Quality"
-    support: "SupportStructure"
-    panels: PanelSet
-    beams: "BeamSet"
-    nesting: NestingSet
-    nodes: NodeTable
-    summary: Summary
-    glazing: "Glazing | None" = None
-    parts: PartsTable = field(default_factory=PartsTable)
-    times: dict[str, float] = field(default_factory=dict, compare=False)
     _written: list[Path] = field(default_factory=list, repr=False, compare=False)
-
-    @property
-    def mesh(self) -> Any:
-        """The placed mesh in mm (:class:`~ppfab.mesh.QuadGrid` or :class:`~ppfab.mesh.QuadMesh`)."""
-        return self.geometry.mesh
 
     def write(self, out: str | Path, force: bool = False, progress: "Progress | None" = None) -> Path:
         """Write the output folder ``out`` atomically (see the README's output contract); returns its absolute
@@ -140,7 +51,7 @@ class Build:
         """
         from ..writers import write_all
         from .folder import AtomicFolder
-        from .progress import Progress
+        from ..progress import Progress
 
         prog = progress or Progress(quiet=True)
         folder = AtomicFolder(out, force=force, protect=self.design.input_files())

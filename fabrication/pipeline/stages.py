@@ -28,7 +28,7 @@ from ..beams.bevel_cut import bevelled_beams
 from ..beams.notch import notched_beams
 from ..nesting import Nesting
 from ..design import Design
-from .progress import Progress
+from ..progress import Progress
 from .records import Build, NestingSet, NodeTable, PanelSet, Summary
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -68,15 +68,18 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     except BaseException:
         p.fail()
         raise
-    b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
-              times=p.times)
-
-    from ..glazing.retention import build_retention, retention_mass_kg
+    from ..glazing.retention import retention_mass_kg, retention_of
     from ..glazing.screws import refuse_screws_in_glass
+    from ..glazing.seat import seat_panes
     from ..parts import parts_table
 
-    refuse_screws_in_glass(build_retention(b), design.panels.gap)   # placed on the built panes and strips
-    b = replace(b, summary=replace(summary, retention_mass_kg=retention_mass_kg(b)))
+    seats = (seat_panes(panels.panels, glazing.strips, glazing.params.gasket_thickness)
+             if glazing is not None and glazing.strips else ())
+    retention = retention_of(panels.panels, seats, glazing, support, float(design.panels.gap))
+    refuse_screws_in_glass(retention, design.panels.gap)    # placed on the built panes and strips
+    summary = replace(summary, retention_mass_kg=retention_mass_kg(retention))
+    b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
+              seats=seats, retention=retention, times=p.times)
     return replace(b, parts=parts_table(b))                  # the parts list, once, for every writer
 
 

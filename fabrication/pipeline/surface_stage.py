@@ -14,7 +14,7 @@ from ppfab.mesh import QuadGrid, QuadMesh
 from ppfab.topology import families_of
 
 from ..design import Design
-from .progress import Progress
+from ..progress import Progress
 
 log = logging.getLogger("ppfab")
 

@@ -17,10 +17,10 @@ from ..model import MeshData, Node, Package, Part, Sheet, Weld
 from .geometry import strip_outline
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
-def _geometry(build: "Build") -> dict[str, tuple[Any, Any]]:
+def _geometry(build: "BuildRecord") -> dict[str, tuple[Any, Any]]:
     """Part id → (flat outline, holes ``(h, 3)``) of every part whose outline a file of the build draws."""
     out: dict[str, tuple[Any, Any]] = {}
     for p in list(build.nesting.glass_parts) + list(build.nesting.beam_parts):
@@ -40,15 +40,14 @@ def _geometry(build: "Build") -> dict[str, tuple[Any, Any]]:
                 out[pid] = (rep.flat_outline, holes)
         for st in g.strips:
             out[st.part_id] = (strip_outline(st.length, st.width), ())
-        from ..glazing.retention import build_retention
 
-        retention = build_retention(build) if g.strips else None
+        retention = build.retention
         for prism in retention.parts if retention is not None else ():
             out[prism.part_id] = (strip_outline(round(prism.length, 6), round(prism.width, 6)), ())
     return out
 
 
-def _sheets(build: "Build") -> tuple[Sheet, ...]:
+def _sheets(build: "BuildRecord") -> tuple[Sheet, ...]:
     from ..writers.dxf import stock_of
 
     nest = build.nesting
@@ -66,7 +65,7 @@ def _sheets(build: "Build") -> tuple[Sheet, ...]:
     return tuple(sheets)
 
 
-def _mesh(build: "Build") -> MeshData:
+def _mesh(build: "BuildRecord") -> MeshData:
     from ppfab.mesh import QuadGrid
     from ppfab.topology import grid_face_indices
 
@@ -84,7 +83,7 @@ def _mesh(build: "Build") -> MeshData:
                     bool(grid.closed) if grid is not None else False)
 
 
-def package_of(build: "Build") -> Package:
+def package_of(build: "BuildRecord") -> Package:
     """The :class:`~fabrication.model.Package` of ``build`` without writing a file."""
     geometry = _geometry(build)
     parts = []

@@ -1,7 +1,7 @@
 """The full build of the edited design in a background thread, through the Python API
 (``fabrication.build(design).write(out)``), into the folder the user named.
 
-:class:`BuildJob` reports every stage of :class:`~fabrication.pipeline.progress.Progress` to a callback and
+:class:`BuildJob` reports every stage of :class:`~fabrication.progress.Progress` to a callback and
 ends in ``done`` (the report's path) or ``failed`` (the one-line error a command line would print).
 """
 
@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any, Callable
 
-from ..pipeline.progress import Progress
+from ..progress import Progress
 
 STAGES = ("geometry", "quality", "support", "panels", "beams", "nesting", "verify")
 """The stages a build reports, in order (for the progress bar; an unknown stage keeps the bar where it is)."""

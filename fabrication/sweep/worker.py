@@ -59,7 +59,7 @@ def compute(task: VariantTask) -> dict[str, Any]:
     """The figures of ``task`` (raises what the design or the build raises)."""
     from ..design import parse_design
     from ..pipeline import stages
-    from ..pipeline.progress import Progress
+    from ..progress import Progress
     from ..pipeline.records import PanelSet
 
     design = parse_design(task.doc, source=f"variant {task.key}", base_dir=Path(task.base_dir))

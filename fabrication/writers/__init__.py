@@ -20,8 +20,8 @@ from .base import Files, Writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..pipeline.progress import Progress
-    from ..pipeline.records import Build
+    from ..progress import Progress
+    from ..records import BuildRecord
 
 _TABLE: Registry[Writer] = Registry("writer", "fabrication.writers")
 WRITERS: dict[str, Writer] = _TABLE.entries
@@ -29,7 +29,7 @@ WRITERS: dict[str, Writer] = _TABLE.entries
 
 def writer(name: str, order: int, enabled: Callable[["Design"], bool] | None = None) -> Callable:
     """Decorator registering ``write(build, out, files) -> note`` as the writer ``name``."""
-    def register(fn: Callable[["Build", Path, Files], str]) -> Callable[["Build", Path, Files], str]:
+    def register(fn: Callable[["BuildRecord", Path, Files], str]) -> Callable[["BuildRecord", Path, Files], str]:
         _TABLE.add(name, Writer(name, order, fn, enabled or (lambda design: True)))
         return fn
     return register
@@ -40,7 +40,7 @@ def load_writers() -> list[Writer]:
     return sorted(_TABLE.load().values(), key=lambda w: (w.order, w.name))
 
 
-def write_all(build: "Build", out: Path, progress: "Progress", parallel: bool | None = None) -> Files:
+def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: bool | None = None) -> Files:
     """Run every enabled writer in order into ``out``; returns the ``files`` table.
 
     With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the

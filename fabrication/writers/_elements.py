@@ -6,7 +6,7 @@ Every part is a flat outline extruded once, so one record describes it for every
 ``z0 + height`` along the normal:
 
 * a glass panel: the inset outline in the panel frame (the face's least-squares plane, normal to the outside),
-  from its seat ``z0`` (:func:`fabrication.glazing.seat.pane_offsets`: the underside on the gaskets, about
+  from its seat ``z0`` (:meth:`fabrication.records.BuildRecord.pane_offsets`: the underside on the gaskets, about
   strip + gasket above the mesh face) to ``z0`` + the glass thickness;
 * a beam plate: its outline (slots and end cuts drawn in) in the plate frame (its support plane), from
   ``z0 = −t/2`` to ``t/2`` — the plate is centred on its support plane; a plate bevelled under its glazing strips
@@ -40,7 +40,7 @@ from ppfab.topology import FAMILY_NAMES
 from ..contract import EXCHANGE_PROPERTIES
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 Value = str | int | float
@@ -195,12 +195,11 @@ def _value(v: Any) -> Value | None:
     return str(v)
 
 
-def elements(build: "Build") -> list[Element]:
+def elements(build: "BuildRecord") -> list[Element]:
     """The panels (in face order), then the beam plates (in plate order), as :class:`Element` records."""
-    from ..glazing.seat import pane_offsets
 
     rows = build.parts.by_id()
-    seat = pane_offsets(build)
+    seat = build.pane_offsets()
     out = []
     for p in build.panels.panels:
         props = _props(rows[p.part_id])
@@ -225,7 +224,7 @@ def elements(build: "Build") -> list[Element]:
     return out + _glazing_elements(build, rows)
 
 
-def _glazing_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
+def _glazing_elements(build: "BuildRecord", rows: dict[str, dict]) -> list[Element]:
     """The glazing strips (on their beams' top edges) and the splice cover plates with their bolt holes."""
     g = build.glazing
     if g is None:
@@ -252,15 +251,13 @@ SCREW_SIDES = 12
 IFC draws the circle itself)."""
 
 
-def retention_elements(build: "Build", rows: dict[str, dict]) -> list[Element]:
+def retention_elements(build: "BuildRecord", rows: dict[str, dict]) -> list[Element]:
     """The retention parts (:mod:`fabrication.glazing.retention`) on layer ``retention``: each setting block, stop,
     pressure gasket, pressure plate and cover cap the box of its ``parts.csv`` row (the prism of glazing.step,
     from a corner of its underside along the row's ``frame``), and the screws of a plate one element with a
     prism per screw (``copies`` at its stations along the strip)."""
-    from ..glazing.retention import build_retention
 
-    g = build.glazing
-    retention = build_retention(build) if g is not None and g.strips else None
+    retention = build.retention
     if retention is None:
         return []
     out = []
@@ -310,7 +307,7 @@ class NodeAxis:
     props: dict[str, Value]
 
 
-def node_axes(build: "Build") -> list[NodeAxis]:
+def node_axes(build: "BuildRecord") -> list[NodeAxis]:
     """One line per node: from its position along its unit axis (into the structure) by the beam depth."""
     depth = float(build.beams.params.depth)
     out = []

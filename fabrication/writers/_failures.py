@@ -20,7 +20,7 @@ from ..contract import GLB_FILE, IFC_FILE, RHINO_FILE
 from .base import Files, Writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 OPTIONAL_FILES: dict[str, tuple[str, str]] = {
     "ifc": ("ifc", IFC_FILE),
@@ -51,7 +51,7 @@ def guarded(w: Writer) -> Writer:
     key, file = OPTIONAL_FILES[w.name]
     write = w.write
 
-    def guarded_write(build: "Build", out: Path, files: Files) -> str:
+    def guarded_write(build: "BuildRecord", out: Path, files: Files) -> str:
         try:
             return write(build, out, files)
         except (OSError, OptionalFileError):

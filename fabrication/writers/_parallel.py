@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any, Callable
 from .base import Files, Writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.progress import Progress
-    from ..pipeline.records import Build
+    from ..progress import Progress
+    from ..records import BuildRecord
 
 SECOND_PROCESS: tuple[str, ...] = ("dxf_types",)
 """Writers that read nothing of the ``files`` table and run in the second process: the per-type DXFs (one file
@@ -72,7 +72,7 @@ def _merged(added: dict[str, Files], order: list[str]) -> Files:
     return files
 
 
-def _run(w: Writer, build: "Build", out: Path, before: Files) -> tuple[Files, str]:
+def _run(w: Writer, build: "BuildRecord", out: Path, before: Files) -> tuple[Files, str]:
     """Run one writer on a copy of the table ``before``; what it added and its note."""
     files = dict(before)
     note = w.write(build, out, files)
@@ -143,7 +143,7 @@ def _forked_main(job: Callable[[], Any], conn: Any, parent: int) -> None:
         conn.close()
 
 
-def _side_writers(build: "Build", out: Path, writers: list[Writer]) -> list[tuple[str, Files, str, float]]:
+def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer]) -> list[tuple[str, Files, str, float]]:
     """The second process's work: run ``writers`` (each on an empty table); their additions, notes and times."""
     results = []
     for w in writers:
@@ -153,7 +153,7 @@ def _side_writers(build: "Build", out: Path, writers: list[Writer]) -> list[tupl
     return results
 
 
-def write_split(build: "Build", out: Path, progress: "Progress", writers: list[Writer]) -> Files:
+def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: list[Writer]) -> Files:
     """Run ``writers`` (enabled, in order) with those of :data:`SECOND_PROCESS` in a forked process; returns the
     ``files`` table, equal to that of a serial run."""
     side = [w for w in writers if w.name in SECOND_PROCESS]
@@ -187,7 +187,7 @@ def write_split(build: "Build", out: Path, progress: "Progress", writers: list[W
     return _merged(added, order)
 
 
-def _join(build: "Build", out: Path, progress: "Progress", proc: Forked, side: list[Writer],
+def _join(build: "BuildRecord", out: Path, progress: "Progress", proc: Forked, side: list[Writer],
           added: dict[str, Files], order: list[str]) -> None:
     """Wait for the second process; record its writers (progress and times), or run them here if it failed."""
     status, payload = proc.result()

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Callable
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 Files = dict[str, "str | list[str]"]
 """The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""
@@ -20,7 +20,7 @@ class Writer:
 
     name: str
     order: int
-    write: Callable[["Build", Path, Files], str]
+    write: Callable[["BuildRecord", Path, Files], str]
     enabled: Callable[["Design"], bool]
 
 

@@ -12,11 +12,11 @@ from ..parts import csv_text
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 @writer("bolts", order=26)
-def write_bolts(build: "Build", out: Path, files: Files) -> str:
+def write_bolts(build: "BuildRecord", out: Path, files: Files) -> str:
     """One row per bolted splice: its bolt sets (size, grade, length from the grip, washers, nut, category)."""
     g = build.glazing
     if g is None or not g.splices:

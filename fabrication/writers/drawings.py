@@ -17,11 +17,11 @@ from ..contract import DRAWINGS_DIR, NODE_SHEET_DIR, node_sheet_file, view_file
 from ..paper import SheetInfo
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 @writer("drawings", order=75)
-def write_drawings(build: "Build", out: Path, files: Files) -> str:
+def write_drawings(build: "BuildRecord", out: Path, files: Files) -> str:
     from ..drawings import VIEW_TITLES, view_svg
     from ..node_sheets import node_sheet_svg
     from ..nodetypes import node_types
@@ -62,7 +62,7 @@ class RegisteredSheet:
     rows: range | None = None
 
 
-def sheet_register(build: "Build") -> dict[str, RegisteredSheet]:
+def sheet_register(build: "BuildRecord") -> dict[str, RegisteredSheet]:
     """Every sheet of the drawing set in its order, by file (relative to the output folder): the key plan, the two
     elevations, the erection drawing, then the node sheets (a node type whose list does not fit one sheet has
     ``node_type_<id>-2.svg`` … after it), each numbered of the total, on ``[output] paper``."""
@@ -91,7 +91,7 @@ def sheet_register(build: "Build") -> dict[str, RegisteredSheet]:
             for k, (rel, title, node_type, rows) in enumerate(entries, start=1)}
 
 
-def plate_ends(build: "Build", record: dict) -> dict[str, np.ndarray]:
+def plate_ends(build: "BuildRecord", record: dict) -> dict[str, np.ndarray]:
     """For each plate that ends at the node of ``record`` (a ``nodes.json`` record): the direction ``(3,)`` from
     the node along the plate's polyline to its next node (where the plate lies)."""
     k = int(record["vertex"])

@@ -18,7 +18,7 @@ import numpy as np
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 DRAWINGS_PDF = "drawings/drawings.pdf"
 _NS = "{http://www.w3.org/2000/svg}"
@@ -96,7 +96,7 @@ def write_pdf(sheets: list[Path], path: Path) -> None:
 
 
 @writer("drawings_pdf", order=78)
-def write_drawings_pdf(build: "Build", out: Path, files: Files) -> str:
+def write_drawings_pdf(build: "BuildRecord", out: Path, files: Files) -> str:
     """The drawing set as ``drawings/drawings.pdf`` (every sheet the drawing and erection writers wrote)."""
     from .drawings import sheet_register
 

@@ -49,7 +49,7 @@ from ..flatpart import FlatPart, Placement, place_points
 from ..marking import TextLine, face_marks, face_sign, place_label
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 
@@ -543,7 +543,7 @@ def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: st
 
 
 @writer("dxf", order=30)
-def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
+def write_dxf_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """Glass and beam-plate cutting sheets (the per-type DXFs: :func:`write_dxf_type_files`)."""
     name = build.design.info.name
     nest = build.nesting
@@ -557,7 +557,7 @@ def write_dxf_files(build: "Build", out: Path, files: Files) -> str:
 
 
 @writer("dxf_types", order=35, enabled=lambda design: design.output.per_type_dxf)
-def write_dxf_type_files(build: "Build", out: Path, files: Files) -> str:
+def write_dxf_type_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """With ``[output] per_type_dxf``, one flat DXF per panel type (reads nothing of ``files``, so it can run in
     a second process, :mod:`fabrication.writers._parallel`)."""
     types = write_type_dxfs(list(build.nesting.glass_parts), out / TYPE_DIR,

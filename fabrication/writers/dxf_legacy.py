@@ -18,7 +18,7 @@ from .dxf import write_sheet_dxfs, write_type_dxfs
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 def legacy_versions(design: "Design") -> list[str]:
@@ -28,7 +28,7 @@ def legacy_versions(design: "Design") -> list[str]:
 
 
 @writer("dxf_legacy", order=40, enabled=lambda design: bool(legacy_versions(design)))
-def write_legacy_dxfs(build: "Build", out: Path, files: Files) -> str:
+def write_legacy_dxfs(build: "BuildRecord", out: Path, files: Files) -> str:
     """The cutting sheets (and, with ``per_type_dxf``, the per-type DXFs) in each version asked for."""
     name = build.design.info.name
     nest = build.nesting

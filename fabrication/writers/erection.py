@@ -12,18 +12,17 @@ from typing import TYPE_CHECKING
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 @writer("erection", order=77)
-def write_erection(build: "Build", out: Path, files: Files) -> str:
+def write_erection(build: "BuildRecord", out: Path, files: Files) -> str:
     from ..erection import ERECTION_COLUMNS, ERECTION_CSV, ERECTION_SVG, erection_plan
     from ..erection_drawing import erection_svg, plan_outlines
     from ..parts import csv_text
 
-    from ..glazing.retention import build_retention
 
-    plan = erection_plan(build.beams, build.glazing, build.panels.panels, build_retention(build))
+    plan = erection_plan(build.beams, build.glazing, build.panels.panels, build.retention)
     (out / ERECTION_CSV).write_text(csv_text(plan.rows(), ERECTION_COLUMNS), encoding="utf-8")
     files["erection_csv"] = ERECTION_CSV
     svg = out / ERECTION_SVG

@@ -25,7 +25,7 @@ from ..parts import csv_text
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 def by_beam(solids: list, beams: list[str], name: str):
@@ -246,7 +246,7 @@ def _plain(value: float, digits: int = 3) -> float:
 
 
 @writer("glazing", order=25, enabled=lambda design: True)
-def write_glazing(build: "Build", out: Path, files: Files) -> str:
+def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
     """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
     from ._step_text import step_label
     from .step import export_step
@@ -258,9 +258,7 @@ def write_glazing(build: "Build", out: Path, files: Files) -> str:
     name = build.design.info.name
     notes = []
     if g.strips:
-        from ..glazing.retention import build_retention
-
-        retention = build_retention(build)
+        retention = build.retention
         beams = [s.beam_id for s in g.strips for _ in range(2)]
         solids = strip_prisms(g)
         what = "glazing strips and gaskets"

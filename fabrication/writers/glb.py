@@ -20,13 +20,13 @@ from . import Files, writer
 from ._elements import elements
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 MM_TO_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]) * 1e-3
 """``(3, 3)``: ppfab's mm, z up → glTF's metres, y up (row vectors: ``p_gltf = p_mm @ MM_TO_GLTF.T``)."""
 
 
-def glb_bytes(build: "Build", files: Files) -> bytes:
+def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
     """The GLB of a build's panels and beam plates."""
     import trimesh
     from trimesh.visual.material import PBRMaterial
@@ -56,7 +56,7 @@ def glb_bytes(build: "Build", files: Files) -> bytes:
 
 
 @writer("glb", order=70, enabled=lambda design: design.output.glb)
-def write_glb(build: "Build", out: Path, files: Files) -> str:
+def write_glb(build: "BuildRecord", out: Path, files: Files) -> str:
     data = glb_bytes(build, files)
     (out / GLB_FILE).write_bytes(data)
     files["glb"] = GLB_FILE

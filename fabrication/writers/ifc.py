@@ -47,7 +47,7 @@ from . import Files, writer
 from ._elements import Element, elements, object_uuid, part_material
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
 
@@ -422,7 +422,7 @@ def material_category(name: str) -> str | None:
     return None
 
 
-def ifc_model(build: "Build", files: Files) -> IfcModel:
+def ifc_model(build: "BuildRecord", files: Files) -> IfcModel:
     """The IFC model of a build (panels, then beams grouped by beam id, then glazing strips and splice cover
     plates with the materials of their ``parts.csv`` rows)."""
     design = build.design
@@ -442,7 +442,7 @@ def ifc_model(build: "Build", files: Files) -> IfcModel:
 
 
 @writer("ifc", order=60, enabled=lambda design: design.output.ifc)
-def write_ifc(build: "Build", out: Path, files: Files) -> str:
+def write_ifc(build: "BuildRecord", out: Path, files: Files) -> str:
     from .ifc_analysis import add_analysis_model
 
     model = ifc_model(build, files)

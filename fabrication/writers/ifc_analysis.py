@@ -29,7 +29,7 @@ import numpy as np
 from ..contract import node_id
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
     from .ifc import IfcModel
 
 
@@ -52,7 +52,7 @@ def member_axes(points: np.ndarray, axes: np.ndarray, edges: np.ndarray) -> np.n
     return z / norm[:, None]
 
 
-def edge_plates(build: "Build") -> dict[tuple[int, int], str]:
+def edge_plates(build: "BuildRecord") -> dict[tuple[int, int], str]:
     """``(i, j) → part_id`` (``i < j``) of the beam plate that carries each mesh edge; an edge across a bolted
     splice is carried by the two pieces it joins: ``"B-U00-S00+B-U00-S01"``."""
     out: dict[tuple[int, int], str] = {}
@@ -71,7 +71,7 @@ def edge_plates(build: "Build") -> dict[tuple[int, int], str]:
     return out
 
 
-def add_analysis_model(model: "IfcModel", build: "Build") -> Any:
+def add_analysis_model(model: "IfcModel", build: "BuildRecord") -> Any:
     """Add the analysis model of ``build`` to ``model`` (see module docstring); returns the
     ``IfcStructuralAnalysisModel``."""
     f = model.f

@@ -17,7 +17,7 @@ from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 def sha256_of(path: Path) -> str:
@@ -55,7 +55,7 @@ def fabrication_params(design: "Design") -> dict[str, Any]:
     return out
 
 
-def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
+def manifest(build: "BuildRecord", out: Path, files: Files) -> dict[str, Any]:
     """The manifest document for a build written into ``out`` with the ``files`` table."""
     from ..design import DEFAULT_DESIGN
 
@@ -104,7 +104,7 @@ def manifest(build: "Build", out: Path, files: Files) -> dict[str, Any]:
 
 
 @writer("manifest", order=90)
-def write_manifest(build: "Build", out: Path, files: Files) -> str:
+def write_manifest(build: "BuildRecord", out: Path, files: Files) -> str:
     doc = manifest(build, out, files)
     (out / "manifest.json").write_text(json_text(doc), encoding="utf-8")
     return f"{len(doc['sha256'])} files"

@@ -19,7 +19,7 @@ from . import Files, writer
 from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:
@@ -37,7 +37,7 @@ def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:
 
 
 @writer("mesh", order=10)
-def write_mesh_files(build: "Build", out: Path, files: Files) -> str:
+def write_mesh_files(build: "BuildRecord", out: Path, files: Files) -> str:
     mesh = build.mesh
     write_obj(mesh, out / "mesh.obj", header=f"ppfab {__version__} — {build.design.info.name}")
     files["mesh_obj"] = "mesh.obj"

@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 @writer("report", order=80, enabled=lambda design: design.output.report)
-def write_report(build: "Build", out: Path, files: Files) -> str:
+def write_report(build: "BuildRecord", out: Path, files: Files) -> str:
     from ..report import build_report
 
     drawings = {}

@@ -39,7 +39,7 @@ from . import Files, writer
 from ._elements import Element, elements, node_axes, object_uuid, part_material
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 RHINO_VERSION = 7
 """The 3dm archive version written."""
@@ -225,7 +225,7 @@ class RhinoModel:
         return fix_revision_times(base64.b64decode(self.f.Encode(options)))
 
 
-def rhino_model(build: "Build", files: Files) -> RhinoModel:
+def rhino_model(build: "BuildRecord", files: Files) -> RhinoModel:
     """The Rhino model of a build: panels, beam plates, node axes, the mesh."""
     design = build.design
     model = RhinoModel(design.info.name)
@@ -240,7 +240,7 @@ def rhino_model(build: "Build", files: Files) -> RhinoModel:
 
 
 @writer("rhino", order=65, enabled=lambda design: design.output.rhino)
-def write_rhino(build: "Build", out: Path, files: Files) -> str:
+def write_rhino(build: "BuildRecord", out: Path, files: Files) -> str:
     model = rhino_model(build, files)
     (out / RHINO_FILE).write_bytes(model.to_bytes())
     files["rhino"] = RHINO_FILE

@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from build123d import Shape, Solid
 
     from ..panels import Panel
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 def _is_valid(shape) -> bool:
@@ -433,7 +433,7 @@ def panel_groups(ids: Sequence[str]) -> list[str]:
 
 def placed_pane_solids(panels: Sequence["Panel"], offsets: dict[str, float]) -> list:
     """The panes as placed: each inset outline in its panel frame, from ``z = offsets[part id]`` (its seat on the
-    gaskets, :func:`fabrication.glazing.seat.pane_offsets`) to that plus the glass thickness along the outside
+    gaskets, :meth:`fabrication.records.BuildRecord.pane_offsets`) to that plus the glass thickness along the outside
     normal; the same prism as the pane of model.ifc, model.3dm and model.glb."""
     return [_placed_prism(p.outline, p.frame, offsets[p.part_id], float(p.thickness_mm), p.part_id) for p in panels]
 
@@ -510,7 +510,7 @@ def export_placed_panes(panels: Sequence["Panel"], offsets: dict[str, float], pa
 
 
 @writer("step", order=20)
-def write_step_files(build: "Build", out: Path, files: Files) -> str:
+def write_step_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """``beams.step`` (one solid per beam plate, grouped by family and beam) and, with ``[output] panels_step``,
     ``panels.step``."""
     name = build.design.info.name
@@ -519,9 +519,8 @@ def write_step_files(build: "Build", out: Path, files: Files) -> str:
                 description=f"beam plates of {name}")
     files["beams_step"] = "beams.step"
     if build.design.output.panels_step:
-        from ..glazing.seat import pane_offsets
 
-        export_placed_panes(build.panels.panels, pane_offsets(build), out / "panels.step", name)
+        export_placed_panes(build.panels.panels, build.pane_offsets(), out / "panels.step", name)
         files["panels_step"] = "panels.step"
         return "beams.step, panels.step"
     return "beams.step"

@@ -14,11 +14,11 @@ from ..parts import csv_text, write_parts_csv, write_parts_json
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..pipeline.records import Build
+    from ..records import BuildRecord
 
 
 @writer("tables", order=50)
-def write_tables(build: "Build", out: Path, files: Files) -> str:
+def write_tables(build: "BuildRecord", out: Path, files: Files) -> str:
     design = build.design
     parts = list(build.nesting.glass_parts)
     if design.output.per_type_dxf:
