@@ -46,12 +46,10 @@ def _rows(folder: Path) -> list[dict[str, str]]:
 
 
 def _check(folder: Path):
-    from fabrication.verify import Verification, read_csv
+    from fabrication.verify import Verification
     from fabrication.verify.erection import check_erection
 
     v = Verification(folder)
-    v.data["manifest"] = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
-    v.data["parts"] = read_csv(folder / "parts.csv")
     check_erection(v)
     return v
 
@@ -72,7 +70,7 @@ def test_sequence_is_verified_by_an_independent_sweep(built):
     v = _check(built)
     assert "erection" in v.checked
     assert v.findings == []
-    passes = v.data["erection_passes"]
+    passes = v.read.erection_passes
     blocked = {r["part_id"] for r in _rows(built) if r["blocked_spread_deg"]}
     # the sweeps met their neighbours: every pane its four gaskets at least, the strips the plates they sit on ...
     panes = {p.part for p in passes if p.part.startswith("P-")}

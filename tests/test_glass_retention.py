@@ -278,12 +278,10 @@ def test_more_wind_than_the_screws_hold_is_stated_per_pane(vault):
 
 def retention_findings(folder: Path) -> list[str]:
     """What verify's retention check alone finds in ``folder``."""
-    from fabrication.verify import Verification, read_csv
+    from fabrication.verify import Verification
     from fabrication.verify.retention import check_retention
 
     v = Verification(folder)
-    v.data["manifest"] = json.loads((folder / "manifest.json").read_text())
-    v.data["parts"] = read_csv(folder / "parts.csv")
     check_retention(v)
     assert "retention" in v.checked
     return [str(f) for f in v.findings]

@@ -184,11 +184,9 @@ def test_blocked_columns_are_cut_and_the_sweep_lets_them_in(roofs):
     assert all(n == [2] * 4 for b, n in pieces.items() if b in was)
     assert all(max(n) > 2 for b, n in pieces.items() if b not in was)        # the others stay continuous
     v = Verification(segmented)
-    v.data["manifest"] = json.loads((segmented / "manifest.json").read_text(encoding="utf-8"))
-    v.data["parts"] = _rows(segmented, "parts.csv")
     check_erection(v)
     assert v.findings == []
-    passes = v.data["erection_passes"]
+    passes = v.read.erection_passes
     assert any(p.part.startswith("B-W02-S") and p.through.startswith("B-U") for p in passes)   # it met the rows
     assert [p for p in passes if p.excess > TOLERANCE] == []
 
@@ -331,9 +329,7 @@ def test_a_column_cut_at_nodes_is_welded_there_not_spliced_and_goes_in(tmp_path_
             a, _, b = r["joins"].partition(";")
             assert not set(nodes.get(a, [])) & set(nodes.get(b, [])), r["part_id"]
     v = Verification(folder)
-    v.data["manifest"] = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
-    v.data["parts"] = parts
     check_erection(v)
     assert v.findings == []
-    assert [x for x in v.data["erection_passes"] if x.excess > TOLERANCE] == []
+    assert [x for x in v.read.erection_passes if x.excess > TOLERANCE] == []
     assert not any(r["blocked_spread_deg"] for r in _rows(folder, "erection.csv"))

@@ -216,12 +216,10 @@ def test_pressure_plate_bending_is_the_beam_formula_under_the_panes_suction(buil
 def retention_findings(folder: Path) -> list[str]:
     """What ``ppfab verify``'s retention check finds in ``folder`` (the check alone: the rest of verify reads
     every file and costs seconds)."""
-    from fabrication.verify import Verification, read_csv
+    from fabrication.verify import Verification
     from fabrication.verify.retention import check_retention
 
     v = Verification(folder)
-    v.data["manifest"] = json.loads((folder / "manifest.json").read_text())
-    v.data["parts"] = read_csv(folder / "parts.csv")
     check_retention(v)
     assert "retention" in v.checked
     return [str(f) for f in v.findings]

@@ -119,14 +119,13 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
     written STEP solids and rebuilt screws: a set whose screws stand in the glass overlaps a pane by its depth
     (within 0.05 mm) and the check names the pane and the screw; a set with room overlaps none.  With the
     example's 18 mm joints no screw stands in the glass."""
-    import json
     import tempfile
     import tomllib
 
     from fabrication import build, load_design
     from fabrication.design import parse_design
     from fabrication.progress import Progress
-    from fabrication.verify import Verification, read_csv
+    from fabrication.verify import Verification
     from fabrication.verify.erection import check_erection
     from fabrication.writers import write_all
 
@@ -147,11 +146,9 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
         out.mkdir()
         write_all(b, out, Progress(quiet=True), parallel=False)
         v = Verification(out)
-        v.data["manifest"] = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-        v.data["parts"] = read_csv(out / "parts.csv")
         check_erection(v)
     measured: dict[str, float] = {}
-    for p in v.data["erection_passes"]:
+    for p in v.read.erection_passes:
         pair = sorted((p.part, p.through), key=lambda s: not s.startswith("SC-"))
         if pair[0].startswith("SC-") and pair[1].startswith("P-"):
             measured[pair[0]] = max(measured.get(pair[0], 0.0), p.static)
@@ -163,7 +160,7 @@ def test_smallest_roof_screws_in_the_glass_are_those_verify_measures_and_names(m
         if s.clearance_mm >= 0.05:
             assert measured.get(s.part_id, 0.0) <= 0.25, s.part_id
     named = [e for e in v.findings if " inside it in its final place" in str(e)]
-    pairs = {tuple(sorted((p.part, p.through))) for p in v.data["erection_passes"]
+    pairs = {tuple(sorted((p.part, p.through))) for p in v.read.erection_passes
              if p.static > 0.25 and {p.part[:3], p.through[:3]} & {"SC-"} and {p.part[:2], p.through[:2]} & {"P-"}}
     assert named and all("SC-" in e.message for e in named)
     assert len(named) == min(20, len(pairs)) and len({(e.element, e.message) for e in named}) == len(named)

@@ -15,7 +15,7 @@ from fabrication.cli import main
 
 from tamper import copy, findings, read_rows, reseal, write_rows  # noqa: F401
 
-from conftest import REPO, built_folder, small_vault
+from conftest import built_folder, small_vault
 
 DESIGN = small_vault("tamper", max_length=5000.0, joint="halflap")
 built = built_folder("tamper", DESIGN)
@@ -361,7 +361,7 @@ def test_verify_on_two_cores_finds_what_one_core_finds(copy):
         raise RuntimeError("the ifc check broke")
 
     ifc = verify_mod.CHECKS["ifc"]
-    verify_mod._TABLE.entries["ifc"] = verify_mod.Check("ifc", ifc.order, broken)
+    verify_mod._TABLE.entries["ifc"] = verify_mod.Check("ifc", broken)
     try:
         with pytest.raises(RuntimeError, match="the ifc check broke"):
             verify_mod.verify(copy, parallel=True)
@@ -369,45 +369,38 @@ def test_verify_on_two_cores_finds_what_one_core_finds(copy):
         verify_mod._TABLE.entries["ifc"] = ifc
 
 
-def test_the_second_process_reads_nothing_the_first_writes_after_the_fork():
-    """The checks of ``SECOND_PROCESS`` see ``Verification.data`` as it was when the process forked: no key
-    they read (in their modules or the shared helpers they import) may be written by a check that runs after
-    ``FORK_AFTER`` in this process.  Parsed from the sources, so a new dependency fails here, not in a build."""
-    import ast
-
+def test_checks_get_what_they_read_in_any_order_and_either_process(copy, monkeypatch):
+    """The checks have no order among themselves: a check reads what another check reads from the folder
+    through :class:`~fabrication.verify.Verification`'s properties, which run that check first when it has not
+    run.  Forked right after the manifest (nothing else read yet), run in reverse name order, or serially, a
+    tampered folder gives the same findings, each once and under the check that found it."""
     from fabrication import verify as verify_mod
 
-    root = REPO / "fabrication" / "verify"
-    order = {c.name: c.order for c in verify_mod.load_checks()}
-    module = {c.name: c.run.__module__.rsplit(".", 1)[1] for c in verify_mod.load_checks()}   # one may hold several
-    fork = order[verify_mod.FORK_AFTER]
-
-    def keys(path):
-        reads, writes = set(), set()
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) and \
-                    isinstance(node.value, ast.Attribute) and node.value.attr == "data":
-                (writes if isinstance(node.ctx, ast.Store) else reads).add(node.slice.value)
-            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.args and \
-                    isinstance(node.func.value, ast.Attribute) and node.func.value.attr == "data" and \
-                    isinstance(node.args[0], ast.Constant):
-                (writes if node.func.attr == "setdefault" else reads).add(node.args[0].value)
-        return reads, writes
-
-    def helpers(path):
-        tree = ast.parse(path.read_text())
-        return [root / f"{n.module}.py" for n in ast.walk(tree)
-                if isinstance(n, ast.ImportFrom) and n.level == 1 and n.module and (root / f"{n.module}.py").exists()]
-
-    late = set()
-    for name, o in order.items():
-        if name not in verify_mod.SECOND_PROCESS and o > fork:
-            late |= keys(root / f"{module[name]}.py")[1]
-    assert late, "the checks after the fork write data (beam_solids, plate_outlines, …)"
-    for name in verify_mod.SECOND_PROCESS:
-        path = root / f"{module[name]}.py"
-        read = set().union(*(keys(p)[0] for p in [path, *helpers(path)]))
-        assert not read & late, f"{name} reads {sorted(read & late)}, written after the fork"
+    rows = read_rows(copy / "parts.csv")
+    beam = next(r for r in rows if r["kind"] == "beam")
+    beam["nest_tag"] = "X" + beam["nest_tag"]                    # parts.csv and the plate's sheet disagree
+    write_rows(copy / "parts.csv", rows)
+    rel, doc, ent = cut_outline(copy, "glass")
+    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
+    pts[0] = (pts[0][0] + 3.0, pts[0][1])
+    ent.set_points(pts, format="xy")
+    doc.saveas(copy / rel)
+    reseal(copy, "parts.csv", rel)
+    serial = verify_mod.verify(copy, parallel=False)
+    assert not serial.ok and {f.code for f in serial.findings} >= {"dxf"}
+    assert len({str(f) for f in serial.findings}) == len(serial.findings)       # none reported twice
+    monkeypatch.setattr(verify_mod, "READ_FIRST", ("manifest",))
+    early_fork = verify_mod.verify(copy, parallel=True)
+    table = verify_mod.load_table()
+    monkeypatch.setattr(verify_mod, "load_checks",
+                        lambda: [table["manifest"]] + sorted((c for c in table.values() if c.name != "manifest"),
+                                                             key=lambda c: c.name, reverse=True))
+    reverse = verify_mod.verify(copy, parallel=False)
+    key = lambda v: sorted(str(f) for f in v.findings)            # noqa: E731 - the same findings, any order
+    assert key(early_fork) == key(serial) == key(reverse)
+    assert sorted(early_fork.checked) == sorted(serial.checked) == sorted(reverse.checked)
+    by_code = lambda v: sorted((f.code, str(f)) for f in v.findings)   # noqa: E731
+    assert by_code(reverse) == by_code(serial)
 
 
 def _sheet_entities(folder, kind, dxftype, layer):
@@ -612,8 +605,9 @@ def test_every_file_of_a_build_is_read_by_a_check(built, monkeypatch):
     files = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
     assert len(files) > 60 and "glazing.step" in files and "drawings/key_plan.svg" in files
     assert set(files) <= opened["manifest"] | {"manifest.json"}          # the manifest check hashes them all
-    assert "model.ifc" in opened["ifc"] and "model.3dm" in opened["rhino"] and "splices.step" in opened["splices"]
+    assert "model.ifc" in opened["ifc"] and "model.3dm" in opened["rhino"]
     content = set().union(*(fs for name, fs in opened.items() if name not in ("manifest", "files")))
+    assert "splices.step" in content                # read once per process, by whichever check asks first
     content.add("manifest.json")                    # its keys, units and digests are what the manifest check reads
     unread = [f for f in files if f not in content]
     assert unread == [], f"files no check reads: {unread}"

@@ -1,11 +1,15 @@
 """``ppfab verify OUT``: re-read a build's files and check them against each other and the output contract.
 
-Each check is one module of this package registered with :func:`check` (an ``order`` says which runs
-first: later checks use what earlier ones read into :attr:`Verification.data`); each appends
-:class:`Finding` records (file, element, message); a folder passes when there is none.  The checks
-re-read files with the real readers: JSON, CSV, the OBJ reader of :mod:`ppfab.io`, ezdxf (with its auditor)
-for DXF; STEP with a text-level reader of its own and the CAD kernel on the product tree and one solid of each
-kind (every solid with ``kernel``, :mod:`._step_read`).  Adding a check is one new module.
+Each check is one module of this package registered with :func:`check`; each appends
+:class:`~ppfab.finding.Finding` records (file, element, value, limit, message); a folder passes when there is
+none.  What a check reads that another check also needs (the manifest as checked, the mesh, the parts and
+node rows, the cutting-sheet outlines, the STEP solids, …) is a typed field of :class:`FolderData`, filled
+by the one check that reads that file (:data:`PRODUCERS`); a check asks for it through the
+:class:`Verification` property of the same name, which runs the producing check first when it has not run
+yet — so the checks have no order among themselves and each may run in either process.  The checks re-read
+files with the real readers: JSON, CSV, the OBJ reader of :mod:`ppfab.io`, ezdxf (with its auditor) for DXF;
+STEP with a text-level reader of its own and the CAD kernel on the product tree and one solid of each kind
+(every solid with ``kernel``, :mod:`._step_read`).  Adding a check is one new module.
 """
 
 from __future__ import annotations
@@ -14,22 +18,82 @@ import csv
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from ppfab.finding import Finding
 from ppfab.registry import Registry
 
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+
+    from ppfab.mesh import QuadMesh
+
+    from ..writers.dxf import DXFContent
+    from ._step_read import StepSolid
+    from .erection import Pass
+
+
+@dataclass
+class FolderData:
+    """What the checks of one verification read from the folder and share, each field filled by the check
+    :data:`PRODUCERS` names (``None``: that check has not read it, or could not).
+
+    ``manifest``: ``manifest.json`` as checked (``files``, ``mesh`` and ``fabrication`` cleaned: every value of
+    the type the contract gives); ``mesh``: ``mesh.obj``; ``parts``: the rows of ``parts.csv`` whose cells the
+    parts check could read (``parts_csv_rows``: every row as written); ``nodes``: the readable rows of
+    ``nodes.csv``; ``cut``: part id → (sheet file, outline ``(k, 2)`` in sheet mm) of every part on a cutting
+    sheet (``dxf_outlines`` the same outlines by part id alone); ``dxf_texts`` / ``dxf_marks`` / ``dxf_trim``:
+    per sheet file its texts, reference-mark lines and TRIM outline; ``type_outlines``: panel type id → the
+    outline of its per-type DXF; ``type_dxf``: per-type DXF file → its content, or the exception reading it
+    raised; ``beam_solids``: part id → the solid of ``beams.step``; ``plate_outlines`` /
+    ``plate_cut_outlines``: part id → a beam plate's flat outline from its solid (the face, and the union of
+    its faces as cut from the sheet); ``step_read``: (file, colours) → the solids read (one read per file and
+    process); ``erection_passes``: the sweep of every part along its way in (:mod:`.erection`)."""
+
+    manifest: dict[str, Any] | None = None
+    mesh: "QuadMesh | None" = None
+    parts: list[dict[str, str]] | None = None
+    parts_csv_rows: list[dict[str, str]] | None = None
+    nodes: list[dict[str, str]] | None = None
+    cut: dict[str, tuple[str, "np.ndarray"]] = field(default_factory=dict)
+    dxf_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
+    dxf_texts: dict[str, list[Any]] = field(default_factory=dict)
+    dxf_marks: dict[str, list[Any]] = field(default_factory=dict)
+    dxf_trim: dict[str, Any] = field(default_factory=dict)
+    type_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
+    type_dxf: dict[str, "DXFContent | Exception"] = field(default_factory=dict)
+    beam_solids: dict[str, Any] | None = None
+    plate_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
+    plate_cut_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
+    step_read: dict[tuple[str, bool], "list[StepSolid] | None"] = field(default_factory=dict)
+    erection_passes: list["Pass"] | None = None
+
+
+PRODUCERS: dict[str, str] = {
+    "manifest": "manifest", "mesh": "mesh", "parts": "parts", "parts_csv_rows": "parts", "nodes": "nodes",
+    "cut": "dxf", "dxf_outlines": "dxf", "dxf_texts": "dxf", "dxf_marks": "dxf", "dxf_trim": "dxf",
+    "type_outlines": "types", "beam_solids": "step", "plate_outlines": "step_geometry",
+    "plate_cut_outlines": "step_geometry", "erection_passes": "erection"}
+"""Field of :class:`FolderData` → the check that fills it (``type_dxf`` and ``step_read`` are memos that any
+check fills as it reads)."""
+
 
 @dataclass
 class Verification:
-    """The findings of a verification, what was checked, and the files read so far (``data``); ``kernel``: the
-    CAD kernel reads every STEP solid (else a text-level reader, :mod:`._step_read`)."""
+    """The findings of a verification, what was checked, and what was read (:attr:`read`); ``kernel``: the
+    CAD kernel reads every STEP solid (else a text-level reader, :mod:`._step_read`).
+
+    The properties named like the fields of :class:`FolderData` return that field after its producing check
+    has run (here, at the first call, when the check has not run yet: its findings are kept and reported when
+    the check's own turn comes, so they are reported once and under its name)."""
 
     folder: Path
     kernel: bool = False
     findings: list[Finding] = field(default_factory=list)
     checked: list[str] = field(default_factory=list)
-    data: dict[str, Any] = field(default_factory=dict)
+    read: FolderData = field(default_factory=FolderData)
+    _early: dict[str, tuple[list[Finding], list[str]]] = field(default_factory=dict, repr=False)
+    _running: set[str] = field(default_factory=set, repr=False)
 
     def error(self, file: str, element: str, message: str, value: float | None = None,
               limit: float | None = None, code: str = "") -> None:
@@ -39,6 +103,103 @@ class Verification:
     @property
     def ok(self) -> bool:
         return not self.findings
+
+    def after(self, name: str) -> FolderData:
+        """:attr:`read` once the check ``name`` has run in this process (run now when it has not: what it finds
+        is kept for its own turn, :meth:`run_check`)."""
+        if name not in self._early and name not in self._running:
+            c = load_table().get(name)
+            if c is not None:
+                found, checked = self.findings, self.checked
+                self.findings, self.checked = [], []
+                self._running.add(name)
+                try:
+                    c.run(self)
+                    self._early[name] = (self._coded(self.findings, name), self.checked)
+                finally:
+                    self._running.discard(name)
+                    self.findings, self.checked = found, checked
+        return self.read
+
+    def run_check(self, c: "Check") -> tuple[list[Finding], list[str]]:
+        """Run the check ``c`` (or take what it found when another check had it run first): its findings, each
+        under its name, and what it says it checked."""
+        if c.name not in self._early:
+            nf, nc = len(self.findings), len(self.checked)
+            self._running.add(c.name)
+            try:
+                c.run(self)
+            finally:
+                self._running.discard(c.name)
+            got = (self._coded(self.findings[nf:], c.name), self.checked[nc:])
+            del self.findings[nf:], self.checked[nc:]
+            self._early[c.name] = got
+        return self._early[c.name]
+
+    @staticmethod
+    def _coded(findings: list[Finding], name: str) -> list[Finding]:
+        return [f if f.code else replace(f, code=name) for f in findings]
+
+    @property
+    def manifest(self) -> dict[str, Any]:
+        """``manifest.json`` as checked; empty when it cannot be read."""
+        return self.after("manifest").manifest or {}
+
+    @property
+    def mesh(self) -> "QuadMesh | None":
+        return self.after("mesh").mesh
+
+    @property
+    def parts(self) -> list[dict[str, str]] | None:
+        return self.after("parts").parts
+
+    @property
+    def parts_csv_rows(self) -> list[dict[str, str]] | None:
+        return self.after("parts").parts_csv_rows
+
+    @property
+    def nodes(self) -> list[dict[str, str]] | None:
+        return self.after("nodes").nodes
+
+    @property
+    def cut(self) -> dict[str, tuple[str, "np.ndarray"]]:
+        return self.after("dxf").cut
+
+    @property
+    def dxf_outlines(self) -> dict[str, "np.ndarray"]:
+        return self.after("dxf").dxf_outlines
+
+    @property
+    def dxf_texts(self) -> dict[str, list[Any]]:
+        return self.after("dxf").dxf_texts
+
+    @property
+    def dxf_marks(self) -> dict[str, list[Any]]:
+        return self.after("dxf").dxf_marks
+
+    @property
+    def dxf_trim(self) -> dict[str, Any]:
+        return self.after("dxf").dxf_trim
+
+    @property
+    def type_outlines(self) -> dict[str, "np.ndarray"]:
+        return self.after("types").type_outlines
+
+    @property
+    def beam_solids(self) -> dict[str, Any] | None:
+        return self.after("step").beam_solids
+
+    @property
+    def plate_outlines(self) -> dict[str, "np.ndarray"]:
+        return self.after("step_geometry").plate_outlines
+
+    @property
+    def plate_cut_outlines(self) -> dict[str, "np.ndarray"]:
+        return self.after("step_geometry").plate_cut_outlines
+
+    @property
+    def erection_passes(self) -> list["Pass"] | None:
+        return self.after("erection").erection_passes
 
     def read_table(self, rel: str, columns: list[str] | tuple[str, ...] = ()) -> list[dict[str, str]] | None:
         """The rows of the CSV table ``rel``, or ``None`` after a finding that it cannot be read or lacks one of
@@ -71,7 +232,6 @@ def read_csv(path: Path) -> list[dict[str, str]]:
 @dataclass(frozen=True)
 class Check:
     name: str
-    order: int
     run: Callable[[Verification], None]
 
 
@@ -79,32 +239,39 @@ _TABLE: Registry[Check] = Registry("check", "fabrication.verify")
 CHECKS: dict[str, Check] = _TABLE.entries
 
 
-def check(name: str, order: int) -> Callable[[Callable[[Verification], None]], Callable[[Verification], None]]:
+def check(name: str) -> Callable[[Callable[[Verification], None]], Callable[[Verification], None]]:
     """Decorator registering ``run(verification)`` as the check ``name``."""
     def register(fn: Callable[[Verification], None]) -> Callable[[Verification], None]:
-        _TABLE.add(name, Check(name, order, fn))
+        _TABLE.add(name, Check(name, fn))
         return fn
     return register
 
 
+def load_table() -> dict[str, Check]:
+    """Import every check module of this package (once); the checks by name."""
+    return _TABLE.load()
+
+
+READ_FIRST: tuple[str, ...] = ("manifest", "mesh", "parts", "nodes", "dxf", "types")
+"""The checks that fill what most others read (:data:`PRODUCERS`), run first so that the second process
+(:data:`SECOND_PROCESS`) starts with it all read; a matter of time only — every check gets what it reads
+whenever it runs (:meth:`Verification.after`)."""
+
+
 def load_checks() -> list[Check]:
-    """Import every check module of this package (once); the checks in order."""
-    return sorted(_TABLE.load().values(), key=lambda c: (c.order, c.name))
+    """Every check, in the order they run and report: :data:`READ_FIRST`, then the others by name."""
+    table = load_table()
+    first = [table[n] for n in READ_FIRST if n in table]
+    return first + sorted((c for c in table.values() if c.name not in READ_FIRST), key=lambda c: c.name)
 
 
 SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "glazing_step", "ifc")
-"""Checks that read only what the checks up to :data:`FORK_AFTER` put into :attr:`Verification.data` (the
-manifest, the mesh, the parts list, the nodes, the cutting-sheet outlines and the per-type DXFs as read) and put
-nothing there that another check reads: on two cores they run in a forked process beside the others.  Chosen
-by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30 faces
-the fork gets bite 21, ifc 11, splices 6 and glass order 1 (it no longer reads the per-type DXFs: the types
-check did) against step 16, panels_step 6, step_geometry 4, rhino and glb 2 each after it here; at 88 × 60
-the bite check alone (glazing.step, 21,416 solids) is about a quarter of the whole.  The glazing_step check
-reads glazing.step too, and runs beside the bite check so that the file is read once."""
-
-FORK_AFTER = "types"
-"""The second process starts once this check (and every check before it) has run in this one: after the
-per-type DXFs are read, so the glass order check finds them in ``data["type_dxf"]``."""
+"""Checks that run in a forked process beside the others on two cores, once :data:`READ_FIRST` has run here.
+Chosen by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30
+faces the fork gets bite 21, ifc 11, splices 6 and glass order 1 against step 16, panels_step 6, step_geometry
+4, rhino and glb 2 each here; at 88 × 60 the bite check alone (glazing.step, 21,416 solids) is about a quarter
+of the whole.  The glazing_step check reads glazing.step too, and runs beside the bite check so that the file
+is read once.  What they read that this process had not read when it forked they read themselves."""
 
 
 def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = False,
@@ -112,12 +279,12 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     """Run every check on an output folder (stopping after the manifest if it cannot be read).
 
     ``parallel`` (default: on with two cores and fork, :func:`fabrication.writers._parallel.parallel_enabled`)
-    runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`FORK_AFTER` has run; the
-    findings and the list of checks are assembled in check order, so the result equals a serial run.  When the
-    second process fails (a check raising, the process dying), its checks run again here, so an error is the
-    check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files (:attr:`Verification.kernel`).
-    ``progress(done, total, what)`` is called as checks finish here (``what``: the check just run, or what is
-    being waited for), so a long verify shows its count and time left."""
+    runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`READ_FIRST` have run; the
+    findings and the list of checks are assembled in :func:`load_checks` order, so the result equals a serial
+    run.  When the second process fails (a check raising, the process dying), its checks run again here, so an
+    error is the check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files
+    (:attr:`Verification.kernel`).  ``progress(done, total, what)`` is called as checks finish here (``what``:
+    the check just run, or what is being waited for), so a long verify shows its count and time left."""
     v = Verification(Path(folder), kernel=kernel)
     if not v.folder.is_dir():
         v.error(str(folder), "", "is not a folder")
@@ -134,11 +301,11 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     report = progress or (lambda done_, total_, what_: None)
     try:
         for c in first:
-            _run_one(v, c, done)
+            done[c.name] = v.run_check(c)
             report(len(done), len(checks), c.name)
-            if not v.data.get("manifest"):
-                return v
-            if c.name == FORK_AFTER and second:
+            if v.read.manifest is None:
+                return _assembled(v, checks, done)
+            if second and child is None and all(n in done for n in READ_FIRST if n in CHECKS):
                 try:
                     child = Forked(lambda: _run_all(v, second), "ppfab-verify")
                 except OSError:                 # no process to be had: the checks run here
@@ -152,10 +319,16 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     if second:
         if outcome[0] != "ok":                  # no second process, or it failed: run its checks here
             for c in second:
-                _run_one(v, c, done)
+                done[c.name] = v.run_check(c)
                 report(len(done), len(checks), c.name)
         else:
             done.update(outcome[1])
+    return _assembled(v, checks, done)
+
+
+def _assembled(v: Verification, checks: list[Check], done: dict[str, tuple[list[Finding], list[str]]]
+               ) -> Verification:
+    """``v`` with the findings and the checked list of every check run, in check order."""
     v.findings = [f for c in checks if c.name in done for f in done[c.name][0]]
     v.checked = [n for c in checks if c.name in done for n in done[c.name][1]]
     return v
@@ -163,15 +336,4 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
 
 def _run_all(v: Verification, checks: list[Check]) -> dict[str, tuple[list[Finding], list[str]]]:
     """The second process's work: ``checks`` run on its copy of ``v``; what each found and checked."""
-    done: dict[str, tuple[list[Finding], list[str]]] = {}
-    for c in checks:
-        _run_one(v, c, done)
-    return done
-
-
-def _run_one(v: Verification, c: Check, done: dict[str, tuple[list[Finding], list[str]]]) -> None:
-    """Run one check and keep what it found and what it says it checked."""
-    nf, nc = len(v.findings), len(v.checked)
-    c.run(v)
-    v.findings[nf:] = [f if f.code else replace(f, code=c.name) for f in v.findings[nf:]]
-    done[c.name] = (v.findings[nf:], v.checked[nc:])
+    return {c.name: v.run_check(c) for c in checks}

@@ -46,7 +46,7 @@ def seat_range(v: Verification) -> tuple[float, float]:
     from . import read_csv
     from ._shapes import number
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     nominal = float(m.get("glazing", {}).get("offset_mm", 0.0) or 0.0)
     if not nominal:
         return 0.0, 0.0
@@ -67,14 +67,14 @@ def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None
     p_y y_dir``)."""
     from .congruence import inset_face_2d
 
-    mesh = v.data.get("mesh")
-    fab = v.data.get("manifest", {}).get("fabrication", {})
+    mesh = v.mesh
+    fab = v.manifest.get("fabrication", {})
     if row["kind"] == "panel" and mesh is not None and row.get("face", "") != "":
         corners = mesh.vertices[mesh.faces[int(row["face"])]]
         c = corners.mean(axis=0)
         vt = np.linalg.svd(corners - c)[2]
         return c + inset_face_2d(corners, 0.5 * float(fab.get("panel_gap", 0.0))) @ vt[:2]
-    sheet = v.data.get("dxf_outlines", {}).get(row["part_id"])
+    sheet = v.dxf_outlines.get(row["part_id"])
     frame = literal(row.get("frame", ""))
     if row["kind"] != "beam" or sheet is None or not isinstance(frame, dict):
         return None
@@ -180,7 +180,7 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
     place_eps = 4.0 * eps if mean_area is not None else eps
     if ring is not None:
         check_outline_place(v, rel, row, ring, max(place_eps, 1e-4))
-    fab = v.data.get("manifest", {}).get("fabrication", {})
+    fab = v.manifest.get("fabrication", {})
     t = float(row.get("thickness_mm") or 0.0)
     area = float(row.get("area_mm2") or 0.0) if mean_area is None else mean_area
     if holes and row["kind"] in ("beam", "splice"):
@@ -194,7 +194,7 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
         allowed = max(allowed, float(row.get("perimeter_mm") or 0.0) * tol * t)
     if t > 0 and area > 0 and abs(volume - area * t) > allowed:
         v.error(rel, pid, f"volume {volume:.6g} mm³ ≠ area × thickness {area * t:.6g} mm³")
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if row["kind"] == "panel" and mesh is not None and row.get("face", "") != "":
         corners = mesh.vertices[mesh.faces[int(row["face"])]]
         c = corners.mean(axis=0)

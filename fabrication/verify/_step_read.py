@@ -280,10 +280,10 @@ def read_or_report(v: "Verification", rel: str, colours: bool = False) -> list[S
     findings too; with ``v.kernel`` (``ppfab verify --kernel``) the kernel reads every solid
     (:func:`read_step_solids`, build123d solids).
 
-    What was read is kept in ``data["step_read"]`` (per process: the forked checks keep their own), so two checks
+    What was read is kept in :attr:`FolderData.step_read` (per process: the forked checks keep their own), so two checks
     of one process read a file once (glazing.step: the bite and the glazing_step checks); a file that cannot be
     read is reported by the first check only.  The text-level reader always reads colours."""
-    memo = v.data.setdefault("step_read", {})
+    memo = v.read.step_read
     key = (rel, colours or not v.kernel)
     if key not in memo:
         memo[key] = _read_kernel(v, rel, colours) if v.kernel else _read_text(v, rel)

@@ -188,11 +188,11 @@ def _check_bevel_face(v: Verification, pid: str, row: dict, strip_pts: np.ndarra
                                      f"bevels.csv's delta_mm is {row.get('delta_mm')!r}")
 
 
-@check("bevels", 67)
+@check("bevels")
 def check_bevels(v: Verification) -> None:
     from ._step_read import read_or_report
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     rel, rel_g = files.get("bevels_csv"), files.get("glazing_step")
     if rel is None or rel_g is None:
@@ -203,7 +203,7 @@ def check_bevels(v: Verification) -> None:
         return
     threshold = float(m.get("fabrication", {}).get("glazing", {}).get("bevel_min_deg", 0.0))
     solids = {s.name: s.solid for s in read if s.name.startswith("GS-")}
-    parts = v.data.get("parts", [])
+    parts = (v.parts or [])
     strips = {r["part_id"]: r for r in parts if r.get("kind") == "strip"}
     plates: dict[str, list[tuple[set[int], np.ndarray, float]]] = {}
     for r in parts:
@@ -213,7 +213,7 @@ def check_bevels(v: Verification) -> None:
             plates.setdefault(r.get("beam_id", ""), []).append(({int(k) for k in nodes}, n / np.linalg.norm(n),
                                                                 number(r.get("thickness_mm"))))
     stated = {r.get("strip", ""): r for r in rows}
-    beam_solids = v.data.get("beam_solids") or {}
+    beam_solids = (v.beam_solids or {})
     frames = {r["part_id"]: frame_of(r) for r in parts if r.get("kind") == "beam"}
     plate_rows = {r["part_id"]: r for r in parts if r.get("kind") == "beam"}
     kept_square: list[str] = []
@@ -247,7 +247,7 @@ def check_bevels(v: Verification) -> None:
                                   "plate's plane in parts.csv")
         bevelled = r.get("bevel", "") != "square"
         if bevelled and r.get("plate", "") in beam_solids:
-            mesh = v.data.get("mesh")
+            mesh = v.mesh
             ends = mesh.vertices[[i, j]] if mesh is not None and max(i, j) < len(mesh.vertices) else None
             _check_bevel_face(v, pid, r, pts, beam_solids[r["plate"]], frames.get(r["plate"]), ends, plate[2])
         if lean > threshold + LEAN_TOL and not bevelled:

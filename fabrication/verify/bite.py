@@ -170,12 +170,12 @@ def _check_rows(v: Verification, rel: str, measured: dict[str, dict[tuple[int, i
                                     f"(it bites {edges[key].bite:.3f} mm)")
 
 
-@check("bite", 64)
+@check("bite")
 def check_bite(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     rel = files.get("glazing_step")
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if rel is None or mesh is None:
         return
     fab = m.get("fabrication", {})
@@ -190,7 +190,7 @@ def check_bite(v: Verification) -> None:
     gaskets: dict[tuple[int, int], np.ndarray] = {}
     strip_edge: dict[str, tuple[int, int]] = {}
     prel = files.get("parts_csv", "parts.csv")
-    for row in v.data.get("parts", []):
+    for row in (v.parts or []):
         if row["kind"] != "strip":
             continue
         pid = row["part_id"]
@@ -211,7 +211,7 @@ def check_bite(v: Verification) -> None:
     low = []
     tree = cKDTree(np.array([g[8] for g in gaskets.values()])) if gaskets else None
     measured: dict[str, dict[tuple[int, int], EdgeMeasure]] = {}
-    for row in v.data.get("parts", []):
+    for row in (v.parts or []):
         if row["kind"] != "panel" or row.get("face", "") == "":
             continue
         face = np.asarray(mesh.faces[int(row["face"])])

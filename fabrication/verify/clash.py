@@ -125,12 +125,12 @@ def measure_clashes(panes: dict[str, Any], supports: dict[str, Any]) -> list[Pai
     return out
 
 
-@check("clash", 66)
+@check("clash")
 def check_clash(v: Verification) -> None:
     from ..glazing.seat import SEAT_TOLERANCE
     from ._step_read import read_or_report
 
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel_p, rel_g = files.get("panels_step"), files.get("glazing_step")
     if rel_p is None or rel_g is None:
         return
@@ -140,7 +140,7 @@ def check_clash(v: Verification) -> None:
         return
     panes = {s.name: s.solid for s in glass if s.name.startswith("P-")}
     supports = {s.name: s.solid for s in support}
-    gaskets = {gasket_id(r["part_id"]) for r in v.data.get("parts", []) if r.get("kind") == "strip"}
+    gaskets = {gasket_id(r["part_id"]) for r in (v.parts or []) if r.get("kind") == "strip"}
     pairs = measure_clashes(panes, supports)
     tol = SEAT_TOLERANCE
     for p in sorted((p for p in pairs if p.depth > tol), key=lambda p: -p.depth)[:20]:

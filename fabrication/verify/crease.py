@@ -41,15 +41,15 @@ def edge_dihedral_angles(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.nd
     return edges, np.degrees(np.arccos(cos))
 
 
-@check("crease", 22)
+@check("crease")
 def check_crease(v: Verification) -> None:
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if mesh is None:
         return
     faces = np.asarray(mesh.faces)
     if faces.ndim != 2 or faces.shape[1] != 4 or not len(faces):
         return
-    m = v.data.get("manifest", {})
+    m = v.manifest
     rel = m.get("mesh", {}).get("path", "mesh.obj")
     edges, angle = edge_dihedral_angles(np.asarray(mesh.vertices), faces)
     largest = float(angle.max()) if len(angle) else 0.0

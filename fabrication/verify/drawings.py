@@ -70,16 +70,16 @@ def label_boxes(texts: list[ET.Element], bad: list[str] | None = None) -> list[t
     return out
 
 
-@check("drawings", 80)
+@check("drawings")
 def check_drawings(v: Verification) -> None:
     from shapely import STRtree
 
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     views, sheets = files.get("drawings"), files.get("node_sheets")
     if views is None and sheets is None and not files.get("erection_drawing"):
         return
     # the key plan names the panels and the beam plates (glazing strips and splice plates are on their beams)
-    parts = {r["part_id"] for r in v.data.get("parts", []) if r.get("kind") in ("panel", "beam")}
+    parts = {r["part_id"] for r in (v.parts or []) if r.get("kind") in ("panel", "beam")}
     texts: dict[str, list[ET.Element]] = {}
     for rel in list(views or []) + list(sheets or []):
         try:
@@ -118,7 +118,7 @@ def check_drawings(v: Verification) -> None:
         sheets_all = list(views or []) + ([files["erection_drawing"]] if files.get("erection_drawing") else []) + \
             list(sheets or [])
         check_pdf(v, files["drawings_pdf"], sheets_all)
-    wanted = {r["node_id"] for r in v.data.get("nodes", []) if r.get("beams")}
+    wanted = {r["node_id"] for r in (v.nodes or []) if r.get("beams")}
     count: dict[str, int] = {}
     for rel in sheets or []:
         for t in texts.get(rel, []):
@@ -287,7 +287,7 @@ def _check_view_polygons(v: Verification, rel: str, view: str) -> None:
         v.error(rel, "svg data-frame", f"{root.get('data-frame')!r} is not two numbers (the picture frame)")
         return
     want: list[tuple[str, np.ndarray]] = []
-    for row in v.data.get("parts", []):
+    for row in (v.parts or []):
         if row.get("kind") != "panel":
             continue
         ref = reference_outline(v, row)

@@ -1,5 +1,5 @@
 """The DXF cutting sheets: audit, layers, parts once, inside TRIM, spacing, parts.csv, panel congruence, labels
-and marks.  The outlines found are kept in ``data["cut"]`` (part id → sheet file, outline) for later checks."""
+and marks.  The outlines found are kept in :attr:`FolderData.cut` (part id → sheet file, outline) for other checks."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from ._cells import file_list
 from ._tolerance import type_tolerance
 
 
-@check("dxf", 50)
+@check("dxf")
 def check_dxf(v: Verification) -> None:
     """Every cutting sheet: ezdxf audit, contract layers/entities, parts once, inside TRIM, spacing,
     agreement with parts.csv, and (glass) congruence with the 3D face inset by half the gap."""
@@ -19,16 +19,16 @@ def check_dxf(v: Verification) -> None:
 
     from ..writers.dxf import check_sheet_dxf
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     fab = m.get("fabrication", {})
-    parts = {r["part_id"]: r for r in v.data.get("parts", [])}
-    mesh = v.data.get("mesh")
+    parts = {r["part_id"]: r for r in (v.parts or [])}
+    mesh = v.mesh
     panels_fab = fab.get("panels", {})
     ctol = type_tolerance(fab)
     marks_wanted = float(panels_fab.get("mark_size", 0.0)) > 0
     seen: dict[str, str] = {}
-    cut = v.data.setdefault("cut", {})
+    cut = v.read.cut
     for key, spacing_key in (("glass_sheets", "nesting"), ("beam_sheets", "beam_nesting")):
         spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
         for sheet_no, rel in enumerate(file_list(files, key), start=1):
@@ -38,9 +38,9 @@ def check_dxf(v: Verification) -> None:
                 v.error(rel, "", str(exc))
                 continue
             polys = []
-            v.data.setdefault("dxf_texts", {})[rel] = content.texts          # for the marking check
-            v.data.setdefault("dxf_marks", {})[rel] = content.mark_lines
-            v.data.setdefault("dxf_trim", {})[rel] = content.trim_outline
+            v.read.dxf_texts[rel] = content.texts          # for the marking check
+            v.read.dxf_marks[rel] = content.mark_lines
+            v.read.dxf_trim[rel] = content.trim_outline
             trim = Polygon(content.trim_outline).buffer(1e-6)
             for label in content.labels:
                 if contract.one_line(label) != label:
@@ -66,7 +66,7 @@ def check_dxf(v: Verification) -> None:
                 if not trim.contains(poly):
                     v.error(rel, pid, "outline leaves the usable (TRIM) area")
                 polys.append((pid, poly))
-                v.data.setdefault("dxf_outlines", {})[pid] = part.points      # sheet coordinates
+                v.read.dxf_outlines[pid] = part.points      # sheet coordinates
                 if key == "glass_sheets" and mesh is not None and row is not None and row.get("face", "") != "":
                     face = int(row["face"])
                     ref = inset_face_2d(mesh.vertices[mesh.faces[face]], 0.5 * float(fab.get("panel_gap", 0.0)))

@@ -11,9 +11,9 @@ from . import Verification, check
 VERSION_CODES = {"R12": "AC1009", "R2000": "AC1015"}
 
 
-@check("dxf_legacy", 57)
+@check("dxf_legacy")
 def check_dxf_legacy(v: Verification) -> None:
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     from ..writers.dxf import read_sheet_dxf, check_sheet_dxf
 
     done = False

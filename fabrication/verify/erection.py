@@ -207,7 +207,7 @@ def _read_rows(v: Verification, rel: str) -> list[tuple[str, str, int, np.ndarra
 def _bodies(v: Verification, files: dict[str, Any], wanted: set[str]) -> dict[str, Body]:
     from ._step_read import read_or_report
 
-    solids: dict[str, Any] = dict(v.data.get("beam_solids") or {})
+    solids: dict[str, Any] = dict((v.beam_solids or {}))
     keys = ["glazing_step", "splices_step", "panels_step"] + ([] if solids else ["beams_step"])
     for key in keys:
         rel = files.get(key)
@@ -244,16 +244,16 @@ def _number(text: Any) -> float | None:
     return x if np.isfinite(x) and x > 0 else None
 
 
-@check("erection", 68)
+@check("erection")
 def check_erection(v: Verification) -> None:
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("erection_csv")
     if rel is None:
         return
     rows = _read_rows(v, rel)
     if rows is None:
         return
-    parts = v.data.get("parts")
+    parts = v.parts
     if parts is None:
         try:
             parts = read_csv(v.folder / files.get("parts_csv", "parts.csv"))
@@ -284,7 +284,7 @@ def check_erection(v: Verification) -> None:
               for p in sweep_passes(order, bodies, {name: HAND_APPROACH_MM for name, _, _ in order
                                                     if kind_of.get(name.split("#")[0]) in BY_HAND})]
     deep = [p for p in passes if p.excess > TOLERANCE]
-    v.data["erection_passes"] = passes
+    v.read.erection_passes = passes
     kinds = {pid: kind for pid, kind, *_ in rows}
     overlapping = [p for p in passes if p.static > TOLERANCE]
     # a plate leaning under a part it carries lifts one top corner into it by (t/2)·sin λ < t/2: an overlap in
@@ -332,7 +332,7 @@ def check_erection(v: Verification) -> None:
     # ... except glass laid straight on the steel ([glazing] support = "none", no strips: the glazing system is
     # someone else's), where a leaning plate's top corner rises (t/2)·sin λ into the pane and a splice's cover
     # plates, set under the top edge for strips that are not there, can reach it: said, as before
-    bare = (v.data.get("manifest", {}).get("fabrication", {}).get("glazing", {}) or {}).get("support") == "none"
+    bare = (v.manifest.get("fabrication", {}).get("glazing", {}) or {}).get("support") == "none"
 
     def on_plates(p: Any) -> bool:
         return bare and {kinds.get(p.part), kinds.get(p.through)} in ({"panel", "row"}, {"panel", "column"},

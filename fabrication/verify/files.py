@@ -8,11 +8,11 @@ from __future__ import annotations
 from . import Verification, check
 
 
-@check("files", 11)
+@check("files")
 def check_files(v: Verification) -> None:
     from ..contract import PARTIAL_MARKER as MARKER
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     listed = set(m.get("sha256", {})) | {"manifest.json", MARKER}
     for path in sorted(p for p in v.folder.rglob("*") if p.is_file() or p.is_symlink()):
         rel = path.relative_to(v.folder).as_posix()

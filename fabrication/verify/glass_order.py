@@ -18,12 +18,12 @@ from .congruence import congruence_error, inset_face_2d
 from .types import type_dxf
 
 
-@check("order", 35)
+@check("order")
 def check_order(v: Verification) -> None:
     """The order list against parts.csv: one row per panel type, its quantity, parts, area and material."""
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("glass_order_csv")
-    parts = v.data.get("parts")
+    parts = v.parts
     if rel is None or parts is None:
         return
     rows = read_csv(v.folder / rel)
@@ -60,9 +60,9 @@ def check_order(v: Verification) -> None:
     v.checked.append("order")
 
 
-@check("glass_order", 55)
+@check("glass_order")
 def check_glass_order(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     rel = files.get("glass_order_csv")
     if rel is None:
@@ -72,9 +72,9 @@ def check_glass_order(v: Verification) -> None:
     if missing:
         v.error(rel, "columns", f"missing columns {missing}")
         return
-    parts = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel"}
+    parts = {r["part_id"]: r for r in (v.parts or []) if r["kind"] == "panel"}
     ordered: dict[str, str] = {}
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     gap = float(m.get("fabrication", {}).get("panel_gap", 0.0))
     dimensioned = bool(m.get("fabrication", {}).get("output", {}).get("type_dimensions", False))
     n = ORDER_CORNERS

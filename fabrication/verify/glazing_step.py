@@ -54,15 +54,16 @@ def _face_normals(mesh) -> np.ndarray:
 def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Part id → (strip corners ``(8, 3)``, gasket corners ``(8, 3)``) recomputed (module docstring); ``sign``
     turns the face normals to the outside."""
-    mesh = v.data["mesh"]
-    fab = v.data.get("manifest", {}).get("fabrication", {})
+    mesh = v.mesh
+    assert mesh is not None                             # the check reads nothing without it
+    fab = v.manifest.get("fabrication", {})
     gl = fab.get("glazing", {})
     c_clear, tg = float(gl.get("clearance", 0.0)), float(gl.get("gasket_thickness", 0.0))
     verts = np.asarray(mesh.vertices, dtype=float)
     axes = {int(number(r.get("vertex"), -1)): np.array([number(r.get(k)) for k in ("axis_x", "axis_y", "axis_z")])
-            for r in v.data.get("nodes", []) or []}
+            for r in (v.nodes or [])}
     plates: dict[str, list[tuple[set[int], np.ndarray]]] = {}
-    for r in v.data.get("parts", []):
+    for r in (v.parts or []):
         pl, nodes = literal(r.get("plane", "")), literal(r.get("nodes", ""))
         if r["kind"] == "beam" and isinstance(pl, list) and len(pl) == 4 and isinstance(nodes, list):
             p = np.asarray(pl, dtype=float)
@@ -165,11 +166,11 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
     return out
 
 
-@check("glazing_step", 66)
+@check("glazing_step")
 def check_glazing_step(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     rel = m.get("files", {}).get("glazing_step")
-    if rel is None or v.data.get("mesh") is None:
+    if rel is None or v.mesh is None:
         return
     from ._step_read import read_or_report
 
@@ -177,12 +178,12 @@ def check_glazing_step(v: Verification) -> None:
     if read is None:
         return
     solids = {s.name: s.solid for s in read}
-    rows = [r for r in v.data.get("parts", []) if r["kind"] == "strip"]
+    rows = [r for r in (v.parts or []) if r["kind"] == "strip"]
     try:
         spans = [tuple(int(x) for x in r.get("edge_nodes", "").split(";")) for r in rows]
     except ValueError:
         spans = []
-    bad = [r["part_id"] for r, s in zip(rows, spans) if len(s) != 2 or not all(0 <= k < len(v.data["mesh"].vertices)
+    bad = [r["part_id"] for r, s in zip(rows, spans) if len(s) != 2 or not all(0 <= k < len(v.mesh.vertices)
                                                                              for k in s)]
     if len(spans) != len(rows) or bad:
         v.error("parts.csv", bad[0] if bad else rows[0]["part_id"], "edge_nodes is not two mesh vertices 'a;b'")

@@ -12,9 +12,9 @@ from . import Verification, check
 from ._solids import check_names, check_part_solid, check_screw_points
 
 
-@check("glb", 74)
+@check("glb")
 def check_glb(v: Verification) -> None:
-    rel = v.data.get("manifest", {}).get("files", {}).get("glb")
+    rel = v.manifest.get("files", {}).get("glb")
     if rel is None:
         return
     import trimesh
@@ -27,7 +27,7 @@ def check_glb(v: Verification) -> None:
     except Exception as exc:  # noqa: BLE001 - reported as a finding
         v.error(rel, "", f"cannot be read by trimesh ({exc})")
         return
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    rows = {r["part_id"]: r for r in (v.parts or [])}
     names = list(scene.graph.nodes_geometry)
     check_names(v, rel, names, {k: r["kind"] for k, r in rows.items()}, "glTF node")
     back = np.linalg.inv(MM_TO_GLTF)

@@ -115,9 +115,9 @@ def circle_items(product, sides: int = 16) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros((0, 3))
 
 
-@check("ifc", 70)
+@check("ifc")
 def check_ifc(v: Verification) -> None:
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("ifc")
     if rel is None:
         return
@@ -143,7 +143,7 @@ def check_ifc(v: Verification) -> None:
     scale = uu.calculate_unit_scale(f)
     if abs(scale - 1e-3) > 1e-12:
         v.error(rel, "units", f"length unit is {scale:g} m, expected millimetres")
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    rows = {r["part_id"]: r for r in (v.parts or [])}
     products: list[Any] = [p for p in f.by_type("IfcElement") if not p.is_a("IfcElementAssembly") and not p.is_a("IfcRoof")]
     check_names(v, rel, [p.Name for p in products], {k: r["kind"] for k, r in rows.items()}, "IFC element")
     for p in products:

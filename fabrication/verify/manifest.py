@@ -1,6 +1,6 @@
 """manifest.json: the keys of the contract, units, the sha256 of every file listed, and values of the right
 type.  A malformed value (``files.glass_sheets = 5``, a string where a number belongs) is a finding naming its
-key, and is left out of ``data["manifest"]``, so the later checks read only well-formed values.  The
+key, and is left out of :attr:`FolderData.manifest`, so the other checks read only well-formed values.  The
 ``fabrication`` parameters are parsed with the design's own parameter records and written back as the build
 writes them: what does not come out the same (an alias such as ``beam_depth`` that differs from
 ``beams.depth``) is named."""
@@ -142,7 +142,7 @@ def _equal(a: Any, b: Any) -> bool:
 
 def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
     """``fab`` with every value of the wrong type (a finding naming its key) replaced by the parameter's
-    default, for the later checks; every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
+    default, for the other checks; every flat alias (``panel_gap``, ``beam_depth``, …) that differs from its section's key is named.
     Types are judged by the parameter records' type hints, not by parsing: a build of an older version keeps
     verifying when a newer one tightens a parameter's limits."""
     if not isinstance(fab, dict):
@@ -163,7 +163,7 @@ def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
                 if k in hints[key] and not _accepts(x, hints[key][k]):
                     v.error("manifest.json", f"fabrication.{key}.{k}",
                             f"{x!r} is not {_name(hints[key][k])}"[:200])
-                    x = defaults[key].get(k)                 # the later checks read the default
+                    x = defaults[key].get(k)                 # the other checks read the default
                 if x is not None:
                     section[k] = x
             out[key] = section
@@ -189,7 +189,7 @@ def clean_fabrication(v: Verification, fab: Any) -> dict[str, Any]:
     return out
 
 
-@check("manifest", 10)
+@check("manifest")
 def check_manifest(v: Verification) -> None:
     path = v.folder / "manifest.json"
     if not path.exists():
@@ -233,5 +233,5 @@ def check_manifest(v: Verification) -> None:
         if key in clean and not isinstance(clean[key], dict):
             v.error("manifest.json", key, f"must be an object, got {type(clean[key]).__name__}")
             clean[key] = {}
-    v.data["manifest"] = clean
+    v.read.manifest = clean
     v.checked.append("manifest")

@@ -48,10 +48,10 @@ def up_normal(row: dict) -> np.ndarray | None:
     return np.cross(lin[:, 0], lin[:, 1])
 
 
-@check("marking", 53)
+@check("marking")
 def check_marking(v: Verification) -> None:
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
-    for rel, texts in v.data.get("dxf_texts", {}).items():
+    rows = {r["part_id"]: r for r in (v.parts or [])}
+    for rel, texts in v.dxf_texts.items():
         faces: dict[tuple[str, str], list[str]] = {}
         for t in texts:
             if not reads_from_bottom_or_right(t.rotation_deg):
@@ -61,9 +61,9 @@ def check_marking(v: Verification) -> None:
                         f"right edge, turned within (−45°, 135°])")
             if t.xdata.get("mark") == "face":
                 faces.setdefault((t.xdata.get("part_id", ""), t.layer), []).append(t.text)
-        for pid, (_, pts) in v.data.get("cut", {}).items():
+        for pid, (_, pts) in v.cut.items():
             row = rows.get(pid)
-            if row is None or row.get("kind") != "beam" or v.data["cut"][pid][0] != rel:
+            if row is None or row.get("kind") != "beam" or v.cut[pid][0] != rel:
                 continue
             top, under = faces.get((pid, "MARK"), []), faces.get((pid, "MARK_BACK"), [])
             up = up_normal(row)
@@ -85,7 +85,7 @@ def check_marking(v: Verification) -> None:
 def _sheet_parts(v: Verification) -> dict[str, list[tuple[str, np.ndarray]]]:
     """sheet file → ``(part id, CUT outline)`` of the parts cut on it (as the dxf check read them)."""
     out: dict[str, list[tuple[str, np.ndarray]]] = {}
-    for pid, (rel, pts) in v.data.get("cut", {}).items():
+    for pid, (rel, pts) in v.cut.items():
         out.setdefault(rel, []).append((pid, np.asarray(pts, dtype=float)))
     return out
 
@@ -110,10 +110,10 @@ def _check_texts(v: Verification) -> None:
     """Every text inside the usable area lies on a part and names it (its id or its nest tag)."""
     from shapely import Point, Polygon
 
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
-    trims = v.data.get("dxf_trim", {})
+    rows = {r["part_id"]: r for r in (v.parts or [])}
+    trims = v.dxf_trim
     for rel, parts in _sheet_parts(v).items():
-        texts = [t for t in v.data.get("dxf_texts", {}).get(rel, [])]
+        texts = [t for t in v.dxf_texts.get(rel, [])]
         where = _locate(parts, np.array([t.centre for t in texts]).reshape(-1, 2))
         trim = trims.get(rel)
         usable = Polygon(trim) if trim is not None and len(trim) >= 3 else None
@@ -161,8 +161,8 @@ def _panel_marks(v: Verification, row: dict, flat_outline: np.ndarray) -> list[n
     CUT outline mapped back (in the order the part was drawn)."""
     from ..panels.panel import _mark_polylines
 
-    size = number(v.data.get("manifest", {}).get("fabrication", {}).get("panels", {}).get("mark_size"), 0.0)
-    outline = v.data.get("type_outlines", {}).get(csv_value(row.get("type_id", "")))
+    size = number(v.manifest.get("fabrication", {}).get("panels", {}).get("mark_size"), 0.0)
+    outline = v.type_outlines.get(csv_value(row.get("type_id", "")))
     if outline is None:
         outline = flat_outline[::-1] if str(row.get("mirrored", "0")) == "1" else flat_outline
     return [np.asarray(m, dtype=float) for m in _mark_polylines(np.asarray(outline, dtype=float), size)]
@@ -174,11 +174,11 @@ def _plate_marks(v: Verification, row: dict, flat_outline: np.ndarray,
     from shapely.geometry import LineString, Polygon
 
     frame, plane, nodes = frame_of(row), literal(row.get("plane", "")), literal(row.get("nodes", ""))
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if frame is None or not isinstance(plane, list) or len(plane) != 4 or not isinstance(nodes, list) \
             or mesh is None:
         return None
-    depth = float(v.data["manifest"].get("fabrication", {}).get("beam_depth", 0.0))
+    depth = float(v.manifest.get("fabrication", {}).get("beam_depth", 0.0))
     pn = np.asarray(plane, dtype=float)
     pn = pn / np.linalg.norm(pn[:3])
     poly = Polygon(flat_outline)
@@ -210,11 +210,11 @@ def _line_gap(a: np.ndarray, b: np.ndarray) -> float:
 
 def _check_mark_lines(v: Verification) -> None:
     """Every MARK / MARK_BACK line on a part, where the source data puts it (module docstring)."""
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    rows = {r["part_id"]: r for r in (v.parts or [])}
     axes = {int(number(r.get("vertex"), -1)): np.array([number(r.get(c)) for c in ("axis_x", "axis_y", "axis_z")])
-            for r in v.data.get("nodes", []) or []}
+            for r in (v.nodes or [])}
     for rel, parts in _sheet_parts(v).items():
-        lines = v.data.get("dxf_marks", {}).get(rel, [])
+        lines = v.dxf_marks.get(rel, [])
         if not lines:
             continue
         mids = np.array([np.asarray(pts, dtype=float)[: 2].mean(axis=0) if len(pts) else [np.nan, np.nan]

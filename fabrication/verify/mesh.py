@@ -5,18 +5,18 @@ from __future__ import annotations
 from . import Verification, check
 
 
-@check("mesh", 20)
+@check("mesh")
 def check_mesh(v: Verification) -> None:
     from ppfab.io import read_mesh
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     rel = m.get("mesh", {}).get("path", "mesh.obj")
     try:
         mesh = read_mesh(v.folder / rel)
     except Exception as exc:  # noqa: BLE001 - reported as a finding
         v.error(rel, "", f"cannot be read: {exc}")
         return
-    v.data["mesh"] = mesh
+    v.read.mesh = mesh
     me = m.get("mesh", {})
     if me.get("vertices") not in (None, len(mesh.vertices)):
         v.error(rel, "vertices", f"{len(mesh.vertices)} in the file, {me.get('vertices')} in the manifest")

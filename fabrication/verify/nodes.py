@@ -1,7 +1,7 @@
 """nodes.csv: contract columns, one node per vertex at its position, unit axes, known beams.
 
 The vertex, position and axis cells are read with :class:`~fabrication.verify._cells.CellReader`: a bad cell
-is a finding naming its row and column, and its row is left out of ``data["nodes"]`` (the later checks read
+is a finding naming its row and column, and its row is left out of :attr:`FolderData.nodes` (the other checks read
 only rows whose numbers they can use)."""
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from ._cells import CellReader
 NUMBER_COLUMNS = ("x", "y", "z", "axis_x", "axis_y", "axis_z")
 
 
-@check("nodes", 40)
+@check("nodes")
 def check_nodes(v: Verification) -> None:
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("nodes_csv")
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if rel is None or mesh is None:
         return
     raw = v.read_table(rel, NODES_COLUMNS)
@@ -39,10 +39,10 @@ def check_nodes(v: Verification) -> None:
             continue
         rows.append({c: ("" if x is None else x) for c, x in row.items() if isinstance(c, str)})
         points.append((k, p, a))
-    v.data["nodes"] = rows
+    v.read.nodes = rows
     if len(raw) != len(mesh.vertices):
         v.error(rel, "rows", f"{len(raw)} nodes for {len(mesh.vertices)} mesh vertices")
-    part_ids = {row["part_id"] for row in v.data.get("parts", [])}
+    part_ids = {row["part_id"] for row in (v.parts or [])}
     for row, (k, p, a) in zip(rows, points):
         if np.abs(p - mesh.vertices[k]).max() > 1e-3:
             v.error(rel, row["node_id"], f"position differs from OBJ vertex {k} by "

@@ -14,11 +14,11 @@ from ._shapes import set_distance, solid_points
 from ._solids import reference_outline, seat_range
 
 
-@check("panels_step", 62)
+@check("panels_step")
 def check_panels_step(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     rel = m.get("files", {}).get("panels_step")
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     if rel is None or mesh is None:
         return
     from ..contract import STEP_GLASS_GROUP
@@ -30,7 +30,7 @@ def check_panels_step(v: Verification) -> None:
     if read is None:
         return
     pairs = [(s.name, s.solid) for s in read]
-    every = {r["part_id"] for r in v.data.get("parts", []) if r["kind"] == "panel"}
+    every = {r["part_id"] for r in (v.parts or []) if r["kind"] == "panel"}
     for s in read:
         if s.name not in every:
             v.error(rel, s.name or "(unnamed)", "solid is not a panel in parts.csv")
@@ -41,7 +41,7 @@ def check_panels_step(v: Verification) -> None:
     t = float(fab.get("glass_thickness", 0.0))
     gap = float(fab.get("panel_gap", 0.0))
     lo, hi = seat_range(v)
-    panels = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "panel" and r.get("face", "") != ""}
+    panels = {r["part_id"]: r for r in (v.parts or []) if r["kind"] == "panel" and r.get("face", "") != ""}
     names = [n for n, _ in pairs]
     for name in sorted(every - set(names)):
         v.error(rel, name, "panel has no solid")

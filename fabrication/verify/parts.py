@@ -3,8 +3,8 @@ readable.
 
 The cells the checks compute with (numbers, the mesh face, the sheet, the plate frame, plane and nodes, a
 strip's edge nodes) are read here with :class:`~fabrication.verify._cells.CellReader`: a bad cell is a finding
-naming its row and column, and is blanked in the rows kept in ``data["parts"]``, so a later check reads it as
-absent instead of failing on it.  The rows as written are kept in ``data["parts_csv_rows"]`` (the parts.json
+naming its row and column, and is blanked in the rows kept in :attr:`FolderData.parts`, so another check reads it as
+absent instead of failing on it.  The rows as written are kept in :attr:`FolderData.parts_csv_rows` (the parts.json
 check compares them)."""
 
 from __future__ import annotations
@@ -56,19 +56,19 @@ def clean_rows(v: Verification, rel: str, rows: list[dict[str, Any]], faces: int
     return out
 
 
-@check("parts", 30)
+@check("parts")
 def check_parts(v: Verification) -> None:
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("parts_csv")
     if rel is None:
         return
     raw = v.read_table(rel, PARTS_COLUMNS)
     if raw is None:
         return
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     rows = clean_rows(v, rel, raw, None if mesh is None else len(mesh.faces))
-    v.data["parts_csv_rows"] = raw
-    v.data["parts"] = rows
+    v.read.parts_csv_rows = raw
+    v.read.parts = rows
     ids, tags = set(), set()
     for r, row in enumerate(rows, start=2):
         if row["part_id"] in ids:

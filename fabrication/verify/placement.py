@@ -15,12 +15,12 @@ from ._shapes import cyclic_distance, number, set_distance
 TOLERANCE_MM = 1e-6
 
 
-@check("placement", 70)
+@check("placement")
 def check_placement(v: Verification) -> None:
-    cut = v.data.get("cut", {})
-    types = v.data.get("type_outlines", {})
-    plates = v.data.get("plate_cut_outlines") or v.data.get("plate_outlines", {})
-    for row in v.data.get("parts", []):
+    cut = v.cut
+    types = v.type_outlines
+    plates = v.plate_cut_outlines or v.plate_outlines
+    for row in (v.parts or []):
         pid = row["part_id"]
         if pid not in cut:
             continue

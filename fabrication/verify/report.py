@@ -283,9 +283,9 @@ def _files_table(c: _Compare, table: Table, files: dict[str, Any], rel: str) -> 
         c.v.error(REL, f"Files: {name}", "listed in the report but not in the manifest")
 
 
-@check("report", 56)
+@check("report")
 def check_report(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     rel = files.get("report_html")
     if rel is None:
@@ -297,10 +297,10 @@ def check_report(v: Verification) -> None:
         return
     tables = read_tables(text)
     c = _Compare(v)
-    parts = v.data.get("parts", [])
+    parts = (v.parts or [])
     figures = recompute_summary(v)
     expected = {"Summary": True, "Panels": any(r["kind"] == "panel" for r in parts),
-                "Beam plates": any(r["kind"] == "beam" for r in parts), "Nodes": bool(v.data.get("nodes")),
+                "Beam plates": any(r["kind"] == "beam" for r in parts), "Nodes": bool(v.nodes),
                 "Files": True}
     present = {t.heading for t in tables}
     for heading, wanted in expected.items():
@@ -319,8 +319,8 @@ def check_report(v: Verification) -> None:
                          {"length [m]": ("length_mm", 1e-3, 5e-4), "mass [kg]": ("mass_kg", 1.0, 5e-5),
                           "sheet": ("sheet", 1.0, 0.0)},
                          {"beam": "beam_id", "family": "family", "nest tag": "nest_tag"})
-        elif t.header[:1] == ["node"] and t.heading == "Nodes" and v.data.get("nodes") is not None:
-            _nodes_table(c, t, v.data["nodes"])
+        elif t.header[:1] == ["node"] and t.heading == "Nodes" and v.nodes is not None:
+            _nodes_table(c, t, v.nodes)
         elif t.header[:1] == ["weld preparation"] and files.get("welds_csv"):
             _welds_table(c, t, _read(v, files["welds_csv"]))
         elif t.header[:1] == ["file"] and t.heading == "Files":

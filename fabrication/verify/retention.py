@@ -96,14 +96,14 @@ def _projected_hull(points: np.ndarray, origin: np.ndarray, ex: np.ndarray, ey: 
     return MultiPoint(np.stack([d @ ex, d @ ey], axis=1)).convex_hull
 
 
-@check("retention", 67)
+@check("retention")
 def check_retention(v: Verification) -> None:
     from shapely.geometry import Point
 
     from ..glazing.retention_strength import RetentionBolt
     from ._step_read import read_or_report
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     rel_r, rel_x = files.get("retention_csv"), files.get("restraint_csv")
     rel_g, rel_p = files.get("glazing_step"), files.get("panels_step")
@@ -119,7 +119,7 @@ def check_retention(v: Verification) -> None:
     solids = {s.name: solid_points(s.solid) for s in support}
     _check_parts_rows(v, files.get("parts_csv", "parts.csv"), rel_r, rel_g, rows, solids)
     panes = {s.name: s.solid for s in glass if s.name.startswith("P-")}
-    parts = {r["part_id"]: r for r in v.data.get("parts", []) if r.get("kind") == "panel"}
+    parts = {r["part_id"]: r for r in (v.parts or []) if r.get("kind") == "panel"}
     by_owner: dict[str, dict[str, list[dict[str, str]]]] = {}
     for r in rows:
         by_owner.setdefault(r.get("owner", ""), {}).setdefault(r.get("kind", ""), []).append(r)
@@ -270,8 +270,8 @@ def _check_parts_rows(v: Verification, rel_parts: str, rel_r: str, rel_g: str, r
     from ..contract import RETENTION_KINDS, screw_set_id
     from ._solids import box_corners
 
-    parts = {r["part_id"]: r for r in v.data.get("parts", []) if r.get("kind") in RETENTION_KINDS}
-    if not v.data.get("parts"):
+    parts = {r["part_id"]: r for r in (v.parts or []) if r.get("kind") in RETENTION_KINDS}
+    if not v.parts:
         return
     wanted = {r["part_id"] for r in rows}
     for r in rows:

@@ -50,9 +50,9 @@ def _curve_area(curve, samples: int = 720) -> float:
     return polygon_area_3d(pts)
 
 
-@check("rhino", 72)
+@check("rhino")
 def check_rhino(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     rel = m.get("files", {}).get("rhino")
     if rel is None:
         return
@@ -69,7 +69,7 @@ def check_rhino(v: Verification) -> None:
     for name in RHINO_LAYERS:
         if name not in layers:
             v.error(rel, name, "layer is missing")
-    rows = {r["part_id"]: r for r in v.data.get("parts", [])}
+    rows = {r["part_id"]: r for r in (v.parts or [])}
     parts, axes, meshes = [], [], []
     for obj in f.Objects:
         a = obj.Attributes
@@ -117,11 +117,11 @@ def check_rhino(v: Verification) -> None:
         height = float(np.linalg.norm(top.mean(axis=0) - bottom.mean(axis=0)))
         area = polygon_area_3d(bottom) - sum(_curve_area(g.Profile3d(k, 0.0)) for k in range(1, g.ProfileCount))
         check_part_solid(v, rel, row, np.concatenate([bottom, top]), area * height, ring=bottom, holes=True)
-    mesh = v.data.get("mesh")
+    mesh = v.mesh
     nodes_rel = m.get("files", {}).get("nodes_csv")
     if nodes_rel and mesh is not None:
         nodes = {r["node_id"]: r for r in read_csv(v.folder / nodes_rel)}
-        readable = {r["node_id"] for r in v.data.get("nodes", [])}     # rows whose cells the nodes check read
+        readable = {r["node_id"] for r in (v.nodes or [])}     # rows whose cells the nodes check read
         check_names(v, rel, [a.Attributes.Name for a in axes], {k: "node" for k in nodes}, "node axis")
         for obj in axes:
             row = nodes.get(obj.Attributes.Name)

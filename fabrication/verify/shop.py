@@ -36,10 +36,10 @@ def _cover_pairs(parts: list[dict]) -> dict[str, dict]:
     return {r["part_id"]: r for r in parts if r.get("kind") == "splice" and r["part_id"].endswith("A")}
 
 
-@check("bolts", 58)
+@check("bolts")
 def check_bolts(v: Verification) -> None:
-    m = v.data.get("manifest", {})
-    parts = v.data.get("parts")
+    m = v.manifest
+    parts = v.parts
     if parts is None:
         return
     covers = _cover_pairs(parts)
@@ -112,12 +112,12 @@ def _dxf_files(files: dict) -> list[str]:
     return out
 
 
-@check("dxf_stock", 59)
+@check("dxf_stock")
 def check_dxf_stock(v: Verification) -> None:
     import ezdxf
 
-    m = v.data.get("manifest", {})
-    parts = v.data.get("parts")
+    m = v.manifest
+    parts = v.parts
     if parts is None:
         return
     by_id = {r["part_id"]: r for r in parts}
@@ -200,16 +200,16 @@ def _cover_holes(solid, frame: dict) -> np.ndarray:
     return np.array(out)
 
 
-@check("splice_holes", 61)
+@check("splice_holes")
 def check_splice_holes(v: Verification) -> None:
     """Every bolt hole of a cover plate (splices.step) is cut in one of the two beam pieces it joins (CUT circles
     of the plate sheets, mapped back through placement and frame into 3D) within :data:`HOLE_TOL`, with
     ``hole_mm``; a piece has no hole that no cover plate of its splices has."""
     import ezdxf
 
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
-    parts = v.data.get("parts")
+    parts = v.parts
     rel = files.get("splices_step")
     if parts is None or rel is None:
         return
@@ -220,7 +220,7 @@ def check_splice_holes(v: Verification) -> None:
         return
     solids = {s.name: s.solid for s in read}
     by_id = {r["part_id"]: r for r in parts}
-    sheets = {r.get("sheet_file") for r in parts if r.get("kind") == "beam" and r.get("sheet_file")}
+    sheets = {r["sheet_file"] for r in parts if r.get("kind") == "beam" and r.get("sheet_file")}
     cut: dict[str, list[tuple[np.ndarray, float]]] = {}          # piece → (centre in 3D, diameter)
     for sheet in sorted(sheets):
         try:

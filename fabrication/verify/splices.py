@@ -66,10 +66,10 @@ def _splice_welds(v: Verification, files: dict) -> dict[frozenset[str], dict[str
     return {frozenset((r["part"], r["to"])): r for r in rows if r.get("joint") == "splice"}
 
 
-@check("splices", 56)
+@check("splices")
 def check_splices(v: Verification) -> None:
-    rows = v.data.get("parts", [])
-    files = v.data.get("manifest", {}).get("files", {})
+    rows = (v.parts or [])
+    files = v.manifest.get("files", {})
     beams: dict[str, list[dict[str, str]]] = {}
     for row in rows:
         if row["kind"] == "beam" and row.get("pieces") not in (None, "", "1"):
@@ -77,8 +77,8 @@ def check_splices(v: Verification) -> None:
     joined: dict[tuple[str, str], list[str]] = {}
     for row in rows:
         if row["kind"] == "splice":
-            a, _, b = row.get("joins", "").partition(";")
-            joined.setdefault((a, b), []).append(row["part_id"])
+            one, _, other = row.get("joins", "").partition(";")
+            joined.setdefault((one, other), []).append(row["part_id"])
     welded = _splice_welds(v, files)
     wanted = 0
     cuts: set[frozenset[str]] = set()
@@ -145,14 +145,13 @@ def check_splices(v: Verification) -> None:
         if len(solids) != len(splice_rows):
             v.error(rel, "", f"{len(solids)} solids for {len(splice_rows)} cover plates in parts.csv")
     v.checked.append("splices")
-    v.data["splices_wanted"] = wanted
 
 
 def _piece_outline(v: Verification, pid: str, frame: dict[str, np.ndarray]) -> np.ndarray | None:
     """The cutting outline of beam piece ``pid`` mapped back into 3D and then into ``frame`` (2D)."""
     from ._solids import reference_outline
 
-    row = next((r for r in v.data.get("parts", []) if r["part_id"] == pid), None)
+    row = next((r for r in (v.parts or []) if r["part_id"] == pid), None)
     ref = reference_outline(v, row) if row is not None else None
     return None if ref is None else to_frame(ref, frame)[:, :2]
 
@@ -177,7 +176,7 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     """One cover plate solid against the pieces it joins (module docstring)."""
     pid = row["part_id"]
     first, _, second = row.get("joins", "").partition(";")
-    piece = next((r for r in v.data.get("parts", []) if r["part_id"] == first), None)
+    piece = next((r for r in (v.parts or []) if r["part_id"] == first), None)
     frame = frame_of(piece) if piece is not None else None
     if frame is None:
         return
@@ -189,7 +188,7 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
         v.error("parts.csv", pid, f"the pieces {first} and {second} it joins share no cut edge")
         return
     c, s, u = cut
-    fab = v.data.get("manifest", {}).get("fabrication", {})
+    fab = v.manifest.get("fabrication", {})
     t = float(fab.get("beam_thickness", 0.0))
     tc = number(row.get("thickness_mm"), 0.0)
     z = to_frame(solid_points(solid), frame)[:, 2]
@@ -229,10 +228,10 @@ def _raise_at_cut(v: Verification, first: str, second: str) -> tuple[float, floa
     (the ``delta_mm`` of a strip that bevels the piece's top edge, :mod:`fabrication.beams.bevel_cut`, else 0) and
     the largest lean (radians, ``lean_deg``) of those strips off the plate, whose underside comes down
     ``(t/2 + t_c)·tan λ`` over a cover plate's outer face."""
-    rel = v.data.get("manifest", {}).get("files", {}).get("bevels_csv")
+    rel = v.manifest.get("files", {}).get("bevels_csv")
     if rel is None or not (v.folder / rel).is_file():
         return 0.0, 0.0
-    parts = {r["part_id"]: r for r in v.data.get("parts", [])}
+    parts = {r["part_id"]: r for r in (v.parts or [])}
     try:
         a, b = ({int(k) for k in ast.literal_eval(parts[p].get("nodes", "[]"))} for p in (first, second))
     except (KeyError, ValueError, SyntaxError, TypeError):
@@ -296,7 +295,7 @@ def check_splice_dxfs(v: Verification, rels: list[str], rows: list[dict[str, str
                               f"{holes} holes of {diameter:g} mm")
         ring = np.array([(p[0], p[1]) for p in getattr(outlines[0], "get_points")("xy")], dtype=float)
         solid = solids.get(members[0]["part_id"])
-        piece = next((r for r in v.data.get("parts", []) if r["part_id"] == members[0].get("joins", "").split(";")[0]),
+        piece = next((r for r in (v.parts or []) if r["part_id"] == members[0].get("joins", "").split(";")[0]),
                      None)
         frame = frame_of(piece) if piece is not None else None
         face = face_outline(solid, frame["normal"]) if solid is not None and frame is not None else None

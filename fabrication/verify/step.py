@@ -11,10 +11,10 @@ from ._step_read import StepSolid
 from .bevels import largest_face_normal
 
 
-@check("step", 60)
+@check("step")
 def check_step(v: Verification) -> None:
     """beams.step: one valid solid per beam part, named by its part id, a plate of the beam thickness."""
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("beams_step")
     if rel is None:
         return
@@ -24,9 +24,9 @@ def check_step(v: Verification) -> None:
     if read is None:
         return
     pairs = [(s.name, s.solid) for s in read]
-    v.data["beam_solids"] = {name: solid for name, solid in reversed(pairs)}
-    beams = {r["part_id"]: r for r in v.data.get("parts", []) if r["kind"] == "beam"}
-    t = float(v.data["manifest"].get("fabrication", {}).get("beam_thickness", 0.0))
+    v.read.beam_solids = {name: solid for name, solid in reversed(pairs)}
+    beams = {r["part_id"]: r for r in (v.parts or []) if r["kind"] == "beam"}
+    t = float(v.manifest.get("fabrication", {}).get("beam_thickness", 0.0))
     names = [n for n, _ in pairs]
     for name in sorted(set(beams) - set(names)):
         v.error(rel, name, "beam part has no solid")

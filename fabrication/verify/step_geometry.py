@@ -17,8 +17,8 @@ For each beam solid (read by the ``step`` check) and its ``parts.csv`` row:
   the axis at the set-back.
 
 The outline of each plate in its frame — its section in the mid-plane, the mean of its two faces (which differ
-where its top edge is bevelled, :mod:`fabrication.beams.bevel_cut`) — is kept in ``data["plate_outlines"]``,
-and the union of its faces, the outline cut from the sheet, in ``data["plate_cut_outlines"]`` for the placement
+where its top edge is bevelled, :mod:`fabrication.beams.bevel_cut`) — is kept in :attr:`FolderData.plate_outlines`,
+and the union of its faces, the outline cut from the sheet, in :attr:`FolderData.plate_cut_outlines` for the placement
 check.
 """
 
@@ -46,14 +46,13 @@ def _notch_depths(row: dict) -> dict[int, float]:
 
 def _node_plates(v: Verification) -> dict[int, dict[str, dict]]:
     """vertex → part id → the plate record of nodes.json (role, trim_mm)."""
-    files = v.data.get("manifest", {}).get("files", {})
+    files = v.manifest.get("files", {})
     rel = files.get("nodes_json")
     if rel is None:
         return {}
     doc = v.read_json(rel)
     if doc is None:
         return {}
-    v.data["nodes_json"] = doc
     out: dict[int, dict[str, dict]] = {}
     nodes = doc.get("nodes", []) if isinstance(doc, dict) else []
     for k, node in enumerate(nodes if isinstance(nodes, list) else []):
@@ -94,14 +93,14 @@ def _smallest_sine(q: np.ndarray, s: np.ndarray, frame: dict, plane: np.ndarray,
     return max(float(np.abs(d[:, 0] * s[1] - d[:, 1] * s[0]).min()), 1e-3)
 
 
-@check("step_geometry", 65)
+@check("step_geometry")
 def check_step_geometry(v: Verification) -> None:
-    solids = v.data.get("beam_solids")
-    mesh = v.data.get("mesh")
-    node_rows = v.data.get("nodes")
+    solids = v.beam_solids
+    mesh = v.mesh
+    node_rows = v.nodes
     if not solids or mesh is None or node_rows is None:
         return
-    m = v.data["manifest"]
+    m = v.manifest
     rel = m.get("files", {}).get("beams_step", "beams.step")
     fab = m.get("fabrication", {})
     t = float(fab.get("beam_thickness", 0.0))
@@ -110,19 +109,19 @@ def check_step_geometry(v: Verification) -> None:
     tors_tol, tors_key = torsion_tolerance(m)
     axes = {int(r["vertex"]): np.array([number(r[c]) for c in ("axis_x", "axis_y", "axis_z")]) for r in node_rows}
     plates_at = _node_plates(v)
-    outlines = v.data.setdefault("plate_outlines", {})
-    cut_outlines = v.data.setdefault("plate_cut_outlines", {})
+    outlines = v.read.plate_outlines
+    cut_outlines = v.read.plate_cut_outlines
     neighbours: dict[int, set[int]] = {}
     for i, j in np.asarray(mesh.edges, dtype=int).tolist():
         neighbours.setdefault(i, set()).add(j)
         neighbours.setdefault(j, set()).add(i)
     planes: dict[str, np.ndarray] = {}
-    for row in v.data.get("parts", []):
+    for row in (v.parts or []):
         pl_ = literal(row.get("plane", "")) if row["kind"] == "beam" else None
         if isinstance(pl_, list) and len(pl_) == 4:
             arr = np.asarray(pl_, dtype=float)
             planes[row["part_id"]] = arr / np.linalg.norm(arr[:3])
-    for row in v.data.get("parts", []):
+    for row in (v.parts or []):
         pid = row["part_id"]
         if row["kind"] != "beam" or pid not in solids:
             continue

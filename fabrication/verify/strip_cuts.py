@@ -23,11 +23,11 @@ TOLERANCE_MM = 0.01
 _TAG = re.compile(r"F(\d+)-(\d+)")
 
 
-@check("strip_cuts", 49)
+@check("strip_cuts")
 def check_strip_cuts(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
-    parts = v.data.get("parts")
+    parts = v.parts
     if parts is None:
         return
     strips = {r["part_id"]: r for r in parts if r["kind"] == "strip" and r.get("length_mm", "") != ""}

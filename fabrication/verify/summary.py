@@ -38,11 +38,11 @@ def _count(x: int) -> Figure:
 
 def recompute_summary(v: Verification) -> dict[str, Figure]:
     """The manifest's ``summary`` as the files give it (figures whose sources are missing are left out)."""
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     fab = m.get("fabrication", {})
-    parts = v.data.get("parts", [])
-    mesh = v.data.get("mesh")
+    parts = (v.parts or [])
+    mesh = v.mesh
     out: dict[str, Figure] = {}
     if mesh is not None:
         out["extent_mm"] = Figure([float(x) for x in np.ptp(mesh.vertices, axis=0)], 1e-6)
@@ -77,7 +77,7 @@ def recompute_summary(v: Verification) -> dict[str, Figure]:
             if sheets and isinstance(size, list) and len(size) == 2 and all(is_number(x) for x in size):
                 whole = sheets * float(size[0]) * float(size[1])
                 out[f"{prefix}_utilisation"] = Figure(area / whole, (5e-4 * rows + 1e-6) / whole + 1e-12)
-    nodes = v.data.get("nodes")
+    nodes = v.nodes
     if nodes and mesh is not None and len(nodes) == len(mesh.vertices):
         tors = [_num(r.get("torsion_deg", "")) for r in nodes]
         if all(math.isfinite(t) for t in tors):
@@ -87,10 +87,10 @@ def recompute_summary(v: Verification) -> dict[str, Figure]:
 
 def recompute_glazing(v: Verification) -> dict[str, Figure]:
     """The manifest's ``glazing`` figures as parts.csv, bites.csv and welds.csv give them."""
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
     fab = m.get("fabrication", {})
-    parts = v.data.get("parts", [])
+    parts = (v.parts or [])
     gl, panels = fab.get("glazing", {}), fab.get("panels", {})
     covers = sum(r["kind"] == "splice" for r in parts)
     out: dict[str, Figure] = {"strips": _count(sum(r["kind"] == "strip" for r in parts)),
@@ -123,7 +123,7 @@ DENSITY = (("beams.density", "beam", "mass_kg"), ("glazing.density", "strip", "m
 def recompute_fabrication(v: Verification) -> dict[str, Figure]:
     """The ``fabrication`` values the rows of ``parts.csv`` repeat (the value most rows of the kind hold) and
     the densities their masses give (the median over the rows, to 0.1 %: masses are written rounded)."""
-    parts = v.data.get("parts", [])
+    parts = (v.parts or [])
     out: dict[str, Figure] = {}
     for key, kind, column in FROM_ROWS:
         values = [csv_value(r.get(column, "")) for r in parts if r["kind"] == kind and r.get(column, "") != ""]
@@ -175,9 +175,9 @@ def _show(value: Any) -> str:
     return f"{value:.6g}" if isinstance(value, float) else repr(value)
 
 
-@check("summary", 55)
+@check("summary")
 def check_summary(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     summary = m.get("summary")
     if isinstance(summary, dict):
         want = recompute_summary(v)

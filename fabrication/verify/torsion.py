@@ -16,13 +16,13 @@ from . import Verification, check
 from ._shapes import number, torsion_tolerance
 
 
-@check("torsion", 47)
+@check("torsion")
 def check_torsion(v: Verification) -> None:
-    rows = v.data.get("nodes")
-    mesh = v.data.get("mesh")
+    rows = v.nodes
+    mesh = v.mesh
     if rows is None or mesh is None or len(rows) != len(mesh.vertices):
         return
-    m = v.data["manifest"]
+    m = v.manifest
     rel = m.get("files", {}).get("nodes_csv", "nodes.csv")
     depth = float(m.get("fabrication", {}).get("beam_depth", 0.0))
     tol, key = torsion_tolerance(m)

@@ -5,8 +5,8 @@ Each DIMENSION shows its measurement: its text override is empty or ``<>`` (the 
 of its rendered block is that value to the one decimal the dimension style gives (a text that is no number is a
 finding too).
 
-The outlines are kept in ``data["type_outlines"]`` (type id → outline) for the placement check, and each file as
-read in ``data["type_dxf"]`` (:func:`type_dxf`), so the glass order check reads none of them again.
+The outlines are kept in :attr:`FolderData.type_outlines` (type id → outline) for the placement check, and each file as
+read in :attr:`FolderData.type_dxf` (:func:`type_dxf`), so the glass order check reads none of them again.
 """
 
 from __future__ import annotations
@@ -25,10 +25,10 @@ if TYPE_CHECKING:  # pragma: no cover
 def type_dxf(v: Verification, rel: str) -> "DXFContent":
     """The per-type DXF ``rel`` read and checked once per verification (``check_sheet_dxf`` without a sheet):
     its content, or the exception that reading raised, raised again at every call.  Kept in
-    ``data["type_dxf"]`` (relative path → content or exception)."""
+    :attr:`FolderData.type_dxf` (relative path → content or exception)."""
     from ..writers.dxf import check_sheet_dxf
 
-    memo = v.data.setdefault("type_dxf", {})
+    memo = v.read.type_dxf
     if rel not in memo:
         try:
             memo[rel] = check_sheet_dxf(v.folder / rel, require_sheet=False)
@@ -40,12 +40,12 @@ def type_dxf(v: Verification, rel: str) -> "DXFContent":
     return got
 
 
-@check("types", 52)
+@check("types")
 def check_types(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
-    mesh = v.data.get("mesh")
-    parts = v.data.get("parts", [])
+    mesh = v.mesh
+    parts = (v.parts or [])
     fab = m.get("fabrication", {})
     ctol = type_tolerance(fab)
     gap = float(fab.get("panel_gap", 0.0))
@@ -53,7 +53,7 @@ def check_types(v: Verification) -> None:
     for p in parts:
         if p["kind"] == "panel":
             by_type.setdefault(csv_value(p["type_id"]), []).append(p)
-    outlines = v.data.setdefault("type_outlines", {})
+    outlines = v.read.type_outlines
     for rel in files.get("panel_type_dxfs", []):
         try:
             content = type_dxf(v, rel)

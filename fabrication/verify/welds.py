@@ -98,11 +98,11 @@ def _check_preparation(v: Verification, rel: str, n: int, r: dict[str, str], wel
                                                     f"dihedral of {dihedral:.2f}°")
 
 
-@check("welds", 48)
+@check("welds")
 def check_welds(v: Verification) -> None:
-    m = v.data.get("manifest", {})
+    m = v.manifest
     files = m.get("files", {})
-    nodes, parts = v.data.get("nodes"), v.data.get("parts")
+    nodes, parts = v.nodes, v.parts
     if nodes is None or parts is None:
         return
     beams = m.get("fabrication", {}).get("beams", {})
