@@ -309,3 +309,25 @@ def test_a_patch_of_a_real_mesh_reads_back_as_the_build(tmp_path):
     assert package.kinds["panel"] == 20 and package.kinds["beam"] == b.summary.beam_plates
     assert set(package.kinds) >= {"panel", "beam", "strip"}
     assert len(package.nodes) == 30 and package.mesh.grid_shape == (6, 5)
+
+
+@pytest.mark.slow
+def test_the_bundled_default_reads_back_as_the_build(tmp_path):
+    """The default design (22 × 15 faces, every part kind the default makes: panes, plates, strips, splice
+    cover plates and the glass retention) written and read back equals the build in memory, to the tolerances
+    of the module docstring; its kinds count what ``parts.csv`` holds."""
+    from fabrication.design import DEFAULT_DESIGN
+
+    text = DEFAULT_DESIGN.read_text(encoding="utf-8")
+    assert "[output]" not in text
+    b = build(parse_design(tomllib.loads(text + LIGHT), base_dir=DEFAULT_DESIGN.parent))
+    out = b.write(tmp_path / "out")
+    _round_trip(b, out)
+    package = open_build(out)
+    with open(out / "parts.csv", newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    kinds: dict[str, int] = {}
+    for r in rows:
+        kinds[r["kind"]] = kinds.get(r["kind"], 0) + 1
+    assert dict(package.kinds) == kinds
+    assert {"panel", "beam", "strip", "splice"} <= set(kinds) and len(kinds) >= 6
