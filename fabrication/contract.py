@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .model.part import NOT_ON_A_SHEET as NOT_ON_A_SHEET  # ``sheet`` of a part on no cutting sheet (0)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ppfab.support.structure import SupportStructure
 
 # -- parts.csv / parts.json -----------------------------------------------------------------------------
 
@@ -269,6 +272,23 @@ def beam_id_grid(family: int, index: int, width: int) -> str:
 def beam_id(polyline: int, width: int) -> str:
     """``B-R0012``: polyline 12 of a general mesh."""
     return f"B-R{polyline:0{width}d}"
+
+
+def beam_ids(support: "SupportStructure") -> list[str]:
+    """Part id stem of every polyline: ``B-U03``/``B-W07`` on a regular patch, ``B-R0012`` otherwise."""
+    lines = support.polylines
+    if support.mesh.grid is not None:
+        m1, n1 = support.mesh.grid.shape
+        w = digits(max(m1, n1))
+        out = []
+        for k in range(len(lines)):
+            found = support.polyline_grid_index(k)
+            assert found is not None
+            fam, idx = found
+            out.append(beam_id_grid(fam, idx, w))
+        return out
+    w = digits(len(lines), 4)
+    return [beam_id(k, w) for k in range(len(lines))]
 
 
 def piece_id(beam: str, piece: int, width: int) -> str:

@@ -217,23 +217,6 @@ def _ccw(p: np.ndarray) -> np.ndarray:
 
 # -- naming ------------------------------------------------------------------------------------------
 
-def beam_ids(support: SupportStructure) -> list[str]:
-    """Part id stem of every polyline: ``B-U03``/``B-W07`` on a regular patch, ``B-R0012`` otherwise."""
-    lines = support.polylines
-    if support.mesh.grid is not None:
-        m1, n1 = support.mesh.grid.shape
-        w = contract.digits(max(m1, n1))
-        out = []
-        for k in range(len(lines)):
-            found = support.polyline_grid_index(k)
-            assert found is not None
-            fam, idx = found
-            out.append(contract.beam_id_grid(fam, idx, w))
-        return out
-    w = contract.digits(len(lines), 4)
-    return [contract.beam_id(k, w) for k in range(len(lines))]
-
-
 # -- plates ------------------------------------------------------------------------------------------
 
 def _in_plane_axes(axes: np.ndarray, n: np.ndarray, where: str) -> np.ndarray:
@@ -352,7 +335,7 @@ def layout_plates(support: SupportStructure, params: BeamParams, max_height: flo
     jt = get_joint_type(params.joint)
     v = support.vertices
     axes = support.axes
-    ids = beam_ids(support)
+    ids = contract.beam_ids(support)
     epl_edges = support.edges
     nv = len(v)
     edge_key = epl_edges[:, 0] * nv + epl_edges[:, 1]

@@ -77,7 +77,7 @@ def structure_counts(result: "Build") -> dict[str, object]:
     """What ``--json`` says of the structure: planar beams kept, polylines left out of the requested planar
     families (and why), the column beams ``[beams] segment = ["blocked"]`` cut at nodes (and at which), and the one-edge
     plates the build made."""
-    from ..beams.plates import beam_ids
+    from ..contract import beam_ids
     from ..pipeline.structure_gate import structure_change
 
     change = structure_change(result.support, beam_ids(result.support))

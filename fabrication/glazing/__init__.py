@@ -55,7 +55,7 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
     """
     from ppfab.errors import FabricationError
 
-    from ..beams.plates import beam_ids
+    from ..contract import beam_ids
 
     normals = edge_normals(panels, support.vertices, support.edges)
     ups = edge_ups(support.edges, normals) if params.support != "none" else None

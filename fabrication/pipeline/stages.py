@@ -221,7 +221,7 @@ def stage_beams(design: Design, support: SupportStructure, progress: Progress,
     bolted splice, ``weld_clear`` for a welded one; with the ``panels``, the bolted splices' cover plates (and so
     their holes in the pieces) stand clear of the glazing strips leaning over them (:func:`strip_ups`)."""
     from ..beams import build_beams
-    from ..beams.plates import beam_ids
+    from ..contract import beam_ids
     from .structure_gate import honour_structure, structure_change
 
     progress.start("beams")
