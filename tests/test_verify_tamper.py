@@ -611,3 +611,27 @@ def test_every_file_of_a_build_is_read_by_a_check(built, monkeypatch):
     content.add("manifest.json")                    # its keys, units and digests are what the manifest check reads
     unread = [f for f in files if f not in content]
     assert unread == [], f"files no check reads: {unread}"
+
+
+def test_every_shared_field_is_filled_by_the_check_named_for_it(built, monkeypatch):
+    """:data:`~fabrication.verify.PRODUCERS` is true: on a real build each field of ``FolderData`` it names is
+    filled once that check has run on a fresh verification; asking for it runs the producer once, and the
+    producer's own turn then reports what it found without running it again."""
+    from fabrication import verify as verify_mod
+
+    verify_mod.load_checks()
+    runs: dict[str, int] = {}
+    for producer in set(verify_mod.PRODUCERS.values()):
+        check = verify_mod.CHECKS[producer]
+
+        def counted(v, run=check.run, name=producer):
+            runs[name] = runs.get(name, 0) + 1
+            run(v)
+        monkeypatch.setitem(verify_mod.CHECKS, producer, verify_mod.Check(producer, counted))
+    for name, producer in verify_mod.PRODUCERS.items():
+        runs.clear()
+        v = verify_mod.Verification(built)
+        assert getattr(v.read, name) in (None, {}, [])                # nothing read yet
+        assert getattr(v, name), f"{name}: {producer} left it empty"  # the property ran the producer
+        found, _ = v.run_check(verify_mod.CHECKS[producer])
+        assert runs[producer] == 1 and found == [] and v.findings == []

@@ -92,7 +92,7 @@ class Verification:
     findings: list[Finding] = field(default_factory=list)
     checked: list[str] = field(default_factory=list)
     read: FolderData = field(default_factory=FolderData)
-    _early: dict[str, tuple[list[Finding], list[str]]] = field(default_factory=dict, repr=False)
+    _found: dict[str, tuple[list[Finding], list[str]]] = field(default_factory=dict, repr=False)
     _running: set[str] = field(default_factory=set, repr=False)
 
     def error(self, file: str, element: str, message: str, value: float | None = None,
@@ -107,7 +107,7 @@ class Verification:
     def after(self, name: str) -> FolderData:
         """:attr:`read` once the check ``name`` has run in this process (run now when it has not: what it finds
         is kept for its own turn, :meth:`run_check`)."""
-        if name not in self._early and name not in self._running:
+        if name not in self._found and name not in self._running:
             c = load_table().get(name)
             if c is not None:
                 found, checked = self.findings, self.checked
@@ -115,7 +115,7 @@ class Verification:
                 self._running.add(name)
                 try:
                     c.run(self)
-                    self._early[name] = (self._coded(self.findings, name), self.checked)
+                    self._found[name] = (self._coded(self.findings, name), self.checked)
                 finally:
                     self._running.discard(name)
                     self.findings, self.checked = found, checked
@@ -124,7 +124,7 @@ class Verification:
     def run_check(self, c: "Check") -> tuple[list[Finding], list[str]]:
         """Run the check ``c`` (or take what it found when another check had it run first): its findings, each
         under its name, and what it says it checked."""
-        if c.name not in self._early:
+        if c.name not in self._found:
             nf, nc = len(self.findings), len(self.checked)
             self._running.add(c.name)
             try:
@@ -133,8 +133,12 @@ class Verification:
                 self._running.discard(c.name)
             got = (self._coded(self.findings[nf:], c.name), self.checked[nc:])
             del self.findings[nf:], self.checked[nc:]
-            self._early[c.name] = got
-        return self._early[c.name]
+            self._found[c.name] = got
+        return self._found[c.name]
+
+    def _field(self, name: str) -> Any:
+        """The field ``name`` of :attr:`read` once its producer (:data:`PRODUCERS`) has run."""
+        return getattr(self.after(PRODUCERS[name]), name)
 
     @staticmethod
     def _coded(findings: list[Finding], name: str) -> list[Finding]:
@@ -143,63 +147,63 @@ class Verification:
     @property
     def manifest(self) -> dict[str, Any]:
         """``manifest.json`` as checked; empty when it cannot be read."""
-        return self.after("manifest").manifest or {}
+        return self._field("manifest") or {}
 
     @property
     def mesh(self) -> "QuadMesh | None":
-        return self.after("mesh").mesh
+        return self._field("mesh")
 
     @property
     def parts(self) -> list[dict[str, str]] | None:
-        return self.after("parts").parts
+        return self._field("parts")
 
     @property
     def parts_csv_rows(self) -> list[dict[str, str]] | None:
-        return self.after("parts").parts_csv_rows
+        return self._field("parts_csv_rows")
 
     @property
     def nodes(self) -> list[dict[str, str]] | None:
-        return self.after("nodes").nodes
+        return self._field("nodes")
 
     @property
     def cut(self) -> dict[str, tuple[str, "np.ndarray"]]:
-        return self.after("dxf").cut
+        return self._field("cut")
 
     @property
     def dxf_outlines(self) -> dict[str, "np.ndarray"]:
-        return self.after("dxf").dxf_outlines
+        return self._field("dxf_outlines")
 
     @property
     def dxf_texts(self) -> dict[str, list[Any]]:
-        return self.after("dxf").dxf_texts
+        return self._field("dxf_texts")
 
     @property
     def dxf_marks(self) -> dict[str, list[Any]]:
-        return self.after("dxf").dxf_marks
+        return self._field("dxf_marks")
 
     @property
     def dxf_trim(self) -> dict[str, Any]:
-        return self.after("dxf").dxf_trim
+        return self._field("dxf_trim")
 
     @property
     def type_outlines(self) -> dict[str, "np.ndarray"]:
-        return self.after("types").type_outlines
+        return self._field("type_outlines")
 
     @property
     def beam_solids(self) -> dict[str, Any] | None:
-        return self.after("step").beam_solids
+        return self._field("beam_solids")
 
     @property
     def plate_outlines(self) -> dict[str, "np.ndarray"]:
-        return self.after("step_geometry").plate_outlines
+        return self._field("plate_outlines")
 
     @property
     def plate_cut_outlines(self) -> dict[str, "np.ndarray"]:
-        return self.after("step_geometry").plate_cut_outlines
+        return self._field("plate_cut_outlines")
 
     @property
     def erection_passes(self) -> list["Pass"] | None:
-        return self.after("erection").erection_passes
+        return self._field("erection_passes")
 
     def read_table(self, rel: str, columns: list[str] | tuple[str, ...] = ()) -> list[dict[str, str]] | None:
         """The rows of the CSV table ``rel``, or ``None`` after a finding that it cannot be read or lacks one of
