@@ -368,6 +368,9 @@ GLAZING_STEP, SPLICES_STEP, SPLICE_DIR = "glazing.step", "splices.step", "splice
 one flat DXF per cover-plate type (``splices/SP125x285-2.dxf``: CUT outline and holes, XDATA ``part_id`` = the
 type id and ``quantity``)."""
 BITES_CSV, STRIP_CUTS_CSV, WELDS_CSV = "bites.csv", "strip_cuts.csv", "welds.csv"
+BITES_COLUMNS = ["panel", "edge", "mesh_edge", "strip", "bite_mm", "supported_mm", "edge_mm", "tilt_deg"]
+STRIP_CUTS_COLUMNS = ["bar", "start_mm", "length_mm", "part_id", "nest_tag", "beam"]
+WELDS_COLUMNS = ["node", "part", "to", "dihedral_deg", "weld_length_mm", "preparation", "throat_mm", "joint"]
 BEVELS_CSV = "bevels.csv"
 """The fit of every glazing strip on its beam plate: :data:`BEVEL_COLUMNS` (:mod:`fabrication.glazing.bevel`)."""
 BEVEL_COLUMNS = ["strip", "plate", "lean_deg", "overlap_mm", "delta_mm", "bevel"]
@@ -384,15 +387,22 @@ RETENTION_COLUMNS = ["part_id", "kind", "owner", "strip", "beam", "length_mm", "
 RESTRAINT_COLUMNS = ["panel", "slope_deg", "weight_kg", "down_edge", "strip", "setting_blocks", "block_load_N",
                      "block_pressure_N_mm2", "block_contact_mm", "stops", "uplift_kN", "screws", "resistance_kN", "clamp_bite_mm",
                      "max_screw_spacing_mm", "plate_utilisation", "silicone_bite_mm", "ok"]
-"""The bite of every pane edge (``panel, edge, mesh_edge, strip, bite_mm, supported_mm, edge_mm, tilt_deg``);
-the strips cut from bars (``bar, start_mm, length_mm, part_id, nest_tag, beam``); the welds
-(``node, part, to, dihedral_deg, weld_length_mm, preparation, throat_mm, joint``): ``joint = "T"`` a plate
+"""The bite of every pane edge (:data:`BITES_COLUMNS`); the strips cut from bars (:data:`STRIP_CUTS_COLUMNS`);
+the welds (:data:`WELDS_COLUMNS`): ``joint = "T"`` a plate
 ending against one running through ``node``, ``joint = "halflap"`` the two plates crossing at a half-lap
 ``node`` welded in its four corners, ``joint = "corner"`` two plates ending at a ``node`` where none runs
 through, ``joint = "splice"`` a welded splice across the cut between two pieces of a beam (no node)."""
 BOLTS_CSV = "bolts.csv"
-"""The bolt sets of the bolted splices, one row per splice: ``splice, beam, pieces, bolt, size, grade, length_mm,
-grip_mm, washers, nut, projection_mm, category, preload, quantity`` (:mod:`fabrication.glazing.bolts`)."""
+"""The bolt sets of the bolted splices, one row per splice: :data:`BOLTS_COLUMNS` (:mod:`fabrication.glazing.bolts`)."""
+BOLTS_COLUMNS = ["splice", "beam", "pieces", "bolt", "size", "grade", "length_mm", "grip_mm", "washers", "nut",
+                 "projection_mm", "category", "preload", "quantity"]
+ERECTION_CSV = "erection.csv"
+"""The erection sequence, one row per part (and per weld): :data:`ERECTION_COLUMNS`
+(:mod:`fabrication.erection`)."""
+ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "direction_z", "after",
+                    "blocked_spread_deg"]
+"""``blocked_spread_deg``: for a plate that no single direction puts through its slots, the angle spread of its
+slot directions; empty otherwise."""
 PLATE_SHEET_DIR, PLATE_SHEET_PREFIX = "beams", "plates"
 TYPE_DIR, TYPE_PREFIX = "glass/types", "type"
 
@@ -560,3 +570,13 @@ def json_safe(obj: object) -> object:
 PARTIAL_MARKER = ".ppfab-partial"
 """The file a build keeps in its temporary folder while it writes (removed before the folder is committed);
 :mod:`fabrication.pipeline.lock` writes it, ``ppfab verify`` does not count it as a stray file."""
+
+
+TABLE_COLUMNS: dict[str, list[str]] = {
+    "nodes.csv": NODES_COLUMNS, "glass_order.csv": ORDER_ALL_COLUMNS, BEVELS_CSV: BEVEL_COLUMNS,
+    RETENTION_CSV: RETENTION_COLUMNS, RESTRAINT_CSV: RESTRAINT_COLUMNS, BITES_CSV: BITES_COLUMNS,
+    STRIP_CUTS_CSV: STRIP_CUTS_COLUMNS, WELDS_CSV: WELDS_COLUMNS, BOLTS_CSV: BOLTS_COLUMNS,
+    ERECTION_CSV: ERECTION_COLUMNS}
+"""Every CSV table a build writes with a fixed header → its columns in order; ``parts.csv`` is the one whose
+columns depend on the parts it lists: :data:`PARTS_CONTRACT_COLUMNS`, then those of
+:data:`PARTS_KNOWN_COLUMNS` present, then those of :data:`PARTS_MORE_COLUMNS` present, sorted by name."""

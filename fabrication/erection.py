@@ -61,16 +61,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .glazing.retention import Retention
     from .panels import Panel
 
-ERECTION_CSV = "erection.csv"
-"""The erection sequence, one row per part (and per weld): :data:`ERECTION_COLUMNS`."""
-
 ERECTION_SVG = "drawings/erection.svg"
 """The plan view of the parts coloured by erection step, with a legend."""
-
-ERECTION_COLUMNS = ["step", "part_id", "kind", "direction_x", "direction_y", "direction_z", "after",
-                    "blocked_spread_deg"]
-"""``blocked_spread_deg``: for a plate that no single direction puts through its slots (:class:`Blocked`), the angle
-spread of its slot directions; empty otherwise."""
 
 STEP_KINDS: tuple[str, ...] = ("row", "column", "weld", "splice", "strip", "gasket", "setting_block", "stop",
                                "panel", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
@@ -112,7 +104,7 @@ class ErectionPlan:
     blocked: tuple[Blocked, ...]
 
     def rows(self) -> list[dict[str, str]]:
-        """The rows of ``erection.csv`` (:data:`ERECTION_COLUMNS`), directions to 6 decimals."""
+        """The rows of ``erection.csv`` (:data:`fabrication.contract.ERECTION_COLUMNS`), directions to 6 decimals."""
         out = []
         spread = {b.part_id: f"{b.spread_deg:.2f}" for b in self.blocked}
         for p in self.insertions:

@@ -152,3 +152,22 @@ def test_the_sheet_column_is_an_integer_column(built):
     package = open_build(built)
     placed = {p.part_id for p in package.parts if p.placement is not None}
     assert placed == {r["part_id"] for r in rows if r["kind"] in SHEET_KINDS}
+
+
+def test_every_table_has_the_columns_the_contract_names(built):
+    """Each CSV of a build has exactly the header ``contract.TABLE_COLUMNS`` gives its file, in order;
+    ``parts.csv`` the contract's columns first, then known and further columns each named in the contract,
+    sorted as it says."""
+    from fabrication import contract
+
+    found = sorted(p.relative_to(built).as_posix() for p in built.rglob("*.csv"))
+    assert len(found) >= 8
+    for rel in found:
+        with open(built / rel, newline="", encoding="utf-8") as fh:
+            header = next(csv.reader(fh))
+        if rel == "parts.csv":
+            known = [c for c in contract.PARTS_KNOWN_COLUMNS if c in header]
+            more = sorted(c for c in header if c in contract.PARTS_MORE_COLUMNS)
+            assert header == contract.PARTS_CONTRACT_COLUMNS + known + more, rel
+        else:
+            assert header == contract.TABLE_COLUMNS[rel], rel

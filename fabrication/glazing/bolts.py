@@ -91,7 +91,7 @@ class BoltSet:
         return self.category in ("B", "C")
 
     def row(self) -> dict[str, object]:
-        """The ``bolts.csv`` row (columns :data:`BOLT_COLUMNS`)."""
+        """The ``bolts.csv`` row (columns :data:`fabrication.contract.BOLTS_COLUMNS`)."""
         std = "EN 14399-3 HR" if self.preloaded else "ISO 4014"
         nut = f"{'EN 14399-3' if self.preloaded else 'ISO 4032'} {self.size} m={self.nut_mm:g}"
         kind = "EN 14399-6" if self.preloaded else "ISO 7089"
@@ -104,8 +104,6 @@ class BoltSet:
                 "quantity": self.quantity}
 
 
-BOLT_COLUMNS = ("splice", "beam", "pieces", "bolt", "size", "grade", "length_mm", "grip_mm", "washers", "nut",
-                "projection_mm", "category", "preload", "quantity")
 
 
 def bolt_set(splice: str, beam: str, pieces: tuple[str, str], spec: BoltSpec, category: str, cover_mm: float,

@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from ..contract import STOCK_HEADER_VARS, csv_value, stock_title, thickness_text
-from ..glazing.bolts import BOLT_COLUMNS, BoltSpec, bolt_set
+from ..contract import BOLTS_COLUMNS
+from ..glazing.bolts import BoltSpec, bolt_set
 from . import Verification, check
 from ._shapes import frame_of, to_frame
 
@@ -60,8 +61,8 @@ def check_bolts(v: Verification) -> None:
     rows = v.read_table(rel)
     if rows is None:
         return
-    if rows and list(rows[0]) != list(BOLT_COLUMNS):
-        v.error(rel, "header", f"columns {list(rows[0])} are not {list(BOLT_COLUMNS)}")
+    if rows and list(rows[0]) != BOLTS_COLUMNS:
+        v.error(rel, "header", f"columns {list(rows[0])} are not {BOLTS_COLUMNS}")
         return
     seen: set[str] = set()
     for n, r in enumerate(rows, start=1):
@@ -85,7 +86,7 @@ def check_bolts(v: Verification) -> None:
         except (KeyError, ValueError, TypeError) as exc:
             v.error("parts.csv", sid, f"the splice's bolts cannot be recomputed ({exc})")
             continue
-        for column in BOLT_COLUMNS:
+        for column in BOLTS_COLUMNS:
             if not _same(r.get(column, ""), want[column]):
                 v.error(rel, f"row {n} column {column}", f"{sid}: {r.get(column)!r} written, {want[column]!r} "
                                                          "recomputed from parts.csv and fabrication.splices")

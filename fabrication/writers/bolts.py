@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..contract import BOLTS_CSV
-from ..glazing.bolts import BOLT_COLUMNS, splice_bolts, total_bolts
+from ..contract import BOLTS_COLUMNS
+from ..glazing.bolts import splice_bolts, total_bolts
 from ..parts import csv_text
 from . import Files, writer
 
@@ -22,6 +23,6 @@ def write_bolts(build: "BuildRecord", out: Path, files: Files) -> str:
     if g is None or not g.splices:
         return "no bolted splices"
     sets = splice_bolts(g.splices, g.splice_params)
-    (out / BOLTS_CSV).write_text(csv_text([s.row() for s in sets], list(BOLT_COLUMNS)), encoding="utf-8")
+    (out / BOLTS_CSV).write_text(csv_text([s.row() for s in sets], BOLTS_COLUMNS), encoding="utf-8")
     files["bolts_csv"] = BOLTS_CSV
     return f"{total_bolts(sets)} bolt sets in {len(sets)} splices"

@@ -17,7 +17,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 @writer("erection", order=77)
 def write_erection(build: "BuildRecord", out: Path, files: Files) -> str:
-    from ..erection import ERECTION_COLUMNS, ERECTION_CSV, ERECTION_SVG, erection_plan
+    from ..contract import ERECTION_COLUMNS, ERECTION_CSV
+    from ..erection import ERECTION_SVG, erection_plan
     from ..erection_drawing import erection_svg, plan_outlines
     from ..parts import csv_text
 

@@ -19,8 +19,9 @@ import numpy as np
 
 from ppfab.frame import Frame
 
-from ..contract import (BEVEL_COLUMNS, BEVELS_CSV, BITES_CSV, GLAZING_STEP, RESTRAINT_COLUMNS, RESTRAINT_CSV, RETENTION_COLUMNS, RETENTION_CSV,
-                        SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_CSV, WELDS_CSV, gasket_id)
+from ..contract import (BEVEL_COLUMNS, BEVELS_CSV, BITES_COLUMNS, BITES_CSV, GLAZING_STEP, RESTRAINT_COLUMNS,
+                        RESTRAINT_CSV, RETENTION_COLUMNS, RETENTION_CSV, SPLICE_DIR, SPLICES_STEP, STRIP_CUTS_COLUMNS,
+                        STRIP_CUTS_CSV, WELDS_COLUMNS, WELDS_CSV, gasket_id)
 from ..parts import csv_text
 from . import Files, writer
 
@@ -281,7 +282,7 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
         rows = [{"panel": b.panel, "edge": b.edge, "mesh_edge": b.mesh_edge, "strip": b.strip,
                  "bite_mm": _plain(b.bite), "supported_mm": _plain(b.supported), "edge_mm": _plain(b.length),
                  "tilt_deg": _plain(b.tilt_deg, 4)} for b in g.bites]
-        (out / BITES_CSV).write_text(csv_text(rows, list(rows[0]) if rows else ["panel"]), encoding="utf-8")
+        (out / BITES_CSV).write_text(csv_text(rows, BITES_COLUMNS), encoding="utf-8")
         files["bites_csv"] = BITES_CSV
         from ..glazing.rows import strip_rows
 
@@ -289,8 +290,7 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                  "part_id": r["part_id"], "nest_tag": r["nest_tag"], "beam": r["beam"]}
                 for r in strip_rows(g, build.beams)]
         cuts.sort(key=lambda r: (r["bar"], r["start_mm"]))
-        (out / STRIP_CUTS_CSV).write_text(csv_text(cuts, ["bar", "start_mm", "length_mm", "part_id", "nest_tag",
-                                                             "beam"]), encoding="utf-8")
+        (out / STRIP_CUTS_CSV).write_text(csv_text(cuts, STRIP_CUTS_COLUMNS), encoding="utf-8")
         files["strip_cuts_csv"] = STRIP_CUTS_CSV
         from ..glazing.bevel import strip_bevels
 
@@ -315,7 +315,7 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                  "dihedral_deg": _plain(w.dihedral_deg, 4), "weld_length_mm": _plain(w.length_mm),
                  "preparation": w.preparation, "throat_mm": w.throat_mm, "joint": w.joint}
                 for w in g.welds]
-        (out / WELDS_CSV).write_text(csv_text(rows, list(rows[0])), encoding="utf-8")
+        (out / WELDS_CSV).write_text(csv_text(rows, WELDS_COLUMNS), encoding="utf-8")
         files["welds_csv"] = WELDS_CSV
         notes.append(f"{len(g.welds)} welds")
     return ", ".join(notes) or "nothing to write"
