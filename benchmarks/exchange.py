@@ -45,9 +45,7 @@ def main(argv: list[str] | None = None) -> None:
     t0 = time.perf_counter()
     b = fabrication.build(fabrication.load_design(args.design))
     print(f"build: {len(b.panels.panels)} panels, {len(b.beams.plates)} plates, {time.perf_counter() - t0:.1f} s")
-    files: dict = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        dxf.write_dxf_files(b, Path(tmp), files)            # the sheet file names the parts table refers to
+    files: dict = dxf.dxf_files(b)                      # the sheet file names the parts table refers to
     plates = list(b.beams.plates)
     panels = b.panels.panels
     corners = np.array([p.corners_3d for p in panels])

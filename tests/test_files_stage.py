@@ -97,3 +97,49 @@ def test_parallel_writing_is_off_on_one_core_and_by_environment(monkeypatch):
     monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", "0")
     assert not _parallel.parallel_enabled()
 
+
+
+def test_each_writer_writes_exactly_the_files_it_declared(tmp_path, small_build):
+    """The writers run one after the other into one folder; after each, the files that appeared are exactly the
+    ones its ``declare(build)`` named before anything was written (the manifest's own file aside)."""
+    from fabrication.progress import Progress
+    from fabrication.writers import declared_files, load_writers, write_all
+    from fabrication.writers.base import listed_files
+
+    out = tmp_path / "out"
+    out.mkdir()
+    enabled = [w for w in load_writers() if w.enabled(small_build.design)]
+    table = declared_files(small_build, enabled)
+    assert len(enabled) >= 12 and len(listed_files(table)) > 20
+    before: set[str] = set()
+    for w in enabled:
+        note = w.write(small_build, out, table)
+        now = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()}
+        expected = set(listed_files(w.declare(small_build))) | ({"manifest.json"} if w.name == "manifest" else set())
+        assert now - before == expected, (w.name, note)
+        before = now
+    second = tmp_path / "again"
+    second.mkdir()
+    assert write_all(small_build, second, Progress(quiet=True), parallel=False) == table
+
+
+def test_a_writer_that_writes_an_undeclared_file_stops_the_build(tmp_path, small_build, monkeypatch):
+    """A writer holding to its declaration is checked on every build: one that writes a file it did not declare
+    stops the build with one line naming the file, and nothing is written."""
+    import dataclasses
+
+    from ppfab.errors import FabricationError
+
+    from fabrication import writers
+
+    writers.load_writers()
+    bolts = writers.WRITERS["bolts"]
+
+    def more(build, out, files):
+        (out / "stray.txt").write_text("not declared", encoding="utf-8")
+        return bolts.write(build, out, files)
+
+    monkeypatch.setitem(writers.WRITERS, "bolts", dataclasses.replace(bolts, write=more))
+    with pytest.raises(FabricationError, match=r"not declared \['stray.txt'\]"):
+        small_build.write(tmp_path / "out")
+    assert not (tmp_path / "out").exists()

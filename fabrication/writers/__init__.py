@@ -1,12 +1,15 @@
 """The output writers: one module per output format, registered in a table.
 
-A writer is a function ``write(build, out, files) -> str`` that writes its files into the (temporary) output
-folder ``out`` and records each under a key of ``files`` (the manifest's ``files`` table, in writing
-order); it returns a short note for the progress display.  Modules of this package register theirs with
-:func:`writer`, with an ``order`` (mesh 10, STEP 20, DXF sheets 30, per-type DXF 35, R12/R2000 DXF 40, tables 50, IFC 60, Rhino 65,
-glTF 70, report 80, manifest 90) and an
-``enabled(design)`` predicate for optional files; :func:`write_all` runs them in order.  Adding an output
-format is one new module.
+A writer is two functions: ``declare(build) -> Files`` names the files it will write, under keys of the
+manifest's ``files`` table, from the build alone; ``write(build, out, files) -> str`` writes exactly those
+files into the (temporary) output folder ``out`` and returns a short note for the progress display.  The
+table ``files`` it gets is every writer's declaration, made before any file is written, so a writer reads
+only the build and names (the manifest lists and digests every file, the report links them), never what
+another writer computed.  Modules of this package register theirs with :func:`writer`, with an ``order``
+(mesh 10, STEP 20, glazing 25, bolts 26, DXF sheets 30, per-type DXF 35, R12/R2000 DXF 40, tables 50, IFC 60,
+Rhino 65, glTF 70, drawings 75, erection 77, PDF 78, report 80, manifest 90) and an ``enabled(design)``
+predicate for optional files; :func:`write_all` runs them in order and holds every writer to its
+declaration.  Adding an output format is one new module.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from typing import TYPE_CHECKING, Callable
 
 from ppfab.registry import Registry
 
-from .base import Files, Writer
+from .base import Files, Writer, listed_files
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
@@ -27,12 +30,38 @@ _TABLE: Registry[Writer] = Registry("writer", "fabrication.writers")
 WRITERS: dict[str, Writer] = _TABLE.entries
 
 
-def writer(name: str, order: int, enabled: Callable[["Design"], bool] | None = None) -> Callable:
-    """Decorator registering ``write(build, out, files) -> note`` as the writer ``name``."""
+def writer(name: str, order: int, declare: Callable[["BuildRecord"], Files],
+           enabled: Callable[["Design"], bool] | None = None) -> Callable:
+    """Decorator registering ``write(build, out, files) -> note`` as the writer ``name``, which writes the files
+    ``declare(build)`` names."""
     def register(fn: Callable[["BuildRecord", Path, Files], str]) -> Callable[["BuildRecord", Path, Files], str]:
-        _TABLE.add(name, Writer(name, order, fn, enabled or (lambda design: True)))
+        _TABLE.add(name, Writer(name, order, fn, enabled or (lambda design: True), declare))
         return fn
     return register
+
+
+def declared_files(build: "BuildRecord", writers: list[Writer]) -> Files:
+    """The ``files`` table of a build: every writer's declaration, in writer order."""
+    files: Files = {}
+    for w in writers:
+        files.update(w.declare(build))
+    return files
+
+
+def check_declared(out: Path, files: Files, writers: list[Writer]) -> None:
+    """Raise :class:`~ppfab.errors.FabricationError` unless the folder ``out`` holds exactly the declared files
+    (and ``manifest.json``): a writer that wrote less or more than it declared is a bug of ppfab's."""
+    from ppfab.errors import FabricationError
+
+    from ..contract import PARTIAL_MARKER
+
+    wanted = set(listed_files(files)) | {"manifest.json"}
+    written = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file() and p.name != PARTIAL_MARKER}
+    missing, extra = sorted(wanted - written), sorted(written - wanted)
+    if missing or extra:
+        raise FabricationError(f"the writers ({', '.join(w.name for w in writers)}) did not write what they "
+                               f"declared: missing {missing[:5]}, not declared {extra[:5]} (a bug of ppfab: "
+                               "please report it with the design)")
 
 
 def load_writers() -> list[Writer]:
@@ -52,22 +81,24 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
     from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
 
     enabled = [guarded(w) for w in load_writers() if w.enabled(build.design)]
+    files = declared_files(build, enabled)
     if parallel is None:
         parallel = parallel_enabled()
     if parallel and any(w.name in SECOND_PROCESS for w in enabled):
-        return write_split(build, out, progress, enabled)
-    files: Files = {}
-    progress.watch(out)                       # the status counts the files written so far
-    try:
-        for k, w in enumerate(enabled):
-            progress.start(w.name)
-            progress.advance(k, None, f"file set {k + 1} of {len(enabled)}")
-            try:
-                note = w.write(build, out, files)
-            except BaseException:
-                progress.fail()
-                raise
-            progress.done(note)
-    finally:
-        progress.watch(None)
+        write_split(build, out, progress, enabled, files)
+    else:
+        progress.watch(out)                       # the status counts the files written so far
+        try:
+            for k, w in enumerate(enabled):
+                progress.start(w.name)
+                progress.advance(k, None, f"file set {k + 1} of {len(enabled)}")
+                try:
+                    note = w.write(build, out, files)
+                except BaseException:
+                    progress.fail()
+                    raise
+                progress.done(note)
+        finally:
+            progress.watch(None)
+    check_declared(out, files, enabled)
     return files

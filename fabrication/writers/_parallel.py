@@ -1,13 +1,10 @@
 """Writing the output files on two cores: the writers of :data:`SECOND_PROCESS` in a forked process.
 
-The writers are independent except through the ``files`` table: some read the file names that earlier
-writers recorded (the report's list of files, the manifest's digests; the sheet files of ``parts.csv`` come
-from the build's parts list, not from the DXF writer).
-The writers named in :data:`SECOND_PROCESS` read nothing of it; they run in one forked child process while
-this process runs all the others in their order.  The child is joined before the first writer of
-:data:`READS_EVERY_FILE` (the report lists every file, the manifest digests every file), and the ``files``
-table each writer sees, and the one returned, are assembled in writer order from what each writer added —
-exactly the table of a serial run, so every file is byte-identical to a serial build.
+The writers are independent: each reads the build and the ``files`` table every writer declared before any
+wrote (:func:`~fabrication.writers.declared_files`).  Those named in :data:`SECOND_PROCESS` run in one forked
+child process while this process runs all the others in their order; the child is joined before the
+writers of :data:`READS_EVERY_FILE` (the manifest digests every file), so every file is byte-identical to a
+serial build.
 
 Safety (:mod:`fabrication.pipeline.folder`): the child only writes into the temporary folder; it ignores
 SIGINT (a Ctrl-C reaches the whole process group: this process decides) and dies on SIGTERM/SIGHUP; it ends
@@ -35,12 +32,14 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 SECOND_PROCESS: tuple[str, ...] = ("dxf_types",)
-"""Writers that read nothing of the ``files`` table and run in the second process: the per-type DXFs (one file
-per panel type, the largest share of the DXF time), beside STEP, the sheets, tables, exchange files and report
-(at 22x15 to 88x60 faces the two halves take about the same time)."""
+"""Writers that run in the second process: the per-type DXFs (one file per panel type, the largest share of
+the DXF time), beside STEP, the sheets, tables, exchange files and report (at 22x15 to 88x60 faces the two
+halves take about the same time)."""
 
-READS_EVERY_FILE: tuple[str, ...] = ("report", "manifest")
-"""Writers that read the whole ``files`` table: the second process is joined before the first of them."""
+READS_EVERY_FILE: tuple[str, ...] = ("manifest",)
+"""Writers that read the files of the second process's writers (the manifest digests every file): the second
+process is joined before the first of them.  (The report and the drawing set's PDF read the drawings, written
+in this process before them.)"""
 
 
 def cores() -> int:
@@ -62,21 +61,6 @@ def parallel_enabled() -> bool:
     if flag in ("0", "1"):
         return flag == "1"
     return cores() >= 2
-
-
-def _merged(added: dict[str, Files], order: list[str]) -> Files:
-    """The ``files`` table after the writers ``order`` (their additions, in that order)."""
-    files: Files = {}
-    for name in order:
-        files.update(added.get(name, {}))
-    return files
-
-
-def _run(w: Writer, build: "BuildRecord", out: Path, before: Files) -> tuple[Files, str]:
-    """Run one writer on a copy of the table ``before``; what it added and its note."""
-    files = dict(before)
-    note = w.write(build, out, files)
-    return {k: v for k, v in files.items() if k not in before or before[k] != v}, note
 
 
 class Forked:
@@ -143,65 +127,62 @@ def _forked_main(job: Callable[[], Any], conn: Any, parent: int) -> None:
         conn.close()
 
 
-def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer]) -> list[tuple[str, Files, str, float]]:
-    """The second process's work: run ``writers`` (each on an empty table); their additions, notes and times."""
+def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer], files: Files
+                  ) -> list[tuple[str, str, float]]:
+    """The second process's work: run ``writers``; their notes and times."""
     results = []
     for w in writers:
         t0 = time.perf_counter()
-        added, note = _run(w, build, out, {})
-        results.append((w.name, added, note, time.perf_counter() - t0))
+        note = w.write(build, out, files)
+        results.append((w.name, note, time.perf_counter() - t0))
     return results
 
 
-def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: list[Writer]) -> Files:
-    """Run ``writers`` (enabled, in order) with those of :data:`SECOND_PROCESS` in a forked process; returns the
-    ``files`` table, equal to that of a serial run."""
+def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: list[Writer], files: Files) -> None:
+    """Run ``writers`` (enabled, in order, the table ``files`` declared) with those of :data:`SECOND_PROCESS` in a
+    forked process; the same files as a serial run."""
     side = [w for w in writers if w.name in SECOND_PROCESS]
-    order = [w.name for w in writers]
-    added: dict[str, Files] = {}
     joined = False
     main = [w.name for w in writers if w.name not in SECOND_PROCESS]
-    proc = Forked(lambda: _side_writers(build, out, side), "ppfab-writer")
+    proc = Forked(lambda: _side_writers(build, out, side, files), "ppfab-writer")
     progress.watch(out)                       # the status counts the files written so far (both processes)
     try:
-        for k, w in enumerate(writers):
+        for w in writers:
             if w.name in SECOND_PROCESS:
                 continue
             if not joined and w.name in READS_EVERY_FILE:
-                _join(build, out, progress, proc, side, added, order)
+                _join(build, out, progress, proc, side, files)
                 joined = True
             progress.start(w.name)
             i = main.index(w.name)
             progress.advance(i, None, f"file set {i + 1} of {len(main)}")
             try:
-                added[w.name], note = _run(w, build, out, _merged(added, order[:k]))
+                note = w.write(build, out, files)
             except BaseException:
                 progress.fail()
                 raise
             progress.done(note)
         if not joined:
-            _join(build, out, progress, proc, side, added, order)
+            _join(build, out, progress, proc, side, files)
     finally:
         progress.watch(None)
         proc.close()
-    return _merged(added, order)
 
 
 def _join(build: "BuildRecord", out: Path, progress: "Progress", proc: Forked, side: list[Writer],
-          added: dict[str, Files], order: list[str]) -> None:
+          files: Files) -> None:
     """Wait for the second process; record its writers (progress and times), or run them here if it failed."""
     status, payload = proc.result()
     if status == "ok":
-        for name, files, note, seconds in payload:
+        for name, note, seconds in payload:
             progress.start(name, "(second process)")
             progress._t0 = time.perf_counter() - seconds     # show and record the child's wall time
             progress.done(note)
-            added[name] = files
         return
     for w in side:                              # again here: the writer's own exception, or success
         progress.start(w.name)
         try:
-            added[w.name], note = _run(w, build, out, _merged(added, order[:order.index(w.name)]))
+            note = w.write(build, out, files)
         except BaseException:
             progress.fail()
             raise

@@ -14,13 +14,27 @@ Files = dict[str, "str | list[str]"]
 """The manifest's ``files`` table: key → a path or a list of paths relative to the output folder."""
 
 
+def listed_files(files: Files) -> list[str]:
+    """Every path in the ``files`` table, sorted, each once."""
+    out: list[str] = []
+    for value in files.values():
+        if isinstance(value, str):
+            out.append(value)
+        else:
+            out.extend(v for v in value if isinstance(v, str))
+    return sorted(set(out))
+
+
 @dataclass(frozen=True)
 class Writer:
-    """One entry of :data:`WRITERS`."""
+    """One entry of :data:`WRITERS`: ``declare(build)`` names every file ``write(build, out, files)`` will
+    write (its entries of the ``files`` table, before any file is written); ``write`` writes exactly those,
+    reading the build and the whole declared table (never a file another writer wrote)."""
 
     name: str
     order: int
     write: Callable[["BuildRecord", Path, Files], str]
     enabled: Callable[["Design"], bool]
+    declare: Callable[["BuildRecord"], Files] = lambda build: {}
 
 

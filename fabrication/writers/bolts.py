@@ -16,7 +16,13 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 
-@writer("bolts", order=26)
+def bolts_files(build: "BuildRecord") -> Files:
+    """bolts.csv when the build has splices."""
+    g = build.glazing
+    return {"bolts_csv": BOLTS_CSV} if g is not None and g.splices else {}
+
+
+@writer("bolts", order=26, declare=bolts_files)
 def write_bolts(build: "BuildRecord", out: Path, files: Files) -> str:
     """One row per bolted splice: its bolt sets (size, grade, length from the grip, washers, nut, category)."""
     g = build.glazing
@@ -24,5 +30,4 @@ def write_bolts(build: "BuildRecord", out: Path, files: Files) -> str:
         return "no bolted splices"
     sets = splice_bolts(g.splices, g.splice_params)
     (out / BOLTS_CSV).write_text(csv_text([s.row() for s in sets], BOLTS_COLUMNS), encoding="utf-8")
-    files["bolts_csv"] = BOLTS_CSV
     return f"{total_bolts(sets)} bolt sets in {len(sets)} splices"

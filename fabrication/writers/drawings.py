@@ -20,7 +20,17 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 
-@writer("drawings", order=75)
+def drawing_files(build: "BuildRecord") -> Files:
+    """The views (key plan and elevations) and the node sheets of the drawing set (:func:`sheet_register`; the
+    erection drawing is the erection writer's)."""
+    from ..drawings import VIEW_TITLES
+
+    register = sheet_register(build)
+    return {"drawings": [f"{DRAWINGS_DIR}/{view_file(view)}" for view in VIEW_TITLES],
+            "node_sheets": [rel for rel, info in register.items() if info.node_type is not None]}
+
+
+@writer("drawings", order=75, declare=drawing_files)
 def write_drawings(build: "BuildRecord", out: Path, files: Files) -> str:
     from ..drawings import VIEW_TITLES, view_svg
     from ..node_sheets import node_sheet_svg
@@ -48,8 +58,6 @@ def write_drawings(build: "BuildRecord", out: Path, files: Files) -> str:
         (out / rel).write_text(node_sheet_svg(t, params.depth, params.thickness, ends=plate_ends(build, t.nodes[0]),
                                               sheet=info.info, rows=info.rows), encoding="utf-8")
         sheets.append(rel)
-    files["drawings"] = views
-    files["node_sheets"] = sheets
     return f"{len(views)} views ({', '.join(scales)} on {build.design.output.paper}), {len(types)} node types"
 
 

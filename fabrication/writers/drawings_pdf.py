@@ -95,12 +95,11 @@ def write_pdf(sheets: list[Path], path: Path) -> None:
             plt.close(fig)
 
 
-@writer("drawings_pdf", order=78)
+@writer("drawings_pdf", order=78, declare=lambda build: {"drawings_pdf": DRAWINGS_PDF})
 def write_drawings_pdf(build: "BuildRecord", out: Path, files: Files) -> str:
     """The drawing set as ``drawings/drawings.pdf`` (every sheet the drawing and erection writers wrote)."""
     from .drawings import sheet_register
 
     sheets = [rel for rel in sheet_register(build) if (out / rel).is_file()]
     write_pdf([out / rel for rel in sheets], out / DRAWINGS_PDF)
-    files["drawings_pdf"] = DRAWINGS_PDF
     return f"{len(sheets)} pages"

@@ -44,7 +44,7 @@ from . import Files, writer
 from ..contract import (BEVEL_LAYER, DIM_LAYER, DXF_INSUNITS_MM, DXF_OLDEST, DXF_VERSION, FACE_MARK_PATTERN, GLASS_SHEET_DIR,
                         GLASS_SHEET_PREFIX, KERF_NOTES, LAYERS, MARK_LAYERS, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
                         REQUIRED_LAYERS, STOCK_HEADER_VARS, TYPE_DIR, TYPE_PREFIX, XDATA_APPID, dxf_text, xdata_fields,
-                        sheet_file, stock_title, stock_xdata, thickness_text, type_file, xdata_strings)
+                        sheet_file, sheet_files, stock_title, stock_xdata, thickness_text, type_file, xdata_strings)
 from ..flatpart import FlatPart, Placement, place_points
 from ..marking import TextLine, face_marks, face_sign, place_label
 
@@ -542,7 +542,22 @@ def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: st
     return out
 
 
-@writer("dxf", order=30)
+def dxf_files(build: "BuildRecord") -> Files:
+    """One cutting sheet per glass and per plate sheet (:func:`~fabrication.contract.sheet_files`)."""
+    nest = build.nesting
+    return {"glass_sheets": sheet_files(GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, nest.glass.sheets),
+            "beam_sheets": sheet_files(PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, nest.plates.sheets)}
+
+
+def type_dxf_files(parts: list[FlatPart], directory: str = TYPE_DIR) -> list[str]:
+    """The per-type DXFs of ``parts`` (one per type, the first part of each, in part order)."""
+    seen: dict[str, str] = {}
+    for p in parts:
+        seen.setdefault(p.type_id or p.part_id, f"{directory}/{type_file(p.type_id or p.part_id)}")
+    return list(seen.values())
+
+
+@writer("dxf", order=30, declare=dxf_files)
 def write_dxf_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """Glass and beam-plate cutting sheets (the per-type DXFs: :func:`write_dxf_type_files`)."""
     name = build.design.info.name
@@ -551,16 +566,18 @@ def write_dxf_files(build: "BuildRecord", out: Path, files: Files) -> str:
                              f"{name} glass")
     plates = write_sheet_dxfs(list(nest.beam_parts), nest.plates, out / PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
                               f"{name} beam plates")
-    files["glass_sheets"] = [str(p.relative_to(out)) for p in glass]
-    files["beam_sheets"] = [str(p.relative_to(out)) for p in plates]
     return f"{len(glass)} glass + {len(plates)} plate sheets"
 
 
-@writer("dxf_types", order=35, enabled=lambda design: design.output.per_type_dxf)
+def dxf_type_files(build: "BuildRecord") -> Files:
+    """The per-type DXFs: one per panel type (:func:`type_dxf_files`)."""
+    return {"panel_type_dxfs": type_dxf_files(list(build.nesting.glass_parts))}
+
+
+@writer("dxf_types", order=35, declare=dxf_type_files, enabled=lambda design: design.output.per_type_dxf)
 def write_dxf_type_files(build: "BuildRecord", out: Path, files: Files) -> str:
-    """With ``[output] per_type_dxf``, one flat DXF per panel type (reads nothing of ``files``, so it can run in
-    a second process, :mod:`fabrication.writers._parallel`)."""
+    """With ``[output] per_type_dxf``, one flat DXF per panel type (in a second process on two cores,
+    :mod:`fabrication.writers._parallel`)."""
     types = write_type_dxfs(list(build.nesting.glass_parts), out / TYPE_DIR,
                             dimensions=build.design.output.type_dimensions)
-    files["panel_type_dxfs"] = [f"{TYPE_DIR}/{v}" for v in types.values()]
     return f"{len(types)} panel types"

@@ -12,9 +12,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..contract import GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, LEGACY_DXF, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR
+from ..contract import (GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, LEGACY_DXF, PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, TYPE_DIR,
+                        sheet_files)
 from . import Files, writer
-from .dxf import write_sheet_dxfs, write_type_dxfs
+from .dxf import type_dxf_files, write_sheet_dxfs, write_type_dxfs
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
@@ -27,7 +28,21 @@ def legacy_versions(design: "Design") -> list[str]:
     return [v for v in LEGACY_DXF if wanted[v]]
 
 
-@writer("dxf_legacy", order=40, enabled=lambda design: bool(legacy_versions(design)))
+def legacy_files(build: "BuildRecord") -> Files:
+    """Per version asked for, under its folder: the cutting sheets, and with ``per_type_dxf`` the per-type DXFs."""
+    nest = build.nesting
+    files: Files = {}
+    for version in legacy_versions(build.design):
+        root = LEGACY_DXF[version]
+        rel = [f"{root}/{f}" for f in sheet_files(GLASS_SHEET_DIR, GLASS_SHEET_PREFIX, nest.glass.sheets)
+               + sheet_files(PLATE_SHEET_DIR, PLATE_SHEET_PREFIX, nest.plates.sheets)]
+        if build.design.output.per_type_dxf:
+            rel += type_dxf_files(list(nest.glass_parts), f"{root}/{TYPE_DIR}")
+        files[root] = rel
+    return files
+
+
+@writer("dxf_legacy", order=40, declare=legacy_files, enabled=lambda design: bool(legacy_versions(design)))
 def write_legacy_dxfs(build: "BuildRecord", out: Path, files: Files) -> str:
     """The cutting sheets (and, with ``per_type_dxf``, the per-type DXFs) in each version asked for."""
     name = build.design.info.name
@@ -40,11 +55,9 @@ def write_legacy_dxfs(build: "BuildRecord", out: Path, files: Files) -> str:
                                  f"{name} glass", version)
         paths += write_sheet_dxfs(list(nest.beam_parts), nest.plates, root / PLATE_SHEET_DIR, PLATE_SHEET_PREFIX,
                                   f"{name} beam plates", version)
-        rel = [str(p.relative_to(out)) for p in paths]
+        count = len(paths)
         if output.per_type_dxf:
-            types = write_type_dxfs(list(nest.glass_parts), root / TYPE_DIR, version=version,
-                                    dimensions=output.type_dimensions)
-            rel += [f"{LEGACY_DXF[version]}/{TYPE_DIR}/{v}" for v in types.values()]
-        files[LEGACY_DXF[version]] = rel
-        notes.append(f"{len(rel)} {version}")
+            count += len(write_type_dxfs(list(nest.glass_parts), root / TYPE_DIR, version=version,
+                                         dimensions=output.type_dimensions))
+        notes.append(f"{count} {version}")
     return ", ".join(notes) + " files"

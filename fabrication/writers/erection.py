@@ -9,23 +9,23 @@ import logging
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..contract import ERECTION_CSV
+from ..erection import ERECTION_SVG
 from . import Files, writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 
-@writer("erection", order=77)
+@writer("erection", order=77, declare=lambda build: {"erection_csv": ERECTION_CSV, "erection_drawing": ERECTION_SVG})
 def write_erection(build: "BuildRecord", out: Path, files: Files) -> str:
-    from ..contract import ERECTION_COLUMNS, ERECTION_CSV
-    from ..erection import ERECTION_SVG, erection_plan
+    from ..contract import ERECTION_COLUMNS
+    from ..erection import erection_plan
     from ..erection_drawing import erection_svg, plan_outlines
     from ..parts import csv_text
 
-
     plan = erection_plan(build.beams, build.glazing, build.panels.panels, build.retention)
     (out / ERECTION_CSV).write_text(csv_text(plan.rows(), ERECTION_COLUMNS), encoding="utf-8")
-    files["erection_csv"] = ERECTION_CSV
     svg = out / ERECTION_SVG
     svg.parent.mkdir(parents=True, exist_ok=True)
     outlines = plan_outlines(build.beams.plates, build.glazing, build.panels.panels)
@@ -33,7 +33,6 @@ def write_erection(build: "BuildRecord", out: Path, files: Files) -> str:
 
     sheet = sheet_register(build)[ERECTION_SVG].info
     svg.write_text(erection_svg(plan, outlines, sheet.title, sheet=sheet), encoding="utf-8")
-    files["erection_drawing"] = ERECTION_SVG
     if plan.blocked:
         worst = sorted(plan.blocked, key=lambda b: -b.spread_deg)
         logging.getLogger("ppfab").warning(

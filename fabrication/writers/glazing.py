@@ -167,6 +167,49 @@ def splice_solids(glazing) -> list:
     return out
 
 
+def _splice_type_firsts(glazing) -> tuple[dict[str, object], dict[str, int]]:
+    """Cover-plate type id → its first splice (in splice order) and → how many cover plates are of it."""
+    from ..glazing.rows import splice_types
+
+    types = splice_types(glazing.splices)
+    first: dict[str, object] = {}
+    count: dict[str, int] = {}
+    for s in glazing.splices:
+        t = types[s.part_ids[0]]
+        first.setdefault(t, s)
+        count[t] = count.get(t, 0) + 2
+    return first, count
+
+
+def splice_dxf_files(glazing) -> list[str]:
+    """The flat DXFs of the cover-plate types (``splices/SP125x285-2.dxf`` …), in the order they are written."""
+    return [f"{SPLICE_DIR}/{t}.dxf" for t in _splice_type_firsts(glazing)[0]]
+
+
+def glazing_files(build: "BuildRecord") -> Files:
+    """The files :func:`write_glazing` writes: glazing.step, the retention and restraint tables (with
+    retention), bites, strip cuts and bevels (with strips); splices.step and the cover plates' DXFs (with
+    splices); welds.csv (with welds)."""
+    g = build.glazing
+    if g is None:
+        return {}
+    files: Files = {}
+    if g.strips:
+        files["glazing_step"] = GLAZING_STEP
+        if build.retention is not None:
+            files["retention_csv"] = RETENTION_CSV
+            files["restraint_csv"] = RESTRAINT_CSV
+        files["bites_csv"] = BITES_CSV
+        files["strip_cuts_csv"] = STRIP_CUTS_CSV
+        files["bevels_csv"] = BEVELS_CSV
+    if g.splices:
+        files["splices_step"] = SPLICES_STEP
+        files["splice_dxfs"] = splice_dxf_files(g)
+    if g.welds:
+        files["welds_csv"] = WELDS_CSV
+    return files
+
+
 def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     """One flat DXF per cover plate type: outline and bolt holes on ``CUT`` (XDATA ``part_id`` = type,
     ``quantity``, ``material``, ``thickness_mm``), the type id on ``LABEL`` and a title under the plate naming
@@ -176,16 +219,9 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
     by :data:`SPLICE_LABEL_MARGIN`, upright along the plate's long side (:func:`~fabrication.marking.place_label`,
     at most 20 mm high); on a plate with no room for it at :data:`SPLICE_LABEL_MIN` mm it goes above the plate."""
     from ..contract import XDATA_APPID, stock_xdata, thickness_text
-    from ..glazing.rows import splice_types
     from .dxf import _fixed_metadata, _new_doc, add_stock, save_doc
 
-    types = splice_types(glazing.splices)
-    first: dict[str, object] = {}
-    count: dict[str, int] = {}
-    for s in glazing.splices:
-        t = types[s.part_ids[0]]
-        first.setdefault(t, s)
-        count[t] = count.get(t, 0) + 2
+    first, count = _splice_type_firsts(glazing)
     folder.mkdir(parents=True, exist_ok=True)
     names = []
     for t, s in first.items():
@@ -246,7 +282,7 @@ def _plain(value: float, digits: int = 3) -> float:
     return 0.0 if v == 0 else v
 
 
-@writer("glazing", order=25, enabled=lambda design: True)
+@writer("glazing", order=25, declare=glazing_files)
 def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
     """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
     from ._step_text import step_label
@@ -269,13 +305,10 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
             what += ", setting blocks, stops and pressure plates"
         write_step(Assembly(step_label(f"{name} glazing"), list(grouped(solids, beams))), out / GLAZING_STEP,
                    description=f"{what} of {name}")
-        files["glazing_step"] = GLAZING_STEP
         if retention is not None:
             (out / RETENTION_CSV).write_text(csv_text(retention_rows(retention), RETENTION_COLUMNS), encoding="utf-8")
             (out / RESTRAINT_CSV).write_text(csv_text(restraint_rows(retention), RESTRAINT_COLUMNS),
                                              encoding="utf-8")
-            files["retention_csv"] = RETENTION_CSV
-            files["restraint_csv"] = RESTRAINT_CSV
             bad = [r for r in retention.panes if r.failures(g.params)]
             notes.append(f"{len(retention.parts)} retention parts"
                          + (f", {len(bad)} pane(s) not held (restraint.csv)" if bad else ""))
@@ -283,7 +316,6 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                  "bite_mm": _plain(b.bite), "supported_mm": _plain(b.supported), "edge_mm": _plain(b.length),
                  "tilt_deg": _plain(b.tilt_deg, 4)} for b in g.bites]
         (out / BITES_CSV).write_text(csv_text(rows, BITES_COLUMNS), encoding="utf-8")
-        files["bites_csv"] = BITES_CSV
         from ..glazing.rows import strip_rows
 
         cuts = [{"bar": r["bar"], "start_mm": r["bar_start_mm"], "length_mm": r["length_mm"],
@@ -291,14 +323,12 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                 for r in strip_rows(g, build.beams)]
         cuts.sort(key=lambda r: (r["bar"], r["start_mm"]))
         (out / STRIP_CUTS_CSV).write_text(csv_text(cuts, STRIP_CUTS_COLUMNS), encoding="utf-8")
-        files["strip_cuts_csv"] = STRIP_CUTS_CSV
         from ..glazing.bevel import strip_bevels
 
         bevels = strip_bevels(g.strips, build.beams.plates, g.params.bevel_min_deg, as_cut=True)
         rows = [{"strip": b.strip, "plate": b.plate, "lean_deg": _plain(b.lean_deg, 3), "overlap_mm": _plain(b.overlap_mm),
                  "delta_mm": _plain(b.delta_mm), "bevel": b.text()} for b in bevels]
         (out / BEVELS_CSV).write_text(csv_text(rows, BEVEL_COLUMNS), encoding="utf-8")
-        files["bevels_csv"] = BEVELS_CSV
         notes.append(f"{len(g.strips)} strips, bite min {g.bite_min:.1f} mm")
         if any(b.bevelled for b in bevels):
             notes.append(f"{sum(b.bevelled for b in bevels)} plate top edges bevelled "
@@ -307,8 +337,7 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
         beams = [s.beam_id for s in g.splices for _ in s.part_ids]
         export_step(by_beam(splice_solids(g), beams, f"{name} splices"), out / SPLICES_STEP,
                     description=f"splice cover plates of {name}")
-        files["splices_step"] = SPLICES_STEP
-        files["splice_dxfs"] = write_splice_dxfs(g, out / SPLICE_DIR)
+        write_splice_dxfs(g, out / SPLICE_DIR)
         notes.append(f"{len(g.splices)} splices")
     if g.welds:
         rows = [{"node": w.vertex if w.vertex >= 0 else "", "part": w.part, "to": w.to,
@@ -316,6 +345,5 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                  "preparation": w.preparation, "throat_mm": w.throat_mm, "joint": w.joint}
                 for w in g.welds]
         (out / WELDS_CSV).write_text(csv_text(rows, WELDS_COLUMNS), encoding="utf-8")
-        files["welds_csv"] = WELDS_CSV
         notes.append(f"{len(g.welds)} welds")
     return ", ".join(notes) or "nothing to write"

@@ -55,9 +55,8 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
     return bytes(scene.export(file_type="glb"))
 
 
-@writer("glb", order=70, enabled=lambda design: design.output.glb)
+@writer("glb", order=70, declare=lambda build: {"glb": GLB_FILE}, enabled=lambda design: design.output.glb)
 def write_glb(build: "BuildRecord", out: Path, files: Files) -> str:
     data = glb_bytes(build, files)
     (out / GLB_FILE).write_bytes(data)
-    files["glb"] = GLB_FILE
     return f"{GLB_FILE}: {len(data) / 1e6:.1f} MB"

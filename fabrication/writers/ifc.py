@@ -441,14 +441,13 @@ def ifc_model(build: "BuildRecord", files: Files) -> IfcModel:
     return model
 
 
-@writer("ifc", order=60, enabled=lambda design: design.output.ifc)
+@writer("ifc", order=60, declare=lambda build: {"ifc": IFC_FILE}, enabled=lambda design: design.output.ifc)
 def write_ifc(build: "BuildRecord", out: Path, files: Files) -> str:
     from .ifc_analysis import add_analysis_model
 
     model = ifc_model(build, files)
     add_analysis_model(model, build)
     model.write(out / IFC_FILE)
-    files["ifc"] = IFC_FILE
     plates = len(model.f.by_type("IfcPlate"))
     members = len(model.f.by_type("IfcMember"))
     analysis = len(model.f.by_type("IfcStructuralCurveMember"))

@@ -13,6 +13,7 @@ from ppfab.mesh import QuadGrid, as_quadmesh
 from ppfab.schema import as_plain
 
 from . import Files, writer
+from .base import listed_files
 from ._json import json_text
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -27,17 +28,6 @@ def sha256_of(path: Path) -> str:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
-
-
-def listed_files(files: Files) -> list[str]:
-    """Every path in the ``files`` table, sorted, each once."""
-    out: list[str] = []
-    for value in files.values():
-        if isinstance(value, str):
-            out.append(value)
-        else:
-            out.extend(v for v in value if isinstance(v, str))
-    return sorted(set(out))
 
 
 def fabrication_params(design: "Design") -> dict[str, Any]:
@@ -103,7 +93,7 @@ def manifest(build: "BuildRecord", out: Path, files: Files) -> dict[str, Any]:
     return doc
 
 
-@writer("manifest", order=90)
+@writer("manifest", order=90, declare=lambda build: {})
 def write_manifest(build: "BuildRecord", out: Path, files: Files) -> str:
     doc = manifest(build, out, files)
     (out / "manifest.json").write_text(json_text(doc), encoding="utf-8")

@@ -36,11 +36,17 @@ def grid_with_support(grid: QuadGrid, support: SupportStructure) -> QuadGrid:
                    support_w=planes[cols] if planar[cols].all() else None)
 
 
-@writer("mesh", order=10)
+def mesh_files(build: "BuildRecord") -> Files:
+    """mesh.obj, and mesh.json for a regular patch."""
+    mesh = build.mesh
+    grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
+    return {"mesh_obj": "mesh.obj", **({"mesh_json": "mesh.json"} if grid is not None else {})}
+
+
+@writer("mesh", order=10, declare=mesh_files)
 def write_mesh_files(build: "BuildRecord", out: Path, files: Files) -> str:
     mesh = build.mesh
     write_obj(mesh, out / "mesh.obj", header=f"ppfab {__version__} — {build.design.info.name}")
-    files["mesh_obj"] = "mesh.obj"
     grid = mesh if isinstance(mesh, QuadGrid) else mesh.grid
     if grid is not None:
         doc = grid_to_json(grid_with_support(grid, build.support))
@@ -49,5 +55,4 @@ def write_mesh_files(build: "BuildRecord", out: Path, files: Files) -> str:
             # the grid's row-major order; obj_vertex[k] is the OBJ vertex of grid vertex k
             doc["obj_vertex"] = [int(x) for x in mesh.grid_ids.reshape(-1)]
         (out / "mesh.json").write_text(json_text(doc), encoding="utf-8")
-        files["mesh_json"] = "mesh.json"
     return "mesh.obj"

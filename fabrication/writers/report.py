@@ -11,7 +11,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 
-@writer("report", order=80, enabled=lambda design: design.output.report)
+@writer("report", order=80, declare=lambda build: {"report_html": "report.html"},
+        enabled=lambda design: design.output.report)
 def write_report(build: "BuildRecord", out: Path, files: Files) -> str:
     from ..report import build_report
 
@@ -19,7 +20,7 @@ def write_report(build: "BuildRecord", out: Path, files: Files) -> str:
     for key in ("drawings", "node_sheets"):
         for rel in files.get(key, []):
             drawings[str(rel)] = (out / str(rel)).read_text(encoding="utf-8")
-    html = build_report(build, files, list(build.parts), drawings)
+    others = {k: v for k, v in files.items() if k != "report_html"}     # the page lists the other files
+    html = build_report(build, others, list(build.parts), drawings)
     (out / "report.html").write_text(html, encoding="utf-8")
-    files["report_html"] = "report.html"
     return f"{len(html) / 1e6:.1f} MB"

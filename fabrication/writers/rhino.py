@@ -239,10 +239,9 @@ def rhino_model(build: "BuildRecord", files: Files) -> RhinoModel:
     return model
 
 
-@writer("rhino", order=65, enabled=lambda design: design.output.rhino)
+@writer("rhino", order=65, declare=lambda build: {"rhino": RHINO_FILE}, enabled=lambda design: design.output.rhino)
 def write_rhino(build: "BuildRecord", out: Path, files: Files) -> str:
     model = rhino_model(build, files)
     (out / RHINO_FILE).write_bytes(model.to_bytes())
-    files["rhino"] = RHINO_FILE
     return f"{RHINO_FILE}: {len(model.f.Objects)} objects"
 

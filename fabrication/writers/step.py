@@ -509,7 +509,12 @@ def export_placed_panes(panels: Sequence["Panel"], offsets: dict[str, float], pa
     return _write_glass(placed_panes(panels, offsets), path, name)
 
 
-@writer("step", order=20)
+def step_files(build: "BuildRecord") -> Files:
+    """beams.step, and panels.step with ``[output] panels_step``."""
+    return {"beams_step": "beams.step", **({"panels_step": "panels.step"} if build.design.output.panels_step else {})}
+
+
+@writer("step", order=20, declare=step_files)
 def write_step_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """``beams.step`` (one solid per beam plate, grouped by family and beam) and, with ``[output] panels_step``,
     ``panels.step``."""
@@ -517,10 +522,8 @@ def write_step_files(build: "BuildRecord", out: Path, files: Files) -> str:
     plates = list(build.beams.plates)
     export_step(beam_assembly(plates, build_solids(plates, check=False), name), out / "beams.step",
                 description=f"beam plates of {name}")
-    files["beams_step"] = "beams.step"
     if build.design.output.panels_step:
 
         export_placed_panes(build.panels.panels, build.pane_offsets(), out / "panels.step", name)
-        files["panels_step"] = "panels.step"
         return "beams.step, panels.step"
     return "beams.step"
