@@ -106,3 +106,31 @@ def test_both_solvers_reach_the_same_mesh():
     va, vb = np.asarray(a.mesh.vertices).reshape(-1, 3), np.asarray(b.mesh.vertices).reshape(-1, 3)
     diag = np.linalg.norm(np.ptp(va, axis=0))
     assert np.abs(va - vb).max() < 1e-8 * diag
+
+
+@pytest.mark.skipif(not linsolve.pardiso_available(), reason="MKL PARDISO (pypardiso) is not installed")
+def test_a_pardiso_optimisation_is_bitwise_the_same_whatever_threads_mkl_may_use(tmp_path):
+    """PARDISO's factor depends on how many threads reduce it, and MKL picks that by the machine's load: two
+    builds of one design on a busy machine differed by 1e-10 mm.  The optimiser keeps MKL on one thread, so the
+    same optimisation (the real DOS enneper2 made PP, 6 steps) in fresh processes told to use 1, 2 or (unset)
+    any number of threads gives the same bytes; without it the 1- and 2-thread runs differ."""
+    import os
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    code = ("import hashlib, numpy as np\n"
+            "from ppfab.io import load_mesh\nfrom ppfab.optimize import optimize\n"
+            f"m = load_mesh({str(shared_file('DOS__enneper2.obj'))!r})\n"
+            "r = optimize(m, families='both', linear_solver='pardiso', max_iterations=6)\n"
+            "print(hashlib.sha256(np.ascontiguousarray(r.mesh.vertices).tobytes()).hexdigest())\n")
+    digests = set()
+    for threads in (None, "1", "2"):
+        env = {k: v for k, v in os.environ.items() if k not in ("MKL_NUM_THREADS", "OMP_NUM_THREADS")}
+        if threads:
+            env["MKL_NUM_THREADS"] = threads
+        run = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        digests.add(run.stdout.strip().splitlines()[-1])
+    assert len(digests) == 1

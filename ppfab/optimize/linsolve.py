@@ -109,7 +109,22 @@ def _thread_pardiso() -> Any:
         from pypardiso import PyPardisoSolver
 
         solver = _LOCAL.pardiso = PyPardisoSolver(mtype=2)
+        _one_mkl_thread(solver.libmkl)
     return solver
+
+
+def _one_mkl_thread(libmkl: Any) -> None:
+    """MKL on one thread in this thread (``mkl_set_num_threads_local``): PARDISO's factor depends on how many
+    threads reduce it, and MKL picks that count by the machine's load (``MKL_DYNAMIC``), so an optimised mesh
+    differed by 1e-10 mm between two builds of one design on a busy machine.  On one thread every build of a
+    design is byte-identical, on any machine; the optimiser's benchmarks count CPU time, which one thread does
+    not raise."""
+    import ctypes
+
+    fn = getattr(libmkl, "MKL_Set_Num_Threads_Local", None) or getattr(libmkl, "mkl_set_num_threads_local", None)
+    if fn is not None:
+        fn.argtypes = [ctypes.c_int]
+        fn(1)
 
 
 class _PardisoFactor:
