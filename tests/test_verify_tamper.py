@@ -398,6 +398,7 @@ def test_checks_get_what_they_read_in_any_order_and_either_process(copy, monkeyp
     reverse = verify_mod.verify(copy, parallel=False)
     key = lambda v: sorted(str(f) for f in v.findings)            # noqa: E731 - the same findings, any order
     assert key(early_fork) == key(serial) == key(reverse)
+    assert [str(f) for f in early_fork.findings] == [str(f) for f in serial.findings]    # in REPORT_ORDER
     assert sorted(early_fork.checked) == sorted(serial.checked) == sorted(reverse.checked)
     by_code = lambda v: sorted((f.code, str(f)) for f in v.findings)   # noqa: E731
     assert by_code(reverse) == by_code(serial)

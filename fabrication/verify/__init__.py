@@ -6,10 +6,11 @@ none.  What a check reads that another check also needs (the manifest as checked
 node rows, the cutting-sheet outlines, the STEP solids, …) is a typed field of :class:`FolderData`, filled
 by the one check that reads that file (:data:`PRODUCERS`); a check asks for it through the
 :class:`Verification` property of the same name, which runs the producing check first when it has not run
-yet — so the checks have no order among themselves and each may run in either process.  The checks re-read
-files with the real readers: JSON, CSV, the OBJ reader of :mod:`ppfab.io`, ezdxf (with its auditor) for DXF;
-STEP with a text-level reader of its own and the CAD kernel on the product tree and one solid of each kind
-(every solid with ``kernel``, :mod:`._step_read`).  Adding a check is one new module.
+yet — so no check depends on another having run before it, and each may run in either process
+(:data:`REPORT_ORDER` is only the order findings are shown in).  The checks re-read files with the real
+readers: JSON, CSV, the OBJ reader of :mod:`ppfab.io`, ezdxf (with its auditor) for DXF; STEP with a
+text-level reader of its own and the CAD kernel on the product tree and one solid of each kind (every solid
+with ``kernel``, :mod:`._step_read`).  Adding a check is one new module.
 """
 
 from __future__ import annotations
@@ -256,17 +257,27 @@ def load_table() -> dict[str, Check]:
     return _TABLE.load()
 
 
+REPORT_ORDER: tuple[str, ...] = (
+    "manifest", "files", "mesh", "crease", "parts", "parts_json", "order", "nodes", "axes", "torsion", "welds",
+    "strip_cuts", "dxf", "types", "marking", "glass_order", "summary", "report", "splices", "dxf_legacy", "bolts",
+    "dxf_stock", "step", "splice_holes", "panels_step", "bite", "step_geometry", "clash", "glazing_step", "bevels",
+    "retention", "erection", "ifc", "placement", "rhino", "glb", "drawings")
+"""The order the checks run in here and report in: the folder, the mesh and its creases, the tables, the
+sheets, the STEP files, the exchange models, the drawings — what a reader should mend first comes first (the
+command prints the first findings).  Presentation only: a check not named here runs and reports after these,
+by name, and every check gets what it reads whatever the order (:meth:`Verification.after`)."""
+
 READ_FIRST: tuple[str, ...] = ("manifest", "mesh", "parts", "nodes", "dxf", "types")
-"""The checks that fill what most others read (:data:`PRODUCERS`), run first so that the second process
-(:data:`SECOND_PROCESS`) starts with it all read; a matter of time only — every check gets what it reads
-whenever it runs (:meth:`Verification.after`)."""
+"""The checks that fill what most others read (:data:`PRODUCERS`): the second process
+(:data:`SECOND_PROCESS`) starts once they have run here, so that it starts with it all read; a matter of time
+only."""
 
 
 def load_checks() -> list[Check]:
-    """Every check, in the order they run and report: :data:`READ_FIRST`, then the others by name."""
+    """Every check, in :data:`REPORT_ORDER` (then any other by name)."""
     table = load_table()
-    first = [table[n] for n in READ_FIRST if n in table]
-    return first + sorted((c for c in table.values() if c.name not in READ_FIRST), key=lambda c: c.name)
+    first = [table[n] for n in REPORT_ORDER if n in table]
+    return first + sorted((c for c in table.values() if c.name not in REPORT_ORDER), key=lambda c: c.name)
 
 
 SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "glazing_step", "ifc")
@@ -284,7 +295,7 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
 
     ``parallel`` (default: on with two cores and fork, :func:`fabrication.writers._parallel.parallel_enabled`)
     runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`READ_FIRST` have run; the
-    findings and the list of checks are assembled in :func:`load_checks` order, so the result equals a serial
+    findings and the list of checks are assembled in :data:`REPORT_ORDER`, so the result equals a serial
     run.  When the second process fails (a check raising, the process dying), its checks run again here, so an
     error is the check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files
     (:attr:`Verification.kernel`).  ``progress(done, total, what)`` is called as checks finish here (``what``:
