@@ -21,7 +21,7 @@ from fabrication.beams.torsion import TorsionError
 from fabrication.cli import main
 from fabrication.design import DEFAULT_DESIGN
 from fabrication.panels import PanelParams, make_panels
-from ppfab.errors import DesignError, FabricationError, MeshFileError
+from ppfab.errors import DesignError, MeshFileError
 from ppfab.geometry import build_geometry
 from ppfab.io import load_mesh, read_mesh, write_obj
 from ppfab.optimize import optimize
@@ -29,7 +29,7 @@ from ppfab.schema import parse_params
 from ppfab.support.params import BeamContext, SupportParams
 from ppfab.support.select import support_structure
 
-from conftest import FULL, REPO
+from conftest import FULL
 from test_real_supports import LOCAL, edges_of, torsion_mm
 
 FAST = "\n[nesting]\ntime_budget = 0.5\n[beam_nesting]\ntime_budget = 0.5\n"

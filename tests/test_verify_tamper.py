@@ -45,6 +45,16 @@ def cut_outline(folder, kind):
     return rel, doc, ent
 
 
+def shift_first_cut_point(folder, kind, dx):
+    """Move the first vertex of the first CUT outline of a glass or plate sheet by ``dx`` mm in x; the sheet file."""
+    rel, doc, ent = cut_outline(folder, kind)
+    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
+    pts[0] = (pts[0][0] + dx, pts[0][1])
+    ent.set_points(pts, format="xy")
+    doc.saveas(folder / rel)
+    return rel
+
+
 def part_of(ent):
     return next(v.split("=", 1)[1] for c, v in ent.get_xdata("PPFAB") if v.startswith("part_id="))
 
@@ -343,11 +353,7 @@ def test_verify_on_two_cores_finds_what_one_core_finds(copy):
     rows = read_rows(copy / "parts.csv")
     splice = next(r for r in rows if r["kind"] == "splice")
     write_rows(copy / "parts.csv", [r for r in rows if r["part_id"] != splice["part_id"]])
-    rel, doc, ent = cut_outline(copy, "beam")
-    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
-    pts[0] = (pts[0][0] + 3.0, pts[0][1])
-    ent.set_points(pts, format="xy")
-    doc.saveas(copy / rel)
+    rel = shift_first_cut_point(copy, "beam", 3.0)
     reseal(copy, "parts.csv", rel)
     one = verify_mod.verify(copy, parallel=False)
     two = verify_mod.verify(copy, parallel=True)
@@ -380,11 +386,7 @@ def test_checks_get_what_they_read_in_any_order_and_either_process(copy, monkeyp
     beam = next(r for r in rows if r["kind"] == "beam")
     beam["nest_tag"] = "X" + beam["nest_tag"]                    # parts.csv and the plate's sheet disagree
     write_rows(copy / "parts.csv", rows)
-    rel, doc, ent = cut_outline(copy, "glass")
-    pts = [(x, y) for x, y, *_ in ent.get_points("xyseb")]
-    pts[0] = (pts[0][0] + 3.0, pts[0][1])
-    ent.set_points(pts, format="xy")
-    doc.saveas(copy / rel)
+    rel = shift_first_cut_point(copy, "glass", 3.0)
     reseal(copy, "parts.csv", rel)
     serial = verify_mod.verify(copy, parallel=False)
     assert not serial.ok and {f.code for f in serial.findings} >= {"dxf"}

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Callable
 
 from ppfab.registry import Registry
 
-from .base import Files, Writer, listed_files
+from .base import Files, Writer, listed_files, run_writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
@@ -90,14 +90,7 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
         progress.watch(out)                       # the status counts the files written so far
         try:
             for k, w in enumerate(enabled):
-                progress.start(w.name)
-                progress.advance(k, None, f"file set {k + 1} of {len(enabled)}")
-                try:
-                    note = w.write(build, out, files)
-                except BaseException:
-                    progress.fail()
-                    raise
-                progress.done(note)
+                run_writer(w, build, out, files, progress, (k, len(enabled)))
         finally:
             progress.watch(None)
     check_declared(out, files, enabled)

@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
-from .base import Files, Writer
+from .base import Files, Writer, run_writer
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..progress import Progress
@@ -153,15 +153,7 @@ def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: 
             if not joined and w.name in READS_EVERY_FILE:
                 _join(build, out, progress, proc, side, files)
                 joined = True
-            progress.start(w.name)
-            i = main.index(w.name)
-            progress.advance(i, None, f"file set {i + 1} of {len(main)}")
-            try:
-                note = w.write(build, out, files)
-            except BaseException:
-                progress.fail()
-                raise
-            progress.done(note)
+            run_writer(w, build, out, files, progress, (main.index(w.name), len(main)))
         if not joined:
             _join(build, out, progress, proc, side, files)
     finally:
@@ -180,10 +172,4 @@ def _join(build: "BuildRecord", out: Path, progress: "Progress", proc: Forked, s
             progress.done(note)
         return
     for w in side:                              # again here: the writer's own exception, or success
-        progress.start(w.name)
-        try:
-            note = w.write(build, out, files)
-        except BaseException:
-            progress.fail()
-            raise
-        progress.done(note)
+        run_writer(w, build, out, files, progress)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Callable
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import Design
+    from ..progress import Progress
     from ..records import BuildRecord
 
 Files = dict[str, "str | list[str]"]
@@ -38,3 +39,18 @@ class Writer:
     declare: Callable[["BuildRecord"], Files] = lambda build: {}
 
 
+
+
+def run_writer(w: Writer, build: "BuildRecord", out: Path, files: Files, progress: "Progress",
+               place: tuple[int, int] | None = None) -> None:
+    """Run one writer as a stage of the progress display (``place``: its index and the count of file sets, shown
+    as "file set k of n"); a failure marks the stage failed and propagates."""
+    progress.start(w.name)
+    if place is not None:
+        progress.advance(place[0], None, f"file set {place[0] + 1} of {place[1]}")
+    try:
+        note = w.write(build, out, files)
+    except BaseException:
+        progress.fail()
+        raise
+    progress.done(note)
