@@ -178,16 +178,20 @@ class Progress:
             self.times[self._stage] = self.times.get(self._stage, 0.0) + dt
             self._event("done", *self._counts, text=summary)
             if not self.quiet:
-                tail = f" {summary}" if summary else ""
-                if self._bar is not None:
-                    self._close_bar()
-                    print(f"{self._line}{tail} ({dt:.1f} s)", file=self.stream, flush=True)
-                else:
-                    self._clear_status()
-                    head = "" if self.tty or self._midline else self._line
-                    print(f"{head}{tail} ({dt:.1f} s)", file=self.stream, flush=True)
-                    self._midline = False
+                self._last_line((f" {summary}" if summary else "") + f" ({dt:.1f} s)")
             self._stage, self._line = "", ""
+
+    def _last_line(self, tail: str) -> None:
+        """Print the stage's last line: its header (unless a terminal's status line or a line already begun
+        shows it) followed by ``tail``; the bar or status line is closed first.  Called under the lock."""
+        if self._bar is not None:
+            self._close_bar()
+            print(f"{self._line}{tail}", file=self.stream, flush=True)
+        else:
+            self._clear_status()
+            head = "" if self.tty or self._midline else self._line
+            print(f"{head}{tail}", file=self.stream, flush=True)
+            self._midline = False
 
     def fail(self) -> None:
         with self._lock:
@@ -195,14 +199,7 @@ class Progress:
             if self._stage:
                 self._event("fail", *self._counts)
             if not self.quiet and self._stage:
-                if self._bar is not None:
-                    self._close_bar()
-                    print(f"{self._line} failed", file=self.stream, flush=True)
-                else:
-                    self._clear_status()
-                    head = "" if self.tty or self._midline else self._line
-                    print(f"{head} failed", file=self.stream, flush=True)
-                    self._midline = False
+                self._last_line(" failed")
             self._stage, self._line = "", ""
 
     def clear(self) -> None:

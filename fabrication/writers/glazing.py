@@ -210,7 +210,7 @@ def glazing_files(build: "BuildRecord") -> Files:
     return files
 
 
-def write_splice_dxfs(glazing, folder: Path) -> list[str]:
+def write_splice_dxfs(glazing, folder: Path) -> None:
     """One flat DXF per cover plate type: outline and bolt holes on ``CUT`` (XDATA ``part_id`` = type,
     ``quantity``, ``material``, ``thickness_mm``), the type id on ``LABEL`` and a title under the plate naming
     the material and thickness (also the header custom properties ``PPFAB_MATERIAL``, ``PPFAB_THICKNESS_MM``).
@@ -223,7 +223,6 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
 
     first, count = _splice_type_firsts(glazing)
     folder.mkdir(parents=True, exist_ok=True)
-    names = []
     for t, s in first.items():
         with _fixed_metadata():                 # ezdxf stamps the creation time into a new document
             doc = _new_doc()
@@ -245,8 +244,6 @@ def write_splice_dxfs(glazing, folder: Path) -> list[str]:
                   height=min(10.0, 0.05 * h), insert=(0.0, -15.0))
         name = f"{SPLICE_DIR}/{t}.dxf"
         save_doc(doc, folder.parent / name)
-        names.append(name)
-    return names
 
 
 SPLICE_LABEL_MARGIN, SPLICE_LABEL_MIN, SPLICE_LABEL_MAX = 3.0, 3.0, 20.0
