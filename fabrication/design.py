@@ -75,6 +75,25 @@ class OutputSection:
     glb: bool = param(True, doc="write model.glb (glTF binary for viewing; node names are the part ids)")
     paper: str = param("A1", doc="paper size of the drawings in drawings/ (frame, title block, standard scale)",
                        choices=("A1", "A3"))
+    classification: dict = param({}, doc="classification of the parts in model.ifc ([output.classification]): "
+                                         "system (e.g. \"Uniclass 2015\"), optional edition and source, and a code "
+                                         "per part kind (panel, beam, strip, splice, setting_block, …), e.g. "
+                                         "panel = \"Pr_xx_xx_xx Glass panes\": the code, then an optional title")
+
+    def __post_init__(self):
+        from .contract import PART_KINDS
+
+        c = self.classification
+        for key, value in c.items():
+            where = f"output.classification.{key}"
+            if key not in ("system", "edition", "source") and key not in PART_KINDS:
+                raise DesignError(where, f"is neither system, edition, source nor a part kind "
+                                         f"({', '.join(PART_KINDS)}): remove it or name a part kind")
+            if not isinstance(value, str) or not value.strip():
+                raise DesignError(where, "must be a non-empty string (a code, then an optional title)")
+        if any(k in PART_KINDS for k in c) and "system" not in c:
+            raise DesignError("output.classification.system", "missing: name the classification system the codes "
+                                                              "belong to, e.g. system = \"Uniclass 2015\"")
 
 
 def _section_types() -> dict[str, Callable[[], type]]:

@@ -155,7 +155,10 @@ def test_verify_names_a_face_of_a_bevelled_plate_moved_in_the_ifc(built, tmp_pat
     f = ifcopenshell.open(str(out / "model.ifc"))
     pid = _bevelled(built)[0]["plate"]
     member = next(m for m in f.by_type("IfcMember") if m.Name == pid)
-    brep = next(it for r in member.Representation.Representations for it in r.Items if it.is_a("IfcFacetedBrep"))
+    from ifcopenshell.util.representation import resolve_representation
+
+    brep = next(it for r in member.Representation.Representations for it in resolve_representation(r).Items
+                if it.is_a("IfcFacetedBrep"))
     top = max(brep.Outer.CfsFaces, key=lambda face: face.Bounds[0].Bound.Polygon[0].Coordinates[2])
     point = top.Bounds[0].Bound.Polygon[0]
     x, y, z = point.Coordinates

@@ -159,13 +159,16 @@ def _faces_differ(row: dict[str, str], bottom: np.ndarray, top: np.ndarray, eps:
 
 def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, volume: float,
                      eps: float = 1e-6, volume_tol: float = 1e-6, ring: np.ndarray | None = None,
-                     holes: bool = False, top_ring: np.ndarray | None = None) -> None:
+                     holes: bool = False, top_ring: np.ndarray | None = None,
+                     outline_eps: float | None = None) -> None:
     """The placement and volume of one part's solid (vertices ``points (n, 3)`` mm, ``volume`` mm³; with
     ``ring``, its base polygon, also where it lies in its plane; with ``holes``, the solid has the bolt holes
     ``parts.csv`` lists (``holes`` × ``hole_mm``), so its volume is the area less theirs times the thickness).
 
     ``top_ring`` (a beam plate whose top face is not its base, bevelled under its strips): the union of the two
-    rings is the outline placed, and the volume is ``t`` times their mean area less the holes, within 1e-4."""
+    rings is the outline placed, and the volume is ``t`` times their mean area less the holes, within 1e-4.
+    ``outline_eps`` (a pane drawn as its type's outline): how far the base polygon may lie from its own face's.
+    """
     pid = row["part_id"]
     mean_area = None
     if ring is not None and top_ring is not None and row["kind"] == "beam" and _faces_differ(row, ring, top_ring,
@@ -179,7 +182,7 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
     # of eps: a few eps off (a bevelled plate of the Enneper roof in model.3dm, 1.13e-3 mm at eps 0.9e-3)
     place_eps = 4.0 * eps if mean_area is not None else eps
     if ring is not None:
-        check_outline_place(v, rel, row, ring, max(place_eps, 1e-4))
+        check_outline_place(v, rel, row, ring, max(place_eps, 1e-4) if outline_eps is None else outline_eps)
     fab = v.manifest.get("fabrication", {})
     t = float(row.get("thickness_mm") or 0.0)
     area = float(row.get("area_mm2") or 0.0) if mean_area is None else mean_area

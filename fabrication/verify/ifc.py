@@ -12,6 +12,60 @@ from ppfab.metrics import polygon_area
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
 from ._solids import check_screw_points, check_names, check_part_solid, same_value
+from ._tolerance import type_tolerance
+
+
+def body_items(product) -> list[tuple[Any, np.ndarray]]:
+    """The solids of a product's body, each with the ``(4, 4)`` matrix from its coordinates to the world (mm):
+    its own items under its placement, or the items of the type's shape an ``IfcMappedItem`` places (the
+    placement times the mapping's operator and origin)."""
+    import ifcopenshell.util.placement as up
+
+    rep = product.Representation
+    if rep is None:
+        return []
+    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
+    out = []
+    for r in rep.Representations:
+        for it in r.Items:
+            if it.is_a("IfcMappedItem"):
+                t = m @ np.asarray(up.get_mappeditem_transformation(it), dtype=float)
+                out += [(sub, t) for sub in it.MappingSource.MappedRepresentation.Items]
+            else:
+                out.append((it, m))
+    return out
+
+
+def mapping_problem(product) -> str | None:
+    """What is wrong with how a product maps its type's shape, ``None`` when nothing is (or it has its own body):
+    the shape must be one of its type's ``RepresentationMaps`` and the operator a rigid motion (orthonormal
+    axes, right-handed, scale 1).  Where the moved shape lies is judged like any body (a pane's outline to its
+    type tolerance: the glass is cut to its type's outline)."""
+    import ifcopenshell.util.element as ue
+
+    rep = product.Representation
+    items = [it for r in (rep.Representations if rep else ()) for it in r.Items if it.is_a("IfcMappedItem")]
+    if not items:
+        return None
+    t = ue.get_type(product)
+    maps = list(t.RepresentationMaps or ()) if t is not None else []
+    for it in items:
+        if it.MappingSource not in maps:
+            return "maps a shape that is not its type's"
+        op = it.MappingTarget
+        if op.Scale not in (None, 1.0) or op.is_a("IfcCartesianTransformationOperator3DnonUniform"):
+            return f"maps its type's shape at scale {op.Scale}"
+        axes = np.array([np.asarray(a.DirectionRatios, dtype=float) if a is not None else e
+                         for a, e in zip((op.Axis1, op.Axis2, op.Axis3), np.eye(3))])
+        if np.abs(axes @ axes.T - np.eye(3)).max() > 1e-9 or np.linalg.det(axes) < 0:
+            return "maps its type's shape by an operator that is not a rotation (mirrored, skewed or scaled)"
+    return None
+
+
+def is_mapped(product) -> bool:
+    """Whether the product's body is its type's shape placed by an ``IfcMappedItem``."""
+    rep = product.Representation
+    return any(it.is_a("IfcMappedItem") for r in (rep.Representations if rep else ()) for it in r.Items)
 
 
 def extruded_prism(product) -> tuple[np.ndarray, float] | None:
@@ -19,20 +73,16 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
     ``IfcArbitraryClosedProfileDef`` of an ``IfcPolyline``, from its placement — exact, no tessellation."""
     import ifcopenshell.util.placement as up
 
-    rep = product.Representation
-    if rep is None:
-        return None
-    solids = [it for r in rep.Representations for it in r.Items if it.is_a("IfcExtrudedAreaSolid")]
+    solids = [(it, m) for it, m in body_items(product) if it.is_a("IfcExtrudedAreaSolid")]
     if len(solids) != 1:
         return None
-    s = solids[0]
+    s, m = solids[0]
     curve = s.SweptArea.OuterCurve if s.SweptArea.is_a("IfcArbitraryClosedProfileDef") else None
     if curve is None or not curve.is_a("IfcPolyline"):
         return None
     q = np.array([p.Coordinates for p in curve.Points], dtype=float)
     if len(q) > 1 and np.allclose(q[0], q[-1]):
         q = q[:-1]
-    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
     pos = np.asarray(up.get_axis2placement(s.Position), dtype=float)
     direction = np.asarray(s.ExtrudedDirection.DirectionRatios, dtype=float)
     direction = direction / np.linalg.norm(direction)
@@ -55,17 +105,12 @@ def faceted_plate(product) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] |
     world), its volume (mm³, the divergence theorem over its faces: each face's vector area from its loops, the
     inner bounds running against the outer), and the outer rings of its two largest faces (the plate's faces,
     world); ``None`` for any other body."""
-    import ifcopenshell.util.placement as up
-
-    rep = product.Representation
-    if rep is None:
-        return None
-    breps = [it for r in rep.Representations for it in r.Items if it.is_a("IfcFacetedBrep")]
+    breps = [(it, m) for it, m in body_items(product) if it.is_a("IfcFacetedBrep")]
     if len(breps) != 1:
         return None
-    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
+    brep, m = breps[0]
     faces: list[list[np.ndarray]] = []
-    for face in breps[0].Outer.CfsFaces:
+    for face in brep.Outer.CfsFaces:
         loops = []
         for bound in face.Bounds:
             if not bound.Bound.is_a("IfcPolyLoop"):
@@ -95,13 +140,9 @@ def circle_items(product, sides: int = 16) -> np.ndarray:
     ``IfcCircleProfileDef`` in the product's body (the screws of a plate), from its placement."""
     import ifcopenshell.util.placement as up
 
-    rep = product.Representation
-    if rep is None:
-        return np.zeros((0, 3))
-    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
     t = 2.0 * np.pi * np.arange(sides) / sides
     out = []
-    for s in (it for r in rep.Representations for it in r.Items if it.is_a("IfcExtrudedAreaSolid")):
+    for s, m in ((it, m) for it, m in body_items(product) if it.is_a("IfcExtrudedAreaSolid")):
         if not s.SweptArea.is_a("IfcCircleProfileDef"):
             continue
         r = float(s.SweptArea.Radius)
@@ -168,6 +209,10 @@ def check_ifc(v: Verification) -> None:
         if ue.get_container(p) is None:
             v.error(rel, p.Name, "is not in the spatial structure (site, building, storey)")
         _check_material_and_type(v, rel, p, row)
+        problem = mapping_problem(p)
+        if problem is not None:
+            v.error(rel, p.Name, problem)
+            continue
         if row["kind"] == "screw":
             check_screw_points(v, rel, row, circle_items(p))
             continue
@@ -180,7 +225,11 @@ def check_ifc(v: Verification) -> None:
         if prism is None:
             v.error(rel, p.Name, "has no single extruded solid of a polyline profile")
             continue
-        check_part_solid(v, rel, row, prism[0], prism[1], ring=prism[0][:len(prism[0]) // 2], holes=True)
+        # a pane drawn as its type's shape is that outline as cut: within the type tolerance of its own face
+        outline_eps = type_tolerance(v.manifest.get("fabrication", {})) + 1e-4 \
+            if row["kind"] == "panel" and is_mapped(p) else None
+        check_part_solid(v, rel, row, prism[0], prism[1], ring=prism[0][:len(prism[0]) // 2], holes=True,
+                         outline_eps=outline_eps)
     names = [m.Name for m in f.by_type("IfcMaterial")]
     for name in sorted({n for n in names if names.count(n) > 1}):
         v.error(rel, f"IfcMaterial {name}", f"defined {names.count(name)} times (one shared material per name)")

@@ -35,6 +35,7 @@ ifcopenshell is imported inside the functions.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -45,11 +46,35 @@ from ppfab import __version__
 from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
 from . import Files, writer
 from ._elements import Element, elements, object_uuid, part_material
+from .ifc_types import MAP_TOLERANCE_MM, Motion, fit_motion, mappable, type_key
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
+CLASSIFICATION_KEYS = ("system", "edition", "source")
+"""The keys of ``[output.classification]`` that describe the system; every other key is a part kind."""
+
+
+@dataclass
+class _Type:
+    """One IFC element type being filled: its class and predefined type, the part kind, its occurrences, the
+    part whose body is its shape and that shape's ``IfcRepresentationMap``, how many occurrences keep their own
+    body, and the largest distance of a mapped shape from an occurrence's own outline (mm)."""
+
+    cls: str
+    predefined: str
+    kind: str
+    members: list[Any] = field(default_factory=list)
+    shape: Element | None = None
+    map: Any = None
+    own: int = 0
+    largest_error: float = 0.0
+
+
+def _clean(v: np.ndarray) -> tuple[float, ...]:
+    """A direction or point with its round-off zeros made exact zeros (``-0.0`` and 1e-17 are not written)."""
+    return tuple(0.0 if abs(float(x)) < 1e-12 else float(x) for x in v)
 
 
 def ifc_guid(design: str, key: str) -> str:
@@ -114,7 +139,11 @@ class IfcModel:
         self._assemblies: dict[str, tuple[Any, list[Any]]] = {}
         self._materials: dict[str, Any] = {}
         self._associations: dict[str, tuple[Any, list[Any]]] = {}
-        self._types: dict[tuple[str, str], tuple[str, list[Any]]] = {}
+        self._types: dict[tuple[str, str], _Type] = {}
+        self._typed: set[tuple[str, str]] = set()
+        self.pane_tolerance = 0.0
+        self.classification: dict[str, str] = {}
+        self._references: dict[str, tuple[Any, list[Any]]] = {}
         self._styles: dict[str, Any] = {}
         self._profiles: dict[str, Any] = {}
 
@@ -169,18 +198,72 @@ class IfcModel:
         return f.create_entity("IfcLabel", value)
 
     # -- elements ------------------------------------------------------------------------------------
+    def plan_types(self, els: list[Element]) -> None:
+        """Decide which parts share a type (:func:`~fabrication.writers.ifc_types.type_key`: two or more parts of
+        one key, every panel type) before the first :meth:`add`, so that the first of each type holds its shape."""
+        count: dict[tuple[str, str], int] = {}
+        for el in els:
+            key = type_key(el)
+            if key is not None:
+                count[(el.kind, key)] = count.get((el.kind, key), 0) + 1
+        self._typed = {k for k, n in count.items() if n >= 2 or k[0] == "panel"}
+
     def add(self, el: Element, material: str, category: str | None) -> Any:
-        """One element: placement, extruded solid, style, property set, quantities, material, decomposition."""
-        f = self.f
+        """One element: placement, body (its own solid, or its type's shape moved onto it), style, property
+        sets, quantities, material, type and decomposition."""
         fr = el.frame
         parent = self.roof.ObjectPlacement
         if el.kind == "beam" and el.group:
             parent = self._assembly(el).ObjectPlacement
         placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
+        key = type_key(el)
+        group = self._type_of(el, key) if key is not None and (el.kind, key) in self._typed else None
+        mapped = self._mapped_body(el, group) if group is not None and mappable(el) else None
+        if mapped is not None:
+            items, representation, extra = [mapped], "MappedRepresentation", self._fastener_size(el)
+        else:
+            items, representation, extra = self._own_body(el)
+        product = self._product(el, material, category, placement, items, representation, extra)
+        if group is not None:
+            group.members.append(product)
+        return product
+
+    def _own_body(self, el: Element) -> tuple[list[Any], str, dict[str, Any]]:
+        """The solids of ``el`` in its frame, their IFC representation type and extra product attributes."""
         if el.copies is not None:
-            return self._add_copies(el, material, category, placement)
+            return self._copy_items(el), "SweptSolid", self._fastener_size(el)
         if el.two_faces:
-            return self._add_brep(el, material, category, placement)
+            return [self._brep_item(el)], "Brep", {}
+        return [self._prism_item(el)], "SweptSolid", {}
+
+    def _mapped_body(self, el: Element, group: "_Type") -> Any | None:
+        """An ``IfcMappedItem`` of the type's shape placed on ``el`` (the type's first part gives the shape, its
+        ``IfcRepresentationMap``); ``None`` when the shape does not fit ``el`` (:data:`MAP_TOLERANCE_MM`, a pane
+        the type tolerance) — then ``el`` keeps its own body."""
+        f = self.f
+        if group.shape is None:
+            items, representation, _ = self._own_body(el)
+            rep = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
+                                  RepresentationType=representation, Items=items)
+            group.shape = el
+            group.map = f.create_entity("IfcRepresentationMap", MappingOrigin=self.origin, MappedRepresentation=rep)
+            motion: Motion | None = Motion(np.eye(3), np.zeros(3), 0.0)
+        else:
+            motion = fit_motion(group.shape, el)
+        limit = self.pane_tolerance + 1e-6 if el.kind == "panel" else MAP_TOLERANCE_MM
+        if motion is None or motion.error > limit:
+            group.own += 1
+            return None
+        group.largest_error = max(group.largest_error, motion.error)
+        r = motion.rotation
+        target = f.create_entity("IfcCartesianTransformationOperator3D", Axis1=self._dir(_clean(r[:, 0])),
+                                 Axis2=self._dir(_clean(r[:, 1])), LocalOrigin=self._point(_clean(motion.shift)),
+                                 Scale=1.0, Axis3=self._dir(_clean(r[:, 2])))
+        return f.create_entity("IfcMappedItem", MappingSource=group.map, MappingTarget=target)
+
+    def _prism_item(self, el: Element) -> Any:
+        """The extruded solid of a flat outline with its bolt holes as circular voids."""
+        f = self.f
         pts = [f.create_entity("IfcCartesianPoint", Coordinates=(float(x), float(y))) for x, y in el.outline]
         outer = f.create_entity("IfcPolyline", Points=pts + pts[:1])
         if len(el.holes):                        # bolt holes: circular voids of the profile
@@ -195,9 +278,9 @@ class IfcModel:
                                 Position=self._placement3d((0.0, 0.0, el.z0)),
                                 ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
         f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
-        return self._product(el, material, category, placement, [solid])
+        return solid
 
-    def _add_brep(self, el: Element, material: str, category: str | None, placement) -> Any:
+    def _brep_item(self, el: Element) -> Any:
         """A part whose two faces differ (a plate bevelled under its strips) as an ``IfcFacetedBrep`` in its frame:
         the bottom and top faces with the bolt holes as inner bounds (polygons of the hole's area,
         :meth:`Element.hole_rings`), a planar side face per outline edge and per hole edge — the faces of
@@ -228,9 +311,9 @@ class IfcModel:
             faces += [face([a[k], a[(k + 1) % m], b[(k + 1) % m], b[k]]) for k in range(m)]
         brep = f.create_entity("IfcFacetedBrep", Outer=f.create_entity("IfcClosedShell", CfsFaces=faces))
         f.create_entity("IfcStyledItem", Item=brep, Styles=[self._style(el.layer)])
-        return self._product(el, material, category, placement, [brep], representation="Brep")
+        return brep
 
-    def _add_copies(self, el: Element, material: str, category: str | None, placement) -> Any:
+    def _copy_items(self, el: Element) -> list[Any]:
         """An element of many equal round prisms (the screws of a plate): one shared ``IfcCircleProfileDef``
         and an ``IfcExtrudedAreaSolid`` per copy at its offset, all in the one product's representation."""
         f = self.f
@@ -245,9 +328,15 @@ class IfcModel:
                                     ExtrudedDirection=self._dir((0.0, 0.0, 1.0)), Depth=el.height)
             f.create_entity("IfcStyledItem", Item=solid, Styles=[self._style(el.layer)])
             solids.append(solid)
-        extra = {"NominalDiameter": 2.0 * radius, "NominalLength": float(el.height)} \
-            if IFC_CLASSES.get(el.kind, ("",))[0] == "IfcMechanicalFastener" else {}
-        return self._product(el, material, category, placement, solids, attributes=extra)
+        return solids
+
+    @staticmethod
+    def _fastener_size(el: Element) -> dict[str, Any]:
+        """``NominalDiameter`` and ``NominalLength`` of a mechanical fastener (the screws of a plate)."""
+        if el.copies is None or IFC_CLASSES.get(el.kind, ("",))[0] != "IfcMechanicalFastener":
+            return {}
+        radius = round(float(np.linalg.norm(np.asarray(el.outline, dtype=float), axis=1).max()), 6)
+        return {"NominalDiameter": 2.0 * radius, "NominalLength": float(el.height)}
 
     def _product(self, el: Element, material: str, category: str | None, placement, solids: list,
                  representation: str = "SweptSolid", attributes: dict[str, Any] | None = None) -> Any:
@@ -275,9 +364,7 @@ class IfcModel:
         self._quantities(el, product)
         self._associate(material, category, el, product)
         self._common_pset(el, product)
-        type_id = str(el.props.get("type_id", "") or "")
-        if type_id and el.kind in ("panel", "beam"):
-            self._type_of(el.kind, type_id, cls, predefined)[1].append(product)
+        self._classify(el.kind, product)
         if el.kind == "beam" and el.group:
             self._assemblies[el.group][1].append(product)
         else:
@@ -346,10 +433,46 @@ class IfcModel:
         f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/common/rel"),
                         RelatedObjects=[product], RelatingPropertyDefinition=pset)
 
-    def _type_of(self, kind: str, type_id: str, cls: str, predefined: str) -> tuple[str, list[Any]]:
-        """The members of a panel or plate type (one ``IfcPlateType`` / ``IfcMemberType`` per ``type_id``, made by
-        :meth:`write`: every panel type, the beam-plate types that repeat)."""
-        return self._types.setdefault((kind, type_id), (f"{cls}Type/{predefined}", []))
+    def _classify(self, kind: str, obj: Any) -> None:
+        """Note ``obj`` (a part or a type) for the classification reference of its kind, if the design gives one
+        (``[output.classification]``)."""
+        code = self.classification.get(kind)
+        if not code:
+            return
+        if kind not in self._references:
+            system = self._classification_system()
+            ident, _, title = code.partition(" ")
+            ref = self.f.create_entity("IfcClassificationReference", Identification=ident, Name=title or None,
+                                       ReferencedSource=system)
+            self._references[kind] = (ref, [])
+        self._references[kind][1].append(obj)
+
+    def _classification_system(self) -> Any:
+        if "system" not in self._references:
+            c = self.classification
+            system = self.f.create_entity("IfcClassification", Name=c["system"], Edition=c.get("edition") or None,
+                                          Source=c.get("source") or None)
+            self._references["system"] = (system, [])
+        return self._references["system"][0]
+
+    def _close_classification(self) -> None:
+        """The project declares the classification system; each kind's reference classifies its parts and types."""
+        if "system" not in self._references:
+            return
+        f = self.f
+        system = self._references["system"][0]
+        (project,) = f.by_type("IfcProject")
+        f.create_entity("IfcRelAssociatesClassification", GlobalId=self.guid("classification"),
+                        RelatedObjects=[project], RelatingClassification=system)
+        for kind, (ref, objects) in self._references.items():
+            if kind != "system":
+                f.create_entity("IfcRelAssociatesClassification", GlobalId=self.guid(f"classification/{kind}"),
+                                RelatedObjects=objects, RelatingClassification=ref)
+
+    def _type_of(self, el: Element, key: str) -> "_Type":
+        """The type ``key`` of ``el``'s kind (one ``IfcPlateType``, ``IfcMemberType``, … made by :meth:`write`)."""
+        cls, predefined = IFC_CLASSES.get(el.kind, ("IfcMember", "USERDEFINED"))
+        return self._types.setdefault((el.kind, key), _Type(f"{cls}Type", predefined, el.kind))
 
     def _quantities(self, el: Element, product) -> None:
         f = self.f
@@ -396,14 +519,15 @@ class IfcModel:
         for name, (material, products) in self._associations.items():
             f.create_entity("IfcRelAssociatesMaterial", GlobalId=self.guid(f"material/{name}"),
                             RelatedObjects=products, RelatingMaterial=material)
-        for (kind, type_id), (spec, products) in self._types.items():
-            if kind != "panel" and len(products) < 2:
-                continue                                   # a plate of its own: no type to share
-            cls, predefined = spec.split("/")
-            t = f.create_entity(cls, GlobalId=self.guid(f"type/{kind}/{type_id}"), Name=type_id,
-                                PredefinedType=predefined)
-            f.create_entity("IfcRelDefinesByType", GlobalId=self.guid(f"type/{kind}/{type_id}/rel"),
-                            RelatedObjects=products, RelatingType=t)
+        for (kind, name), group in self._types.items():
+            extra = {"ElementType": kind} if group.predefined == "USERDEFINED" else {}
+            t = f.create_entity(group.cls, GlobalId=self.guid(f"type/{kind}/{name}"), Name=name,
+                                PredefinedType=group.predefined,
+                                RepresentationMaps=[group.map] if group.map is not None else None, **extra)
+            f.create_entity("IfcRelDefinesByType", GlobalId=self.guid(f"type/{kind}/{name}/rel"),
+                            RelatedObjects=group.members, RelatingType=t)
+            self._classify(kind, t)
+        self._close_classification()
         f.write(str(path))
         return path
 
@@ -427,7 +551,11 @@ def ifc_model(build: "BuildRecord", files: Files) -> IfcModel:
     plates with the materials of their ``parts.csv`` rows)."""
     design = build.design
     model = IfcModel(design.info.name, design.info.description)
-    for el in elements(build):
+    model.pane_tolerance = float(design.panels.type_tol)
+    model.classification = dict(design.output.classification)
+    els = elements(build)
+    model.plan_types(els)
+    for el in els:
         try:
             if el.kind == "panel":
                 model.add(el, design.panels.makeup, "glass")
@@ -451,4 +579,7 @@ def write_ifc(build: "BuildRecord", out: Path, files: Files) -> str:
     plates = len(model.f.by_type("IfcPlate"))
     members = len(model.f.by_type("IfcMember"))
     analysis = len(model.f.by_type("IfcStructuralCurveMember"))
-    return f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember, analysis model of {analysis} members"
+    types = len(model.f.by_type("IfcElementType"))
+    mapped = len(model.f.by_type("IfcMappedItem"))
+    return (f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember, {types} types ({mapped} parts drawn as their "
+            f"type's shape), analysis model of {analysis} members")

@@ -1,0 +1,147 @@
+"""Element types of ``model.ifc`` and their shared shapes: which parts are one type, and the rigid motion that
+places a type's shape on each of its occurrences.
+
+A BIM tool counts, schedules and draws a type once (``IfcPlateType``, ``IfcMemberType``, …) and places its shape
+(an ``IfcRepresentationMap``) on every occurrence by an ``IfcMappedItem``.  Which parts share a type
+(:func:`type_key`):
+
+* a glass pane: its panel type (``type_id``; every pane is typed).  The glass is cut to the outline of the
+  type's first pane (:func:`fabrication.panels.panel.type_flat_parts`), so the type's shape *is* the pane as
+  built: each occurrence maps it, placed by the motion that fits it best onto the pane's own outline — within
+  the type tolerance (``[panels] type_tolerance``) of the face, by the definition of a type;
+* a beam plate or splice cover plate: its ``type_id`` (congruent plates; cover plates of one size and skew);
+* a glazing strip or retention box: its kind and its size to 0.001 mm (``strip 1234.5 x 60 x 8``);
+* the screws of a plate: their diameter and length (the type of the fastener; each occurrence keeps its own
+  row of screws).
+
+A type is written when two or more parts share it (every panel type is).  Every occurrence other than a pane
+maps its type's shape only where that shape lies within :data:`MAP_TOLERANCE_MM` of its own body after the
+motion (plates that are mirror images in a symmetric roof); the others keep their own body and are still typed.
+
+A motion (:class:`Motion`) acts in the occurrence's own frame (its ``Element.frame``): a rotation about the
+frame's normal and a shift in its plane — or, where only the mirror image fits (a plate turned over), that
+rotation after a reflection ``x ↦ −x``, turned over in 3D as ``z ↦ 2 z0 + h − z`` so that the solid keeps its
+place ``z0 … z0 + h`` along the normal and the motion is proper (no mirroring operator for viewers to honour).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._elements import Element
+
+MAP_TOLERANCE_MM = 1e-5
+"""Largest corner distance (mm) at which a part other than a pane is drawn as its type's shape moved onto it:
+below the 1e-4 mm to which ``ppfab verify`` places every solid, so a mapped plate is the plate."""
+
+
+@dataclass(frozen=True)
+class Motion:
+    """``x ↦ R x + t`` in an element's frame (mm): ``rotation (3, 3)`` proper, ``shift (3,)``; ``error`` the
+    largest corner distance of the moved shape from the element's own outline (mm)."""
+
+    rotation: np.ndarray
+    shift: np.ndarray
+    error: float
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """``(n, 3)`` points moved."""
+        return np.asarray(points, dtype=float) @ self.rotation.T + self.shift
+
+
+def type_key(el: Element) -> str | None:
+    """The name of the IFC type ``el`` belongs to, ``None`` for a part typed by nothing.
+
+    >>> import numpy as np
+    >>> from ppfab.frame import Frame
+    >>> box = np.array([[0.0, 0.0], [1234.5, 0.0], [1234.5, 60.0], [0.0, 60.0]])
+    >>> f = Frame(np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+    >>> type_key(Element("S-1", "strip", "rows", "", box, f, 0.0, 8.0))
+    'strip 1234.5 x 60 x 8'
+    """
+    type_id = str(el.props.get("type_id", "") or "")
+    if type_id:
+        return type_id
+    if el.kind == "screw":
+        d = 2.0 * float(np.linalg.norm(np.asarray(el.outline, dtype=float), axis=1).max())
+        return f"screw {_mm(d)} x {_mm(el.height)}"
+    if el.kind in ("strip",) or el.kind in _BOX_KINDS:
+        size = np.ptp(np.asarray(el.outline, dtype=float), axis=0)
+        return f"{el.kind} {_mm(max(size))} x {_mm(min(size))} x {_mm(el.height)}"
+    return None
+
+
+_BOX_KINDS = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "cover_cap")
+
+
+def _mm(x: float) -> str:
+    return f"{round(float(x), 3):g}"
+
+
+def mappable(el: Element) -> bool:
+    """Whether ``el``'s body can be its type's shape moved: one prism, or two faces (a bevelled plate) — not the
+    row of screws of a plate (their count and places differ between plates)."""
+    return el.copies is None
+
+
+def fit_motion(shape: Element, el: Element) -> Motion | None:
+    """The proper rigid motion in ``el``'s frame that puts ``shape``'s body (outline, holes, top face, extruded
+    from its ``z0`` by its height) best onto ``el``'s: over every way the corners can correspond (where the
+    outline starts; reversed under a reflection, which turns the solid over), the 2D Procrustes fit of the
+    corners, judged by the largest corner distance.  ``None`` when the two bodies cannot be one shape (other
+    corner counts, heights, holes, or an error that the holes or top face make larger than the outline's).
+    """
+    a = np.asarray(shape.outline, dtype=float)
+    b = np.asarray(el.outline, dtype=float)
+    if a.shape != b.shape or abs(shape.height - el.height) > 1e-9 or len(shape.holes) != len(el.holes) \
+            or shape.two_faces != el.two_faces:
+        return None
+    best: tuple[float, np.ndarray, np.ndarray, bool, int] | None = None
+    k = len(a)
+    for flip in (False, True):
+        if flip and shape.two_faces:                    # the faces would swap: no turned-over bevelled plate
+            continue
+        src = a * np.array([-1.0, 1.0]) if flip else a
+        src = src[::-1] if flip else src
+        for s in range(k):
+            p = np.roll(src, -s, axis=0)
+            rot, shift = _procrustes(p, b)
+            err = float(np.linalg.norm(p @ rot.T + shift - b, axis=1).max())
+            if best is None or err < best[0] - 1e-12:
+                best = (err, rot, shift, flip, s)
+    if best is None:
+        return None
+    err, rot2, shift2, flip, s = best
+    mirror = np.diag([-1.0, 1.0]) if flip else np.eye(2)
+    lin = rot2 @ mirror                                   # the 2D map, det −1 when turned over
+    rotation = np.zeros((3, 3))
+    rotation[:2, :2] = lin
+    rotation[2, 2] = -1.0 if flip else 1.0
+    # z0 … z0 + h of the shape onto the element's: shifted, or turned over (z ↦ e0 + h + s0 − z)
+    dz = el.z0 + shape.z0 + shape.height if flip else el.z0 - shape.z0
+    shift = np.array([shift2[0], shift2[1], dz])
+    motion = Motion(rotation, shift, err)
+    if len(el.holes):                                     # every hole onto one of the same diameter
+        h_src = np.asarray(shape.holes, dtype=float).reshape(-1, 3)
+        h_dst = np.asarray(el.holes, dtype=float).reshape(-1, 3)
+        moved = motion.apply(np.c_[h_src[:, :2], np.zeros(len(h_src))])[:, :2]
+        d = np.linalg.norm(moved[:, None, :] - h_dst[None, :, :2], axis=2)
+        d[np.abs(h_src[:, None, 2] - h_dst[None, :, 2]) > 1e-9] = np.inf
+        err = max(err, float(d.min(axis=1).max()), float(d.min(axis=0).max()))
+    if shape.two_faces:
+        top = np.roll(shape.top_outline(), -s, axis=0)
+        moved_top = top @ rot2.T + shift2
+        err = max(err, float(np.linalg.norm(moved_top - el.top_outline(), axis=1).max()))
+    return Motion(rotation, shift, err)
+
+
+def _procrustes(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rotation ``(2, 2)`` and shift ``(2,)`` minimising ``Σ |R p_i + t − q_i|²`` (2D Kabsch)."""
+    cp, cq = p.mean(axis=0), q.mean(axis=0)
+    h = (p - cp).T @ (q - cq)
+    theta = np.arctan2(h[0, 1] - h[1, 0], h[0, 0] + h[1, 1])
+    c, s = np.cos(theta), np.sin(theta)
+    rot = np.array([[c, -s], [s, c]])
+    return rot, cq - rot @ cp
