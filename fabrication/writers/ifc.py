@@ -22,8 +22,11 @@ It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.
 :data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
 ``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
 the project units), the standard property set ``Pset_PlateCommon`` / ``Pset_MemberCommon`` (Reference = type id,
-IsExternal, LoadBearing), its type (an ``IfcPlateType`` per panel type, an ``IfcMemberType`` per beam-plate type,
-``IfcRelDefinesByType``), its material — one ``IfcMaterial`` per material name, shared; a pane's make-up as an
+IsExternal, LoadBearing), its type (:mod:`fabrication.writers.ifc_types`: an ``IfcPlateType`` per panel type, an
+``IfcMemberType`` per repeated beam-plate, cover-plate or strip size, the retention types by size;
+``IfcRelDefinesByType``) whose shape, an ``IfcRepresentationMap``, the occurrence places by an ``IfcMappedItem``
+(a pane always — the glass is cut to its type's outline —, another part where that shape is its own), the
+classification reference of its kind when the design names one (``[output.classification]``), its material — one ``IfcMaterial`` per material name, shared; a pane's make-up as an
 ``IfcMaterialLayerSet`` of its plies and interlayers (``IfcMaterialLayerSetUsage`` along the pane's local z from
 its underside) — and a surface style of its family's colour (:data:`~fabrication.contract.COLOURS`).
 
