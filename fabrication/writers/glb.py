@@ -3,7 +3,10 @@
 
 One node per part, named by its part id, holding the closed triangle mesh of its prism
 (:meth:`fabrication.writers._elements.Element.prism_mesh`) with a material per layer: transparent glass and one
-colour per beam family (:data:`fabrication.contract.COLOURS`).  glTF's conventions hold: metres, +Y up, so a
+colour per beam family (:data:`fabrication.contract.COLOURS`).  A part whose prism is that of the first part of its
+type moved (:func:`fabrication.writers._instances.instances`: congruent within 1e-5 mm — the half-turn pairs of a
+symmetric roof, strips of one length, retention parts of one size) is a node that places that part's mesh by
+its transform (glTF mesh instancing): the mesh is stored once.  glTF's conventions hold: metres, +Y up, so a
 point ``(x, y, z)`` mm of the other files is ``(x, z, −y) / 1000`` here (a rotation, so the solids keep their
 orientation).  trimesh writes the file; it holds no time stamp.
 """
@@ -17,7 +20,8 @@ import numpy as np
 
 from ..contract import COLOURS, GLB_FILE
 from . import Files, writer
-from ._elements import elements
+from ._elements import Element, elements
+from ._instances import instances
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
@@ -37,7 +41,17 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
                                        layer == "glass" else 0.6, roughnessFactor=0.1 if layer == "glass" else 0.5,
                                        alphaMode="BLEND" if a < 1.0 else "OPAQUE", doubleSided=False)
     scene = trimesh.Scene()
-    for el in elements(build):
+    els = elements(build)
+    moved = instances(els)
+    centres: dict[str, np.ndarray] = {}
+    for el in els:
+        inst = moved.get(el.part_id)
+        if inst is not None:                 # the mesh of its type's first part, placed by the node's transform
+            shape = inst.shape
+            scene.graph.update(frame_to=el.part_id, frame_from=scene.graph.base_frame, geometry=shape.part_id,
+                               matrix=_instance_transform(shape, el, inst.motion.rotation, inst.motion.shift,
+                                                          centres[shape.part_id]))
+            continue
         try:
             v, f = el.prism_mesh()
         except Exception as exc:            # a degenerate outline: name the part and what is wrong with it
@@ -46,13 +60,29 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
             raise part_failure(el.part_id, el.outline, el.height, "the glTF mesh of its prism", exc) from None
         # glTF stores float32: vertices relative to the part's centre, placed by its node's translation, keep
         # a 12 mm plate 30 m from the origin exact to well below a micrometre (absolute coordinates would not)
-        c = v.mean(axis=0)
+        c = centres[el.part_id] = v.mean(axis=0)
         mesh = trimesh.Trimesh((v - c) @ MM_TO_GLTF.T, f, process=False)
         mesh.visual = trimesh.visual.TextureVisuals(material=materials[el.layer])
         place = np.eye(4)
         place[:3, 3] = MM_TO_GLTF @ c
         scene.add_geometry(mesh, node_name=el.part_id, geom_name=el.part_id, transform=place)
     return bytes(scene.export(file_type="glb"))
+
+
+def _instance_transform(shape: Element, el: Element, rotation: np.ndarray, shift: np.ndarray,
+                        centre: np.ndarray) -> np.ndarray:
+    """``(4, 4)`` the glTF node transform that puts ``shape``'s stored mesh (glTF coordinates about its centre
+    ``centre``, mm) where ``el`` is: back to ``shape``'s frame, the motion ``x ↦ R x + t`` in ``el``'s frame
+    (:class:`~fabrication.writers._instances.Motion`), out of ``el``'s frame, into glTF's metres, y up.  Its
+    linear part is a rotation (the two unit conversions cancel)."""
+    a_shape = np.column_stack([shape.frame.ex, shape.frame.ey, shape.frame.normal])
+    a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
+    world = a_el @ rotation @ a_shape.T                       # mm, world → world
+    to_mm = np.linalg.inv(MM_TO_GLTF)
+    out = np.eye(4)
+    out[:3, :3] = MM_TO_GLTF @ world @ to_mm
+    out[:3, 3] = MM_TO_GLTF @ (world @ (centre - shape.frame.origin) + a_el @ shift + el.frame.origin)
+    return out
 
 
 @writer("glb", order=70, declare=lambda build: {"glb": GLB_FILE}, enabled=lambda design: design.output.glb)

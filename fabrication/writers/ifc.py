@@ -22,7 +22,7 @@ It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.
 :data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
 ``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
 the project units), the standard property set ``Pset_PlateCommon`` / ``Pset_MemberCommon`` (Reference = type id,
-IsExternal, LoadBearing), its type (:mod:`fabrication.writers.ifc_types`: an ``IfcPlateType`` per panel type, an
+IsExternal, LoadBearing), its type (:mod:`fabrication.writers._instances`: an ``IfcPlateType`` per panel type, an
 ``IfcMemberType`` per repeated beam-plate, cover-plate or strip size, the retention types by size;
 ``IfcRelDefinesByType``) whose shape, an ``IfcRepresentationMap``, the occurrence places by an ``IfcMappedItem``
 (a pane always — the glass is cut to its type's outline —, another part where that shape is its own), the
@@ -49,7 +49,7 @@ from ppfab import __version__
 from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
 from . import Files, writer
 from ._elements import Element, elements, object_uuid, part_material
-from .ifc_types import MAP_TOLERANCE_MM, Motion, fit_motion, mappable, type_key
+from ._instances import MAP_TOLERANCE_MM, Motion, fit_motion, mappable, type_key
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
@@ -202,7 +202,7 @@ class IfcModel:
 
     # -- elements ------------------------------------------------------------------------------------
     def plan_types(self, els: list[Element]) -> None:
-        """Decide which parts share a type (:func:`~fabrication.writers.ifc_types.type_key`: two or more parts of
+        """Decide which parts share a type (:func:`~fabrication.writers._instances.type_key`: two or more parts of
         one key, every panel type) before the first :meth:`add`, so that the first of each type holds its shape."""
         count: dict[tuple[str, str], int] = {}
         for el in els:

@@ -1,5 +1,5 @@
-"""Element types of ``model.ifc`` and their shared shapes: which parts are one type, and the rigid motion that
-places a type's shape on each of its occurrences.
+"""Repeated parts: which parts are one type, and the rigid motion that places a type's shape on each of its
+occurrences — the element types of ``model.ifc`` and the instanced meshes of ``model.glb``.
 
 A BIM tool counts, schedules and draws a type once (``IfcPlateType``, ``IfcMemberType``, …) and places its shape
 (an ``IfcRepresentationMap``) on every occurrence by an ``IfcMappedItem``.  Which parts share a type
@@ -14,7 +14,7 @@ A BIM tool counts, schedules and draws a type once (``IfcPlateType``, ``IfcMembe
 * the screws of a plate: their diameter and length (the type of the fastener; each occurrence keeps its own
   row of screws).
 
-A type is written when two or more parts share it (every panel type is).  Every occurrence other than a pane
+In ``model.ifc`` a type is written when two or more parts share it (every panel type is).  Every occurrence other than a pane
 maps its type's shape only where that shape lies within :data:`MAP_TOLERANCE_MM` of its own body after the
 motion (plates that are mirror images in a symmetric roof); the others keep their own body and are still typed.
 
@@ -145,3 +145,31 @@ def _procrustes(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c, s = np.cos(theta), np.sin(theta)
     rot = np.array([[c, -s], [s, c]])
     return rot, cq - rot @ cp
+
+
+@dataclass(frozen=True)
+class Instance:
+    """A part drawn as another's body moved: ``shape`` (the first part of its type) placed by ``motion`` in the
+    part's own frame."""
+
+    shape: Element
+    motion: Motion
+
+
+def instances(els: list[Element], tolerance: float = MAP_TOLERANCE_MM) -> dict[str, Instance]:
+    """``part_id → Instance`` for every part whose body is the first of its type's (:func:`type_key`) moved within
+    ``tolerance`` mm (:func:`fit_motion`); the first parts themselves and the parts that fit no shape are left
+    out (they keep their own bodies)."""
+    first: dict[tuple[str, str], Element] = {}
+    out: dict[str, Instance] = {}
+    for el in els:
+        key = type_key(el)
+        if key is None or not mappable(el):
+            continue
+        shape = first.setdefault((el.kind, key), el)
+        if shape is el:
+            continue
+        motion = fit_motion(shape, el)
+        if motion is not None and motion.error <= tolerance:
+            out[el.part_id] = Instance(shape, motion)
+    return out

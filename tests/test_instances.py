@@ -1,9 +1,10 @@
-"""Element types in model.ifc: repeated parts are occurrences of one type whose shape (an IfcRepresentationMap)
-each maps by a rigid motion; the classification the design names.
+"""Repeated parts drawn once: element types in model.ifc (occurrences of one type whose shape, an
+IfcRepresentationMap, each maps by a rigid motion), instanced meshes in model.glb; the classification the design
+names.
 
 Built on the bundled default's roof at a third of its size (8 × 6 faces, the same half-turn symmetry: 48 panes
-in 24 congruent pairs), read with ifcopenshell and its geometry kernel, and compared with the glass as cut (the
-per-type DXF, ezdxf) and with the same parts in the STEP files (the CAD kernel's reader).
+in 24 congruent pairs), read with ifcopenshell and its geometry kernel and with trimesh, and compared with the
+glass as cut (the per-type DXF, ezdxf) and with the same parts in the STEP files (the CAD kernel's reader).
 """
 
 import csv
@@ -20,7 +21,7 @@ import pytest
 from fabrication.cli import main
 from fabrication.design import DEFAULT_DESIGN
 from fabrication.writers._elements import Element
-from fabrication.writers.ifc_types import fit_motion
+from fabrication.writers._instances import fit_motion
 from ppfab.frame import Frame
 
 from conftest import small_design
@@ -29,7 +30,6 @@ CLASSIFICATION = """
 [output]
 report = false
 rhino = false
-glb = false
 [output.classification]
 system = "Uniclass 2015"
 edition = "v1.30"
@@ -176,11 +176,7 @@ def test_a_mapped_pane_is_its_type_as_cut_on_its_own_face(built, ifc, parts):
 def test_mapped_strips_caps_and_cover_plates_are_where_the_step_files_put_them(built, ifc, parts):
     """Every mapped part other than a pane lies where glazing.step / splices.step have it (each IFC vertex within
     1e-4 mm of a STEP vertex and back): its type's shape moved onto it is its own body."""
-    from fabrication.verify._step_read import read_step_solids
-
-    step = {}
-    for name in ("glazing.step", "splices.step"):
-        step.update({s.name: np.array([tuple(p) for p in s.solid.vertices()]) for s in read_step_solids(built / name)})
+    step = step_vertices(built)
     world = world_vertices(ifc)
     seen = 0
     for e in ifc.by_type("IfcElement"):
@@ -196,6 +192,46 @@ def test_mapped_strips_caps_and_cover_plates_are_where_the_step_files_put_them(b
             assert max(d.min(axis=0).max(), d.min(axis=1).max()) <= 1e-4, (e.Name, d.min(axis=1).max())
         seen += 1
     assert seen > 100
+
+
+def step_vertices(built) -> dict[str, np.ndarray]:
+    """Part id → the vertices ``(n, 3)`` mm of its solid in panels.step, glazing.step and splices.step."""
+    from fabrication.verify._step_read import read_step_solids
+
+    out = {}
+    for name in ("panels.step", "glazing.step", "splices.step"):
+        out.update({s.name: np.array([tuple(p) for p in s.solid.vertices()]) for s in read_step_solids(built / name)})
+    return out
+
+
+def test_glb_stores_a_repeated_mesh_once_and_places_it_where_the_part_is(built, parts):
+    """model.glb has a node per part; a part congruent with the first of its type is a node holding that part's
+    mesh, placed by a rotation and shift: read with trimesh and taken back to mm, its corners are the part's
+    corners in the STEP files (float32 vertices: within 1e-3 mm; a cover plate, whose bolt holes are polygons
+    here, by the extremes of its outline)."""
+    import trimesh
+
+    from fabrication.writers.glb import MM_TO_GLTF
+
+    scene = trimesh.load(str(built / "model.glb"), force="scene", process=False)
+    nodes = list(scene.graph.nodes_geometry)
+    assert sorted(nodes) == sorted(parts)
+    shared = {n: scene.graph[n][1] for n in nodes if scene.graph[n][1] != n}
+    assert len(scene.geometry) == len(nodes) - len(shared) and len(shared) > len(nodes) // 3
+    assert {parts[n]["kind"] for n in shared} >= {"panel", "strip", "cover_cap", "splice"}
+    step = step_vertices(built)
+    back = np.linalg.inv(MM_TO_GLTF)
+    for n, geometry in shared.items():
+        transform = scene.graph[n][0]
+        assert np.linalg.det(transform[:3, :3]) == pytest.approx(1.0, abs=1e-9)
+        x = trimesh.transform_points(scene.geometry[geometry].vertices, transform) @ back.T
+        s = step[n]
+        if parts[n]["kind"] == "splice":           # bolt holes: 24-gons here, circles there
+            assert np.abs(x.min(axis=0) - s.min(axis=0)).max() <= 1e-3, n
+            assert np.abs(x.max(axis=0) - s.max(axis=0)).max() <= 1e-3, n
+            continue
+        d = np.linalg.norm(x[:, None, :] - s[None, :, :], axis=2)
+        assert max(d.min(axis=0).max(), d.min(axis=1).max()) <= 1e-3, (n, d.min(axis=1).max())
 
 
 def test_the_classification_reaches_the_parts_and_types_it_names(ifc, parts):
