@@ -75,6 +75,62 @@ def test_a_kept_pardiso_factor_preconditions_cg(system):
     assert np.linalg.norm(s2 @ x2 - rhs) <= 1e-9 * np.linalg.norm(rhs)
 
 
+def _upper(a: sparse.spmatrix) -> sparse.csr_matrix:
+    u = sparse.triu(a, format="csr")
+    u.sort_indices()
+    return u
+
+
+def test_a_pattern_pardiso_has_analysed_is_factorised_numerically_only(system):
+    """A second matrix of the same pattern is factorised without PARDISO's analysis (phase 22), a matrix of
+    another pattern with it (phase 12): each solve is its own system's (against numpy's dense solve), and the
+    numeric-only factor is bitwise the factor a fresh analysis gives."""
+    pytest.importorskip("pypardiso")
+    s, rhs, _ = system
+    solver = linsolve._thread_pardiso()
+    solver.ppfab_pattern = None
+    phases: list[int] = []
+    call = solver._call_pardiso
+
+    def spy(a, b):
+        phases.append(solver.phase)
+        return call(a, b)
+
+    solver._call_pardiso = spy
+    try:
+        linsolve._PardisoFactor(_upper(s), solver)
+        s2 = (s + 0.37 * sparse.diags(np.linspace(1.0, 2.0, s.shape[0]))).tocsr()       # same pattern
+        second = linsolve._PardisoFactor(_upper(s2), solver)
+        x2 = second.solve(rhs)
+        assert phases == [12, 22, 33]
+        assert np.linalg.norm(x2 - np.linalg.solve(s2.toarray(), rhs)) <= 1e-9 * np.linalg.norm(x2)
+        solver.ppfab_pattern = None                                   # forget the analysis: phase 12 again
+        fresh = linsolve._PardisoFactor(_upper(s2), solver).solve(rhs)
+        assert phases[-2:] == [12, 33] and np.array_equal(fresh, x2)
+        keep = s2.tolil()                                             # another pattern: one more entry
+        keep[0, s.shape[0] - 1] = keep[s.shape[0] - 1, 0] = 1e-3
+        s3 = keep.tocsr()
+        x3 = linsolve._PardisoFactor(_upper(s3), solver).solve(rhs)
+        assert phases[-2:] == [12, 33]
+        assert np.linalg.norm(x3 - np.linalg.solve(s3.toarray(), rhs)) <= 1e-9 * np.linalg.norm(x3)
+    finally:
+        del solver._call_pardiso
+
+
+def test_a_pardiso_factor_replaced_by_another_solve_in_the_thread_is_computed_again(system):
+    """Two factors kept in one thread (PARDISO holds one): solving with the older recomputes it, and each solve
+    is its own system's."""
+    pytest.importorskip("pypardiso")
+    s, rhs, _ = system
+    solver = linsolve._thread_pardiso()
+    a = linsolve._PardisoFactor(_upper(s), solver)
+    s2 = (s + 5.0 * sparse.identity(s.shape[0])).tocsr()
+    b = linsolve._PardisoFactor(_upper(s2), solver)
+    for f, m in ((a, s), (b, s2), (a, s)):
+        x = f.solve(rhs)
+        assert np.linalg.norm(m @ x - rhs) <= 1e-9 * np.linalg.norm(rhs)
+
+
 def test_a_pardiso_error_falls_back_to_superlu(system, monkeypatch):
     s, rhs, last = system
 
