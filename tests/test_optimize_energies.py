@@ -271,3 +271,52 @@ def test_crease_barrier_angle_is_the_dihedral_angle():
     ref = mesh_dihedral_angles(mesh)
     assert len(theta) == np.isfinite(ref).sum()
     assert np.allclose(np.sort(np.degrees(theta)), np.sort(ref[np.isfinite(ref)]), atol=1e-9)
+
+
+def test_kept_blocks_follow_the_state_and_the_references():
+    """The residual blocks kept for the last state are given back only for an equal state and the same
+    references: a state changed in place, a new reference surface and new shape normals each give the blocks
+    computed afresh (compared with a second Residuals that keeps nothing in common)."""
+    rng = np.random.default_rng(8)
+    mesh = wavy_grid().to_quadmesh()
+    sel = select_polylines(mesh, "both")
+    free = np.ones(len(mesh.vertices), dtype=bool)
+
+    def make():
+        r = Residuals(mesh.vertices, mesh.faces, mesh.edges, sel.planar, sel.fair, free, Weights(shape_ratio=0.9),
+                      closeness="surface", edge_faces=mesh.topology.edge_faces, crease_start=np.radians(8.0))
+        r.set_reference(mesh.vertices + 0.01, np.tile([0.0, 0.0, 1.0], (len(mesh.vertices), 1)))
+        return r
+
+    res, fresh = make(), make()
+    z = res.pack(mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape),
+                 rng.normal(size=(res.n_planes, 3)), rng.normal(size=(res.n_faces, 3)))
+    first = res.residual(z)
+    assert res.residual(z.copy()) is not first and np.array_equal(res.residual(z.copy()), first)
+    z[3] += 0.02                                                    # the caller's array changed in place
+    assert np.array_equal(res.residual(z), fresh.residual(z)) and not np.array_equal(res.residual(z), first)
+    points, normals = mesh.vertices - 0.03, rng.normal(size=mesh.vertices.shape)
+    for r in (res, fresh):
+        r.set_reference(points, normals)
+    assert np.array_equal(res.residual(z), fresh.residual(z))
+    moved = mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape)
+    for r in (res, fresh):
+        r.set_shape_reference(moved)
+    assert np.array_equal(res.residual(z), fresh.residual(z))
+
+
+def test_the_dihedral_residual_is_the_jacobian_s_angle_to_the_bit():
+    from ppfab.optimize.terms import crease_stars, dihedral, dihedral_and_grad
+
+    mesh = wavy_grid(9, 7).to_quadmesh()
+    verts, slot = crease_stars(mesh.faces, mesh.topology.edge_faces)
+    v = mesh.vertices + np.random.default_rng(1).normal(scale=0.05, size=mesh.vertices.shape)
+    theta = dihedral(v, verts, slot)
+    assert len(theta) > 0 and np.array_equal(theta, dihedral_and_grad(v, verts, slot)[0])
+    c = v[mesh.faces]                                               # independently: the faces' diagonal normals
+    n = np.cross(c[:, 2] - c[:, 0], c[:, 3] - c[:, 1])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    ef = mesh.topology.edge_faces
+    inner = ef[(ef >= 0).all(axis=1)]
+    expected = np.arccos(np.clip(np.einsum("ij,ij->i", n[inner[:, 0]], n[inner[:, 1]]), -1, 1))
+    assert np.allclose(np.sort(theta), np.sort(expected), atol=1e-7)

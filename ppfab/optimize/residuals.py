@@ -57,7 +57,7 @@ from scipy import sparse
 
 from ..topology import Polyline
 from .selection import edge_pairs, triples
-from .terms import (angle_balance, corner_cosines, crease_stars, dihedral_and_grad, face_angle_balance,
+from .terms import (angle_balance, corner_cosines, crease_stars, dihedral, dihedral_and_grad, face_angle_balance,
                     face_corners_index)
 
 BLOCKS = ("E_f", "E_P", "E_1", "E_fair", "E_close", "E_shape_corner", "E_shape_edge", "E_conical", "E_orth",
@@ -302,7 +302,23 @@ class Residuals:
                 np.sqrt(s * w.axes), np.sqrt(s * w.close * w.slide), np.sqrt(w.shape), np.sqrt(w.circular), np.sqrt(w.nodes)]
 
     def blocks(self, z: np.ndarray) -> list[np.ndarray]:
-        """Unweighted residual blocks in the order of :data:`BLOCKS`."""
+        """Unweighted residual blocks in the order of :data:`BLOCKS` (not to be changed by the caller).
+
+        The last state's blocks are kept: an LM iteration asks for them three times at one state (the trial
+        step's residual, the record's energies, the next linearisation's residual).  They are reused when ``z``
+        is equal element for element and the references the blocks read (foot points and their normals, the
+        shape normals) are the same arrays."""
+        z = np.asarray(z)
+        key = (self.ref_points, self.ref_normals, self.shape_normals)       # held: no id is reused meanwhile
+        memo = getattr(self, "_memo", None)
+        if memo is not None and all(a is b for a, b in zip(memo[0], key)) and memo[1].shape == z.shape \
+                and np.array_equal(memo[1], z):
+            return memo[2]
+        out = self._blocks(z)
+        self._memo = (key, z.copy(), out)
+        return out
+
+    def _blocks(self, z: np.ndarray) -> list[np.ndarray]:
         v, ns, nf = self.unpack(z)
         fa, fb, fown = self.face_edges
         pa, pb, pown = self.plane_edges
@@ -328,7 +344,7 @@ class Residuals:
         r_axes = np.einsum("ij,ij->i", ns[ao], nf[af])
         sv = self.slide_vertices
         r_slide = (v[sv] - self.vertices0[sv]).ravel()
-        theta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)[0]
+        theta = dihedral(v, self.crease_verts, self.crease_slot)
         r_crease = np.maximum(0.0, theta - self.crease_start)
         r_circ = face_angle_balance(v, self.circles)[0]
         r_nodes = np.einsum("ij,ij->i", ns[self.nodes[:, 0]], ns[self.nodes[:, 1]])

@@ -222,6 +222,19 @@ def crease_stars(faces: np.ndarray, edge_faces: np.ndarray) -> tuple[np.ndarray,
     return verts[ok], slot[ok]
 
 
+def dihedral(v: np.ndarray, verts: np.ndarray, slot_b: np.ndarray) -> np.ndarray:
+    """The dihedral angles ``θ (E,)`` of :func:`dihedral_and_grad` without their derivative (the residual needs
+    no more): the same operations, so the same numbers to the last bit."""
+    if len(verts) == 0:
+        return np.zeros(0)
+    rows = np.arange(len(verts))
+    ca = v[verts[:, :4]]
+    cb = v[verts[rows[:, None], slot_b]]
+    a = np.cross(ca[:, 2] - ca[:, 0], ca[:, 3] - ca[:, 1])
+    b = np.cross(cb[:, 2] - cb[:, 0], cb[:, 3] - cb[:, 1])
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
+
+
 def dihedral_and_grad(v: np.ndarray, verts: np.ndarray, slot_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Dihedral angle ``θ (E,)`` (radians) between the diagonal normals ``n = (c2 − c0) × (c3 − c1)`` of the two
     faces of each edge, and ``∂θ/∂(6 vertices) (E, 6, 3)`` (see :func:`crease_stars`).
