@@ -131,6 +131,24 @@ def test_a_pardiso_factor_replaced_by_another_solve_in_the_thread_is_computed_ag
         assert np.linalg.norm(m @ x - rhs) <= 1e-9 * np.linalg.norm(rhs)
 
 
+def test_pardiso_keeps_ppfab_s_settings_and_orders_long_rows_by_minimum_degree(system):
+    """PARDISO's settings are ppfab's (``iparm(1) = 1``: otherwise PARDISO refills its defaults on every call),
+    without iterative refinement; a system with the support normals among its unknowns (long-range rows) is
+    ordered by minimum degree, one without by METIS — a change of ordering analysed afresh — and each solve is
+    its own system's (numpy's dense solve)."""
+    pytest.importorskip("pypardiso")
+    s, rhs, last = system
+    solver = linsolve._thread_pardiso()
+    assert solver.get_iparm(1) == 1 and solver.get_iparm(8) == 0
+    dense = np.linalg.solve(s.toarray(), rhs)
+    for cache_last, code in ((last, 0), (0, solver.ppfab_metis), (last, 0)):
+        cache = FactorCache(last=cache_last, solver="pardiso")
+        x = cache.solve(s, rhs)
+        assert solver.get_iparm(2) == code and solver.ppfab_pattern[2] == ("minimum degree" if code == 0 else "metis")
+        assert solver.get_iparm(7) == 0                                     # no refinement steps taken
+        assert np.linalg.norm(x - dense) <= 1e-9 * np.linalg.norm(dense)
+
+
 def test_a_pardiso_error_falls_back_to_superlu(system, monkeypatch):
     s, rhs, last = system
 

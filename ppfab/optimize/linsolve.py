@@ -27,7 +27,8 @@ How ``S`` is solved (:class:`FactorCache`):
   solutions to 1e-14.  ``linear_solver`` (``[optimize]``) chooses; a PARDISO error falls back to SuperLU.
   PARDISO analyses a sparsity pattern once (phase 11, about half of a factorisation) and factorises later
   matrices of that pattern numerically only (:class:`_PardisoFactor`): the benchmark grids' runs 20–30 % faster,
-  the meshes bit for bit the same.  A sparse Cholesky was measured instead, side by side on the systems of
+  the meshes bit for bit the same.  Its settings are ppfab's (:func:`_own_settings`): no iterative refinement,
+  minimum degree ordering for a system with the exact support normals, METIS otherwise (:data:`ORDERINGS`).  A sparse Cholesky was measured instead, side by side on the systems of
   the 100 × 100 and 150 × 150 benchmark grids: CHOLMOD as packaged by
   ``cholespy`` (AMD ordering) took 1.6–2.4× the time of this SuperLU
   factorisation, so it is not used (``docs/optimisation.md``).
@@ -113,7 +114,30 @@ def _thread_pardiso() -> Any:
 
         solver = _LOCAL.pardiso = PyPardisoSolver(mtype=2)
         _one_mkl_thread(solver.libmkl)
+        _own_settings(solver)
     return solver
+
+
+def _own_settings(solver: Any) -> None:
+    """PARDISO with its settings in ppfab's hands: with ``iparm(1) = 0`` (pypardiso's start) PARDISO fills in
+    its defaults on every call and ignores any other value, so an analysis of a 1 × 1 matrix fills them once and
+    ``iparm(1) = 1`` keeps them; then no iterative refinement (``iparm(8) = 0``: the two refinement steps of the
+    default doubled the cost of a solve for a residual of 2e-13 instead of 5e-13 relative on the 100² system —
+    an LM step needs neither) and :data:`ORDERINGS` chosen per system (``iparm(2)``)."""
+    one = sparse.csr_matrix(np.ones((1, 1)))
+    for phase in (11, -1):
+        solver.set_phase(phase)
+        solver._call_pardiso(one, np.zeros(1))
+    solver.ppfab_metis = int(solver.get_iparm(2))          # PARDISO's default: its nested dissection (METIS)
+    solver.set_iparm(1, 1)
+    solver.set_iparm(8, 0)
+
+
+ORDERINGS = {"metis": None, "minimum degree": 0}
+"""PARDISO's fill-reducing orderings ppfab uses (``iparm(2)``; ``None``: PARDISO's default, METIS nested
+dissection).  Minimum degree for a system with long-range rows (the exact support normals: each couples every
+vertex of its polyline), where it factorises 1.6–2.1× faster than METIS (the 30² benchmark system 6.3 against
+13.0 ms, DOS conical1 9.8 against 15.3 ms, one thread); METIS otherwise (100²: 0.149 s against 0.155 s)."""
 
 
 def _one_mkl_thread(libmkl: Any) -> None:
@@ -142,20 +166,25 @@ class _PardisoFactor:
     is no longer the solver's (another solve in the thread factorised since) is computed again before it solves.
     """
 
-    def __init__(self, upper: sparse.csr_matrix, solver: Any):
+    def __init__(self, upper: sparse.csr_matrix, solver: Any, ordering: str = "metis"):
         self.a = upper
         self.solver = solver
+        self.ordering = ordering
         self.generation = -1
         self._factorise()
 
     def _factorise(self) -> None:
         a, solver = self.a, self.solver
         pattern = getattr(solver, "ppfab_pattern", None)
-        same = pattern is not None and np.array_equal(pattern[0], a.indptr) and np.array_equal(pattern[1], a.indices)
+        same = pattern is not None and pattern[2] == self.ordering and np.array_equal(pattern[0], a.indptr) \
+            and np.array_equal(pattern[1], a.indices)
+        if not same:
+            code = ORDERINGS[self.ordering]
+            solver.set_iparm(2, getattr(solver, "ppfab_metis", 2) if code is None else code)
         solver.set_phase(22 if same else 12)
         solver._call_pardiso(a, np.zeros(a.shape[0]))
         if not same:
-            solver.ppfab_pattern = (a.indptr.copy(), a.indices.copy())
+            solver.ppfab_pattern = (a.indptr.copy(), a.indices.copy(), self.ordering)
         solver.ppfab_generation = self.generation = getattr(solver, "ppfab_generation", 0) + 1
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -252,7 +281,7 @@ class FactorCache:
             upper.sort_indices()
             self._drop()
             try:
-                self.lu = _PardisoFactor(upper, _thread_pardiso())
+                self.lu = _PardisoFactor(upper, _thread_pardiso(), "minimum degree" if self.last else "metis")
             except Exception:                                 # a PARDISO error: SuperLU from now on
                 self.solver, self.lu, reuse = "superlu", None, False
             else:
