@@ -26,8 +26,8 @@ IsExternal, LoadBearing), its type (:mod:`fabrication.writers._instances`: an ``
 ``IfcMemberType`` per repeated beam-plate, cover-plate or strip size, the retention types by size;
 ``IfcRelDefinesByType``) whose shape, an ``IfcRepresentationMap``, the occurrence places by an ``IfcMappedItem``
 (a pane always — the glass is cut to its type's outline —, another part where that shape is its own), the
-classification reference of its kind when the design names one (``[output.classification]``), its material — one ``IfcMaterial`` per material name, shared; a pane's make-up as an
-``IfcMaterialLayerSet`` of its plies and interlayers (``IfcMaterialLayerSetUsage`` along the pane's local z from
+classification reference of its kind when the design names one (``[output.classification]``), its material —
+one ``IfcMaterial`` per material name, shared; a pane's make-up as an ``IfcMaterialLayerSet`` of its plies and interlayers (``IfcMaterialLayerSetUsage`` along the pane's local z from
 its underside) — and a surface style of its family's colour (:data:`~fabrication.contract.COLOURS`).
 
 Reproducible: every ``GlobalId`` is derived from the design's name and the element's key (its part id;
@@ -55,15 +55,14 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
-CLASSIFICATION_KEYS = ("system", "edition", "source")
-"""The keys of ``[output.classification]`` that describe the system; every other key is a part kind."""
 
 
 @dataclass
 class _Type:
     """One IFC element type being filled: its class and predefined type, the part kind, its occurrences, the
     part whose body is its shape and that shape's ``IfcRepresentationMap``, how many occurrences keep their own
-    body, and the largest distance of a mapped shape from an occurrence's own outline (mm)."""
+    body, and the largest distance of a mapped shape from an occurrence's own outline (mm, reported for the
+    panes by the writer's line)."""
 
     cls: str
     predefined: str
@@ -584,5 +583,8 @@ def write_ifc(build: "BuildRecord", out: Path, files: Files) -> str:
     analysis = len(model.f.by_type("IfcStructuralCurveMember"))
     types = len(model.f.by_type("IfcElementType"))
     mapped = len(model.f.by_type("IfcMappedItem"))
+    panes = max((t.largest_error for (kind, _), t in model._types.items() if kind == "panel"), default=0.0)
+    own = sum(t.own for t in model._types.values())
     return (f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember, {types} types ({mapped} parts drawn as their "
-            f"type's shape), analysis model of {analysis} members")
+            f"type's shape, {own} typed parts with a body of their own, a pane within {panes:.2g} mm of its face), "
+            f"analysis model of {analysis} members")
