@@ -121,9 +121,9 @@ def _thread_pardiso() -> Any:
 def _own_settings(solver: Any) -> None:
     """PARDISO with its settings in ppfab's hands: with ``iparm(1) = 0`` (pypardiso's start) PARDISO fills in
     its defaults on every call and ignores any other value, so an analysis of a 1 × 1 matrix fills them once and
-    ``iparm(1) = 1`` keeps them; then no iterative refinement (``iparm(8) = 0``: the two refinement steps of the
-    default doubled the cost of a solve for a residual of 2e-13 instead of 5e-13 relative on the 100² system —
-    an LM step needs neither) and :data:`ORDERINGS` chosen per system (``iparm(2)``)."""
+    ``iparm(1) = 1`` keeps them; then no iterative refinement (``iparm(8) = 0``: the default's two refinement
+    steps doubled the cost of a solve on the 100² system, 19.2 against 8.7 ms, for a residual of 2e-13 instead
+    of 5e-13 relative — an LM step needs neither) and :data:`ORDERINGS` chosen per system (``iparm(2)``)."""
     one = sparse.csr_matrix(np.ones((1, 1)))
     for phase in (11, -1):
         solver.set_phase(phase)
@@ -136,8 +136,9 @@ def _own_settings(solver: Any) -> None:
 ORDERINGS = {"metis": None, "minimum degree": 0}
 """PARDISO's fill-reducing orderings ppfab uses (``iparm(2)``; ``None``: PARDISO's default, METIS nested
 dissection).  Minimum degree for a system with long-range rows (the exact support normals: each couples every
-vertex of its polyline), where it factorises 1.6–2.1× faster than METIS (the 30² benchmark system 6.3 against
-13.0 ms, DOS conical1 9.8 against 15.3 ms, one thread); METIS otherwise (100²: 0.149 s against 0.155 s)."""
+vertex of its polyline), where it factorises 1.6–2.0× faster than METIS (the 30² benchmark system 7.2 against
+14.3 ms, DOS conical1 10.4 against 16.6 ms, one thread, idle machine); METIS otherwise (100²: 0.144–0.163 s
+against minimum degree's 0.141–0.157 s in four runs, no difference; minimum degree fills 17 % more)."""
 
 
 def _one_mkl_thread(libmkl: Any) -> None:
