@@ -14,20 +14,26 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 
-def _kabsch_residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Largest corner distance after the best proper rigid motion of ``b`` onto ``a``.
+def kabsch_2d(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The best proper rigid motions of candidates ``b`` onto ``a`` (2D Kabsch/Procrustes, least squares over the
+    corresponding corners): ``x ↦ R x + t`` minimising ``Σ_i |R b_i + t − a_i|²``.
 
-    a : (k, 2); b : (C, k, 2) candidates (already in corresponding corner order). Returns (C,).
+    a : (k, 2); b : (C, k, 2) candidates (already in corresponding corner order).  Returns the rotations
+    ``(C, 2, 2)``, the shifts ``(C, 2)`` and the largest corner distance after the motion ``(C,)``.
     """
-    ca = a - a.mean(axis=0)
-    cb = b - b.mean(axis=1, keepdims=True)
+    mean_a = a.mean(axis=0)
+    mean_b = b.mean(axis=1)
+    ca = a - mean_a
+    cb = b - mean_b[:, None, :]
     h = np.einsum("cki,kj->cij", cb, ca)            # cross-covariance
     # optimal rotation angle for 2D: atan2(h01 - h10, h00 + h11)
     theta = np.arctan2(h[:, 0, 1] - h[:, 1, 0], h[:, 0, 0] + h[:, 1, 1])
     c, s = np.cos(theta), np.sin(theta)
     rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)   # (C, 2, 2)
     moved = np.einsum("cij,ckj->cki", rot, cb)
-    return np.linalg.norm(moved - ca[None], axis=-1).max(axis=-1)
+    residual = np.linalg.norm(moved - ca[None], axis=-1).max(axis=-1)
+    shift = mean_a[None, :] - np.einsum("cij,cj->ci", rot, mean_b)
+    return rot, shift, residual
 
 
 def correspondences(b: np.ndarray, mirror: bool) -> np.ndarray:
@@ -49,7 +55,7 @@ def congruence_distance(a: np.ndarray, b: np.ndarray, mirror: bool = False) -> f
     b = np.asarray(b, dtype=float)
     if a.shape != b.shape:
         return float("inf")
-    return float(_kabsch_residual(a, correspondences(b, mirror)).min())
+    return float(kabsch_2d(a, correspondences(b, mirror))[2].min())
 
 
 def group_congruent(outlines: list[np.ndarray], tol: float, mirror: bool = False) -> np.ndarray:

@@ -36,6 +36,12 @@ def body_items(product) -> list[tuple[Any, np.ndarray]]:
     return out
 
 
+def mapped_items(product) -> list[Any]:
+    """The ``IfcMappedItem`` s of a product's body (none when it has its own)."""
+    rep = product.Representation
+    return [it for r in (rep.Representations if rep else ()) for it in r.Items if it.is_a("IfcMappedItem")]
+
+
 def mapping_problem(product) -> str | None:
     """What is wrong with how a product maps its type's shape, ``None`` when nothing is (or it has its own body):
     the shape must be one of its type's ``RepresentationMaps`` and the operator a rigid motion (orthonormal
@@ -43,8 +49,7 @@ def mapping_problem(product) -> str | None:
     type tolerance: the glass is cut to its type's outline)."""
     import ifcopenshell.util.element as ue
 
-    rep = product.Representation
-    items = [it for r in (rep.Representations if rep else ()) for it in r.Items if it.is_a("IfcMappedItem")]
+    items = mapped_items(product)
     if not items:
         return None
     t = ue.get_type(product)
@@ -64,8 +69,7 @@ def mapping_problem(product) -> str | None:
 
 def is_mapped(product) -> bool:
     """Whether the product's body is its type's shape placed by an ``IfcMappedItem``."""
-    rep = product.Representation
-    return any(it.is_a("IfcMappedItem") for r in (rep.Representations if rep else ()) for it in r.Items)
+    return bool(mapped_items(product))
 
 
 def extruded_prism(product) -> tuple[np.ndarray, float] | None:

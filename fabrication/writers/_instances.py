@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..panels.congruence import correspondences, kabsch_2d
 from ._elements import Element
 
 MAP_TOLERANCE_MM = 1e-5
@@ -98,22 +99,13 @@ def fit_motion(shape: Element, el: Element) -> Motion | None:
     if a.shape != b.shape or abs(shape.height - el.height) > 1e-9 or len(shape.holes) != len(el.holes) \
             or shape.two_faces != el.two_faces:
         return None
-    best: tuple[float, np.ndarray, np.ndarray, bool, int] | None = None
     k = len(a)
-    for flip in (False, True):
-        if flip and shape.two_faces:                    # the faces would swap: no turned-over bevelled plate
-            continue
-        src = a * np.array([-1.0, 1.0]) if flip else a
-        src = src[::-1] if flip else src
-        for s in range(k):
-            p = np.roll(src, -s, axis=0)
-            rot, shift = _procrustes(p, b)
-            err = float(np.linalg.norm(p @ rot.T + shift - b, axis=1).max())
-            if best is None or err < best[0] - 1e-12:
-                best = (err, rot, shift, flip, s)
-    if best is None:
-        return None
-    err, rot2, shift2, flip, s = best
+    # every way the corners can correspond: the shape's outline started at each corner, then (a plate turned
+    # over: no turned-over bevelled plate, its faces would swap) reflected x ↦ −x and reversed
+    rots, shifts, errors = kabsch_2d(b, correspondences(a, mirror=not shape.two_faces))
+    c = int(np.flatnonzero(errors <= errors.min() + 1e-12)[0])
+    err, rot2, shift2 = float(errors[c]), rots[c], shifts[c]
+    flip, s = c >= k, c % k
     mirror = np.diag([-1.0, 1.0]) if flip else np.eye(2)
     lin = rot2 @ mirror                                   # the 2D map, det −1 when turned over
     rotation = np.zeros((3, 3))
@@ -137,16 +129,6 @@ def fit_motion(shape: Element, el: Element) -> Motion | None:
     return Motion(rotation, shift, err)
 
 
-def _procrustes(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The rotation ``(2, 2)`` and shift ``(2,)`` minimising ``Σ |R p_i + t − q_i|²`` (2D Kabsch)."""
-    cp, cq = p.mean(axis=0), q.mean(axis=0)
-    h = (p - cp).T @ (q - cq)
-    theta = np.arctan2(h[0, 1] - h[1, 0], h[0, 0] + h[1, 1])
-    c, s = np.cos(theta), np.sin(theta)
-    rot = np.array([[c, -s], [s, c]])
-    return rot, cq - rot @ cp
-
-
 @dataclass(frozen=True)
 class Instance:
     """A part drawn as another's body moved: ``shape`` (the first part of its type) placed by ``motion`` in the
@@ -156,20 +138,57 @@ class Instance:
     motion: Motion
 
 
+@dataclass(frozen=True)
+class TypePlan:
+    """Which parts share a type and which are drawn as their type's shape moved.
+
+    ``keys``: ``part_id → (kind, key)`` of every part with a type key (:func:`type_key`); ``counts``: the parts
+    per ``(kind, key)``; ``first``: ``(kind, key) → part_id`` of the part whose body is the type's shape (the
+    first mappable part of the type, in the order given); ``moved``: ``part_id → Instance`` of every other part
+    whose body is that shape moved within its tolerance (:func:`fit_motion`)."""
+
+    keys: dict[str, tuple[str, str]]
+    counts: dict[tuple[str, str], int]
+    first: dict[tuple[str, str], str]
+    moved: dict[str, Instance]
+
+    def shared(self, kind_key: tuple[str, str]) -> bool:
+        """Whether a type is written for ``kind_key``: two or more parts share it, or it is a panel type."""
+        return self.counts.get(kind_key, 0) >= 2 or kind_key[0] == "panel"
+
+
+def plan_types(els: list[Element], tolerance: float = MAP_TOLERANCE_MM,
+               pane_tolerance: float | None = None) -> TypePlan:
+    """The types of ``els`` and the parts drawn as their type's shape: a part other than a pane within ``tolerance``
+    mm of the shape moved; a pane within ``pane_tolerance`` (the panel type tolerance: the glass is cut to the
+    type's outline) when it is given, else within ``tolerance`` like any part."""
+    keys: dict[str, tuple[str, str]] = {}
+    counts: dict[tuple[str, str], int] = {}
+    first: dict[tuple[str, str], str] = {}
+    shapes: dict[tuple[str, str], Element] = {}
+    moved: dict[str, Instance] = {}
+    for el in els:
+        key = type_key(el)
+        if key is None:
+            continue
+        kk = (el.kind, key)
+        keys[el.part_id] = kk
+        counts[kk] = counts.get(kk, 0) + 1
+        if not mappable(el):
+            continue
+        shape = shapes.setdefault(kk, el)
+        if shape is el:
+            first[kk] = el.part_id
+            continue
+        limit = pane_tolerance + 1e-6 if el.kind == "panel" and pane_tolerance is not None else tolerance
+        motion = fit_motion(shape, el)
+        if motion is not None and motion.error <= limit:
+            moved[el.part_id] = Instance(shape, motion)
+    return TypePlan(keys, counts, first, moved)
+
+
 def instances(els: list[Element], tolerance: float = MAP_TOLERANCE_MM) -> dict[str, Instance]:
     """``part_id → Instance`` for every part whose body is the first of its type's (:func:`type_key`) moved within
     ``tolerance`` mm (:func:`fit_motion`); the first parts themselves and the parts that fit no shape are left
     out (they keep their own bodies)."""
-    first: dict[tuple[str, str], Element] = {}
-    out: dict[str, Instance] = {}
-    for el in els:
-        key = type_key(el)
-        if key is None or not mappable(el):
-            continue
-        shape = first.setdefault((el.kind, key), el)
-        if shape is el:
-            continue
-        motion = fit_motion(shape, el)
-        if motion is not None and motion.error <= tolerance:
-            out[el.part_id] = Instance(shape, motion)
-    return out
+    return plan_types(els, tolerance).moved

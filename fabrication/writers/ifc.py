@@ -49,7 +49,7 @@ from ppfab import __version__
 from ..contract import COLOURS, FIXED_TIMESTAMP, IFC_CLASSES, IFC_FILE, IFC_PSET, IFC_SCHEMA
 from . import Files, writer
 from ._elements import Element, elements, object_uuid, part_material
-from ._instances import MAP_TOLERANCE_MM, Motion, fit_motion, mappable, type_key
+from ._instances import TypePlan, mappable, plan_types
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
@@ -59,16 +59,14 @@ LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
 
 @dataclass
 class _Type:
-    """One IFC element type being filled: its class and predefined type, the part kind, its occurrences, the
-    part whose body is its shape and that shape's ``IfcRepresentationMap``, how many occurrences keep their own
-    body, and the largest distance of a mapped shape from an occurrence's own outline (mm, reported for the
+    """One IFC element type being filled: its class and predefined type, the part kind, its occurrences, its
+    shape's ``IfcRepresentationMap`` (the body of its first part), how many occurrences keep their own body, and the largest distance of a mapped shape from an occurrence's own outline (mm, reported for the
     panes by the writer's line)."""
 
     cls: str
     predefined: str
     kind: str
     members: list[Any] = field(default_factory=list)
-    shape: Element | None = None
     map: Any = None
     own: int = 0
     largest_error: float = 0.0
@@ -142,7 +140,7 @@ class IfcModel:
         self._materials: dict[str, Any] = {}
         self._associations: dict[str, tuple[Any, list[Any]]] = {}
         self._types: dict[tuple[str, str], _Type] = {}
-        self._typed: set[tuple[str, str]] = set()
+        self._plan = TypePlan({}, {}, {}, {})
         self.pane_tolerance = 0.0
         self.classification: dict[str, str] = {}
         self._references: dict[str, tuple[Any, list[Any]]] = {}
@@ -201,14 +199,10 @@ class IfcModel:
 
     # -- elements ------------------------------------------------------------------------------------
     def plan_types(self, els: list[Element]) -> None:
-        """Decide which parts share a type (:func:`~fabrication.writers._instances.type_key`: two or more parts of
-        one key, every panel type) before the first :meth:`add`, so that the first of each type holds its shape."""
-        count: dict[tuple[str, str], int] = {}
-        for el in els:
-            key = type_key(el)
-            if key is not None:
-                count[(el.kind, key)] = count.get((el.kind, key), 0) + 1
-        self._typed = {k for k, n in count.items() if n >= 2 or k[0] == "panel"}
+        """Decide which parts share a type and which are drawn as their type's shape
+        (:func:`~fabrication.writers._instances.plan_types`: a pane within the panel type tolerance, any other part
+        within 1e-5 mm) before the first :meth:`add`."""
+        self._plan = plan_types(els, pane_tolerance=self.pane_tolerance)
 
     def add(self, el: Element, material: str, category: str | None) -> Any:
         """One element: placement, body (its own solid, or its type's shape moved onto it), style, property
@@ -218,8 +212,8 @@ class IfcModel:
         if el.kind == "beam" and el.group:
             parent = self._assembly(el).ObjectPlacement
         placement = self._local(parent, self._placement3d(fr.origin, fr.normal, fr.ex))
-        key = type_key(el)
-        group = self._type_of(el, key) if key is not None and (el.kind, key) in self._typed else None
+        kind_key = self._plan.keys.get(el.part_id)
+        group = self._type_of(el, kind_key[1]) if kind_key is not None and self._plan.shared(kind_key) else None
         mapped = self._mapped_body(el, group) if group is not None and mappable(el) else None
         if mapped is not None:
             items, representation, extra = [mapped], "MappedRepresentation", self._fastener_size(el)
@@ -240,27 +234,24 @@ class IfcModel:
 
     def _mapped_body(self, el: Element, group: "_Type") -> Any | None:
         """An ``IfcMappedItem`` of the type's shape placed on ``el`` (the type's first part gives the shape, its
-        ``IfcRepresentationMap``); ``None`` when the shape does not fit ``el`` (:data:`MAP_TOLERANCE_MM`, a pane
-        the type tolerance) — then ``el`` keeps its own body."""
+        ``IfcRepresentationMap``); ``None`` when the shape does not fit ``el`` (the plan's motions) — then ``el``
+        keeps its own body."""
         f = self.f
-        if group.shape is None:
+        if self._plan.first.get(self._plan.keys[el.part_id]) == el.part_id:
             items, representation, _ = self._own_body(el)
             rep = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
                                   RepresentationType=representation, Items=items)
-            group.shape = el
             group.map = f.create_entity("IfcRepresentationMap", MappingOrigin=self.origin, MappedRepresentation=rep)
-            motion: Motion | None = Motion(np.eye(3), np.zeros(3), 0.0)
+            rotation, shift = np.eye(3), np.zeros(3)
+        elif (moved := self._plan.moved.get(el.part_id)) is not None and group.map is not None:
+            group.largest_error = max(group.largest_error, moved.motion.error)
+            rotation, shift = moved.motion.rotation, moved.motion.shift
         else:
-            motion = fit_motion(group.shape, el)
-        limit = self.pane_tolerance + 1e-6 if el.kind == "panel" else MAP_TOLERANCE_MM
-        if motion is None or motion.error > limit:
             group.own += 1
             return None
-        group.largest_error = max(group.largest_error, motion.error)
-        r = motion.rotation
-        target = f.create_entity("IfcCartesianTransformationOperator3D", Axis1=self._dir(_clean(r[:, 0])),
-                                 Axis2=self._dir(_clean(r[:, 1])), LocalOrigin=self._point(_clean(motion.shift)),
-                                 Scale=1.0, Axis3=self._dir(_clean(r[:, 2])))
+        target = f.create_entity("IfcCartesianTransformationOperator3D", Axis1=self._dir(_clean(rotation[:, 0])),
+                                 Axis2=self._dir(_clean(rotation[:, 1])), LocalOrigin=self._point(_clean(shift)),
+                                 Scale=1.0, Axis3=self._dir(_clean(rotation[:, 2])))
         return f.create_entity("IfcMappedItem", MappingSource=group.map, MappingTarget=target)
 
     def _prism_item(self, el: Element) -> Any:
@@ -457,6 +448,13 @@ class IfcModel:
             self._references["system"] = (system, [])
         return self._references["system"][0]
 
+    def type_summary(self) -> tuple[int, float]:
+        """How many typed parts keep a body of their own, and the largest distance (mm) of a mapped pane's shape
+        from its own outline — for the writer's line."""
+        own = sum(t.own for t in self._types.values())
+        panes = max((t.largest_error for (kind, _), t in self._types.items() if kind == "panel"), default=0.0)
+        return own, panes
+
     def _close_classification(self) -> None:
         """The project declares the classification system; each kind's reference classifies its parts and types."""
         if "system" not in self._references:
@@ -583,8 +581,7 @@ def write_ifc(build: "BuildRecord", out: Path, files: Files) -> str:
     analysis = len(model.f.by_type("IfcStructuralCurveMember"))
     types = len(model.f.by_type("IfcElementType"))
     mapped = len(model.f.by_type("IfcMappedItem"))
-    panes = max((t.largest_error for (kind, _), t in model._types.items() if kind == "panel"), default=0.0)
-    own = sum(t.own for t in model._types.values())
+    own, panes = model.type_summary()
     return (f"{IFC_FILE}: {plates} IfcPlate, {members} IfcMember, {types} types ({mapped} parts drawn as their "
             f"type's shape, {own} typed parts with a body of their own, a pane within {panes:.2g} mm of its face), "
             f"analysis model of {analysis} members")
