@@ -43,6 +43,7 @@ from ..mesh import QuadGrid
 from ..schema import param
 from ..frame import Frame
 from ..curves import PlanarCurve, support_values, weak_curvature
+from ppfab.conical.arcspline import ArcSpline
 from ppfab.conical.cones import cone_axes
 from ppfab.conical.spheres import SphereSpline, bisector_normals_extended, check_spacelike_pairs, reflections, w_planes
 from .registry import construction
@@ -169,7 +170,7 @@ def _propagate(T0: np.ndarray, s0: int, sigma: list) -> np.ndarray:
 def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
                  angle_range: tuple[float, float] = (-90.0, 90.0), closed: bool = False,
                  up: ArrayLike = (0.0, 0.0, 1.0), degree: int = 3, profile: PlanarCurve | None = None,
-                 profile_plane: int | None = None, check: bool = True) -> QuadGrid:
+                 profile_plane: int | None = None, check: bool = True, arcs: ArcSpline | None = None) -> QuadGrid:
     """A conical P mesh from control spheres (Steps 1–4 of §4.2.3).
 
     Parameters
@@ -186,6 +187,13 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
         crown face); the unchanged profile polygon in that frame is ``meta["profile_reference"]``
     profile_plane : index ``k`` of the plane whose profile is designed (default ``N // 2``)
     check : raise :class:`~ppfab.errors.FoldError` when the mesh folds
+    arcs : optional arc-spline profile (Remark 4.3, :class:`~ppfab.conical.arcspline.ArcSpline`) in the
+        cross-section ``Π`` of the cone ``C_s`` of strip ``s = min(k, N − 1)``: the plane through the centre of
+        sphere ``Z_s`` normal to the cone's axis, frame ``meta["arc_frame"]`` (``e1`` towards the crown), where
+        the normal angle of a tangent plane's trace is its profile angle ``θ`` and the channel's profile is a
+        circle of radius ``r_s / sin β`` about the origin.  Each arc's faces are the tangent planes of one cone
+        (a strip is a union of cone patches); ``angle_range`` is not used (the arcs' normal angles are), the
+        faces are shared among the arcs by how far each turns (``meta["arc_of_column"]``)
 
     Returns
     -------
@@ -214,12 +222,28 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     if inscribed:
         assert profile is not None
         chords, theta = _chord_planes(profile, faces_profile, closed, frame, W[k0], (a, cosb, b1, b2))
+    arc_of = np.zeros(0, dtype=np.int64)
+    if arcs is not None:
+        if profile is not None:
+            raise GeometryError("a profile curve and profile arcs were both given; give one", element="profile_arcs")
+        if arcs.closed != closed:
+            raise GeometryError("the arc-spline profile must be closed exactly when the mesh is",
+                                element="profile_arcs")
+        theta, arc_of = arcs.face_angles(faces_profile)
     for attempt in range(2):
-        th = theta if attempt == 0 else (-theta if closed else theta[::-1])
+        if arcs is not None:               # Remark 4.3: reversed, the columns keep their arcs
+            order = np.arange(len(theta)) if attempt == 0 else (
+                np.r_[1, np.arange(len(theta) - 1, 0, -1)] if closed else np.arange(len(theta))[::-1])
+            th, arc_th = theta[order], arc_of[order]
+        else:
+            th = theta if attempt == 0 else (-theta if closed else theta[::-1])
         n = cosb * a + sinb * (np.cos(th)[:, None] * b1 + np.sin(th)[:, None] * b2)
         T0 = np.concatenate([n, (-n @ Z[s0, :3] - Z[s0, 3])[:, None]], axis=1)
         reference = None
-        if inscribed:                      # Remark 4.2: the polygon inscribed in a profile with inflections
+        if arcs is not None:               # each face's trace in Π the support line of its arc
+            reference = frame.to2d(_vertices(_propagate(T0, s0, sigma), W, closed)[k0])
+            T0 = np.concatenate([n, (-n @ Z[s0, :3] - sinb * arcs.support(th, arc_th))[:, None]], axis=1)
+        elif inscribed:                      # Remark 4.2: the polygon inscribed in a profile with inflections
             th = theta if attempt == 0 else (np.concatenate([theta[1:2], theta[1:][::-1]]) if closed
                                              else theta[::-1])              # closed: column 0 is the last face
             T0 = chords if attempt == 0 else (np.concatenate([chords[1:2], chords[1:][::-1]]) if closed
@@ -244,6 +268,9 @@ def channel_mesh(spheres: np.ndarray, faces_spine: int, faces_profile: int,
     meta = {"spheres": Z, "sphere_t": tz, "H": H, "profile_plane": k0,
             "theta_deg": degrees, "profile_frame": frame, "profile_reference": reference,
             "planar_families": ("rows",)}
+    if arcs is not None:
+        meta["arc_frame"] = Frame(Z[s0, :3], b1, b2)
+        meta["arc_of_column"] = arc_th[1:] if closed else arc_th[1:-1]
     grid = replace(grid, axes=axes, extended_face_planes=E, meta=meta)
     if check:                              # past an inflection the faces touch their spheres from the other
         check_folds(grid, strip_t, degrees, reference=None if inscribed else inner,       # side: no reference
@@ -345,6 +372,13 @@ class ConicalSpheresParams:
     profile_closed: bool = param(False, doc="the profile curve is closed (defaults to true for a closed mesh)")
     profile_plane: int = param(-1, doc="index of the plane W_k carrying the designed profile (-1: the middle one)",
                                min=-1)
+    profile_arcs: list[list[float]] = param([], doc="Step 4 with an arc-spline profile (Remark 4.3): arcs [radius, "
+                                                    "from_deg, to_deg] joined with a common tangent, by the angles of "
+                                                    "their outward normals (the profile angles) in the cone's cross-"
+                                                    "section at the profile plane; each arc's faces are tangent "
+                                                    "planes of one cone; angle_range is then not used; empty: none")
+    profile_arcs_centre: list[float] = param([0.0, 0.0], doc="centre [p, q] of the first profile arc (origin: the "
+                                                             "sphere's centre, p towards the crown)", length=2)
 
     def __post_init__(self):
         for k, s in enumerate(self.spheres):
@@ -357,6 +391,12 @@ class ConicalSpheresParams:
         for k, q in enumerate(self.profile):
             if len(q) != 2:
                 raise DesignError(f"profile[{k}]", f"needs [p, q], got {len(q)} values")
+        if self.profile_arcs:
+            if self.profile:
+                raise DesignError("profile_arcs", "and profile are both given: a designed profile is a curve or "
+                                                  "arcs, not both; remove one")
+            ArcSpline.from_arcs(self.profile_arcs, self.profile_arcs_centre, self.closed).faces_per_arc(
+                self.faces_profile)
 
 
 def _profile_curve(p: ConicalSpheresParams) -> PlanarCurve | None:
@@ -372,10 +412,11 @@ def _profile_curve(p: ConicalSpheresParams) -> PlanarCurve | None:
               "conical P mesh from a B-spline family of spheres: channel surface, propagated tangent planes, "
               "optional designed profile", planar_families=("rows",), section="§4.2.3")
 def build_conical_spheres(p: ConicalSpheresParams) -> QuadGrid:
+    arcs = ArcSpline.from_arcs(p.profile_arcs, p.profile_arcs_centre, p.closed) if p.profile_arcs else None
     return channel_mesh(np.asarray(p.spheres, float), p.faces_spine, p.faces_profile,
                         (p.angle_range[0], p.angle_range[1]),
                         p.closed, np.asarray(p.up, float), p.degree, _profile_curve(p),
-                        None if p.profile_plane < 0 else p.profile_plane)
+                        None if p.profile_plane < 0 else p.profile_plane, arcs=arcs)
 
 
 @dataclass(frozen=True)
