@@ -86,7 +86,9 @@ class Topology:
     def edges(self) -> np.ndarray:
         """Unique undirected edges ``(E, 2)`` with ``a < b``, sorted."""
         he = np.sort(self.half_edges, axis=1)
-        return np.unique(he, axis=0)
+        n = max(self.n_vertices, int(he.max(initial=-1)) + 1)
+        keys = np.unique(he[:, 0] * n + he[:, 1])          # lexicographic (a, b) order, as unique(axis=0)
+        return np.stack([keys // n, keys % n], axis=1).reshape(-1, 2)
 
     @cached_property
     def edge_faces(self) -> np.ndarray:

@@ -48,8 +48,7 @@ def test_each_energy_jacobian_equals_finite_differences(orthogonality, exact):
     free[[0, 9]] = False
     topo = mesh.topology
     stars = conical_stars(mesh.faces, len(mesh.vertices), ~topo.boundary_vertices)
-    edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(mesh.edges.tolist())}
-    pairs = polyline_faces(sel.planar, edge_index, topo.edge_faces)
+    pairs = polyline_faces(sel.planar, mesh.edges, topo.edge_faces)
     w = Weights(shape_ratio=0.9, conical=0.7, orthogonal=0.4, axes=0.3, slide=0.2)
     res = Residuals(mesh.vertices, mesh.faces, mesh.edges, sel.planar, sel.fair, free, w, closeness="surface",
                     plane_unknowns=exact, stars=stars, orthogonality=orthogonality, axes_pairs=pairs,
@@ -320,3 +319,26 @@ def test_the_dihedral_residual_is_the_jacobian_s_angle_to_the_bit():
     inner = ef[(ef >= 0).all(axis=1)]
     expected = np.arccos(np.clip(np.einsum("ij,ij->i", n[inner[:, 0]], n[inner[:, 1]]), -1, 1))
     assert np.allclose(np.sort(theta), np.sort(expected), atol=1e-7)
+
+
+@pytest.mark.parametrize("name", ["DOS__conical1.obj", "libhedra__YasIsland.off", "DOI__rot4_def1_sparse.obj"])
+def test_polyline_faces_are_the_faces_on_each_polyline_edge(name):
+    """Every (polyline, face) pair of ``E_axes`` once: a face is paired with a polyline when one of the face's own
+    sides (consecutive corners) is an edge of the polyline — found here face by face, apart from the edge table
+    (open and closed polylines, real meshes from the shared data)."""
+    mesh = load_mesh(shared_file(name))
+    sel = select_polylines(mesh, "both")
+    sides: dict[frozenset, list[int]] = {}
+    for f, quad in enumerate(mesh.faces.tolist()):
+        for k in range(4):
+            sides.setdefault(frozenset((quad[k], quad[(k + 1) % 4])), []).append(f)
+    expect = set()
+    for s, line in enumerate(sel.planar):
+        v = line.vertices.tolist()
+        steps = zip(v, v[1:] + v[:1]) if line.closed else zip(v[:-1], v[1:])
+        for x, y in steps:
+            expect.update((s, f) for f in sides.get(frozenset((x, y)), []))
+    owner, face = polyline_faces(sel.planar, mesh.edges, mesh.topology.edge_faces)
+    got = list(zip(owner.tolist(), face.tolist()))
+    assert len(got) == len(set(got)) and set(got) == expect and got == sorted(got)
+    assert any(line.closed for line in sel.planar) or name != "libhedra__YasIsland.off"

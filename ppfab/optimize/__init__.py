@@ -323,8 +323,7 @@ def build_problem(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | Non
                                                        "to make orthogonal")
     pairs = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
     if p.weight_axes > 0:
-        edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
-        pairs = polyline_faces(sel.planar, edge_index, topo.edge_faces)
+        pairs = polyline_faces(sel.planar, qm.edges, topo.edge_faces)
     fairness = p.fairness
     if fairness == "auto":
         far = len(faces) and float(face_planarity(v[faces]).max()) > AUTO_FAIRNESS_DELTA_F
@@ -485,8 +484,7 @@ def _all_pairs(prob: Problem) -> tuple[np.ndarray, np.ndarray]:
     if len(prob.axes_pairs[0]) or not prob.selection.planar:
         return prob.axes_pairs
     qm = prob.mesh
-    edge_index = {(int(a), int(b)): k for k, (a, b) in enumerate(qm.edges.tolist())}
-    return polyline_faces(prob.selection.planar, edge_index, qm.topology.edge_faces)
+    return polyline_faces(prob.selection.planar, qm.edges, qm.topology.edge_faces)
 
 
 def _support_planes(v: np.ndarray, lines) -> np.ndarray:
@@ -521,7 +519,7 @@ def _notes(p: OptimizeParams, prob: Problem, per_line: np.ndarray) -> str:
         worst = bad[np.argsort(-per_line[bad])][:5]
         tail += (f"; {len(bad)} polyline(s) above the δ_P target, worst: "
                  + ", ".join(f"{int(prob.selection.planar_index[k])} ({per_line[k]:.1e})" for k in worst))
-    if not prob.mesh.topology.families_consistent and p.families != "none" and prob.mesh.grid is None:
+    if prob.mesh.grid is None and p.families != "none" and not prob.mesh.topology.families_consistent:
         tail += " (polyline families are not consistent on this mesh: family labels are per polyline)"
     if len(prob.selection.crossing):
         tail += (f"; left out {len(prob.selection.crossing)} polyline(s) that pass twice through a vertex: "

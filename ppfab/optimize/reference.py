@@ -32,24 +32,33 @@ def closest_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndar
     va = d3 * d6 - d5 * d4
     vb = d5 * d2 - d1 * d6
     vc = d1 * d4 - d3 * d2
+    # the foot as a + s·ab + t·ac, region by region (later regions take precedence, as in Ericson's order)
     with np.errstate(divide="ignore", invalid="ignore"):
         denom = va + vb + vc
-        v = np.where(denom != 0, vb / denom, 0.0)
-        w = np.where(denom != 0, vc / denom, 0.0)
-        out = a + v[..., None] * ab + w[..., None] * ac                        # interior
+        s = np.where(denom != 0, vb / denom, 0.0)                                  # interior
+        t = np.where(denom != 0, vc / denom, 0.0)
         t_ab = np.clip(d1 / np.where(d1 - d3 != 0, d1 - d3, 1.0), 0, 1)
         t_ac = np.clip(d2 / np.where(d2 - d6 != 0, d2 - d6, 1.0), 0, 1)
         t_bc = np.clip((d4 - d3) / np.where((d4 - d3) + (d5 - d6) != 0, (d4 - d3) + (d5 - d6), 1.0), 0, 1)
-    on_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-    on_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
     on_bc = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
-    out = np.where(on_bc[..., None], b + t_bc[..., None] * (c - b), out)
-    out = np.where(on_ac[..., None], a + t_ac[..., None] * ac, out)
-    out = np.where(on_ab[..., None], a + t_ab[..., None] * ab, out)
-    out = np.where(((d6 >= 0) & (d5 <= d6))[..., None], c, out)
-    out = np.where(((d3 >= 0) & (d4 <= d3))[..., None], b, out)
-    out = np.where(((d1 <= 0) & (d2 <= 0))[..., None], a, out)
-    return out
+    s = np.where(on_bc, 1.0 - t_bc, s)
+    t = np.where(on_bc, t_bc, t)
+    on_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    s = np.where(on_ac, 0.0, s)
+    t = np.where(on_ac, t_ac, t)
+    on_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    s = np.where(on_ab, t_ab, s)
+    t = np.where(on_ab, 0.0, t)
+    at_c = (d6 >= 0) & (d5 <= d6)
+    s = np.where(at_c, 0.0, s)
+    t = np.where(at_c, 1.0, t)
+    at_b = (d3 >= 0) & (d4 <= d3)
+    s = np.where(at_b, 1.0, s)
+    t = np.where(at_b, 0.0, t)
+    at_a = (d1 <= 0) & (d2 <= 0)
+    s = np.where(at_a, 0.0, s)
+    t = np.where(at_a, 0.0, t)
+    return a + s[..., None] * ab + t[..., None] * ac
 
 
 class ReferenceSurface:

@@ -83,16 +83,6 @@ class Weights:
     nodes: float = 0.0
 
 
-def _pattern(start: int, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column of every Jacobian value of a block whose row ``i`` touches columns ``cols[i] (k,)``."""
-    cols = np.asarray(cols, dtype=np.int64)
-    if cols.size == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    cols = cols.reshape(len(cols), -1)
-    rows = np.repeat(start + np.arange(len(cols)), cols.shape[1])
-    return rows, cols.ravel()
-
-
 class Residuals:
     """The residual vector ``r(z, s)`` and its Jacobian ``∂r/∂x``.
 
@@ -222,17 +212,23 @@ class Residuals:
             vcol[self.circles].reshape(-1, 12),
             scol[self.nodes].reshape(-1, 6),
         ]
+        cols_per_block = [np.asarray(c, dtype=np.int64) for c in cols_per_block]
+        cols_per_block = [c.reshape(len(c), int(np.prod(c.shape[1:], dtype=np.int64))) for c in cols_per_block]
         sizes = [len(c) for c in cols_per_block]
         self.block_starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         self.n_residuals = int(self.block_starts[-1])
-        pats = [_pattern(s, c) for s, c in zip(self.block_starts, cols_per_block)]
-        rows_all = np.concatenate([p[0] for p in pats])
-        cols_all = np.concatenate([p[1] for p in pats])
+        # the values in order (row by row, as jacobian() lays them out); rows never decrease along it, so a
+        # stable sort by column puts them in CSC order (by column, then row)
+        cols_all = np.concatenate([c.ravel() for c in cols_per_block])
+        per_row = np.repeat([c.shape[1] for c in cols_per_block], sizes)
+        rows_all = np.repeat(np.arange(self.n_residuals, dtype=np.int64), per_row)
         keep = np.flatnonzero(cols_all >= 0)
-        order = np.lexsort((rows_all[keep], cols_all[keep]))
+        cols_kept = cols_all[keep]
+        order = np.argsort(cols_kept, kind="stable")
         self._take = keep[order]
         self._indices = rows_all[self._take]
-        self._indptr = np.searchsorted(cols_all[self._take], np.arange(self.n_unknowns + 1)).astype(np.int64)
+        self._indptr = np.concatenate([[0], np.cumsum(np.bincount(cols_kept, minlength=self.n_unknowns))]
+                                      ).astype(np.int64)
         self.nnz = len(self._take)
 
     # -- state -----------------------------------------------------------------------------
@@ -307,16 +303,32 @@ class Residuals:
         The last state's blocks are kept: an LM iteration asks for them three times at one state (the trial
         step's residual, the record's energies, the next linearisation's residual).  They are reused when ``z``
         is equal element for element and the references the blocks read (foot points and their normals, the
-        shape normals) are the same arrays."""
+        shape normals) are the same arrays; where only references changed (a new stage) only the blocks that read
+        them are computed again."""
         z = np.asarray(z)
         key = (self.ref_points, self.ref_normals, self.shape_normals)       # held: no id is reused meanwhile
         memo = getattr(self, "_memo", None)
-        if memo is not None and all(a is b for a, b in zip(memo[0], key)) and memo[1].shape == z.shape \
-                and np.array_equal(memo[1], z):
-            return memo[2]
+        if memo is not None and memo[1].shape == z.shape and np.array_equal(memo[1], z):
+            if all(a is b for a, b in zip(memo[0], key)):
+                return memo[2]
+            out = list(memo[2])                  # a new stage's foot points or shape normals: only their blocks
+            v = self.unpack(z)[0]
+            if memo[0][0] is not key[0] or memo[0][1] is not key[1]:
+                out[4] = self._close_block(v)
+            if memo[0][2] is not key[2]:
+                out[5] = np.maximum(0.0, self.corner_floor - self._corner_area(v))
+            self._memo = (key, memo[1], out)
+            return out
         out = self._blocks(z)
         self._memo = (key, z.copy(), out)
         return out
+
+    def _close_block(self, v: np.ndarray) -> np.ndarray:
+        """``r_close``: the vertices' offsets from their input places, or along the foot points' normals."""
+        cv = self.close_vertices
+        if self.closeness == "vertices":
+            return (v[cv] - self.vertices0[cv]).ravel()
+        return np.einsum("ij,ij->i", self.ref_normals[cv], v[cv] - self.ref_points[cv])
 
     def _blocks(self, z: np.ndarray) -> list[np.ndarray]:
         v, ns, nf = self.unpack(z)
@@ -328,11 +340,7 @@ class Residuals:
         r_1 = np.einsum("ij,ij->i", normals, normals) - 1.0
         a, b, c = self.triples.T
         r_fair = (v[a] - 2.0 * v[b] + v[c] - self.fair_target).ravel()
-        cv = self.close_vertices
-        if self.closeness == "vertices":
-            r_close = (v[cv] - self.vertices0[cv]).ravel()
-        else:
-            r_close = np.einsum("ij,ij->i", self.ref_normals[cv], v[cv] - self.ref_points[cv])
+        r_close = self._close_block(v)
         r_corner = np.maximum(0.0, self.corner_floor - self._corner_area(v))
         se = self.shape_edges
         d = v[se[:, 1]] - v[se[:, 0]]
@@ -367,8 +375,12 @@ class Residuals:
         return out
 
     def jacobian(self, z: np.ndarray, s: float = 1.0) -> sparse.csc_matrix:
-        """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring)."""
+        """``∂r/∂x`` as a CSC matrix ``(R, n_unknowns)`` (analytic, see module docstring).
+
+        The barriers' active rows are read from the residual blocks at ``z`` (kept from the residual the solver
+        has just evaluated there, :meth:`blocks`); a crease's derivative is computed only where it is active."""
         v, ns, nf = self.unpack(z)
+        blk = self.blocks(z)
         (cf, cpl, c1, cfair, cclose, cshape, _, ccon, corth, caxes, cslide, ccrease, ccirc,
          cnodes) = self._sqrt_weights(s)
         vals = []
@@ -383,14 +395,14 @@ class Residuals:
         e1 = v[ck] - v[cp]
         e2 = v[cq] - v[ck]
         m = self.shape_normals[self.corner_face]
-        active = (self.corner_floor - self._corner_area(v)) > 0
+        active = blk[5] > 0                                      # r_corner = max(0, floor − area)
         coef = -(cshape * active / self.face_scale2[self.corner_face])[:, None]
         d_e1 = np.cross(e2, m)                                   # ∂(e1 × e2)·m / ∂e1
         d_e2 = np.cross(m, e1)                                   # ∂(e1 × e2)·m / ∂e2
         vals.append(coef * np.concatenate([-d_e1, d_e1 - d_e2, d_e2], axis=1))
         se = self.shape_edges
         d = v[se[:, 1]] - v[se[:, 0]]
-        active = (self.weights.shape_ratio - np.einsum("ij,ij->i", d, d) / self.edge_len2) > 0
+        active = blk[6] > 0                                      # r_edge = max(0, ratio − |d|² / ℓ²)
         g = (2.0 * cshape * active / self.edge_len2)[:, None] * d
         vals.append(np.concatenate([g, -g], axis=1))
         vals.append(ccon * angle_balance(v, self.stars)[1].reshape(-1, 15))
@@ -401,8 +413,11 @@ class Residuals:
         ao, af = self.axes_pairs
         vals.append(caxes * np.concatenate([nf[af], ns[ao]], axis=1))
         vals.append(np.full(3 * len(self.slide_vertices), cslide))
-        theta, dtheta = dihedral_and_grad(v, self.crease_verts, self.crease_slot)
-        vals.append((ccrease * (theta > self.crease_start))[:, None] * dtheta.reshape(-1, 18))
+        crease = np.zeros((len(self.crease_verts), 18))
+        on = np.flatnonzero(blk[11] > 0)                         # r_crease = max(0, θ − θ_b)
+        if len(on):
+            crease[on] = ccrease * dihedral_and_grad(v, self.crease_verts[on], self.crease_slot[on])[1].reshape(-1, 18)
+        vals.append(crease)
         vals.append(ccirc * face_angle_balance(v, self.circles)[1].reshape(-1, 12))
         vals.append(cnodes * np.concatenate([ns[self.nodes[:, 1]], ns[self.nodes[:, 0]]], axis=1))
         data = np.concatenate([np.ravel(x) for x in vals])[self._take]

@@ -163,25 +163,38 @@ def corner_cosines(v: np.ndarray, corners: np.ndarray) -> tuple[np.ndarray, np.n
     return cos, np.stack([da, -(da + db), db], axis=1)
 
 
-def polyline_faces(lines: list[Polyline], edge_index: dict[tuple[int, int], int],
-                   edge_faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def polyline_faces(lines: list[Polyline], edges: np.ndarray, edge_faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(polyline, face) pairs for the support-plane term: every face with an edge on the polyline.
 
-    Returns ``owner (P,)`` (position in ``lines``) and ``face (P,)``, each pair once.
+    ``edges (E, 2)`` the mesh's unique edges ``a < b``, ``edge_faces (E, 2)`` their faces (``-1`` none).
+    Returns ``owner (P,)`` (position in ``lines``) and ``face (P,)``, each pair once, by polyline and face.
     """
-    owner, face = [], []
+    if not lines:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    a_parts, b_parts, own_parts = [], [], []
     for s, p in enumerate(lines):
-        v = p.vertices
+        v = np.asarray(p.vertices, dtype=np.int64)
         a = v if p.closed else v[:-1]
         b = np.roll(v, -1) if p.closed else v[1:]
-        fs: set[int] = set()
-        for x, y in zip(a.tolist(), b.tolist()):
-            e = edge_index.get((min(x, y), max(x, y)))
-            if e is not None:
-                fs.update(int(f) for f in edge_faces[e] if f >= 0)
-        owner.extend([s] * len(fs))
-        face.extend(sorted(fs))
-    return np.asarray(owner, dtype=np.int64), np.asarray(face, dtype=np.int64)
+        a_parts.append(a)
+        b_parts.append(b)
+        own_parts.append(np.full(len(a), s, dtype=np.int64))
+    a, b, own = np.concatenate(a_parts), np.concatenate(b_parts), np.concatenate(own_parts)
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    base = int(max(e.max(initial=-1), a.max(initial=-1), b.max(initial=-1))) + 1
+    keys = e[:, 0] * base + e[:, 1]
+    order = np.argsort(keys, kind="stable")
+    want = np.minimum(a, b) * base + np.maximum(a, b)
+    at = np.clip(np.searchsorted(keys[order], want), 0, max(len(keys) - 1, 0))
+    found = keys[order][at] == want if len(keys) else np.zeros(len(want), dtype=bool)
+    idx = order[at[found]]
+    faces = np.asarray(edge_faces, dtype=np.int64)[idx]                     # (k, 2)
+    owner = np.repeat(own[found], 2)
+    face = faces.ravel()
+    keep = face >= 0
+    pair = np.unique(owner[keep] * (int(face.max(initial=0)) + 1) + face[keep])
+    width = int(face.max(initial=0)) + 1
+    return pair // width, pair % width
 
 
 def node_pairs(lines: list[Polyline]) -> tuple[np.ndarray, np.ndarray]:
