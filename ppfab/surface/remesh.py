@@ -150,7 +150,8 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     if spec.net == "principal":
         net, twist, found, seeding = principal_net(hf, frame, loops, spec.spacing, spec.min_face)
     elif spec.net == "conjugate":
-        net, twist, seeding, off = conjugate_net(hf, frame, loops, spec.spacing, spec.min_face, spec.guides)
+        net, twist, seeding, off = conjugate_net(hf, frame, loops, spec.spacing, spec.min_face, spec.guides,
+                                                 spec.row_guides, spec.column_guides)
     elif spec.net == "pp":
         net, twist, _ = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal, spec.max_warp)
     else:

@@ -51,6 +51,14 @@ class SurfaceSpec:
                                                         "the columns should follow, projected on the plan "
                                                         "(default: the plan's axes, x the longer plan "
                                                         "direction)", length=2)
+    row_guides: list[list[list[float]]] | None = param(None, doc="conjugate net: guide curves the rows should "
+                                                                 "follow, each a polyline of points [x, y, z] in "
+                                                                 "mm (the surface's coordinates), projected on "
+                                                                 "the plan; between curves their directions are "
+                                                                 "blended by distance")
+    column_guides: list[list[list[float]]] | None = param(None, doc="conjugate net: guide curves for the columns, "
+                                                                    "as row_guides (default: the second of guides, "
+                                                                    "else across the rows' guide in plan)")
     max_warp: float = param(60.0, doc="pp net: largest warp of a quad before optimising, mm (the normal part "
                                       "of c0 - c1 + c2 - c3: about how far planar panels move off the surface); "
                                       "a net warped more is refused", exclusive_min=0.0)
@@ -66,6 +74,14 @@ class SurfaceSpec:
     def __post_init__(self) -> None:
         if not self.path:
             raise DesignError("path", "give the surface file (.3dm, .obj, .off, .stl or .ply)")
+        curves = "row_guides" if self.row_guides is not None else "column_guides" if self.column_guides is not None \
+            else None
+        if curves is not None and self.net != "conjugate":
+            raise DesignError(curves, f"only the conjugate net follows guide curves (net is {self.net!r}); set "
+                                      "net = 'conjugate' or remove the curves")
+        if curves is not None and self.search_planes:
+            raise DesignError("search_planes", f"turns the guide directions, and {curves} are fixed curves: set "
+                                               "search_planes = false or remove the curves")
 
     def file(self, base_dir: Path | None = None) -> Path:
         """The surface file, a relative path taken from ``base_dir`` (the design file's folder)."""
