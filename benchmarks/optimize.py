@@ -142,8 +142,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--families", default="both", choices=["rows", "cols", "both", "none"])
     ap.add_argument("--scipy-budget", type=float, default=900.0, help="CPU seconds per scipy run")
     ap.add_argument("--scipy-scale", default="", help="skip the variant comparison: x_scale for scipy (1 or jac)")
-    ap.add_argument("--scipy-variants-up-to", type=int, default=60,
-                    help="run both x_scale variants of scipy up to this grid size and keep the faster")
+    ap.add_argument("--scipy-variants-up-to", type=int, default=10 ** 9,
+                    help="run both x_scale variants of scipy up to this grid size and keep the faster (default: at "
+                         "every size — the faster variant at 60² was the slower one at 100² and 200², 13.9 against "
+                         "12.8 s and 80.7 against 68.0 s)")
     args = ap.parse_args(argv)
     head = (f"{'grid':>9} {'solver':>6} {'variant':>18} {'CPU s':>8} {'wall s':>8} {'iter':>5} {'jac/fact':>8} "
             f"{'max δ_f':>9} {'max δ_P':>9} {'met':>4} {'scipy/ppfab':>11}")
