@@ -764,6 +764,22 @@ def test_ifc_shares_its_materials_types_panes_and_passes_the_express_rules(built
         assert common["Reference"] == parts[plate.Name]["type_id"] and common["LoadBearing"] is False
     for member in f.by_type("IfcMember"):
         assert ue.get_psets(member)["Pset_MemberCommon"]["LoadBearing"] is True
+    # the common set of a typed part is its type's, written once on the type (Reference = the type's name); an
+    # untyped part carries its own (Reference = its type id or part id)
+    for product in f.by_type("IfcElement"):
+        if product.Name not in parts:                   # the roof, the beams' assemblies
+            continue
+        own = [r.RelatingPropertyDefinition.Name for r in product.IsDefinedBy if r.is_a("IfcRelDefinesByProperties")]
+        common = [n for n in own if n.startswith("Pset_") and n.endswith("Common")]
+        t = ue.get_type(product)
+        if t is None:
+            assert len(common) == 1
+            ref = ue.get_psets(product)[common[0]]["Reference"]
+            assert ref in (parts[product.Name].get("type_id") or product.Name, product.Name)
+        else:
+            assert common == []
+            (pset,) = [q for q in t.HasPropertySets if q.Name.startswith("Pset_")]
+            assert ue.get_psets(product)[pset.Name]["Reference"] == t.Name
     log = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(f, log, express_rules=True)
     assert log.statements == []

@@ -21,8 +21,9 @@ placement (the solid of ``beams.step``, holes as polygons of their area).
 It carries the property set :data:`~fabrication.contract.IFC_PSET` (the ``parts.csv`` values of
 :data:`~fabrication.contract.EXCHANGE_PROPERTIES`; ``area_mm2`` with an explicit mm² unit), the base quantities
 ``Qto_PlateBaseQuantities`` / ``Qto_MemberBaseQuantities`` (width or length, net area, net volume, net weight in
-the project units), the standard property set ``Pset_PlateCommon`` / ``Pset_MemberCommon`` (Reference = type id,
-IsExternal, LoadBearing), its type (:mod:`fabrication.writers._instances`: an ``IfcPlateType`` per panel type, an
+the project units), the standard property set ``Pset_PlateCommon`` / ``Pset_MemberCommon`` (Reference = the type's
+name, IsExternal, LoadBearing; written once on the type, which its occurrences inherit, or on an untyped part with
+Reference = its part id), its type (:mod:`fabrication.writers._instances`: an ``IfcPlateType`` per panel type, an
 ``IfcMemberType`` per repeated beam-plate, cover-plate or strip size, the retention types by size;
 ``IfcRelDefinesByType``) whose shape, an ``IfcRepresentationMap``, the occurrence places by an ``IfcMappedItem``
 (a pane always — the glass is cut to its type's outline —, another part where that shape is its own), the
@@ -219,7 +220,8 @@ class IfcModel:
             items, representation, extra = [mapped], "MappedRepresentation", self._fastener_size(el)
         else:
             items, representation, extra = self._own_body(el)
-        product = self._product(el, material, category, placement, items, representation, extra)
+        product = self._product(el, material, category, placement, items, representation, extra,
+                                typed=group is not None)
         if group is not None:
             group.members.append(product)
         return product
@@ -332,9 +334,11 @@ class IfcModel:
         return {"NominalDiameter": 2.0 * radius, "NominalLength": float(el.height)}
 
     def _product(self, el: Element, material: str, category: str | None, placement, solids: list,
-                 representation: str = "SweptSolid", attributes: dict[str, Any] | None = None) -> Any:
+                 representation: str = "SweptSolid", attributes: dict[str, Any] | None = None,
+                 typed: bool = False) -> Any:
         """The product of ``el`` with its body ``solids`` (of the IFC representation type ``representation``),
-        extra product ``attributes``, property sets, quantities, material and place."""
+        extra product ``attributes``, property sets, quantities, material and place; a ``typed`` part's common
+        property set is its type's (written once on the type, :meth:`write`), others carry their own."""
         f = self.f
         extra = dict(attributes or {})
         shape = f.create_entity("IfcShapeRepresentation", ContextOfItems=self.body, RepresentationIdentifier="Body",
@@ -356,7 +360,10 @@ class IfcModel:
                         RelatedObjects=[product], RelatingPropertyDefinition=pset)
         self._quantities(el, product)
         self._associate(material, category, el, product)
-        self._common_pset(el, product)
+        if not typed:
+            common = self._common_pset(el.kind, str(el.props.get("type_id", "") or el.part_id), f"{el.part_id}/common")
+            f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/common/rel"),
+                            RelatedObjects=[product], RelatingPropertyDefinition=common)
         self._classify(el.kind, product)
         if el.kind == "beam" and el.group:
             self._assemblies[el.group][1].append(product)
@@ -406,25 +413,21 @@ class IfcModel:
             "IfcMaterialLayerSet", MaterialLayers=layers, LayerSetName=makeup)
         return out
 
-    def _common_pset(self, el: Element, product) -> None:
-        """``Pset_PlateCommon`` (panes) or the common set of the element's class (``Pset_MemberCommon`` of plates,
+    def _common_pset(self, kind: str, reference: str, key: str) -> Any:
+        """``Pset_PlateCommon`` (panes) or the common set of the kind's class (``Pset_MemberCommon`` of plates,
         strips, cover plates; ``Pset_DiscreteAccessoryCommon``, ``Pset_MechanicalFastenerCommon``, … of the
-        retention parts) with the standard properties BIM tools read: Reference (the type id, else the part id),
-        IsExternal, LoadBearing."""
+        retention parts) with the standard properties BIM tools read: Reference (the type's name, else the part
+        id), IsExternal, LoadBearing.  ``key`` names its GlobalId."""
         f = self.f
-        cls = IFC_CLASSES.get(el.kind, ("IfcMember", ""))[0]
-        name = "Pset_PlateCommon" if el.kind == "panel" else f"Pset_{cls[3:]}Common"
-        reference = str(el.props.get("type_id", "") or el.part_id)
+        cls = IFC_CLASSES.get(kind, ("IfcMember", ""))[0]
+        name = "Pset_PlateCommon" if kind == "panel" else f"Pset_{cls[3:]}Common"
         props = [f.create_entity("IfcPropertySingleValue", Name="Reference",
                                  NominalValue=f.create_entity("IfcIdentifier", reference)),
                  f.create_entity("IfcPropertySingleValue", Name="IsExternal",
                                  NominalValue=f.create_entity("IfcBoolean", True)),
                  f.create_entity("IfcPropertySingleValue", Name="LoadBearing",
-                                 NominalValue=f.create_entity("IfcBoolean", el.kind != "panel"))]
-        pset = f.create_entity("IfcPropertySet", GlobalId=self.guid(f"{el.part_id}/common"), Name=name,
-                               HasProperties=props)
-        f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/common/rel"),
-                        RelatedObjects=[product], RelatingPropertyDefinition=pset)
+                                 NominalValue=f.create_entity("IfcBoolean", kind != "panel"))]
+        return f.create_entity("IfcPropertySet", GlobalId=self.guid(key), Name=name, HasProperties=props)
 
     def _classify(self, kind: str, obj: Any) -> None:
         """Note ``obj`` (a part or a type) for the classification reference of its kind, if the design gives one
@@ -523,7 +526,8 @@ class IfcModel:
             extra = {"ElementType": kind} if group.predefined == "USERDEFINED" else {}
             t = f.create_entity(group.cls, GlobalId=self.guid(f"type/{kind}/{name}"), Name=name,
                                 PredefinedType=group.predefined,
-                                RepresentationMaps=[group.map] if group.map is not None else None, **extra)
+                                RepresentationMaps=[group.map] if group.map is not None else None,
+                                HasPropertySets=[self._common_pset(kind, name, f"type/{kind}/{name}/common")], **extra)
             f.create_entity("IfcRelDefinesByType", GlobalId=self.guid(f"type/{kind}/{name}/rel"),
                             RelatedObjects=group.members, RelatingType=t)
             self._classify(kind, t)
