@@ -11,12 +11,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ppfab.errors import DesignError, MeshFileError
 from ppfab.surface import UNITS, SurfaceSamples
+
+if TYPE_CHECKING:
+    from ppfab.surface import SurfaceSpec
 
 MESH_SUFFIXES = (".obj", ".off", ".stl", ".ply")
 SURFACE_SUFFIXES = (".3dm",) + MESH_SUFFIXES
@@ -198,6 +201,62 @@ def _read_3dm(p: Path, units: str | None, name: str | None) -> SurfaceFile:
     source = f"{p.name}: {type(geom).__name__}{' ' + repr(label) if label else ''}"
     unit_name = _UNIT_NAMES.get(unit, units or "mm")
     return SurfaceFile("nurbs", SurfaceSamples(pts, tri, tuple(loops), unit_name, source), srf, factor)
+
+
+GUIDE_SAMPLES = 65
+"""Points a guide curve of a ``.3dm`` is sampled at, evenly in its parameter (a polyline keeps its own points)."""
+
+
+def layer_curves(path: str | Path, layer: str) -> list[np.ndarray]:
+    """The curves on ``layer`` (its name or full path) of a ``.3dm`` as polylines ``(m, 3)`` in mm.
+
+    Raises
+    ------
+    DesignError : the file is not a ``.3dm``, has no such layer (its layers are named), or no curve on it
+    """
+    import rhino3dm
+
+    p = Path(path)
+    if p.suffix.lower() != ".3dm":
+        raise DesignError("surface.guide_layers", f"{p.name} is not a .3dm: only a Rhino file has layers; give the "
+                                                  "guide curves as row_guides / column_guides")
+    model: Any = rhino3dm.File3dm.Read(str(p))
+    if model is None:
+        raise MeshFileError(str(p), "cannot be read as a Rhino .3dm file")
+    unit = str(model.Settings.ModelUnitSystem).split(".")[-1]
+    factor = _RHINO_UNITS.get(unit, 1.0)
+    layers = [model.Layers[k] for k in range(len(model.Layers))]
+    wanted = {k for k, lay in enumerate(layers) if layer in (lay.Name, lay.FullPath)}
+    if not wanted:
+        names = ", ".join(repr(lay.FullPath or lay.Name) for lay in layers) or "none"
+        raise DesignError("surface.guide_layers", f"{p.name} has no layer {layer!r} (its layers: {names})")
+    out = []
+    for obj in model.Objects:
+        g = obj.Geometry
+        if obj.Attributes.LayerIndex not in wanted or not isinstance(g, rhino3dm.Curve):
+            continue
+        if isinstance(g, rhino3dm.PolylineCurve):
+            pts = np.array([[(q := g.Point(i)).X, q.Y, q.Z] for i in range(g.PointCount)])
+        else:
+            pts = _curve_points(g, GUIDE_SAMPLES)
+        out.append(pts * factor)
+    if not out:
+        raise DesignError("surface.guide_layers", f"layer {layer!r} of {p.name} holds no curve: draw the guide "
+                                                  "curves on it (lines, polylines, arcs or NURBS curves)")
+    return out
+
+
+def with_layer_guides(spec: "SurfaceSpec", path: str | Path) -> "SurfaceSpec":
+    """``spec`` with the guide curves of its ``guide_layers`` read from the ``.3dm`` (:func:`layer_curves`) as
+    ``row_guides`` (and ``column_guides``); unchanged without ``guide_layers``."""
+    from dataclasses import replace
+
+    if spec.guide_layers is None:
+        return spec
+    rows = layer_curves(path, spec.guide_layers[0])
+    cols = layer_curves(path, spec.guide_layers[1]) if len(spec.guide_layers) > 1 else None
+    return replace(spec, guide_layers=None, row_guides=[c.tolist() for c in rows],
+                   column_guides=None if cols is None else [c.tolist() for c in cols])
 
 
 METRES_BELOW = 500.0

@@ -175,3 +175,75 @@ def test_guide_curves_drawn_along_a_real_net_are_followed(enneper):
     b = off(c.net.mesh, du, dv)
     assert c.net.grid_faces.sum() >= 8 and np.median(b) < 10.0 and b.max() < 17.0, b       # 8.4° / 15.9° measured
     assert np.median(off(c.net.mesh, dv, du)) > 60.0                   # the families have traded places
+
+
+def _paraboloid_3dm(path, rows_layer: str = "Rows", polyline: bool = False) -> None:
+    """A .3dm in mm: the paraboloid of revolution ``_z`` over 14 × 14 m centred at the origin as an exact bicubic
+    Bézier surface (a quadratic's cubic Bernstein coefficients), and on layer ``rows_layer`` two arcs about
+    ``CENTRE`` (NURBS curves from rhino3dm's arcs, or one of them as a polyline)."""
+    import rhino3dm
+
+    half = 7000.0
+    ns = rhino3dm.NurbsSurface.Create(3, False, 4, 4, 4, 4)
+    x = np.linspace(-half, half, 4)                    # control abscissae (linear precision)
+    # Bernstein coefficients of x² on [−h, h] at cubic degree: x(t)² with x = −h + 2ht → [h², −h²/3, −h²/3, h²]
+    sq = np.array([half ** 2, -half ** 2 / 3.0, -half ** 2 / 3.0, half ** 2])
+    for i in range(4):
+        for j in range(4):
+            ns.Points[i, j] = rhino3dm.Point4d(x[i], x[j], 3000.0 - (sq[i] + sq[j]) / (2.0 * R), 1.0)
+    for k, t in enumerate([0, 0, 0, 1, 1, 1]):
+        ns.KnotsU[k] = t
+        ns.KnotsV[k] = t
+    model = rhino3dm.File3dm()
+    model.Settings.ModelUnitSystem = rhino3dm.UnitSystem.Millimeters
+    model.Objects.AddSurface(ns)
+    layer = rhino3dm.Layer()
+    layer.Name = rows_layer
+    att = rhino3dm.ObjectAttributes()
+    att.LayerIndex = model.Layers.Add(layer)
+    for k, radius in enumerate((20000.0, 32000.0)):
+        pts = _arc(radius, 25)
+        if polyline and k == 1:
+            model.Objects.AddPolyline([rhino3dm.Point3d(*p) for p in pts], att)
+        else:
+            arc = rhino3dm.Arc(rhino3dm.Point3d(*pts[0]), rhino3dm.Point3d(*pts[12]), rhino3dm.Point3d(*pts[-1]))
+            model.Objects.AddCurve(arc.ToNurbsCurve(), att)
+    model.Write(str(path), 7)
+
+
+@pytest.mark.parametrize("polyline", [False, True])
+def test_guide_curves_from_a_rhino_layer(tmp_path, capsys, polyline):
+    """A designer draws the guide curves in Rhino on a layer: `ppfab remesh --guide-layers Rows` (and
+    ``[surface] guide_layers``) reads them from the .3dm (arcs as NURBS curves, a polyline by its points) and the
+    rows of the written net follow them; the NURBS is the paraboloid exactly (checked: heights on the closed
+    form)."""
+    from fabrication.cli import main
+    from ppfab.io import read_mesh
+
+    surface = tmp_path / "roof.3dm"
+    _paraboloid_3dm(surface, polyline=polyline)
+    out = tmp_path / "net.obj"
+    assert main(["remesh", str(surface), "-o", str(out), "--net", "conjugate", "--guide-layers", "Rows"]) == 0
+    mesh = read_mesh(out)
+    v = np.asarray(mesh.vertices)
+    assert np.abs(v[:, 2] - _z(v[:, 0], v[:, 1])).max() < 1.0
+    off = _off_circle_deg(mesh)
+    assert len(mesh.faces) >= 30 and np.median(off) < 2.0 and off.max() < 6.0, (np.median(off), off.max())
+
+
+def test_guide_layers_that_do_not_exist_or_hold_no_curve_are_named(tmp_path, capsys):
+    from fabrication.cli import main
+
+    surface = tmp_path / "roof.3dm"
+    _paraboloid_3dm(surface, rows_layer="Guides")
+    for layers, words in ((["Rows"], "roof.3dm has no layer 'Rows' (its layers: 'Guides')"),
+                          (["Guides", "Default"], "has no layer 'Default'")):
+        out = tmp_path / "net.obj"
+        assert main(["remesh", str(surface), "-o", str(out), "--net", "conjugate", "--guide-layers", *layers]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0] and not out.exists()
+    mesh_file = tmp_path / "roof.ply"
+    _height_mesh(tmp_path, _z, half=7000.0, n=21).rename(mesh_file)
+    assert main(["remesh", str(mesh_file), "-o", str(tmp_path / "n.obj"), "--net", "conjugate",
+                 "--guide-layers", "Rows"]) == 2
+    assert "only a Rhino file has layers" in capsys.readouterr().err

@@ -26,6 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--guides", type=float, nargs=6, metavar=("X1", "Y1", "Z1", "X2", "Y2", "Z2"), default=None,
                    help="conjugate net: the directions the rows and the columns should follow (default: the plan's "
                         "axes)")
+    p.add_argument("--guide-layers", nargs="+", metavar="LAYER", default=None,
+                   help="conjugate net, a .3dm: the layer of the rows' guide curves, and optionally the columns'")
     p.add_argument("--search-planes", action="store_true",
                    help="sections and conjugate nets: try section planes every 15° then 2.5° in plan and keep the "
                         "net whose edges stay nearest the spacing")
@@ -48,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from ppfab.surface import SurfaceSpec, remesh
 
     from ..pipeline.overwrite import check_output_file, write_output
-    from ..surfacefile import read_surface
+    from ..surfacefile import read_surface, with_layer_guides
 
     out = Path(args.out)
     if out.suffix.lower() != ".obj":
@@ -58,9 +60,10 @@ def run(args: argparse.Namespace) -> int:
         "path": args.surface, "net": args.net, "spacing": args.spacing, "plane_normal": args.plane_normal,
         "second_normal": args.second_normal,
         "guides": [args.guides[:3], args.guides[3:]] if args.guides is not None else None,
-        "search_planes": args.search_planes or None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
+        "guide_layers": args.guide_layers, "search_planes": args.search_planes or None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
     surface = read_surface(args.surface, spec.units, spec.object)
+    spec = with_layer_guides(spec, args.surface)
     if surface.note:
         print(f"ppfab: note: {surface.note}", file=sys.stderr)
     result = remesh(surface.samples, spec)

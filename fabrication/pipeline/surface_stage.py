@@ -25,12 +25,13 @@ def surface_geometry(design: Design, progress: Progress, allow_large: bool,
     from ppfab.surface import remesh
     from ppfab.transforms.similarity import transform
 
-    from ..surfacefile import read_surface
+    from ..surfacefile import read_surface, with_layer_guides
 
     spec = design.surface
     assert spec is not None
     geo = design.geometry
     surface = read_surface(spec.file(design.base_dir), spec.units, spec.object)
+    spec = with_layer_guides(spec, spec.file(design.base_dir))
     if surface.note:
         log.warning(surface.note)
     progress.note(f"{spec.net} net, spacing {spec.spacing:g} mm…")

@@ -59,6 +59,10 @@ class SurfaceSpec:
     column_guides: list[list[list[float]]] | None = param(None, doc="conjugate net: guide curves for the columns, "
                                                                     "as row_guides (default: the second of guides, "
                                                                     "else across the rows' guide in plan)")
+    guide_layers: list[str] | None = param(None, doc="conjugate net, a .3dm surface: the layer whose curves are "
+                                                    "the rows' guide curves, and optionally the columns' layer "
+                                                    "([\"Rows\"] or [\"Rows\", \"Columns\"]; a layer's name or "
+                                                    "full path); each curve is sampled in mm")
     max_warp: float = param(60.0, doc="pp net: largest warp of a quad before optimising, mm (the normal part "
                                       "of c0 - c1 + c2 - c3: about how far planar panels move off the surface); "
                                       "a net warped more is refused", exclusive_min=0.0)
@@ -75,7 +79,13 @@ class SurfaceSpec:
         if not self.path:
             raise DesignError("path", "give the surface file (.3dm, .obj, .off, .stl or .ply)")
         curves = "row_guides" if self.row_guides is not None else "column_guides" if self.column_guides is not None \
-            else None
+            else "guide_layers" if self.guide_layers is not None else None
+        if self.guide_layers is not None and not 1 <= len(self.guide_layers) <= 2:
+            raise DesignError("guide_layers", f"names the rows' layer and optionally the columns' (one or two "
+                                              f"names), not {len(self.guide_layers)}")
+        if self.guide_layers is not None and (self.row_guides is not None or self.column_guides is not None):
+            raise DesignError("guide_layers", "and row_guides / column_guides are both given: the curves come from "
+                                              "the .3dm's layers or from the design, not both")
         if curves is not None and self.net != "conjugate":
             raise DesignError(curves, f"only the conjugate net follows guide curves (net is {self.net!r}); set "
                                       "net = 'conjugate' or remove the curves")
