@@ -34,10 +34,12 @@ def test_example_geometry(path):
         g = build_geometry(design.geometry, design.optimize, design.base_dir)
     q = quality(g.mesh)
     assert q.delta_f_max <= 1e-6 and q.flipped_edges == 0
+    # the design's own δ_P target where it sets one above 1e-6 (Fig. 16's multi-patch dome: 3e-6, the paper's level)
+    tol_p = max(1e-6, design.optimize.target_delta_p) if design.optimize is not None else 1e-6
     if "rows" in g.planar_families:
-        assert q.delta_p_rows_max <= 1e-6
+        assert q.delta_p_rows_max <= tol_p
     if "cols" in g.planar_families:
-        assert q.delta_p_cols_max <= 1e-6
+        assert q.delta_p_cols_max <= tol_p
     # realistic architectural size: panels between 0.5 m and 3 m, structure above 10 m
     qm = g.mesh.to_quadmesh() if hasattr(g.mesh, "to_quadmesh") else g.mesh
     e = qm.edge_lengths()

@@ -243,6 +243,27 @@ class Retention:
     panes: tuple[PaneRestraint, ...]
     screws: tuple[ScrewSet, ...] = ()
     bending: dict[str, PlateBending] | None = None
+    cramped: tuple["CrampedBlock", ...] = ()
+
+
+AcrossFace = tuple[np.ndarray, np.ndarray, np.ndarray, float]
+"""The glass across a joint at its edge: a point on the bottom edge of its edge face ``(3,)``, the face's outward
+unit normal ``(3,)`` (towards the joint), the pane's unit normal ``(3,)`` and its thickness (mm)."""
+
+
+@dataclass(frozen=True)
+class CrampedBlock:
+    """A pane whose setting block has less than :data:`MIN_BLOCK_MM` of height below the pane across the joint
+    (a kink closes the joint over it): ``room_mm`` the height it has (negative: the pane across comes down to the
+    block's foot), ``widen_mm`` how much wider the joint must be for the block to stand :data:`MIN_BLOCK_MM`."""
+
+    panel: str
+    room_mm: float
+    widen_mm: float
+
+
+MIN_BLOCK_MM = 1.0
+"""The lowest setting block or stop ppfab places (mm)."""
 
 
 def down_edge(panel: "Panel") -> int:
@@ -269,23 +290,79 @@ def _gasket_height(points3: np.ndarray, normal: np.ndarray, strip: Strip, gasket
     return float((((top[0] - points3) @ u) / denom).max())
 
 
-def _below_face(points3: np.ndarray, normal: np.ndarray, face: tuple[np.ndarray, np.ndarray] | None) -> float:
-    """How far (mm) ``points3`` may rise along ``normal`` before one of them reaches the plane ``face`` (a point
-    on it and its unit normal, pointing to the side the points are on); ``inf`` when none comes nearer."""
+def _below_face(points3: np.ndarray, normal: np.ndarray, face: "AcrossFace | None") -> float:
+    """How far (mm) the convex footprint ``points3 (k, 3)`` may rise along ``normal`` (a prism growing from it)
+    before it enters the glass across the joint: the part of that pane's slab (between its bottom and top faces)
+    on the inner side of its edge face (:data:`AcrossFace`); ``inf`` when it never does.
+
+    The first height of contact is a small linear programme: the least ``h ≥ 0`` with a point ``Σ λ_i p_i + h·n``
+    (``λ`` convex weights of the footprint's corners) inside the slab and behind the edge face — exact for the
+    convex block against the pane's edge region, where only the edge face, not its infinite plane, bounds the
+    glass."""
     if face is None:
         return math.inf
-    origin, m = face
-    rate = float(normal @ m)
-    if rate >= -1e-9:
-        return math.inf
-    return float((((points3 - origin) @ m) / -rate).min())
+    from scipy.optimize import linprog
+
+    pts = np.asarray(points3, dtype=float)
+    k = len(pts)
+    origin, m, up, thick = face
+    # variables: λ (k), h; rows: m·(x − o) ≤ 0, −up·(x − o) ≤ 0, up·(x − o) ≤ t
+    a_m = np.r_[pts @ m - origin @ m, normal @ m]
+    a_up = np.r_[pts @ up - origin @ up, normal @ up]
+    res = linprog(np.r_[np.zeros(k), 1.0], A_ub=np.stack([a_m, -a_up, a_up]), b_ub=np.array([0.0, 0.0, thick]),
+                  A_eq=np.r_[np.ones(k), 0.0][None], b_eq=np.array([1.0]),
+                  bounds=[(0.0, None)] * (k + 1), method="highs")
+    return float(res.x[-1]) if res.status == 0 else math.inf
+
+
+def _clear_of(s: float, towards: float, lb: float, length: float, along, avoid: Sequence[tuple[float, float]]) -> float:
+    """A block centred ``s`` mm along its edge (``lb`` long) moved by ``towards`` (±1: to the edge's middle) until
+    its span along the strip (``along(t)``: strip ``x`` of the point ``t`` mm along the edge) is clear of every
+    interval of ``avoid`` by :data:`JOINT_SPARE`; it stays on the edge (at most to its middle)."""
+    limit = 0.5 * length
+    for _ in range(len(avoid) + 1):
+        x = sorted((float(along(s - 0.5 * lb)), float(along(s + 0.5 * lb))))
+        hit = [(u, v) for u, v in avoid if x[0] < v + JOINT_SPARE and u - JOINT_SPARE < x[1]]
+        if not hit:
+            return s
+        u, v = hit[0]
+        step = max(v + JOINT_SPARE - x[0], x[1] - (u - JOINT_SPARE))       # the larger way out: always enough
+        s = s + towards * step
+        if (towards > 0 and s > limit) or (towards < 0 and s < limit):
+            return limit
+    return s
+
+
+def _widen_for_block(points3: np.ndarray, normal: np.ndarray, out3: np.ndarray, face: "AcrossFace") -> float:
+    """How much wider (mm) the joint must be for a block on ``points3`` to stand :data:`MIN_BLOCK_MM` under the
+    glass across: the joint widened by ``Δ`` moves each pane's edge ``Δ / 2`` away from it (the block along
+    ``−out3``, the face across along its normal), found by bisection on :func:`_below_face`."""
+    origin, m, up, thick = face
+
+    def room(delta: float) -> float:
+        moved = (origin - 0.5 * delta * m, m, up, thick)
+        return _below_face(points3 - 0.5 * delta * out3, normal, moved) - 0.5 * JOINT_SPARE
+
+    lo, hi = 0.0, 1.0
+    while room(hi) < MIN_BLOCK_MM and hi < 1000.0:
+        lo, hi = hi, 2.0 * hi
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if room(mid) >= MIN_BLOCK_MM else (mid, hi)
+    return hi
 
 
 def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, p: GlazingParams,
-                   stops: bool, across: tuple[np.ndarray, np.ndarray] | None = None) -> list[Prism]:
+                   stops: bool, across: AcrossFace | None = None,
+                   cramped: list[CrampedBlock] | None = None,
+                   avoid: Sequence[tuple[float, float]] = ()) -> list[Prism]:
     """The two setting blocks of a pane (and their stops when ``stops``) on outline edge ``edge``; ``across``
-    is the edge face of the pane across the joint (a point on it and its outward unit normal): where a kink
-    tilts that face over the joint, a block or stop reaches only to :data:`JOINT_SPARE` / 2 below it."""
+    is the glass across the joint (:data:`AcrossFace`): where a kink brings it over the joint, a block or stop
+    reaches only to :data:`JOINT_SPARE` / 2 below it.  A block with less room than :data:`MIN_BLOCK_MM` is still
+    placed that high, and noted in ``cramped``.  ``avoid``: intervals along the strip's ``x`` (mm) taken by the
+    blocks of the pane across the same joint (a valley, where both panes' down-slope edges lie on one strip):
+    each block moves from its quarter point towards the edge's middle until it is clear of them by
+    :data:`JOINT_SPARE`."""
     f = panel.frame
     N = f.normal
     q = np.asarray(panel.outline, dtype=float)
@@ -300,6 +377,9 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
     sid = strip.part_id if strip is not None else ""
     beam = strip.beam_id if strip is not None else ""
     for k, s in enumerate((0.25 * L, 0.75 * L), start=1):
+        if avoid and strip is not None:
+            s = _clear_of(s, 1.0 if k == 1 else -1.0, lb, L, lambda t: strip.frame.to2d(f.to3d(a + t * d))[0],
+                          avoid)
         layers = [("setting_block", setting_block_id(owner, k), 0.0, p.setting_block_width)]
         if stops:
             layers.append(("stop", stop_id(owner, k), p.setting_block_width, p.setting_block_width + p.stop_width))
@@ -312,7 +392,11 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
             if base < seat:
                 base = seat
             reach = _below_face(f.to3d(rect) + base * N, N, across) - 0.5 * JOINT_SPARE
-            height = max(min(top - base, reach), 1.0)
+            room = min(top - base, reach)
+            if room < MIN_BLOCK_MM and cramped is not None and across is not None:
+                cramped.append(CrampedBlock(owner, room, _widen_for_block(f.to3d(rect) + base * N, N, f.vec3d(o),
+                                                                         across)))
+            height = max(room, MIN_BLOCK_MM)
             out.append(Prism(pid, kind, owner, sid, beam, f, rect, base, height))
     return out
 
@@ -370,7 +454,9 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                                                 f"in the {gap:g} mm joint: use a smaller one or widen [panels] gap")
     seat_of = {s.panel: s.offset for s in seats}
     parts: list[Prism] = []
+    cramped: list[CrampedBlock] = []
     blocks_on: dict[str, list[tuple[float, float]]] = {}
+    placed: dict[str, list[tuple[float, float]]] = {}         # blocks and stops along each strip, as placed
     down: dict[str, tuple[int, Strip | None, float]] = {}
     contact: dict[str, float] = {}
     panel_of = {x.part_id: x for x in panels}
@@ -388,9 +474,10 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                 ring = other.outline_3d() + seat_of.get(other.part_id, 0.0) * other.frame.normal
                 e = ring[(q + 1) % len(ring)] - ring[q]
                 m = np.cross(e, other.frame.normal)            # outward of a counter-clockwise outline
-                across = (ring[q], m / np.linalg.norm(m))
+                across = (ring[q], m / np.linalg.norm(m), other.frame.normal, float(other.thickness_mm))
         seat = seat_of.get(panel.part_id, 0.0)
-        blocks = setting_blocks(panel, seat, strip, k, p, stops, across)
+        blocks = setting_blocks(panel, seat, strip, k, p, stops, across, cramped,
+                                placed.get(strip.part_id, []) if strip is not None else ())
         parts += blocks
         down[panel.part_id] = (k, strip, slope)
         if strip is not None:
@@ -398,6 +485,7 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
             for b in blocks:
                 along = strip.frame.to2d(b.frame.to3d(b.outline))[:, 0]
                 blocks_on.setdefault(strip.part_id, []).append((float(along.min()) - r, float(along.max()) + r))
+                placed.setdefault(strip.part_id, []).append((float(along.min()), float(along.max())))
     stations: dict[str, tuple[float, ...]] = {}
     bites: dict[str, list[float]] = {}
     spacing: dict[str, list[float]] = {}
@@ -501,7 +589,27 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
                     "the joint over the block: %s; widen [panels] gap there or give them a bracket under the edge",
                     len(low), ", ".join(f"{x.part_id} ({c:.1f} of {x.thickness_mm:g} mm)" for x, c in low[:8]))
-    return Retention(p, bolt, tuple(parts), stations, tuple(out), tuple(screw_sets), bending)
+    return Retention(p, bolt, tuple(parts), stations, tuple(out), tuple(screw_sets), bending, tuple(cramped))
+
+
+def refuse_blocks_in_glass(retention: "Retention | None", gap: float) -> None:
+    """Raise :class:`~ppfab.errors.DesignError` (``panels.gap``) naming the panes whose setting blocks have less
+    than :data:`MIN_BLOCK_MM` of room under the pane across their joint (a kink closes the joint over them: the
+    block would stand in that glass) and the joint that gives them room: before any file is written, where the
+    build's clash check would refuse the files after writing them."""
+    if retention is None or not retention.cramped:
+        return
+    worst: dict[str, CrampedBlock] = {}
+    for c in retention.cramped:
+        if c.panel not in worst or c.widen_mm > worst[c.panel].widen_mm:
+            worst[c.panel] = c
+    order = sorted(worst.values(), key=lambda c: (-c.widen_mm, c.panel))
+    need = math.ceil(gap + max(c.widen_mm for c in order) + 0.01)
+    raise DesignError("panels.gap", f"{len(order)} pane(s) have no room for their setting blocks, where a kink closes "
+                                    "the joint over them (the pane across comes down to the block): "
+                                    + ", ".join(f"{c.panel} ({c.room_mm:.2f} mm of {MIN_BLOCK_MM:g})" for c in order[:6])
+                                    + f"; widen [panels] gap to at least {need} mm (from {gap:g}) or give these "
+                                    "panes a bracket under the edge")
 
 
 def _perimeter(panel: "Panel") -> float:

@@ -68,7 +68,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     except BaseException:
         p.fail()
         raise
-    from ..glazing.retention import retention_mass_kg, retention_of
+    from ..glazing.retention import refuse_blocks_in_glass, retention_mass_kg, retention_of
     from ..glazing.screws import refuse_screws_in_glass
     from ..glazing.seat import seat_panes
     from ..parts import parts_table
@@ -77,6 +77,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
              if glazing is not None and glazing.strips else ())
     retention = retention_of(panels.panels, seats, glazing, support, float(design.panels.gap))
     refuse_screws_in_glass(retention, design.panels.gap)    # placed on the built panes and strips
+    refuse_blocks_in_glass(retention, design.panels.gap)
     summary = replace(summary, retention_mass_kg=retention_mass_kg(retention))
     b = Build(design, geometry, quality, support, panels, beams, nesting, nodes, summary, glazing=glazing,
               seats=seats, retention=retention, times=p.times)
