@@ -41,6 +41,9 @@ def test_the_room_under_the_glass_across_is_the_first_height_of_contact(seed):
     def block(height: float) -> np.ndarray:
         return np.stack([-50 + 100 * u.ravel(), w * v.ravel(), height * s.ravel()], axis=1)
 
+    for cap in (1.0, 5.0, 18.0):                      # a block never taller than cap: the plane's bound may answer
+        capped = _below_face(rect, n, face, cap)
+        assert capped == h if h < cap else capped >= cap
     if math.isinf(h):
         assert not _inside(block(60.0), face).any()
         return

@@ -290,7 +290,7 @@ def _gasket_height(points3: np.ndarray, normal: np.ndarray, strip: Strip, gasket
     return float((((top[0] - points3) @ u) / denom).max())
 
 
-def _below_face(points3: np.ndarray, normal: np.ndarray, face: "AcrossFace | None") -> float:
+def _below_face(points3: np.ndarray, normal: np.ndarray, face: "AcrossFace | None", cap: float = math.inf) -> float:
     """How far (mm) the convex footprint ``points3 (k, 3)`` may rise along ``normal`` (a prism growing from it)
     before it enters the glass across the joint: the part of that pane's slab (between its bottom and top faces)
     on the inner side of its edge face (:data:`AcrossFace`); ``inf`` when it never does.
@@ -298,14 +298,23 @@ def _below_face(points3: np.ndarray, normal: np.ndarray, face: "AcrossFace | Non
     The first height of contact is a small linear programme: the least ``h ≥ 0`` with a point ``Σ λ_i p_i + h·n``
     (``λ`` convex weights of the footprint's corners) inside the slab and behind the edge face — exact for the
     convex block against the pane's edge region, where only the edge face, not its infinite plane, bounds the
-    glass."""
+    glass.  The glass lies behind that plane, so the height at which the footprint reaches the plane is a lower
+    bound: when it is ``cap`` or more (the block is never that tall) it is returned without the programme."""
     if face is None:
         return math.inf
+    pts = np.asarray(points3, dtype=float)
+    origin, m, up, thick = face
+    rate = float(normal @ m)
+    ahead = (pts - origin) @ m                            # ≥ 0: in front of the edge face's plane
+    if rate >= -1e-12:                                    # rising does not bring the footprint nearer the plane
+        plane = math.inf if float(ahead.min()) >= 0.0 else 0.0
+    else:
+        plane = float((ahead / -rate).min())
+    if plane >= cap:
+        return plane
     from scipy.optimize import linprog
 
-    pts = np.asarray(points3, dtype=float)
     k = len(pts)
-    origin, m, up, thick = face
     # variables: λ (k), h; rows: m·(x − o) ≤ 0, −up·(x − o) ≤ 0, up·(x − o) ≤ t
     a_m = np.r_[pts @ m - origin @ m, normal @ m]
     a_up = np.r_[pts @ up - origin @ up, normal @ up]
@@ -391,7 +400,7 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
                 base = min(max(seat, _gasket_height(f.to3d(rect), N, strip, p.gasket_thickness)), top - 1.0)
             if base < seat:
                 base = seat
-            reach = _below_face(f.to3d(rect) + base * N, N, across) - 0.5 * JOINT_SPARE
+            reach = _below_face(f.to3d(rect) + base * N, N, across, top - base + 0.5 * JOINT_SPARE) - 0.5 * JOINT_SPARE
             room = min(top - base, reach)
             if room < MIN_BLOCK_MM and cramped is not None and across is not None:
                 cramped.append(CrampedBlock(owner, room, _widen_for_block(f.to3d(rect) + base * N, N, f.vec3d(o),
