@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -207,8 +207,9 @@ GUIDE_SAMPLES = 65
 """Points a guide curve of a ``.3dm`` is sampled at, evenly in its parameter (a polyline keeps its own points)."""
 
 
-def layer_curves(path: str | Path, layer: str) -> list[np.ndarray]:
-    """The curves on ``layer`` (its name or full path) of a ``.3dm`` as polylines ``(m, 3)`` in mm.
+def layer_curves(path: str | Path, layers: Sequence[str], factor: float) -> list[list[np.ndarray]]:
+    """Per name of ``layers`` (a layer's name or full path), the curves on that layer of a ``.3dm`` as polylines
+    ``(m, 3)`` in mm (``factor``: mm per file unit, the surface's as read), the file read once.
 
     Raises
     ------
@@ -223,40 +224,41 @@ def layer_curves(path: str | Path, layer: str) -> list[np.ndarray]:
     model: Any = rhino3dm.File3dm.Read(str(p))
     if model is None:
         raise MeshFileError(str(p), "cannot be read as a Rhino .3dm file")
-    unit = str(model.Settings.ModelUnitSystem).split(".")[-1]
-    factor = _RHINO_UNITS.get(unit, 1.0)
-    layers = [model.Layers[k] for k in range(len(model.Layers))]
-    wanted = {k for k, lay in enumerate(layers) if layer in (lay.Name, lay.FullPath)}
-    if not wanted:
-        names = ", ".join(repr(lay.FullPath or lay.Name) for lay in layers) or "none"
-        raise DesignError("surface.guide_layers", f"{p.name} has no layer {layer!r} (its layers: {names})")
-    out = []
-    for obj in model.Objects:
-        g = obj.Geometry
-        if obj.Attributes.LayerIndex not in wanted or not isinstance(g, rhino3dm.Curve):
-            continue
-        if isinstance(g, rhino3dm.PolylineCurve):
-            pts = np.array([[(q := g.Point(i)).X, q.Y, q.Z] for i in range(g.PointCount)])
-        else:
-            pts = _curve_points(g, GUIDE_SAMPLES)
-        out.append(pts * factor)
-    if not out:
-        raise DesignError("surface.guide_layers", f"layer {layer!r} of {p.name} holds no curve: draw the guide "
-                                                  "curves on it (lines, polylines, arcs or NURBS curves)")
-    return out
+    table = [model.Layers[k] for k in range(len(model.Layers))]
+    objects = [(obj.Attributes.LayerIndex, obj.Geometry) for obj in model.Objects]
+    found = []
+    for layer in layers:
+        wanted = {k for k, lay in enumerate(table) if layer in (lay.Name, lay.FullPath)}
+        if not wanted:
+            names = ", ".join(repr(lay.FullPath or lay.Name) for lay in table) or "none"
+            raise DesignError("surface.guide_layers", f"{p.name} has no layer {layer!r} (its layers: {names})")
+        out = []
+        for index, g in objects:
+            if index not in wanted or not isinstance(g, rhino3dm.Curve):
+                continue
+            if isinstance(g, rhino3dm.PolylineCurve):
+                pts = np.array([[(q := g.Point(i)).X, q.Y, q.Z] for i in range(g.PointCount)])
+            else:
+                pts = _curve_points(g, GUIDE_SAMPLES)
+            out.append(pts * factor)
+        if not out:
+            raise DesignError("surface.guide_layers", f"layer {layer!r} of {p.name} holds no curve: draw the guide "
+                                                      "curves on it (lines, polylines, arcs or NURBS curves)")
+        found.append(out)
+    return found
 
 
-def with_layer_guides(spec: "SurfaceSpec", path: str | Path) -> "SurfaceSpec":
-    """``spec`` with the guide curves of its ``guide_layers`` read from the ``.3dm`` (:func:`layer_curves`) as
-    ``row_guides`` (and ``column_guides``); unchanged without ``guide_layers``."""
+def with_layer_guides(spec: "SurfaceSpec", path: str | Path, surface: "SurfaceFile") -> "SurfaceSpec":
+    """``spec`` with the guide curves of its ``guide_layers`` read from the ``.3dm`` ``path`` (:func:`layer_curves`,
+    in the units ``surface`` — that file as read — was scaled by) as ``row_guides`` (and ``column_guides``);
+    unchanged without ``guide_layers``."""
     from dataclasses import replace
 
     if spec.guide_layers is None:
         return spec
-    rows = layer_curves(path, spec.guide_layers[0])
-    cols = layer_curves(path, spec.guide_layers[1]) if len(spec.guide_layers) > 1 else None
-    return replace(spec, guide_layers=None, row_guides=[c.tolist() for c in rows],
-                   column_guides=None if cols is None else [c.tolist() for c in cols])
+    curves = layer_curves(path, spec.guide_layers, surface.factor)
+    return replace(spec, guide_layers=None, row_guides=[c.tolist() for c in curves[0]],
+                   column_guides=[c.tolist() for c in curves[1]] if len(curves) > 1 else None)
 
 
 METRES_BELOW = 500.0

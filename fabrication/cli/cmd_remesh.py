@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         "guide_layers": args.guide_layers, "search_planes": args.search_planes or None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
     surface = read_surface(args.surface, spec.units, spec.object)
-    spec = with_layer_guides(spec, args.surface)
+    spec = with_layer_guides(spec, args.surface, surface)
     if surface.note:
         print(f"ppfab: note: {surface.note}", file=sys.stderr)
     result = remesh(surface.samples, spec)

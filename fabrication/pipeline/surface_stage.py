@@ -31,7 +31,7 @@ def surface_geometry(design: Design, progress: Progress, allow_large: bool,
     assert spec is not None
     geo = design.geometry
     surface = read_surface(spec.file(design.base_dir), spec.units, spec.object)
-    spec = with_layer_guides(spec, spec.file(design.base_dir))
+    spec = with_layer_guides(spec, spec.file(design.base_dir), surface)
     if surface.note:
         log.warning(surface.note)
     progress.note(f"{spec.net} net, spacing {spec.spacing:g} mm…")
