@@ -37,11 +37,18 @@ How ``S`` is solved (:class:`FactorCache`):
   of the Schur term.  The factor of ``S(μ)`` is then used as the preconditioner of
   conjugate gradients on ``S(μ')`` (Saad, *Iterative methods for sparse linear
   systems*, Alg. 9.1); only when CG does not reach the relative residual
-  ``cg_tol`` within ``cg_maxiter`` iterations is ``S(μ')`` factorised afresh.  (Reusing
-  a factor across linearisations was measured too: every LM iteration of the
-  benchmark grids is a new continuation stage, and CG then needed about 20
-  iterations per solve, no faster than a new factorisation.)
-
+  ``cg_tol`` within ``cg_maxiter`` iterations is ``S(μ')`` factorised afresh.
+* **Inexact steps on a new linearisation** (systems of at least :data:`INEXACT_MIN_UNKNOWNS` unknowns).  The
+  first system of a new linearisation is solved by CG preconditioned with the kept factor of an earlier one,
+  to the forcing term ``‖S h − b‖ ≤ η ‖b‖``, ``η =`` :data:`FORCING` (an inexact Newton step: Dembo,
+  Eisenstat & Steihaug, *Inexact Newton methods*, SIAM J. Numer. Anal. 19, 1982; Nocedal & Wright §7.1), within
+  :data:`FORCING_MAXITER` iterations, else it is factorised.  The gain ratio judges the step as any other (its
+  predicted decrease is computed from ``J h``, exact for any ``h``).  A failed attempt, or a rejected inexact
+  step (the solver tells, :attr:`FactorCache.inexact_ok`), stops inexact steps until the next continuation
+  stage.  Measured (``benchmarks/optimize.py``, docs/optimisation.md): the 200 × 200 grid takes 3 factorisations
+  instead of 9 in the same 9 iterations; on the 1,000–2,000-vertex real meshes the extra iterations inexact
+  steps cost were not repaid (DOI rot4 took 201–500 iterations instead of 226 depending on ``η``), hence the
+  size threshold.
 A rejected step only changes ``μ``: ``JᵀJ`` and ``Jᵀr`` are kept.
 """
 
@@ -61,6 +68,15 @@ from ..errors import GeometryError
 from .ordering import level_set_dissection
 
 LINEAR_SOLVERS = ("auto", "pardiso", "superlu")
+
+FORCING = 0.1
+"""Forcing term ``η`` of the inexact Newton steps (Dembo, Eisenstat & Steihaug 1982): the first system of a new
+linearisation is accepted from CG when ``‖S h − b‖ ≤ η ‖b‖``."""
+FORCING_MAXITER = 6
+"""CG iterations (each one solve with the kept factor) tried before a new linearisation's system is factorised."""
+INEXACT_MIN_UNKNOWNS = 30_000
+"""Inexact steps only for systems ``S`` of at least this many unknowns (10,000 vertices): below it a factorisation
+costs few solves, and the extra iterations inexact steps can cost are not repaid."""
 
 
 def _point_at_mkl() -> None:
@@ -247,18 +263,25 @@ class FactorCache:
     """
 
     def __init__(self, cg_tol: float = 1e-10, cg_maxiter: int = 12, reuse: bool = True, last: int = 0,
-                 solver: str = "superlu"):
+                 solver: str = "superlu", forcing: float = FORCING, forcing_maxiter: int = FORCING_MAXITER,
+                 inexact_min: int = INEXACT_MIN_UNKNOWNS):
         self.cg_tol = cg_tol
         self.cg_maxiter = cg_maxiter
         self.reuse = reuse
+        self.forcing = forcing
+        self.forcing_maxiter = forcing_maxiter
+        self.inexact_min = inexact_min
         self.last = last
         self.solver = solver
         self.perm: np.ndarray | None = None
         self.lu: Any = None                  # SuperLU or _PardisoFactor of the last factorised system
-        self.owner: object = None
+        self.owner: object = None            # the linearisation of the last solve
+        self.factor_owner: object = None     # the linearisation whose system ``lu`` factorised
         self.factorisations = 0
         self.cg_solves = 0
         self.cg_iterations = 0
+        self.inexact_solves = 0
+        self.inexact_ok = True               # inexact steps allowed (until one fails; the solver allows them again)
 
     def _ordering(self, s: sparse.csr_matrix) -> np.ndarray:
         if self.perm is None or len(self.perm) != s.shape[0]:
@@ -269,35 +292,55 @@ class FactorCache:
     def solve(self, s: sparse.spmatrix, rhs: np.ndarray, owner: object = None) -> np.ndarray:
         """``h`` with ``S h = rhs`` for SPD ``S (n, n)``.
 
-        ``owner`` identifies the linearisation: the kept factor preconditions CG only for the same owner.
+        ``owner`` identifies the linearisation.  Its first system is solved inexactly by CG preconditioned with
+        the kept factor of an earlier linearisation when that reaches the forcing term (below); a later system
+        of the same owner (a new damping) by CG preconditioned with the factor of that owner's own system, to
+        ``cg_tol``; otherwise ``S`` is factorised.
         """
         s = sparse.csr_matrix(s)
-        reuse = self.reuse and self.lu is not None and owner is not None and owner is self.owner
+        have = self.reuse and self.lu is not None and owner is not None
+        first = owner is not self.owner
+        inexact = (have and first and self.inexact_ok and self.forcing_maxiter > 0     # a new linearisation
+                   and s.shape[0] >= self.inexact_min)
+        if have and not first and self.factor_owner is owner:
+            tol, maxiter = self.cg_tol, self.cg_maxiter       # a new damping: its own factor, (nearly) exact
+        elif inexact:
+            tol, maxiter = self.forcing, self.forcing_maxiter
+        else:
+            tol, maxiter = 0.0, -1
         self.owner = owner
         if self.solver == "pardiso":                          # PARDISO orders the matrix itself
-            x = self._pcg(s, rhs) if reuse else None
+            x = self._pcg(s, rhs, tol, maxiter) if maxiter >= 0 else None
             if x is not None:
+                self.inexact_solves += int(inexact)
                 return x
+            self.inexact_ok = self.inexact_ok and not inexact
             upper = sparse.triu(s, format="csr")
             upper.sort_indices()
             self._drop()
             try:
                 self.lu = _PardisoFactor(upper, _thread_pardiso(), "minimum degree" if self.last else "metis")
             except Exception:                                 # a PARDISO error: SuperLU from now on
-                self.solver, self.lu, reuse = "superlu", None, False
+                self.solver, self.lu = "superlu", None
+                maxiter = -1
             else:
                 self.factorisations += 1
+                self.factor_owner = owner
                 return self.lu.solve(rhs)
         p = self._ordering(s)
         sp = sparse.csr_matrix(s[p][:, p])
         b = rhs[p]
-        x = self._pcg(sp, b) if reuse else None
+        x = self._pcg(sp, b, tol, maxiter) if maxiter >= 0 and self.lu is not None else None
         if x is None:
+            self.inexact_ok = self.inexact_ok and not inexact
             self._drop()
             self.lu = splu(sparse.csc_matrix(sp), permc_spec="NATURAL", diag_pivot_thresh=0.0,
                            options={"SymmetricMode": True})
             self.factorisations += 1
+            self.factor_owner = owner
             x = self.lu.solve(b)
+        else:
+            self.inexact_solves += int(inexact)
         out = np.empty_like(rhs)
         out[p] = x
         return out
@@ -308,8 +351,9 @@ class FactorCache:
             self.lu.free()
         self.lu = None
 
-    def _pcg(self, a: sparse.csr_matrix, b: np.ndarray) -> np.ndarray | None:
-        """Conjugate gradients on ``a x = b`` preconditioned by the kept factor; ``None`` if too slow."""
+    def _pcg(self, a: sparse.csr_matrix, b: np.ndarray, tol: float, maxiter: int) -> np.ndarray | None:
+        """Conjugate gradients on ``a x = b`` preconditioned by the kept factor, to the relative residual ``tol``
+        within ``maxiter`` iterations; ``None`` if it does not get there."""
         bn = float(np.linalg.norm(b))
         if bn == 0.0:
             return np.zeros_like(b)
@@ -319,12 +363,12 @@ class FactorCache:
         z = lu.solve(r)
         d = z.copy()
         rz = float(r @ z)
-        for k in range(self.cg_maxiter + 1):
-            if np.linalg.norm(r) <= self.cg_tol * bn:
+        for k in range(maxiter + 1):
+            if np.linalg.norm(r) <= tol * bn:
                 self.cg_solves += 1
                 self.cg_iterations += k
                 return x
-            if k == self.cg_maxiter or not rz > 0:
+            if k == maxiter or not rz > 0:
                 break
             ad = a @ d
             alpha = rz / float(d @ ad)
@@ -334,7 +378,7 @@ class FactorCache:
             rz_new = float(r @ z)
             d = z + (rz_new / rz) * d
             rz = rz_new
-        self.cg_iterations += self.cg_maxiter
+        self.cg_iterations += maxiter
         return None
 
 

@@ -17,6 +17,9 @@ state, so the constraints E_P, E_f, E_1 are driven to zero while the mesh stays
 where the regularised problem put it.  The run stops when the targets on
 ``max δ_f`` and ``max δ_P`` are met (measured with :mod:`ppfab.metrics` after
 every accepted step), at a stationary point, or after ``max_iterations`` solves.
+
+On large systems the first solve of a new linearisation may be an inexact Newton step (CG preconditioned with
+an earlier factor, :mod:`ppfab.optimize.linsolve`); a rejected inexact step turns them off until the next stage.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from ..metrics import circular_residual, face_planarity, pad_polylines, polyline
 from ..planes import fit_plane
 from ..topology import Polyline
 from .guard import StepGuard
-from .linsolve import DampedSystem, FactorCache
+from .linsolve import INEXACT_MIN_UNKNOWNS, DampedSystem, FactorCache
 from .residuals import Residuals
 from .terms import angle_balance
 
@@ -160,6 +163,7 @@ class SolverControl:
     target_circular: float = np.inf
     target_nodes: float = np.inf
     linear_solver: str = "superlu"
+    inexact_min_unknowns: int = INEXACT_MIN_UNKNOWNS      # systems this large may take inexact Newton steps
 
     def rises(self, now: tuple[float, ...], start: tuple[float, ...]) -> tuple[str, ...]:
         """The targeted measures — max δ_f, max δ_P, max conical and circular residual, max node cosine — of an iterate ``now`` that are
@@ -238,7 +242,7 @@ class LevenbergMarquardt:
         self.history: list[IterationRecord] = []
         self.t0 = time.perf_counter()
         self.cache = FactorCache(last=3 * problem.n_planes if problem.plane_unknowns else 0,
-                                 solver=self.c.linear_solver)
+                                 solver=self.c.linear_solver, inexact_min=self.c.inexact_min_unknowns)
         if on_stage is not None:
             on_stage(self.z)
         self._linearise()
@@ -288,7 +292,9 @@ class LevenbergMarquardt:
     def step(self) -> str:
         """One LM iteration; returns ``''`` to go on or the reason to stop."""
         self.iteration += 1
+        inexact_before = self.cache.inexact_solves
         h = self.system.solve(self.mu)
+        inexact = self.cache.inexact_solves > inexact_before
         z_new = self.z.copy()
         z_new[self.p.free_index] += h
         z_new = self.p.project_normals(z_new)
@@ -303,6 +309,8 @@ class LevenbergMarquardt:
             if not (rho > 0 and np.isfinite(e_new)):
                 reason = "energy"
         if reason:                       # undo: state, energy and linearisation stay as they were
+            if inexact:
+                self.cache.inexact_ok = False          # the stale factor misled: exact steps until a new stage
             self.mu *= self.nu
             self.nu *= 2.0
             self.rejections += 1
@@ -329,6 +337,7 @@ class LevenbergMarquardt:
         if decrease < self.c.stall and self.reg > self.c.reg_min and self.c.reg_decay < 1.0:
             self.reg = max(self.reg * self.c.reg_decay, self.c.reg_min)
             self.stage += 1
+            self.cache.inexact_ok = True
             if self.on_stage is not None:
                 self.on_stage(self.z)
         elif tiny:
@@ -344,6 +353,7 @@ class LevenbergMarquardt:
         count from 0; the best state and the start's measures are those of ``z``."""
         self.z = self.p.project_normals(np.array(z, dtype=float))
         self.reg, self.stage, self.iteration, self.rejections, self.nu, self.mu = 1.0, 0, 0, 0, 2.0, 0.0
+        self.cache.inexact_ok = True
         if self.on_stage is not None:
             self.on_stage(self.z)
         self._linearise()
