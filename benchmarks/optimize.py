@@ -34,7 +34,10 @@ time other jobs take; both solvers run single-threaded with ``OMP_NUM_THREADS=1`
 Jacobian evaluations), achieved max δ_f and δ_P, whether both targets were met, and scipy time / ppfab time.
 Set ``OMP_NUM_THREADS=1`` for comparable timings.
 
-Run:  python benchmarks/optimize.py [--sizes 30,60,100,200] [--scipy-budget 900]
+``--sizes`` may also name ``roof``: the generated 100 × 120-vertex roof patch of ``benchmarks/optimize_table.py``
+(12,000 vertices, a real-size P problem: rows made planar, ``families = "rows"``).
+
+Run:  python benchmarks/optimize.py [--sizes 30,60,100,200,roof] [--scipy-budget 900]
 """
 
 from __future__ import annotations
@@ -159,25 +162,30 @@ def main(argv: list[str] | None = None) -> int:
     run_ppfab(warm, args.families, "superlu")
     for xs in (1.0, "jac"):
         run_scipy(warm, args.families, args.scipy_budget, xs)
-    for n in (int(k) for k in args.sizes.split(",")):
-        grid = noisy_grid(n)
-        a = run_ppfab(grid, args.families)
-        plain = [run_ppfab(grid, args.families, "superlu")] if a["variant"].endswith("pardiso") else []
+    for size in args.sizes.split(","):
+        if size == "roof":
+            from optimize_table import roof_patch
+            grid, families, n, label = roof_patch()[1], "rows", 110, "roof 100x120 P"
+        else:
+            n = int(size)
+            grid, families, label = noisy_grid(n), args.families, f"{n:>4}x{n:<4}"
+        a = run_ppfab(grid, families)
+        plain = [run_ppfab(grid, families, "superlu")] if a["variant"].endswith("pardiso") else []
         if n <= args.scipy_variants_up_to and not args.scipy_scale:
-            runs = [run_scipy(grid, args.families, args.scipy_budget, xs) for xs in (1.0, "jac")]
+            runs = [run_scipy(grid, families, args.scipy_budget, xs) for xs in (1.0, "jac")]
             met = [r for r in runs if r["met"]] or runs
             b = min(met, key=lambda r: r["time"])
             best_scale = 1.0 if b is runs[0] else "jac"
             others = [r for r in runs if r is not b]
         else:
-            b = run_scipy(grid, args.families, args.scipy_budget, best_scale)
+            b = run_scipy(grid, families, args.scipy_budget, best_scale)
             others = []
         for name, r in [("ppfab", a)] + [("ppfab", q) for q in plain] + [("scipy", b)] + [("scipy", o) for o in others]:
             bound = "" if b["met"] else ">"
             ratio = f"{bound}{r['time'] / a['time']:.1f}" if name == "scipy" else ""
             note = ("  (slower variant)" if name == "scipy" and r is not b
                     else f"  (scipy/this {b['time'] / r['time']:.1f})" if name == "ppfab" and r is not a else "")
-            print(f"{n:>4}x{n:<4} {name:>6} {r['variant']:>18} {r['time']:8.2f} {r['wall']:8.2f} {r['iters']:5d} "
+            print(f"{label:>9} {name:>6} {r['variant']:>18} {r['time']:8.2f} {r['wall']:8.2f} {r['iters']:5d} "
                   f"{r['evals']:8d} "
                   f"{r['df']:9.2e} {r['dp']:9.2e} {'yes' if r['met'] else 'no':>4} {ratio:>11}{note}", flush=True)
     return 0

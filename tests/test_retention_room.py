@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from fabrication.glazing.retention import _below_face
+from fabrication.glazing.retention import JOINT_SPARE, _below_face, _clear_of
 
 
 def _inside(points: np.ndarray, face) -> np.ndarray:
@@ -52,6 +52,37 @@ def test_the_room_under_the_glass_across_is_the_first_height_of_contact(seed):
     assert _inside(block(h + 0.05), face).any()
 
 
+def _clear(t: float, lb: float, shift: float, avoid) -> bool:
+    """The block centred ``t`` (``lb`` long, strip x = t + shift, reversed when shift < 0) is clear of ``avoid``."""
+    x = sorted((shift + t - 0.5 * lb, shift + t + 0.5 * lb)) if shift >= 0 else \
+        sorted((-shift - t - 0.5 * lb, -shift - t + 0.5 * lb))
+    return all(x[1] + JOINT_SPARE <= u or v + JOINT_SPARE <= x[0] for u, v in avoid)
+
+
+@pytest.mark.parametrize("shift", [0.0, 250.0, -1200.0])
+def test_a_valley_block_moves_to_the_nearest_clear_station_or_is_refused(shift):
+    """A 100 mm block at the quarter point of a 1,000 mm edge, the strip running along the edge or against it:
+    moved towards the middle when that is clear, towards the end when only that is, ``None`` when neither is;
+    every returned station checked clear of the taken intervals and on its stretch."""
+    lb, length = 100.0, 1000.0
+
+    def along(t: float) -> float:
+        return shift + t if shift >= 0 else -shift - t
+
+    def strip(a: float, b: float) -> tuple[float, float]:            # edge stretch [a, b] in strip x
+        u, v = sorted((along(a), along(b)))
+        return u, v
+
+    free = _clear_of(250.0, 1.0, lb, length, along, [])
+    assert free == 250.0
+    middle = _clear_of(250.0, 1.0, lb, length, along, [strip(150.0, 320.0)])
+    assert middle is not None and 250.0 < middle <= 500.0 and _clear(middle, lb, shift, [strip(150.0, 320.0)])
+    end = _clear_of(250.0, 1.0, lb, length, along, [strip(180.0, 600.0)])
+    assert end is not None and 50.0 <= end < 250.0 and _clear(end, lb, shift, [strip(180.0, 600.0)])
+    assert _clear_of(250.0, 1.0, lb, length, along, [strip(100.0, 700.0)]) is None
+    assert _clear_of(750.0, -1.0, lb, length, along, [strip(400.0, 700.0), strip(720.0, 1000.0)]) is None
+
+
 def _design(tmp_path, gap: float):
     from fabrication.examples import example_path
 
@@ -75,6 +106,23 @@ def test_blocks_without_room_are_refused_with_the_joint_that_fits(tmp_path, caps
     assert len(err) == 1 and "Traceback" not in err[0]
     assert "panels.gap: 4 pane(s) have no room for their setting blocks" in err[0]
     assert "widen [panels] gap to at least 15 mm (from 10)" in err[0]
+    assert not out.exists()
+
+
+def test_valley_blocks_that_find_no_clear_station_are_refused(tmp_path, capsys):
+    """300 mm blocks: in one of the dome's valley joints the two panes' blocks cannot stand apart; the build stops
+    before writing, in one line naming the pane, the strip and the key."""
+    from fabrication.cli import main
+
+    design = _design(tmp_path, 15.0)
+    text = design.read_text(encoding="utf-8").replace("[glazing]\n", "[glazing]\nsetting_block_length = 300.0\n")
+    design.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["build", str(design), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0]
+    assert "glazing.setting_block_length: 1 pane(s) find no station for a setting block clear" in err[0]
+    assert "P-0040 on GS-R0002-02" in err[0] and "now 300 mm" in err[0]
     assert not out.exists()
 
 

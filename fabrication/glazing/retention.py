@@ -244,11 +244,22 @@ class Retention:
     screws: tuple[ScrewSet, ...] = ()
     bending: dict[str, PlateBending] | None = None
     cramped: tuple["CrampedBlock", ...] = ()
+    crowded: tuple["CrowdedBlock", ...] = ()
 
 
 AcrossFace = tuple[np.ndarray, np.ndarray, np.ndarray, float]
 """The glass across a joint at its edge: a point on the bottom edge of its edge face ``(3,)``, the face's outward
 unit normal ``(3,)`` (towards the joint), the pane's unit normal ``(3,)`` and its thickness (mm)."""
+
+
+@dataclass(frozen=True)
+class CrowdedBlock:
+    """A setting block of pane ``panel`` that finds no station on its edge clear of the blocks and stops of the
+    pane across the same joint (a valley: both panes' down-slope edges on strip ``strip``), ``length_mm`` long."""
+
+    panel: str
+    strip: str
+    length_mm: float
 
 
 @dataclass(frozen=True)
@@ -324,22 +335,35 @@ def _below_face(points3: np.ndarray, normal: np.ndarray, face: "AcrossFace | Non
     return float(res.x[-1]) if res.status == 0 else math.inf
 
 
-def _clear_of(s: float, towards: float, lb: float, length: float, along, avoid: Sequence[tuple[float, float]]) -> float:
-    """A block centred ``s`` mm along its edge (``lb`` long) moved by ``towards`` (±1: to the edge's middle) until
-    its span along the strip (``along(t)``: strip ``x`` of the point ``t`` mm along the edge) is clear of every
-    interval of ``avoid`` by :data:`JOINT_SPARE`; it stays on the edge (at most to its middle)."""
-    limit = 0.5 * length
-    for _ in range(len(avoid) + 1):
-        x = sorted((float(along(s - 0.5 * lb)), float(along(s + 0.5 * lb))))
-        hit = [(u, v) for u, v in avoid if x[0] < v + JOINT_SPARE and u - JOINT_SPARE < x[1]]
-        if not hit:
-            return s
-        u, v = hit[0]
-        step = max(v + JOINT_SPARE - x[0], x[1] - (u - JOINT_SPARE))       # the larger way out: always enough
-        s = s + towards * step
-        if (towards > 0 and s > limit) or (towards < 0 and s < limit):
-            return limit
-    return s
+def _clear_of(s: float, towards: float, lb: float, length: float, along,
+              avoid: Sequence[tuple[float, float]]) -> float | None:
+    """A block centred ``s`` mm along its edge (``lb`` long) moved until its span along the strip (``along(t)``:
+    strip ``x`` of the point ``t`` mm along the edge) is clear of every interval of ``avoid`` by
+    :data:`JOINT_SPARE`: first by ``towards`` (±1: to the edge's middle, at most to it), then the other way (at
+    most to the edge's end).  ``None`` when no station on either stretch is clear."""
+    def hit(t: float) -> tuple[float, float, float, float] | None:
+        x = sorted((float(along(t - 0.5 * lb)), float(along(t + 0.5 * lb))))
+        for u, v in avoid:
+            if x[0] < v + JOINT_SPARE and u - JOINT_SPARE < x[1]:
+                return x[0], x[1], u, v
+        return None
+
+    ends = (0.5 * lb, length - 0.5 * lb)
+    for way in (towards, -towards):
+        bound = 0.5 * length if way == towards else (ends[1] if way > 0 else ends[0])
+        t = s
+        for _ in range(len(avoid) + 2):
+            h = hit(t)
+            if h is None:
+                return t
+            x0, x1, u, v = h
+            t = t + way * max(v + JOINT_SPARE - x0, x1 - (u - JOINT_SPARE))   # the larger way out: always enough
+            if (way > 0 and t > bound) or (way < 0 and t < bound):
+                t = bound
+                if hit(t) is None:
+                    return t
+                break
+    return None
 
 
 def _widen_for_block(points3: np.ndarray, normal: np.ndarray, out3: np.ndarray, face: "AcrossFace") -> float:
@@ -364,14 +388,16 @@ def _widen_for_block(points3: np.ndarray, normal: np.ndarray, out3: np.ndarray, 
 def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, p: GlazingParams,
                    stops: bool, across: AcrossFace | None = None,
                    cramped: list[CrampedBlock] | None = None,
-                   avoid: Sequence[tuple[float, float]] = ()) -> list[Prism]:
+                   avoid: Sequence[tuple[float, float]] = (),
+                   crowded: list[CrowdedBlock] | None = None) -> list[Prism]:
     """The two setting blocks of a pane (and their stops when ``stops``) on outline edge ``edge``; ``across``
     is the glass across the joint (:data:`AcrossFace`): where a kink brings it over the joint, a block or stop
     reaches only to :data:`JOINT_SPARE` / 2 below it.  A block with less room than :data:`MIN_BLOCK_MM` is still
     placed that high, and noted in ``cramped``.  ``avoid``: intervals along the strip's ``x`` (mm) taken by the
     blocks of the pane across the same joint (a valley, where both panes' down-slope edges lie on one strip):
-    each block moves from its quarter point towards the edge's middle until it is clear of them by
-    :data:`JOINT_SPARE`."""
+    each block moves from its quarter point towards the edge's middle (failing that, towards its end) until it is
+    clear of them and of the pane's own first block by :data:`JOINT_SPARE`; one that finds no such station stays
+    at its quarter point and is noted in ``crowded``."""
     f = panel.frame
     N = f.normal
     q = np.asarray(panel.outline, dtype=float)
@@ -385,10 +411,20 @@ def setting_blocks(panel: "Panel", seat: float, strip: Strip | None, edge: int, 
     owner = panel.part_id
     sid = strip.part_id if strip is not None else ""
     beam = strip.beam_id if strip is not None else ""
+    taken = list(avoid)
     for k, s in enumerate((0.25 * L, 0.75 * L), start=1):
         if avoid and strip is not None:
-            s = _clear_of(s, 1.0 if k == 1 else -1.0, lb, L, lambda t: strip.frame.to2d(f.to3d(a + t * d))[0],
-                          avoid)
+            def along(t: float, strip: Strip = strip) -> float:
+                return float(strip.frame.to2d(f.to3d(a + t * d))[0])
+
+            clear = _clear_of(s, 1.0 if k == 1 else -1.0, lb, L, along, taken)
+            if clear is None:
+                if crowded is not None:
+                    crowded.append(CrowdedBlock(owner, sid, lb))
+            else:
+                s = clear
+            x0, x1 = sorted((along(s - 0.5 * lb), along(s + 0.5 * lb)))
+            taken.append((x0, x1))
         layers = [("setting_block", setting_block_id(owner, k), 0.0, p.setting_block_width)]
         if stops:
             layers.append(("stop", stop_id(owner, k), p.setting_block_width, p.setting_block_width + p.stop_width))
@@ -464,6 +500,7 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
     seat_of = {s.panel: s.offset for s in seats}
     parts: list[Prism] = []
     cramped: list[CrampedBlock] = []
+    crowded: list[CrowdedBlock] = []
     blocks_on: dict[str, list[tuple[float, float]]] = {}
     placed: dict[str, list[tuple[float, float]]] = {}         # blocks and stops along each strip, as placed
     down: dict[str, tuple[int, Strip | None, float]] = {}
@@ -486,7 +523,7 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
                 across = (ring[q], m / np.linalg.norm(m), other.frame.normal, float(other.thickness_mm))
         seat = seat_of.get(panel.part_id, 0.0)
         blocks = setting_blocks(panel, seat, strip, k, p, stops, across, cramped,
-                                placed.get(strip.part_id, []) if strip is not None else ())
+                                placed.get(strip.part_id, []) if strip is not None else (), crowded)
         parts += blocks
         down[panel.part_id] = (k, strip, slope)
         if strip is not None:
@@ -598,15 +635,27 @@ def make_retention(panels: Sequence["Panel"], seats: Sequence[PaneSeat], strips:
         log.warning("%d pane(s) bear on their setting blocks over less than half the glass edge, where a kink closes "
                     "the joint over the block: %s; widen [panels] gap there or give them a bracket under the edge",
                     len(low), ", ".join(f"{x.part_id} ({c:.1f} of {x.thickness_mm:g} mm)" for x, c in low[:8]))
-    return Retention(p, bolt, tuple(parts), stations, tuple(out), tuple(screw_sets), bending, tuple(cramped))
+    return Retention(p, bolt, tuple(parts), stations, tuple(out), tuple(screw_sets), bending, tuple(cramped),
+                     tuple(crowded))
 
 
 def refuse_blocks_in_glass(retention: "Retention | None", gap: float) -> None:
     """Raise :class:`~ppfab.errors.DesignError` (``panels.gap``) naming the panes whose setting blocks have less
     than :data:`MIN_BLOCK_MM` of room under the pane across their joint (a kink closes the joint over them: the
     block would stand in that glass) and the joint that gives them room: before any file is written, where the
-    build's clash check would refuse the files after writing them."""
-    if retention is None or not retention.cramped:
+    build's clash check would refuse the files after writing them.  Blocks that find no station clear of the
+    blocks of the pane across a valley joint are refused first (``glazing.setting_block_length``)."""
+    if retention is None:
+        return
+    if retention.crowded:
+        crowd = sorted({(x.panel, x.strip): x for x in retention.crowded}.values(), key=lambda x: x.panel)
+        raise DesignError("glazing.setting_block_length",
+                          f"{len(crowd)} pane(s) find no station for a setting block clear of the blocks of the pane "
+                          "across their valley joint (both panes' down-slope edges on one strip): "
+                          + ", ".join(f"{x.panel} on {x.strip} ({x.length_mm:.0f} mm blocks)" for x in crowd[:6])
+                          + f"; shorten [glazing] setting_block_length (now "
+                          f"{retention.params.setting_block_length:g} mm)")
+    if not retention.cramped:
         return
     worst: dict[str, CrampedBlock] = {}
     for c in retention.cramped:
