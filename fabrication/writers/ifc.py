@@ -61,8 +61,9 @@ LENGTH_KEYS = {"thickness_mm", "planarity_dev_mm"}
 @dataclass
 class _Type:
     """One IFC element type being filled: its class and predefined type, the part kind, its occurrences, its
-    shape's ``IfcRepresentationMap`` (the body of its first part), how many occurrences keep their own body, and the largest distance of a mapped shape from an occurrence's own outline (mm, reported for the
-    panes by the writer's line)."""
+    shape's ``IfcRepresentationMap`` (the body of its first part), how many occurrences keep their own body,
+    and the largest distance of a mapped shape from an occurrence's own outline (mm, reported for the panes by
+    the writer's line)."""
 
     cls: str
     predefined: str
