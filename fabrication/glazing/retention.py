@@ -652,9 +652,10 @@ def refuse_blocks_in_glass(retention: "Retention | None", gap: float) -> None:
         raise DesignError("glazing.setting_block_length",
                           f"{len(crowd)} pane(s) find no station for a setting block clear of the blocks of the pane "
                           "across their valley joint (both panes' down-slope edges on one strip): "
-                          + ", ".join(f"{x.panel} on {x.strip} ({x.length_mm:.0f} mm blocks)" for x in crowd[:6])
-                          + f"; shorten [glazing] setting_block_length (now "
-                          f"{retention.params.setting_block_length:g} mm)")
+                          + ", ".join(f"{x.panel} on {x.strip} ({x.length_mm:.0f} mm blocks)"
+                                      for x in crowd[:6])
+                          + "; shorten [glazing] setting_block_length (now "
+                          + f"{retention.params.setting_block_length:g} mm)")
     if not retention.cramped:
         return
     worst: dict[str, CrampedBlock] = {}

@@ -47,7 +47,7 @@ How ``S`` is solved (:class:`FactorCache`):
   step (the solver tells, :attr:`FactorCache.inexact_ok`), stops inexact steps until the next continuation
   stage.  Measured (``benchmarks/optimize.py``, docs/optimisation.md): the 200 × 200 grid takes 3 factorisations
   instead of 9 in the same 9 iterations; on the 1,000–2,000-vertex real meshes the extra iterations inexact
-  steps cost were not repaid (DOI rot4 took 201–500 iterations instead of 226 depending on ``η``), hence the
+  steps cost were not repaid (DOI rot4 took 189–500 iterations instead of 226 depending on ``η``), hence the
   size threshold.
 A rejected step only changes ``μ``: ``JᵀJ`` and ``Jᵀr`` are kept.
 """
@@ -253,13 +253,17 @@ class FactorCache:
 
     Parameters
     ----------
-    cg_tol : relative residual ``‖S h − b‖ / ‖b‖`` at which a preconditioned CG solve is accepted
+    cg_tol : relative residual ``‖S h − b‖ / ‖b‖`` at which CG on a new damping's system is accepted
     cg_maxiter : CG iterations before ``S`` is factorised afresh
     reuse : keep factors for preconditioned CG (``False``: factorise every system, the direct method)
     last : the trailing unknowns ordered last (:func:`nested_dissection`)
     solver : ``"superlu"`` or ``"pardiso"`` (:func:`resolve_solver`)
+    forcing, forcing_maxiter : the inexact step's relative residual and CG iterations on a new linearisation
+    inexact_min : the fewest unknowns of ``S`` for which a new linearisation may be solved inexactly
 
-    Counters ``factorisations``, ``cg_solves`` and ``cg_iterations`` say how the systems were solved.
+    Counters ``factorisations``, ``cg_solves`` (``inexact_solves`` of them on a new linearisation) and
+    ``cg_iterations`` say how the systems were solved; ``inexact_ok`` is cleared by a failed inexact attempt
+    (and by the solver after a rejected inexact step) and set again by the solver at a new stage.
     """
 
     def __init__(self, cg_tol: float = 1e-10, cg_maxiter: int = 12, reuse: bool = True, last: int = 0,
