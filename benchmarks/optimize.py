@@ -152,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     head = (f"{'grid':>9} {'solver':>6} {'variant':>18} {'CPU s':>8} {'wall s':>8} {'iter':>5} {'jac/fact':>8} "
             f"{'max δ_f':>9} {'max δ_P':>9} {'met':>4} {'scipy/ppfab':>11}")
-    print(f"families = {args.families}; targets max δ_f, max δ_P <= {TARGET:.0e}; noise 3 % of the spacing; "
+    roof = " (the roof patch: rows)" if "roof" in args.sizes.split(",") else ""
+    print(f"families = {args.families}{roof}; targets max δ_f, max δ_P <= {TARGET:.0e}; noise 3 % of the spacing; "
           f"same residuals, start, analytic Jacobian and stage rule; time = CPU seconds")
     print(head)
     print("-" * len(head))
