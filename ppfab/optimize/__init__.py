@@ -110,7 +110,8 @@ class OptimizeResult:
         ``nan``)
     returned : ``"last"`` (the final iterate), ``"best"`` (the final iterate was worse than the input; the
         best-scoring iterate is returned) or ``"input"`` (no iterate was better than the input)
-    factorisations, cg_solves : how the linear systems were solved
+    factorisations, cg_solves : how the linear systems were solved (``inexact_solves`` of the CG solves were
+        inexact Newton steps on a new linearisation, :mod:`ppfab.optimize.linsolve`)
     conjugacy_defect : :func:`ppfab.metrics.conjugacy_defect` of the input
     warnings : what the targets do not say but the caller should know (also at the end of ``message`` and
         logged): a nearly conical input that lost its conicality (:func:`.outcome.conical_loss`), polylines
@@ -164,6 +165,7 @@ class OptimizeResult:
     returned: str = "last"
     factorisations: int = 0
     cg_solves: int = 0
+    inexact_solves: int = 0
     conjugacy_defect: float = 0.0
     warnings: tuple[str, ...] = ()
 
@@ -195,6 +197,7 @@ class OptimizeResult:
             "support_angle_max": self.support_angle_max, "axis_angle_max": self.axis_angle_max,
             "axis_angle_mean": self.axis_angle_mean, "rejected": dict(self.rejected), "returned": self.returned,
             "factorisations": self.factorisations, "cg_solves": self.cg_solves,
+            "inexact_solves": self.inexact_solves,
             "conjugacy_defect": self.conjugacy_defect, "warnings": list(self.warnings),
         }
 
@@ -471,7 +474,7 @@ def optimize(mesh: QuadMesh | QuadGrid, params: OptimizeParams | dict | None = N
         axis_angle_max=float(axis.max()) if len(axis) else 0.0,
         axis_angle_mean=float(axis.mean()) if len(axis) else 0.0,
         rejected=state.rejected, returned=returned, factorisations=state.factorisations,
-        cg_solves=state.cg_solves, conjugacy_defect=defect, warnings=warns)
+        cg_solves=state.cg_solves, inexact_solves=state.inexact_solves, conjugacy_defect=defect, warnings=warns)
 
 
 def _cos_to_deviation(cos: float) -> float:

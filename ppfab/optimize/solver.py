@@ -206,6 +206,7 @@ class SolverState:
     factorisations: int = 0
     cg_solves: int = 0
     start_metrics: tuple[float, ...] = (np.inf,) * 5   # max δ_f, max δ_P, conical, circular, node cosine
+    inexact_solves: int = 0                             # CG solves of a new linearisation (inexact Newton)
 
 
 class LevenbergMarquardt:
@@ -370,4 +371,4 @@ class LevenbergMarquardt:
             reason = self.step()
         return SolverState(self.z, self.iteration, reason, self.history, self.best_z, self.best_iteration,
                            self.best_score, self.start_score, dict(self.rejected), self.cache.factorisations,
-                           self.cache.cg_solves, self.start_metrics)
+                           self.cache.cg_solves, self.start_metrics, self.cache.inexact_solves)
