@@ -80,7 +80,7 @@ class _Stop(Exception):
     pass
 
 
-def run_scipy(grid: QuadGrid, families: str, budget: float, x_scale, tol: float = 1e-8) -> dict:
+def run_scipy(grid: QuadGrid, families: str, budget: float, x_scale, tol: float = 1e-8, max_nfev: int = 1000) -> dict:
     """The same residuals and Jacobian with every normal an unknown, the same stages, scipy's trf."""
     t, c = time.perf_counter(), time.process_time()
     prob = build_problem(grid, families=families, plane_solver="exact")
@@ -125,7 +125,7 @@ def run_scipy(grid: QuadGrid, families: str, budget: float, x_scale, tol: float 
                 raise StopIteration
 
         out = least_squares(fun, z[res.free_index], jac=jac, method="trf", tr_solver="lsmr", x_scale=x_scale,
-                            max_nfev=1000, callback=callback, ftol=tol, xtol=tol, gtol=tol)
+                            max_nfev=max_nfev, callback=callback, ftol=tol, xtol=tol, gtol=tol)
         z[res.free_index] = out.x
         df, _, dp, _ = prob.metrics(res.unpack(z)[0])
         if state["met"] or (df <= TARGET and dp <= TARGET) or time.process_time() - c > budget:
@@ -148,6 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scipy-tol", type=float, default=1e-8,
                     help="scipy's ftol, xtol and gtol (default 1e-8, its own): a smaller one lets a stage that trf "
                          "calls converged go on towards the targets")
+    ap.add_argument("--scipy-max-nfev", type=int, default=1000, help="scipy's function evaluations per stage")
     ap.add_argument("--scipy-scale", default="", help="skip the variant comparison: x_scale for scipy (1 or jac)")
     ap.add_argument("--scipy-variants-up-to", type=int, default=10 ** 9,
                     help="run both x_scale variants of scipy up to this grid size and keep the faster (default: at "
@@ -177,13 +178,14 @@ def main(argv: list[str] | None = None) -> int:
         a = run_ppfab(grid, families)
         plain = [run_ppfab(grid, families, "superlu")] if a["variant"].endswith("pardiso") else []
         if n <= args.scipy_variants_up_to and not args.scipy_scale:
-            runs = [run_scipy(grid, families, args.scipy_budget, xs, args.scipy_tol) for xs in (1.0, "jac")]
+            runs = [run_scipy(grid, families, args.scipy_budget, xs, args.scipy_tol, args.scipy_max_nfev)
+                    for xs in (1.0, "jac")]
             met = [r for r in runs if r["met"]] or runs
             b = min(met, key=lambda r: r["time"])
             best_scale = 1.0 if b is runs[0] else "jac"
             others = [r for r in runs if r is not b]
         else:
-            b = run_scipy(grid, families, args.scipy_budget, best_scale, args.scipy_tol)
+            b = run_scipy(grid, families, args.scipy_budget, best_scale, args.scipy_tol, args.scipy_max_nfev)
             others = []
         for name, r in [("ppfab", a)] + [("ppfab", q) for q in plain] + [("scipy", b)] + [("scipy", o) for o in others]:
             bound = "" if b["met"] else ">"
