@@ -3,7 +3,8 @@
 Each mesh of ``../shared/data`` (its README gives repositories and commits) is made P with its rows planar
 (``ppfab.optimize``, default parameters), scaled to a 30 m span (mm), and given its P support
 (``ppfab.support.p.support_p``, beams 200 mm deep, torsion limit 0.5 mm).  The torsion of every edge is then
-recomputed here by determinants, not by ppfab: the height of ``v_j + D a_j`` over the plane through ``v_i``,
+recomputed by determinants, not by ppfab (the formula of ``tests/test_support_p_exact.py``): the height of
+``v_j + D a_j`` over the plane through ``v_i``,
 ``v_j`` and ``v_i + D a_i`` is ``|det[e, D a_i, D a_j]| / |e × D a_i|`` (the larger of the two ends), in mm at
 beam depth ``D = 200`` mm.  Printed per mesh: whether the optimiser met its targets (δ_P of the rows), the rows
 kept as planar beams and those left out (planes more than 30° from the surface normal: their edges become
@@ -22,28 +23,19 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from ppfab.errors import PpfabError  # noqa: E402
 from ppfab.io import load_mesh  # noqa: E402
-from ppfab.mesh import QuadMesh  # noqa: E402
 from ppfab.optimize import optimize  # noqa: E402
 from ppfab.support.p import support_p  # noqa: E402
 from ppfab.support.params import BeamContext  # noqa: E402
 from ppfab.support.structure import edge_polyline_index  # noqa: E402
 from ppfab.transforms.similarity import transform  # noqa: E402
+from test_support_p_exact import height_mm as torsion_mm  # noqa: E402  (the tests' own determinant formula)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DEPTH, LIMIT, SPAN = 200.0, 0.5, 30_000.0
-
-
-def torsion_mm(mesh: QuadMesh, axes: np.ndarray, depth: float = DEPTH) -> np.ndarray:
-    """``(E,)`` torsion of every edge at beam depth ``depth``, by the determinant formula above."""
-    e = mesh.topology.edges
-    v = mesh.vertices
-    d = v[e[:, 1]] - v[e[:, 0]]
-    ai, aj = depth * axes[e[:, 0]], depth * axes[e[:, 1]]
-    vol = np.abs(np.linalg.det(np.stack([d, ai, aj], axis=1)))
-    return np.maximum(vol / np.linalg.norm(np.cross(d, ai), axis=1), vol / np.linalg.norm(np.cross(d, aj), axis=1))
 
 
 def main() -> int:
