@@ -80,7 +80,8 @@ class _Stop(Exception):
     pass
 
 
-def run_scipy(grid: QuadGrid, families: str, budget: float, x_scale, tol: float = 1e-8, max_nfev: int = 1000) -> dict:
+def run_scipy(grid: QuadGrid, families: str, budget: float, x_scale, tol: float = 1e-8,
+              max_nfev: int = 1000) -> dict:
     """The same residuals and Jacobian with every normal an unknown, the same stages, scipy's trf."""
     t, c = time.perf_counter(), time.process_time()
     prob = build_problem(grid, families=families, plane_solver="exact")
@@ -171,6 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     for size in args.sizes.split(","):
         if size == "roof":
             from optimize_table import roof_patch
+            # n: its size for --scipy-variants-up-to, √12,000 vertices ≈ 110
             grid, families, n, label = roof_patch()[1], "rows", 110, "roof 100x120 P"
         else:
             n = int(size)

@@ -94,8 +94,9 @@ def test_small_systems_are_always_factorised(run):
     res, (jac1, r1), (jac2, r2), mu = run
     cache = FactorCache()
     for jac, r in ((jac1, r1), (jac2, r2)):
-        assert DampedSystem(jac, r, res.n_face_unknowns, cache).ny < INEXACT_MIN_UNKNOWNS
-        DampedSystem(jac, r, res.n_face_unknowns, cache).solve(mu)
+        system = DampedSystem(jac, r, res.n_face_unknowns, cache)
+        assert system.ny < INEXACT_MIN_UNKNOWNS
+        system.solve(mu)
     assert cache.factorisations == 2 and cache.inexact_solves == 0
 
 
@@ -112,13 +113,12 @@ def test_a_run_with_inexact_steps_reaches_the_targets_with_fewer_factorisations(
         state = lm.run()
         assert state.stopped_by == "targets"
         out[allowed] = (prob.residuals.unpack(state.z)[0], state, lm)
-    v, state, lm = out[0]
+    v, state, lm = out[0]                               # the last loop's prob: the same selection
     assert state.factorisations < state.iterations and state.inexact_solves == lm.cache.inexact_solves >= 1
     accepted = [h for h in state.history if h.accepted]
     for a, b in zip(accepted, accepted[1:]):
         if a.stage == b.stage:
             assert b.energy <= a.energy
-    prob = build_problem(mesh, families="both", plane_solver="projected")
     for line in prob.selection.planar:                   # δ_P: largest distance to the SVD plane / bbox diagonal
         pts = v[line.vertices]
         normal = np.linalg.svd(pts - pts.mean(axis=0))[2][-1]

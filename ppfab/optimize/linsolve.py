@@ -325,8 +325,7 @@ class FactorCache:
             try:
                 self.lu = _PardisoFactor(upper, _thread_pardiso(), "minimum degree" if self.last else "metis")
             except Exception:                                 # a PARDISO error: SuperLU from now on
-                self.solver, self.lu = "superlu", None
-                maxiter = -1
+                self.solver, self.lu = "superlu", None          # no factor: the SuperLU path factorises
             else:
                 self.factorisations += 1
                 self.factor_owner = owner
