@@ -27,7 +27,9 @@ import pytest
 
 from fabrication.cli import main
 from fabrication.glazing.seat import SEAT_TOLERANCE
+from fabrication.verify._solids import BOX_KINDS
 from fabrication.verify._step_read import read_step_solids
+from fabrication.verify.rhino import placed_objects
 
 from conftest import REPO, shared_file, small_vault
 
@@ -418,10 +420,11 @@ def test_the_written_panes_pass_verify(name, request):
     assert mine == []
 
 
-def test_every_model_places_the_panes_alike(vault):
+def test_every_model_places_the_panes_and_the_glazing_parts_alike(vault):
     """The corners of every pane in model.glb (trimesh, glTF metres back to mm) and model.3dm (rhino3dm, the
     extrusion's bottom and top profiles) are those of its solid in panels.step (the kernel), within the
-    glTF's float32 rounding."""
+    glTF's float32 rounding; so are those of every strip and retention part of glazing.step in model.3dm, where
+    repeated shapes are block instances (the block's body moved by the instance's transform)."""
     import rhino3dm
     import trimesh
     from scipy.spatial import cKDTree
@@ -443,15 +446,22 @@ def test_every_model_places_the_panes_alike(vault):
             assert far(pts[:, :3], step[name]) < 5e-3, name
             seen += 1
     assert seen == len(step)
-    model = rhino3dm.File3dm.Read(str(vault / "model.3dm"))
-    seen = 0
-    for obj in model.Objects:
-        name = obj.Attributes.Name
-        if name in step:
+    glazing = {s.name: points(s.solid) for s in read_step_solids(vault / "glazing.step")}
+    objects, problems = placed_objects(rhino3dm.File3dm.Read(str(vault / "model.3dm")))
+    assert problems == []
+    seen, instanced = 0, 0
+    for obj in objects:
+        name = obj.attributes.Name
+        solid = step.get(name, glazing.get(name))
+        if solid is not None and isinstance(obj.geometry, rhino3dm.Extrusion):
             rings = []
             for t in (0.0, 1.0):                                 # the bottom and the top profile, as polylines
-                c = obj.Geometry.Profile3d(0, t)
+                c = obj.geometry.Profile3d(0, t)
                 rings += [[c.Point(i).X, c.Point(i).Y, c.Point(i).Z] for i in range(c.PointCount - 1)]
-            assert far(np.array(rings), step[name]) < 1e-6, name
+            assert far(np.array(rings), solid) < 1e-6, name
             seen += 1
-    assert seen == len(step)
+            instanced += bool(obj.block)
+    with open(vault / "parts.csv", newline="", encoding="utf-8") as fh:
+        kinds = [r["kind"] for r in csv.DictReader(fh)]
+    assert seen == sum(k in ("panel", "strip") + BOX_KINDS for k in kinds)
+    assert instanced >= kinds.count("setting_block")        # repeated shapes: the blocks of one size at least

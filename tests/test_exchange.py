@@ -13,6 +13,7 @@ import pytest
 
 from fabrication.cli import main
 from fabrication.contract import RETENTION_KINDS
+from fabrication.verify.rhino import placed_objects
 from ppfab.io import load_mesh
 
 from conftest import small_design
@@ -313,19 +314,20 @@ def test_bolt_holes_are_cut_in_the_ifc_and_rhino_solids(built, parts):
         for c in inner:
             assert c.is_a("IfcCircle") and 2.0 * c.Radius == pytest.approx(float(row["hole_mm"]))
             assert outline.contains(Point(c.Position.Location.Coordinates).buffer(c.Radius))
-    model = rhino3dm.File3dm.Read(str(built / "model.3dm"))
+    objects, problems = placed_objects(rhino3dm.File3dm.Read(str(built / "model.3dm")))
+    assert problems == []
     seen = 0
-    for o in model.Objects:
-        row = drilled.get(o.Attributes.Name)
+    for o in objects:
+        row = drilled.get(o.attributes.Name)
         if row is None:
             continue
-        g = o.Geometry
+        g = o.geometry
         if isinstance(g, rhino3dm.Mesh):         # a plate bevelled under its strips: a closed mesh of genus holes
             faces = g.Faces.Count
-            assert g.IsClosed and 2 - len(g.Vertices) + faces // 2 == 2 * int(row["holes"]), o.Attributes.Name
+            assert g.IsClosed and 2 - len(g.Vertices) + faces // 2 == 2 * int(row["holes"]), o.attributes.Name
             seen += 1
             continue
-        assert g.ProfileCount - 1 == int(row["holes"]), o.Attributes.Name
+        assert g.ProfileCount - 1 == int(row["holes"]), o.attributes.Name
         assert all(2.0 * g.Profile3d(k, 0.0).Radius == pytest.approx(float(row["hole_mm"]))
                    for k in range(1, g.ProfileCount))
         seen += 1
@@ -364,22 +366,23 @@ def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):
                       "retention::setting_block", "retention::stop", "retention::pressure_gasket",
                       "retention::pressure_plate", "retention::screw", "retention::cover_cap"]
     nodes = rows(built / "nodes.csv")
-    objs = list(f.Objects)
+    objs, problems = placed_objects(f)                     # block instances placed: a part each
+    assert problems == []
     assert len(objs) == len(parts) + len(nodes) + 1
-    by_name = {o.Attributes.Name: o for o in objs}
+    by_name = {o.attributes.Name: o for o in objs}
     assert set(parts) <= set(by_name) and {n["node_id"] for n in nodes} <= set(by_name)
     for pid, row in parts.items():
         o = by_name[pid]
-        layer = layers[o.Attributes.LayerIndex]
+        layer = layers[o.attributes.LayerIndex]
         if row["kind"] in RETENTION_KINDS:           # on a layer per kind (test_retention_parts.py)
             assert layer == f"retention::{row['kind']}"
             continue
         assert layer == ("glass" if row["kind"] == "panel" else f"beams::{row['family']}")
-        text = dict(o.Attributes.GetUserStrings())
+        text = dict(o.attributes.GetUserStrings())
         for key in ("part_id", "nest_tag", "type_id", "sheet", "material", "area_mm2"):
             assert text.get(key, "") == row[key], (pid, key)            # a strip has no type and no sheet
         assert text["weight_kg"] == (row["weight_kg"] or row["mass_kg"])
-        g = o.Geometry
+        g = o.geometry
         if isinstance(g, rhino3dm.Mesh):          # a plate bevelled under its strips: its two faces differ
             assert row["kind"] == "beam" and g.IsClosed, pid
             continue
@@ -390,14 +393,14 @@ def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):
         if row["kind"] == "panel":
             assert len(pts) == 5
     for n in nodes:
-        line = by_name[n["node_id"]].Geometry
+        line = by_name[n["node_id"]].geometry
         start = np.array([line.PointAtStart.X, line.PointAtStart.Y, line.PointAtStart.Z])
         end = np.array([line.PointAtEnd.X, line.PointAtEnd.Y, line.PointAtEnd.Z])
         axis = np.array([float(n[c]) for c in ("axis_x", "axis_y", "axis_z")])
         assert np.allclose(start, mesh.vertices[int(n["vertex"])], atol=1e-6)
         assert np.allclose(end - start, 150.0 * axis, atol=1e-6)           # the beam depth along the axis
-        assert dict(by_name[n["node_id"]].Attributes.GetUserStrings())["beams"] == n["beams"]
-    m = by_name["mesh"].Geometry
+        assert dict(by_name[n["node_id"]].attributes.GetUserStrings())["beams"] == n["beams"]
+    m = by_name["mesh"].geometry
     assert len(m.Vertices) == len(mesh.vertices) and len(m.Faces) == len(mesh.faces) == m.Faces.QuadCount
 
 
@@ -663,6 +666,58 @@ def test_verify_names_an_ifc_property_changed_and_a_3dm_object_moved(built, tmp_
     err = capsys.readouterr().err
     assert f"model.ifc: {plate.Name}: PPFAB_Part.nest_tag is 'G99-999'" in err
     assert f"model.3dm: {moved.Attributes.Name}: outline is 25 mm from where its DXF outline puts it" in err
+
+
+def test_repeated_parts_are_block_instances_of_one_body_each(built, parts):
+    """Parts of one repeated shape are instances of one block (its single body an instance-definition object);
+    each block is placed by two or more parts of one kind, by rigid motions; every part is placed once."""
+    import rhino3dm
+
+    f = rhino3dm.File3dm.Read(str(built / "model.3dm"))
+    objects, problems = placed_objects(f)
+    assert problems == []
+    by_block: dict[str, list[str]] = {}
+    for o in objects:
+        if o.block:
+            by_block.setdefault(o.block, []).append(o.attributes.Name)
+    assert len(by_block) == len(f.InstanceDefinitions) >= 3
+    bodies = [o for o in f.Objects if o.Attributes.Mode == rhino3dm.ObjectMode.InstanceDefinitionObject]
+    assert len(bodies) == len(by_block)
+    kinds = {parts[name]["kind"] for names in by_block.values() for name in names}
+    assert len(kinds) >= 3, kinds
+    for block, names in by_block.items():
+        assert len(names) >= 2 and len({parts[n]["kind"] for n in names}) == 1, block
+        assert block.startswith(parts[names[0]]["kind"]), block
+    placed = [o.attributes.Name for o in objects if o.attributes.Name in parts]
+    assert sorted(placed) == sorted(parts)
+    instanced = sum(len(n) for n in by_block.values())
+    assert len(list(f.Objects)) == len(objects) + len(bodies)
+    assert instanced > len(by_block)                       # fewer bodies than parts drawn by them
+
+
+def test_verify_names_a_moved_and_a_stretched_block_instance_and_a_moved_strip(built, parts, tmp_path, capsys):
+    """A retention box's block instance moved 25 mm (placed by its block's transform, not by a body of its own), an
+    instance whose transform stretches its block by 0.1 % (not a rigid motion) and a glazing strip moved 25 mm off
+    its span are each named by verify."""
+    import rhino3dm
+
+    out = tmp_path / "copy"
+    shutil.copytree(built, out)
+    model = rhino3dm.File3dm.Read(str(out / "model.3dm"))
+    refs = [o for o in model.Objects if isinstance(o.Geometry, rhino3dm.InstanceReference)]
+    moved, stretched = [o for o in refs if parts[o.Attributes.Name]["kind"] in RETENTION_KINDS][:2]
+    strip = next(o for o in model.Objects if parts.get(o.Attributes.Name, {}).get("kind") == "strip")
+    for obj in (moved, strip):
+        obj.Geometry.Translate(rhino3dm.Vector3d(0.0, 0.0, 25.0))
+    stretched.Geometry.Transform(rhino3dm.Transform.Scale(rhino3dm.Point3d(0.0, 0.0, 0.0), 1.001))
+    model.Write(str(out / "model.3dm"), 7)
+    assert main(["verify", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"model.3dm: {moved.Attributes.Name}: solid is 25 mm from the box its parts.csv row places" in err
+    found = re.search(rf"model.3dm: {strip.Attributes.Name}: strip is ([\d.]+) mm from the box its span", err)
+    assert found and float(found.group(1)) > 10.0, err
+    assert f"model.3dm: {stretched.Attributes.Name}: the transform of its block" in err
+    assert "is not a rigid motion" in err
 
 
 # -- reproducibility and a real mesh ------------------------------------------------------------------------

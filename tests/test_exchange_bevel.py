@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fabrication.verify.rhino import placed_objects
+
 from conftest import REPO
 
 
@@ -60,13 +62,13 @@ def _rhino_volumes(built: Path) -> dict[str, float]:
     import rhino3dm
 
     out = {}
-    for obj in rhino3dm.File3dm.Read(str(built / "model.3dm")).Objects:
-        g = obj.Geometry
+    for obj in placed_objects(rhino3dm.File3dm.Read(str(built / "model.3dm")))[0]:
+        g = obj.geometry
         if isinstance(g, rhino3dm.Mesh) and g.IsClosed:
             p = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
             t = np.array([[g.Faces[i][0], g.Faces[i][1], g.Faces[i][2]] for i in range(g.Faces.Count)])
             p = p - p.mean(axis=0)
-            out[obj.Attributes.Name] = abs(float(np.einsum("ij,ij->i", p[t[:, 0]],
+            out[obj.attributes.Name] = abs(float(np.einsum("ij,ij->i", p[t[:, 0]],
                                                            np.cross(p[t[:, 1]], p[t[:, 2]])).sum()) / 6.0)
     return out
 

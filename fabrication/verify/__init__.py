@@ -49,7 +49,9 @@ class FolderData:
     raised; ``beam_solids``: part id → the solid of ``beams.step``; ``plate_outlines`` /
     ``plate_cut_outlines``: part id → a beam plate's flat outline from its solid (the face, and the union of
     its faces as cut from the sheet); ``step_read``: (file, colours) → the solids read (one read per file and
-    process); ``erection_passes``: the sweep of every part along its way in (:mod:`.erection`)."""
+    process); ``erection_passes``: the sweep of every part along its way in (:mod:`.erection`); ``strip_places``:
+    part id → the corners ``(8, 3)`` of a strip's box for either outside, recomputed from the structure
+    (:func:`.glazing_step.strip_places`, no file of solids read)."""
 
     manifest: dict[str, Any] | None = None
     mesh: "QuadMesh | None" = None
@@ -68,6 +70,7 @@ class FolderData:
     plate_cut_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
     step_read: dict[tuple[str, bool], "list[StepSolid] | None"] = field(default_factory=dict)
     erection_passes: list["Pass"] | None = None
+    strip_places: dict[str, list["np.ndarray"]] | None = None
 
 
 PRODUCERS: dict[str, str] = {

@@ -168,6 +168,8 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
     ``top_ring`` (a beam plate whose top face is not its base, bevelled under its strips): the union of the two
     rings is the outline placed, and the volume is ``t`` times their mean area less the holes, within 1e-4.
     ``outline_eps`` (a pane drawn as its type's outline): how far the base polygon may lie from its own face's.
+    Placed: a pane on its face, a retention box on its ``parts.csv`` frame, a strip in the box its span puts it
+    in (:func:`.glazing_step.check_strip_place`), a beam plate about its support plane.
     """
     pid = row["part_id"]
     mean_area = None
@@ -212,6 +214,10 @@ def check_part_solid(v: Verification, rel: str, row: dict[str, str], points: np.
                               f"expected z … z + {t:g} mm with its seat z in {lo:.4g} … {hi:.4g} mm")
     elif row["kind"] in BOX_KINDS:
         check_box_place(v, rel, row, pts, max(eps, 1e-3))
+    elif row["kind"] == "strip":
+        from .glazing_step import check_strip_place
+
+        check_strip_place(v, rel, row, pts, eps)
     elif row["kind"] == "beam":
         plane = parse_list(row.get("plane", ""))
         if len(plane) != 4:

@@ -166,6 +166,49 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
     return out
 
 
+def _bad_spans(v: Verification, rows: list[dict[str, str]]) -> list[str]:
+    """The part ids of the strip rows whose ``edge_nodes`` are not two mesh vertices ``a;b``."""
+    assert v.mesh is not None
+    n, bad = len(v.mesh.vertices), []
+    for r in rows:
+        try:
+            span = [int(x) for x in r.get("edge_nodes", "").split(";")]
+        except ValueError:
+            span = []
+        if len(span) != 2 or not all(0 <= k < n for k in span):
+            bad.append(r["part_id"])
+    return bad
+
+
+def strip_places(v: Verification) -> dict[str, list[np.ndarray]]:
+    """Part id → the corners ``(8, 3)`` of the strip's box recomputed from the structure (module docstring) for
+    either outside — a file without the gaskets (model.3dm, model.ifc, model.glb) does not say which side is
+    out; empty without the mesh or with a strip row whose span is not a mesh edge (the glazing.step check
+    reports it).  Computed once per process."""
+    if v.read.strip_places is None:
+        places: dict[str, list[np.ndarray]] = {}
+        rows = [r for r in (v.parts or []) if r["kind"] == "strip"]
+        if v.mesh is not None and rows and not _bad_spans(v, rows):
+            for sign in (1.0, -1.0):
+                for pid, (strip, _gasket) in _strip_boxes(v, rows, sign).items():
+                    places.setdefault(pid, []).append(strip)
+        v.read.strip_places = places
+    return v.read.strip_places
+
+
+def check_strip_place(v: Verification, rel: str, row: dict[str, str], points: np.ndarray, eps: float) -> None:
+    """A strip's solid (vertices ``points (n, 3)``) is its recomputed box (:func:`strip_places`, the nearer of
+    the two sides) within ``max(eps, GLAZING_TOL)``."""
+    boxes = strip_places(v).get(row["part_id"])
+    if not boxes:
+        return
+    gap = min(set_distance(np.asarray(points, dtype=float).reshape(-1, 3), b) for b in boxes)
+    if not gap <= max(eps, GLAZING_TOL):
+        off = f"{gap:.3g} mm" if np.isfinite(gap) else f"({len(points)} vertices for 8)"
+        v.error(rel, row["part_id"], f"strip is {off} from the box its span, node axes and beam plane put it in "
+                                     f"(mesh edge {row.get('edge_nodes', '').replace(';', '-')})")
+
+
 @check("glazing_step")
 def check_glazing_step(v: Verification) -> None:
     m = v.manifest
@@ -179,14 +222,9 @@ def check_glazing_step(v: Verification) -> None:
         return
     solids = {s.name: s.solid for s in read}
     rows = [r for r in (v.parts or []) if r["kind"] == "strip"]
-    try:
-        spans = [tuple(int(x) for x in r.get("edge_nodes", "").split(";")) for r in rows]
-    except ValueError:
-        spans = []
-    bad = [r["part_id"] for r, s in zip(rows, spans) if len(s) != 2 or not all(0 <= k < len(v.mesh.vertices)
-                                                                             for k in s)]
-    if len(spans) != len(rows) or bad:
-        v.error("parts.csv", bad[0] if bad else rows[0]["part_id"], "edge_nodes is not two mesh vertices 'a;b'")
+    bad = _bad_spans(v, rows)
+    if bad:
+        v.error("parts.csv", bad[0], "edge_nodes is not two mesh vertices 'a;b'")
         return
     names = {n for n in solids if not n.startswith(RETENTION_PREFIXES)}     # the retention check's (retention.py)
     for r in rows:

@@ -1,8 +1,12 @@
 """model.3dm: the contract layers; one closed extrusion per part, named by part id, on its layer, with the
-parts.csv values as user text, on its mesh face or support plane; one axis line per node; the mesh."""
+parts.csv values as user text, on its mesh face or support plane; one axis line per node; the mesh.
+
+A part of a repeated shape is an instance of a block (:func:`placed_objects`): the block's one member placed by
+the instance's transform, which must be a rigid motion, is checked like any part's own body."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -50,6 +54,72 @@ def _curve_area(curve, samples: int = 720) -> float:
     return polygon_area_3d(pts)
 
 
+RIGID_TOLERANCE = 1e-9
+"""Largest entry of ``Rᵀ R − I`` (and ``|det R − 1|``) of an instance's transform read as a rigid motion."""
+
+
+@dataclass(frozen=True)
+class PlacedObject:
+    """An object of the model as it is seen: ``attributes`` its own (name, layer, user text), ``geometry`` its body
+    where it stands — a block instance's member duplicated and moved by the instance's transform; ``block`` the
+    name of that block, ``""`` for an object that is its own body."""
+
+    attributes: Any
+    geometry: Any
+    block: str = ""
+
+
+def placed_objects(f: Any) -> tuple[list[PlacedObject], list[tuple[str, str]]]:
+    """The model objects of the 3dm archive ``f`` (rhino3dm ``File3dm``) with block instances resolved, and the
+    problems found on the way as ``(subject, message)``: an instance of a missing block, a block of other than one member,
+    a transform that is not a rigid motion, a block member that belongs to no block.  Block members themselves
+    (instance-definition objects) are not model objects."""
+    import rhino3dm as _rhino3dm
+
+    r: Any = _rhino3dm
+    members = {}
+    placed: list[PlacedObject] = []
+    problems: list[tuple[str, str]] = []
+    for obj in f.Objects:
+        if obj.Attributes.Mode == r.ObjectMode.InstanceDefinitionObject:
+            members[obj.Attributes.Id] = obj
+    used = set()
+    for obj in f.Objects:
+        a = obj.Attributes
+        if a.Mode == r.ObjectMode.InstanceDefinitionObject:
+            continue
+        g = obj.Geometry
+        if not isinstance(g, r.InstanceReference):
+            placed.append(PlacedObject(a, g))
+            continue
+        name = a.Name or "(unnamed)"
+        block = f.InstanceDefinitions.FindId(g.ParentIdefId)
+        if block is None:
+            problems.append((name, f"instance of block {g.ParentIdefId}, which is not in the file"))
+            continue
+        ids = list(block.GetObjectIds())
+        if len(ids) != 1 or ids[0] not in members:
+            problems.append((name, f"block {block.Name!r} holds {len(ids)} member(s), expected one body"))
+            continue
+        used.add(ids[0])
+        x = g.Xform
+        m = np.array([[getattr(x, f"M{i}{j}") for j in range(4)] for i in range(4)])
+        rot = m[:3, :3]
+        if np.abs(m[3] - [0.0, 0.0, 0.0, 1.0]).max() > RIGID_TOLERANCE or \
+                np.abs(rot.T @ rot - np.eye(3)).max() > RIGID_TOLERANCE or \
+                abs(np.linalg.det(rot) - 1.0) > RIGID_TOLERANCE:
+            problems.append((name, f"the transform of its block {block.Name!r} is not a rigid motion"))
+            continue
+        body = members[ids[0]].Geometry.Duplicate()
+        if not body.Transform(x):
+            problems.append((name, f"the body of block {block.Name!r} cannot be moved by its transform"))
+            continue
+        placed.append(PlacedObject(a, body, block.Name))
+    for key in sorted(members.keys() - used, key=str):
+        problems.append((f"block member {key}", "is the body of no placed block"))
+    return placed, problems
+
+
 @check("rhino")
 def check_rhino(v: Verification) -> None:
     m = v.manifest
@@ -71,8 +141,11 @@ def check_rhino(v: Verification) -> None:
             v.error(rel, name, "layer is missing")
     rows = {r["part_id"]: r for r in (v.parts or [])}
     parts, axes, meshes = [], [], []
-    for obj in f.Objects:
-        a = obj.Attributes
+    objects, problems = placed_objects(f)
+    for subject, problem in problems:
+        v.error(rel, subject, problem)
+    for obj in objects:
+        a = obj.attributes
         layer = layers[a.LayerIndex] if 0 <= a.LayerIndex < len(layers) else "?"
         if layer == "nodes":
             axes.append(obj)
@@ -93,12 +166,12 @@ def check_rhino(v: Verification) -> None:
             want = f"beams::{row.get('family', '')}"
         if layer != want:
             v.error(rel, name, f"is on layer {layer}, expected {want}")
-        text = dict(obj.Attributes.GetUserStrings())
+        text = dict(obj.attributes.GetUserStrings())
         for key in EXCHANGE_PROPERTIES:
             cell = csv_value(row.get(key, "") or (row.get("mass_kg", "") if key == "weight_kg" else ""))
             if cell and text.get(key) != cell:
                 v.error(rel, name, f"user text {key} is {text.get(key)!r}, parts.csv has {cell!r}")
-        g = obj.Geometry
+        g = obj.geometry
         if row["kind"] == "screw":                 # the screws of a plate: one closed mesh of a prism per screw
             if not isinstance(g, rhino3dm.Mesh) or not g.IsClosed:
                 v.error(rel, name, "is not a closed mesh")
@@ -122,12 +195,12 @@ def check_rhino(v: Verification) -> None:
     if nodes_rel and mesh is not None:
         nodes = {r["node_id"]: r for r in read_csv(v.folder / nodes_rel)}
         readable = {r["node_id"] for r in (v.nodes or [])}     # rows whose cells the nodes check read
-        check_names(v, rel, [a.Attributes.Name for a in axes], {k: "node" for k in nodes}, "node axis")
+        check_names(v, rel, [a.attributes.Name for a in axes], {k: "node" for k in nodes}, "node axis")
         for obj in axes:
-            row = nodes.get(obj.Attributes.Name)
+            row = nodes.get(obj.attributes.Name)
             if row is None or row["node_id"] not in readable:
                 continue
-            g = obj.Geometry
+            g = obj.geometry
             start = np.array([g.PointAtStart.X, g.PointAtStart.Y, g.PointAtStart.Z])
             end = np.array([g.PointAtEnd.X, g.PointAtEnd.Y, g.PointAtEnd.Z])
             k = int(row["vertex"])
@@ -136,10 +209,10 @@ def check_rhino(v: Verification) -> None:
             if np.abs(start - mesh.vertices[k]).max() > 1e-6 or np.linalg.norm(np.cross(d, axis)) > 1e-6 * max(
                     1.0, float(np.linalg.norm(d))) or d @ axis <= 0:
                 v.error(rel, row["node_id"], "axis line does not start at its vertex along its node axis")
-    if len(meshes) != 1 or not isinstance(meshes[0].Geometry, rhino3dm.Mesh):
+    if len(meshes) != 1 or not isinstance(meshes[0].geometry, rhino3dm.Mesh):
         v.error(rel, "mesh", f"{len(meshes)} objects on layer mesh, expected the mesh")
     elif mesh is not None:
-        g = meshes[0].Geometry
+        g = meshes[0].geometry
         pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
         if len(pts) != len(mesh.vertices) or len(g.Faces) != len(mesh.faces) or \
                 np.abs(pts - mesh.vertices).max() > 1e-2:           # read back in single precision

@@ -137,6 +137,28 @@ class Instance:
     shape: Element
     motion: Motion
 
+    def rotation(self, el: Element) -> np.ndarray:
+        """``(3, 3)`` the world rotation that turns ``shape``'s body into ``el``'s: into ``shape``'s frame, the
+        motion's rotation in ``el``'s frame, out of ``el``'s frame (proper: a plate turned over is a half turn)."""
+        a_shape = np.column_stack([self.shape.frame.ex, self.shape.frame.ey, self.shape.frame.normal])
+        a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
+        return a_el @ self.motion.rotation @ a_shape.T
+
+    def moved(self, el: Element) -> np.ndarray:
+        """``(3,)`` where the origin of ``shape``'s frame goes (world mm): the motion's shift in ``el``'s frame."""
+        a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
+        return el.frame.origin + a_el @ self.motion.shift
+
+    def placement(self, el: Element) -> np.ndarray:
+        """``(4, 4)`` the rigid motion of the world (mm) that puts ``shape``'s body where ``el``'s is:
+        ``x ↦ Q (x − o) + m`` with ``Q`` :meth:`rotation`, ``o`` the origin of ``shape``'s frame, ``m``
+        :meth:`moved`."""
+        q = self.rotation(el)
+        out = np.eye(4)
+        out[:3, :3] = q
+        out[:3, 3] = self.moved(el) - q @ self.shape.frame.origin
+        return out
+
 
 @dataclass(frozen=True)
 class TypePlan:

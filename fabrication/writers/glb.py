@@ -21,7 +21,7 @@ import numpy as np
 from ..contract import COLOURS, GLB_FILE
 from . import Files, writer
 from ._elements import Element, elements
-from ._instances import instances
+from ._instances import Instance, instances
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
@@ -49,8 +49,7 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
         if inst is not None:                 # the mesh of its type's first part, placed by the node's transform
             shape = inst.shape
             scene.graph.update(frame_to=el.part_id, frame_from=scene.graph.base_frame, geometry=shape.part_id,
-                               matrix=_instance_transform(shape, el, inst.motion.rotation, inst.motion.shift,
-                                                          centres[shape.part_id]))
+                               matrix=_instance_transform(inst, el, centres[shape.part_id]))
             continue
         try:
             v, f = el.prism_mesh()
@@ -69,19 +68,17 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
     return bytes(scene.export(file_type="glb"))
 
 
-def _instance_transform(shape: Element, el: Element, rotation: np.ndarray, shift: np.ndarray,
-                        centre: np.ndarray) -> np.ndarray:
-    """``(4, 4)`` the glTF node transform that puts ``shape``'s stored mesh (glTF coordinates about its centre
-    ``centre``, mm) where ``el`` is: back to ``shape``'s frame, the motion ``x ↦ R x + t`` in ``el``'s frame
-    (:class:`~fabrication.writers._instances.Motion`), out of ``el``'s frame, into glTF's metres, y up.  Its
-    linear part is a rotation (the two unit conversions cancel)."""
-    a_shape = np.column_stack([shape.frame.ex, shape.frame.ey, shape.frame.normal])
-    a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
-    world = a_el @ rotation @ a_shape.T                       # mm, world → world
+def _instance_transform(inst: Instance, el: Element, centre: np.ndarray) -> np.ndarray:
+    """``(4, 4)`` the glTF node transform that puts the stored mesh of ``inst.shape`` (glTF coordinates about its
+    centre ``centre``, mm) where ``el`` is: back to mm, the world motion of :meth:`Instance.placement` (the
+    centre moved as ``Q (c − o) + A t + p``, ``A``, ``p`` ``el``'s frame), into glTF's metres, y up.  Its linear part is a rotation (the two unit
+    conversions cancel)."""
+    q = inst.rotation(el)
     to_mm = np.linalg.inv(MM_TO_GLTF)
     out = np.eye(4)
-    out[:3, :3] = MM_TO_GLTF @ world @ to_mm
-    out[:3, 3] = MM_TO_GLTF @ (world @ (centre - shape.frame.origin) + a_el @ shift + el.frame.origin)
+    out[:3, :3] = MM_TO_GLTF @ q @ to_mm
+    a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
+    out[:3, 3] = MM_TO_GLTF @ (q @ (centre - inst.shape.frame.origin) + a_el @ inst.motion.shift + el.frame.origin)
     return out
 
 
