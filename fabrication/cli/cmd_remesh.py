@@ -21,6 +21,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--net", default="sections", help="the net kind: sections, principal, conjugate or pp (default sections)")
     p.add_argument("--plane-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
                    help="normal of the section planes (default: vertical planes across the longer plan direction)")
+    p.add_argument("--pencil-axis", type=float, nargs=2, metavar=("X", "Y"), default=None,
+                   help="sections net: section planes through the vertical line at plan point X Y (mm, outside the "
+                        "outline) instead of parallel planes")
     p.add_argument("--second-normal", type=float, nargs=3, metavar=("X", "Y", "Z"), default=None,
                    help="pp net: normal of the column planes, horizontal (default: across --plane-normal in plan)")
     p.add_argument("--guides", type=float, nargs=6, metavar=("X1", "Y1", "Z1", "X2", "Y2", "Z2"), default=None,
@@ -58,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     target = check_output_file(out, inputs=[args.surface], force=args.force)
     spec = parse_params(SurfaceSpec, {k: v for k, v in {
         "path": args.surface, "net": args.net, "spacing": args.spacing, "plane_normal": args.plane_normal,
-        "second_normal": args.second_normal,
+        "second_normal": args.second_normal, "pencil_axis": args.pencil_axis,
         "guides": [args.guides[:3], args.guides[3:]] if args.guides is not None else None,
         "guide_layers": args.guide_layers, "search_planes": args.search_planes or None, "units": args.units, "smoothing": args.smoothing, "object": args.object}.items() if v is not None},
         "surface")
@@ -90,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
               f"{summary['twist_max']:.3f} (0: conjugate)" +
               (f"; directions within {result.guide_deviation_deg:.1f}° of the guides"
                if result.guide_deviation_deg is not None else "") +
+              (f"; section planes through the vertical axis at {result.pencil_axis}"
+               if result.pencil_axis is not None else "") +
               (f"; section planes: the best of {result.planes_tried} directions, normal "
                f"{np.round(result.frame.axes[0], 3).tolist()}" if result.planes_tried else ""), file=sys.stderr)
         for u in result.umbilics:

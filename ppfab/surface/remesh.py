@@ -28,6 +28,7 @@ from ..mesh import as_quadmesh
 from ..metrics import conjugacy_defect
 from .conjugate import conjugate_net
 from .curvature import quad_twist
+from .families import PencilPlanes
 from .heightfield import HeightField, fit_height_field
 from .plan import PlanFrame, plan_frame
 from .pp import pp_net, quad_warp
@@ -75,6 +76,8 @@ class RemeshResult:
     tilt_max_deg : the largest angle between a vertex's section plane and the fitted surface's normal there
         (rows, and columns of a pp net); ``None`` for a net with no planar family.  A P support leaves rows
         further than :data:`SECTION_TILT_DEG` out of the planar beams
+    pencil_axis : the plan point ``[x, y]`` (mm) of the vertical axis the section planes pass through, ``None``
+        for parallel planes
     """
 
     net: SectionsNet
@@ -93,6 +96,7 @@ class RemeshResult:
     guide_deviation_deg: float | None = None
     planes_tried: int = 0
     tilt_max_deg: float | None = None
+    pencil_axis: list[float] | None = None
 
     def summary(self) -> dict:
         """Plain data (``--json`` of ``ppfab remesh``)."""
@@ -101,7 +105,8 @@ class RemeshResult:
         return {"vertices": int(len(v)), "faces": int(n.grid_faces.sum()), "faces_total": n.faces_total,
                 "dropped_outside": n.dropped_outside, "dropped_sliver": n.dropped_sliver,
                 "dropped_island": n.dropped_island, "planar_family": n.planar_family,
-                "section_normal": self.frame.axes[0].tolist(),
+                "section_normal": None if self.pencil_axis is not None else self.frame.axes[0].tolist(),
+                "pencil_axis": self.pencil_axis,
                 "fit_deviation_mm": self.fit_deviation_mm, "planarity_mm": self.planarity_mm,
                 "panel_size_min": self.panel_size_min, "panel_size_max": self.panel_size_max,
                 "seconds": self.seconds, "seeding": self.seeding, "fan_out": self.fan_out,
@@ -155,14 +160,17 @@ def remesh(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     elif spec.net == "pp":
         net, twist, _ = pp_net(hf, frame, loops, spec.spacing, spec.min_face, spec.second_normal, spec.max_warp)
     else:
-        net, seeding = _balanced_sections(hf, frame, loops, spec)
+        family = None if spec.pencil_axis is None else \
+            PencilPlanes(frame, frame.to_local(np.array([*spec.pencil_axis, 0.0]))[:2])
+        net, seeding = _balanced_sections(hf, frame, loops, spec, family)
     if twist is None:
         twist = _twist_of(net, frame, hf)
     planarity = planarity_mm(net)
     sizes = np.concatenate([net.edge_lengths_rows, net.edge_lengths_cols]) / spec.spacing
     return RemeshResult(net, frame, hf, fit_dev, planarity, float(sizes.min()), float(sizes.max()),
                         time.process_time() - t0, seeding, fan_out(net), twist, found, quad_warp(_corners(net)), off,
-                        tilt_max_deg=section_tilt_deg(net, frame, hf))
+                        tilt_max_deg=section_tilt_deg(net, frame, hf),
+                        pencil_axis=list(spec.pencil_axis) if spec.pencil_axis is not None else None)
 
 
 SECTION_TILT_DEG = 30.0
@@ -264,10 +272,11 @@ def search_planes(samples: SurfaceSamples, spec: SurfaceSpec) -> RemeshResult:
     return replace(chosen[1], planes_tried=len(tried))
 
 
-def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray],
-                       spec: SurfaceSpec) -> tuple[SectionsNet, str]:
-    """The sections net with the seeding that keeps its edges nearest the spacing."""
-    net = sections_net(hf, frame, loops, spec.spacing, spec.min_face)
+def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray], spec: SurfaceSpec,
+                       family: PencilPlanes | None = None) -> tuple[SectionsNet, str]:
+    """The sections net (parallel planes, or the pencil ``family``) with the seeding that keeps its edges nearest
+    the spacing."""
+    net = sections_net(hf, frame, loops, spec.spacing, spec.min_face, family=family)
     # the conjugate curves fan out or converge away from the middle: scale the two steps so that each
     # family's shortest and longest edge straddle the spacing (geometric mean 1), if that narrows the range
     # without losing more than a fifth of the panels
@@ -277,10 +286,11 @@ def _balanced_sections(hf: HeightField, frame: PlanFrame, loops: list[np.ndarray
     candidates = []
     if max(abs(np.log(g[0])), abs(np.log(g[1]))) > 0.02:
         candidates.append(("scaled", sections_net(hf, frame, loops, spec.spacing, spec.min_face,
-                                                  (1.0 / g[0], 1.0 / g[1]))))
+                                                  (1.0 / g[0], 1.0 / g[1]), family=family)))
     # every strip balanced on its own (seeds and planes chosen on a dense net): kept when it narrows the range
     if _worst(first, spec.spacing) > np.log(1.0 / (1.0 - BALANCED)):
-        candidates.append(("strips", sections_net(hf, frame, loops, spec.spacing, spec.min_face, balance=True)))
+        candidates.append(("strips", sections_net(hf, frame, loops, spec.spacing, spec.min_face, balance=True,
+                                                  family=family)))
     for how, other in candidates:
         if _worst(other, spec.spacing) < _worst(net, spec.spacing) and \
                 other.grid_faces.sum() >= 0.8 * first.grid_faces.sum():

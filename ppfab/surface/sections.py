@@ -1,4 +1,5 @@
-"""The ``sections`` net: planar sections by parallel planes and their conjugate curves.
+"""The ``sections`` net: planar sections by parallel planes (or a pencil of planes, :mod:`.families`) and their
+conjugate curves.
 
 On a height field ``z = f(x, y)`` (the plan frame of :mod:`.plan`: sections are ``x = const``) a section has
 the tangent ``∂y``; the direction ``w = (a, b)`` conjugate to it satisfies ``II(∂y, w) = f_xy·a + f_yy·b = 0``,
@@ -26,6 +27,7 @@ from scipy.spatial import cKDTree
 from ..errors import GeometryError
 from ..mesh import QuadGrid, QuadMesh
 from .heightfield import HeightField
+from .families import ParallelPlanes, PlaneFamily
 from .plan import PlanFrame
 from .trim import faces_inside, inside
 
@@ -81,10 +83,9 @@ class SectionsNet:
 
 
 def conjugate_slope(hf: HeightField, x: np.ndarray, y: np.ndarray, floor: float, limit: float) -> np.ndarray:
-    """``dy/dx = −f_xy / f_yy`` of the curves conjugate to the sections, regularised by ``floor`` where
-    ``f_yy`` vanishes with ``f_xy`` (a flat direction) and clipped to ``±limit``."""
-    fxy, fyy = hf.fxy(x, y), hf.fyy(x, y)
-    return np.clip(-fxy * fyy / (fyy * fyy + floor * floor), -limit, limit)
+    """``dy/dx = −f_xy / f_yy`` of the curves conjugate to parallel sections ``x = const``, regularised by
+    ``floor`` where ``f_yy`` vanishes with ``f_xy`` (a flat direction) and clipped to ``±limit``."""
+    return ParallelPlanes(PlanFrame(np.zeros(3), np.eye(3))).slope(hf, x, y, floor, limit)
 
 
 def grid_inside(hf: HeightField, loops: Sequence[np.ndarray], margin: float) -> tuple[np.ndarray, np.ndarray]:
@@ -101,15 +102,17 @@ def grid_inside(hf: HeightField, loops: Sequence[np.ndarray], margin: float) -> 
 
 
 def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], limit: float,
-                      margin: float) -> float:
+                      margin: float, fam: PlaneFamily | None = None) -> float:
     """Refuse when the conjugate direction comes within ``90° − MAX_ANGLE_DEG`` of the sections inside the
     region, ``margin`` mm or more from its boundary (the fit is least sure at its edge); return the curvature
     floor used to regularise the slope."""
+    fam = fam if fam is not None else ParallelPlanes(frame)
     pts, ins = grid_inside(hf, loops, margin)
     p = pts[ins]
     fxx, fxy, fyy = hf.fxx(p[:, 0], p[:, 1]), hf.fxy(p[:, 0], p[:, 1]), hf.fyy(p[:, 0], p[:, 1])
     scale = float(np.max(np.abs(np.concatenate([fxx, fxy, fyy])))) if len(p) else 0.0
     floor = max(1e-3 * scale, FLAT)
+    fyy, fxy = fam.second(hf, p[:, 0], p[:, 1])          # along the section, and mixed
     ratio = np.abs(fxy) / (np.abs(fyy) + floor)
     if len(p) and float(ratio.max()) > limit:
         k = int(np.argmax(ratio))
@@ -130,21 +133,21 @@ def _densify(loop: np.ndarray, step: float) -> np.ndarray:
     return np.concatenate([a[k] + (b[k] - a[k]) * (np.arange(n[k])[:, None] / n[k]) for k in range(len(a))])
 
 
-def _rk4(hf: HeightField, x0: float, y0: np.ndarray, x1: float, h: float, floor: float,
+def _rk4(hf: HeightField, fam: PlaneFamily, s0: float, t0: np.ndarray, s1: float, h: float, floor: float,
          limit: float) -> np.ndarray:
-    """Integrate ``dy/dx`` from ``x0`` to ``x1`` for all ``y0`` at once."""
-    n = max(1, int(np.ceil(abs(x1 - x0) / h)))
-    dx = (x1 - x0) / n
-    y = np.array(y0, dtype=float)
-    x = x0
+    """Integrate ``dt/ds`` of the curves conjugate to the sections from ``s0`` to ``s1`` for all ``t0`` at once."""
+    n = max(1, int(np.ceil(abs(s1 - s0) / h)))
+    ds = (s1 - s0) / n
+    t = np.array(t0, dtype=float)
+    s = s0
     for _ in range(n):
-        k1 = conjugate_slope(hf, np.full_like(y, x), y, floor, limit)
-        k2 = conjugate_slope(hf, np.full_like(y, x + dx / 2), y + dx / 2 * k1, floor, limit)
-        k3 = conjugate_slope(hf, np.full_like(y, x + dx / 2), y + dx / 2 * k2, floor, limit)
-        k4 = conjugate_slope(hf, np.full_like(y, x + dx), y + dx * k3, floor, limit)
-        y = y + dx / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        x = x + dx
-    return y
+        k1 = fam.slope(hf, np.full_like(t, s), t, floor, limit)
+        k2 = fam.slope(hf, np.full_like(t, s + ds / 2), t + ds / 2 * k1, floor, limit)
+        k3 = fam.slope(hf, np.full_like(t, s + ds / 2), t + ds / 2 * k2, floor, limit)
+        k4 = fam.slope(hf, np.full_like(t, s + ds), t + ds * k3, floor, limit)
+        t = t + ds / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        s = s + ds
+    return t
 
 
 def _arc_positions(t: np.ndarray, pts: np.ndarray, centre: float, spacing: float) -> np.ndarray:
@@ -158,13 +161,13 @@ def _arc_positions(t: np.ndarray, pts: np.ndarray, centre: float, spacing: float
 
 def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray], spacing: float,
                  min_face: float = 0.25, steps: tuple[float, float] = (1.0, 1.0),
-                 balance: bool = False) -> SectionsNet:
+                 balance: bool = False, family: PlaneFamily | None = None) -> SectionsNet:
     """Build the sections net of a height field, trimmed to the plan region.
 
     Parameters
     ----------
     hf : the surface as a height field in ``frame``
-    frame : the plan frame (sections are ``x = const``)
+    frame : the plan frame (parallel sections are ``x = const``)
     loops : the trim region's loops in plan ``(k, 2)`` (frame coordinates); empty: the box of the fit
     spacing : target panel size, mm (along both families' arc length)
     min_face : faces smaller than this fraction of ``spacing²`` are dropped as slivers
@@ -173,86 +176,90 @@ def sections_net(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndarray],
         grow and shrink away from the middle straddle ``spacing``)
     balance : place every seed and plane so that the panels of its own strip straddle ``spacing``
         (:mod:`.balance`), instead of a uniform step along the middle lines
+    family : the section planes (:mod:`.families`): parallel planes ``x = const`` of ``frame`` (the default) or
+        a pencil through a vertical axis
     """
+    fam = family if family is not None else ParallelPlanes(frame)
     limit = float(np.tan(np.radians(MAX_ANGLE_DEG)))
     loops = [np.asarray(lp, dtype=float)[:, :2] for lp in loops]
-    floor = _check_degenerate(hf, frame, loops, limit, EDGE_MARGIN * spacing)
-    x_lo, x_hi, y_lo, y_hi = region_box(hf, loops)
-    xc, yc = 0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)
-    h = spacing / SUBSTEPS_PER_SPACING
+    floor = _check_degenerate(hf, frame, loops, limit, EDGE_MARGIN * spacing, fam)
+    box = fam.box(hf, loops)
+    s_lo, s_hi, t_lo, t_hi = box
+    sc, tc = 0.5 * (s_lo + s_hi), 0.5 * (t_lo + t_hi)
+    h = spacing / SUBSTEPS_PER_SPACING                       # integration step along t (mm)
+    hs = fam.s_step(spacing, box) / SUBSTEPS_PER_SPACING     # … and along s
+    lo_s, hi_s, lo_t, hi_t = fam.reach(hf, spacing, box)
     # seeds: along the middle section, spaced by arc length, over the region (and one spacing beyond)
-    lo_y, hi_y = max(hf.y[0], y_lo - spacing), min(hf.y[-1], y_hi + spacing)
-    ys = np.linspace(lo_y, hi_y, max(50, int((hi_y - lo_y) / h) + 1))
-    sec = np.stack([ys, hf.f(np.full_like(ys, xc), ys)], axis=1)
+    ts = np.linspace(lo_t, hi_t, max(50, int((hi_t - lo_t) / h) + 1))
+    sec = _points(hf, fam, np.full_like(ts, sc), ts)
     # planes: along the middle conjugate curve, spaced by arc length, over the region (and one beyond)
-    lo_x, hi_x = max(hf.x[0], x_lo - spacing), min(hf.x[-1], x_hi + spacing)
-    xs_r = np.linspace(xc, hi_x, max(2, int((hi_x - xc) / h) + 1))
-    xs_l = np.linspace(xc, lo_x, max(2, int((xc - lo_x) / h) + 1))
+    ss_r = np.linspace(sc, hi_s, max(2, int((hi_s - sc) / hs) + 1))
+    ss_l = np.linspace(sc, lo_s, max(2, int((sc - lo_s) / hs) + 1))
 
-    def trace(xs: np.ndarray) -> np.ndarray:
-        out = [yc]
-        for a, b in zip(xs[:-1], xs[1:]):
-            out.append(float(_rk4(hf, float(a), np.array([out[-1]]), float(b), h, floor, limit)[0]))
+    def trace(ss: np.ndarray) -> np.ndarray:
+        out = [tc]
+        for a, b in zip(ss[:-1], ss[1:]):
+            out.append(float(_rk4(hf, fam, float(a), np.array([out[-1]]), float(b), hs, floor, limit)[0]))
         return np.array(out)
 
-    xs = np.concatenate([xs_l[::-1], xs_r[1:]])
-    yline = np.concatenate([trace(xs_l)[::-1], trace(xs_r)[1:]])
-    curve = np.stack([xs, yline, hf.f(xs, yline)], axis=1)
+    ss = np.concatenate([ss_l[::-1], ss_r[1:]])
+    tline = np.concatenate([trace(ss_l)[::-1], trace(ss_r)[1:]])
+    curve = _points(hf, fam, ss, tline)
     if balance:
         # a dense net (eight curves and planes per panel) decides where the seeds and planes go
         from .balance import balanced_positions
 
-        d_seeds = _arc_positions(ys, sec, yc, spacing * steps[0] / BALANCE_DENSITY)
-        d_planes = _arc_positions(xs, curve, xc, spacing * steps[1] / BALANCE_DENSITY)
+        d_seeds = _arc_positions(ts, sec, tc, spacing * steps[0] / BALANCE_DENSITY)
+        d_planes = _arc_positions(ss, curve, sc, spacing * steps[1] / BALANCE_DENSITY)
         if len(d_planes) < 2 or len(d_seeds) < 2:
             raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
                                 "direction; give a smaller [surface] spacing", value=spacing)
-        dY = _march(hf, d_seeds, d_planes, xc, h, floor, limit)
-        dX = np.broadcast_to(d_planes[:, None], dY.shape)
-        dense = np.stack([dX, dY, hf.f(dX, dY)], axis=-1)
-        ins = hf.inside_box(dX, dY)
+        dT = _march(hf, fam, d_seeds, d_planes, sc, hs, floor, limit)
+        dense = _points(hf, fam, np.broadcast_to(d_planes[:, None], dT.shape), dT)
+        ins = hf.inside_box(dense[..., 0], dense[..., 1])
         if loops:
             ins &= inside(dense[..., :2].reshape(-1, 2), loops).reshape(ins.shape)
-        seeds, planes_x = balanced_positions(dense, ins, d_seeds, d_planes, yc, xc, spacing)
+        seeds, planes_s = balanced_positions(dense, ins, d_seeds, d_planes, tc, sc, spacing)
     else:
-        seeds = _arc_positions(ys, sec, yc, spacing * steps[0])
-        planes_x = _arc_positions(xs, curve, xc, spacing * steps[1])
-    if len(planes_x) < 2 or len(seeds) < 2:
+        seeds = _arc_positions(ts, sec, tc, spacing * steps[0])
+        planes_s = _arc_positions(ss, curve, sc, spacing * steps[1])
+    if len(planes_s) < 2 or len(seeds) < 2:
         raise GeometryError(f"the surface is smaller than two panels of spacing {spacing:g} mm in one "
                             "direction; give a smaller [surface] spacing", value=spacing)
-    Y = _march(hf, seeds, planes_x, xc, h, floor, limit)
-    X = np.broadcast_to(planes_x[:, None], Y.shape)
-    valid = hf.inside_box(X, Y)
-    local = np.stack([X, Y, hf.f(X, Y)], axis=-1)
+    T = _march(hf, fam, seeds, planes_s, sc, hs, floor, limit)
+    local = _points(hf, fam, np.broadcast_to(planes_s[:, None], T.shape), T)
+    valid = hf.inside_box(local[..., 0], local[..., 1])
     world = frame.to_world(local)
-    # rows lie in their planes exactly: the x of their vertices is the plane's
-    planes = np.stack([frame.section_plane(float(x)) for x in planes_x])
+    # rows lie in their planes exactly: every vertex of a row has its plane's s
+    planes = np.stack([fam.plane(float(s)) for s in planes_s])
     return trim_grid(world, local, valid, planes, loops, spacing, min_face)
+
+
+def _points(hf: HeightField, fam: PlaneFamily, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(..., 3)`` plan-frame points of ``(s, t)`` on the height field."""
+    x, y = fam.to_plan(s, t)
+    return np.stack([x, y, hf.f(x, y)], axis=-1)
 
 
 def region_box(hf: HeightField, loops: Sequence[np.ndarray]) -> tuple[float, float, float, float]:
     """``(x_lo, x_hi, y_lo, y_hi)``: the plan box of the trim loops within the box of the fit."""
-    if loops:
-        allp = np.concatenate(loops)
-        return (max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max()),
-                max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max()))
-    return float(hf.x[0]), float(hf.x[-1]), float(hf.y[0]), float(hf.y[-1])
+    return ParallelPlanes(PlanFrame(np.zeros(3), np.eye(3))).box(hf, loops)
 
 
-def _march(hf: HeightField, seeds: np.ndarray, planes_x: np.ndarray, xc: float, h: float, floor: float,
-           limit: float) -> np.ndarray:
-    """``Y (len(planes_x), len(seeds))``: the conjugate curves through ``(xc, seeds)`` at every plane,
-    marching out from the middle."""
-    Y = np.empty((len(planes_x), len(seeds)))
-    mid = min(int(np.searchsorted(planes_x, xc)), len(planes_x) - 1)
-    y = _rk4(hf, xc, seeds, float(planes_x[mid]), h, floor, limit)
-    Y[mid] = y
-    for i in range(mid + 1, len(planes_x)):
-        Y[i] = y = _rk4(hf, float(planes_x[i - 1]), y, float(planes_x[i]), h, floor, limit)
-    y = Y[mid]
+def _march(hf: HeightField, fam: PlaneFamily, seeds: np.ndarray, planes_s: np.ndarray, sc: float, h: float,
+           floor: float, limit: float) -> np.ndarray:
+    """``T (len(planes_s), len(seeds))``: the conjugate curves through ``(sc, seeds)`` at every plane, marching
+    out from the middle."""
+    T = np.empty((len(planes_s), len(seeds)))
+    mid = min(int(np.searchsorted(planes_s, sc)), len(planes_s) - 1)
+    t = _rk4(hf, fam, sc, seeds, float(planes_s[mid]), h, floor, limit)
+    T[mid] = t
+    for i in range(mid + 1, len(planes_s)):
+        T[i] = t = _rk4(hf, fam, float(planes_s[i - 1]), t, float(planes_s[i]), h, floor, limit)
+    t = T[mid]
     for i in range(mid - 1, -1, -1):
-        Y[i] = y = _rk4(hf, float(planes_x[i + 1]), y, float(planes_x[i]), h, floor, limit)
-    return Y
+        T[i] = t = _rk4(hf, fam, float(planes_s[i + 1]), t, float(planes_s[i]), h, floor, limit)
+    return T
 
 
 def trim_grid(world: np.ndarray, local: np.ndarray, valid: np.ndarray, planes: np.ndarray | None,

@@ -41,6 +41,11 @@ class SurfaceSpec:
     plane_normal: list[float] | None = param(None, doc="normal of the parallel section planes (default: "
                                                        "vertical planes across the longer plan direction)",
                                              length=3)
+    pencil_axis: list[float] | None = param(None, doc="sections net: the section planes form a pencil through "
+                                                      "the vertical line at this plan point [x, y] (mm, the "
+                                                      "surface's coordinates, outside its outline) instead of "
+                                                      "parallel planes: sections that fan out from the axis",
+                                            length=2)
     search_planes: bool = param(False, doc="sections and conjugate nets: try vertical section planes (and guides "
                                            "turned with them) every 15° in plan, then every 2.5° near the best, "
                                            "and keep the net whose edges stay nearest the spacing (a few "
@@ -89,6 +94,15 @@ class SurfaceSpec:
         if curves is not None and self.net != "conjugate":
             raise DesignError(curves, f"only the conjugate net follows guide curves (net is {self.net!r}); set "
                                       "net = 'conjugate' or remove the curves")
+        if self.pencil_axis is not None:
+            other = "plane_normal" if self.plane_normal is not None else "search_planes" if self.search_planes \
+                else None
+            if self.net != "sections":
+                raise DesignError("pencil_axis", f"only the sections net has a pencil of planes (net is "
+                                                 f"{self.net!r}); set net = 'sections' or remove pencil_axis")
+            if other is not None:
+                raise DesignError("pencil_axis", f"and {other} both say where the section planes go: a pencil "
+                                                 "contains its vertical axis; remove one of them")
         if curves is not None and self.search_planes:
             raise DesignError("search_planes", f"turns the guide directions, and {curves} are fixed curves: set "
                                                "search_planes = false or remove the curves")
