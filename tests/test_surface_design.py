@@ -152,3 +152,44 @@ def test_a_real_shell_patch_becomes_a_verified_p_package(tmp_path, capsys):
         assert np.abs(q @ np.linalg.svd(q)[2][-1]).max() <= 1e-6 * 10000.0
     sf = read_surface(tmp_path / "patch.ply", units="m")
     assert sf.distance(v).max() < 25.0
+
+
+@pytest.mark.slow
+def test_panes_lifted_by_a_strip_end_are_refused_before_writing_and_verify_agrees(tmp_path, capsys, monkeypatch):
+    """The 10 m patch (8, 4) of the botanic-garden bubble (WWmore/DOS @ f15cff51, resampled), sections net with
+    the planes searched: where its beams kink towards the glass under obtuse pane corners, a neighbouring span's
+    strip end lifts panes above what their own gaskets give.  The build stops before writing (exit 2, one line,
+    ``glazing.seat``, no folder); the same build written anyway is refused by ``ppfab verify`` for exactly the
+    panes the refusal names (panes off their faces' seat range in panels.step)."""
+    import re
+
+    from conftest import shared_file
+    from fabrication import build
+    from fabrication.cli import main
+    from fabrication.design import load_design
+    from fabrication.progress import Progress
+    from fabrication.verify import verify
+    from fabrication.writers import write_all
+    from surface_cases import resample_quad_mesh
+
+    resample_quad_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"), 1500, 3,
+                       crop=(8.0, 4.0, 5.0)).export(tmp_path / "patch.ply")
+    text = ROOF.replace('path = "roof.3dm"', 'path = "patch.ply"\nunits = "m"\nsearch_planes = true') + \
+        "\n[nesting]\ntime_budget = 0.5\n\n[beam_nesting]\ntime_budget = 0.5\n"
+    (tmp_path / "d.toml").write_text(text, encoding="utf-8")
+    capsys.readouterr()
+    assert main(["build", str(tmp_path / "d.toml"), "-o", str(tmp_path / "out")]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("ppfab: error")]
+    assert len(err) == 1 and "glazing.seat:" in err[0] and not (tmp_path / "out").exists()
+    named = set(re.findall(r"(P-\d+) on \d+ mm² of GS-", err[0]))
+    count = int(re.search(r"glazing.seat: (\d+) pane", err[0]).group(1))
+    assert count == len(named) or count > 4                       # the message names the first four
+    import fabrication.glazing.seat as seat
+
+    monkeypatch.setattr(seat, "refuse_lifted_panes", lambda *a, **k: None)      # written anyway
+    b = build(load_design(tmp_path / "d.toml"))
+    (tmp_path / "written").mkdir()
+    write_all(b, tmp_path / "written", Progress(quiet=True))
+    found = {f.element for f in verify(tmp_path / "written").findings
+             if f.file == "panels.step" and "outside the seat range" in f.message}
+    assert len(found) == count and named <= found

@@ -134,3 +134,35 @@ def seat_panes(panels: Sequence["Panel"], strips: Sequence[Strip], gasket: float
         near = [strips[k] for k in sorted(tree.query_ball_point(c, r + reach))]
         out.append(seat_pane(p, near, gasket, nominal))
     return tuple(out)
+
+
+def seat_limit(nominal: float, width: float, tilt_deg: float, flatness: float) -> float:
+    """mm: the highest seat the gaskets of a pane's own edges can give it — the nominal ``t_s + t_g``, plus half
+    the strip width times the tangent of the steepest gasket tilt ``tilt_deg`` (at most 45°; the larger of
+    ``glazing.max_tilt_deg`` and the bites' tilts), plus ``flatness`` (``panels.planarity_tolerance``: a face's
+    corners off its plane).  The self-check holds every pane to it (``seat_range`` of
+    :mod:`fabrication.verify._solids`, computed there from the written files)."""
+    return nominal + 0.5 * width * float(np.tan(np.radians(min(tilt_deg, 45.0)))) + flatness
+
+
+def refuse_lifted_panes(seats: Sequence[PaneSeat], limit: float, nominal: float) -> None:
+    """Raise :class:`~ppfab.errors.DesignError` (``glazing.seat``) naming the panes seated above ``limit``
+    (:func:`seat_limit`), each with the strip it bears on and how far it stands off its other gaskets: such a pane
+    rests on a gasket under its corner — the end of a strip of the next span, where its beam kinks towards the
+    glass under an obtuse corner — and stands off its own edges' gaskets; the self-check would refuse the
+    written files (the pane off its face's seat range).  Before any file is written."""
+    high = sorted((s for s in seats if s.offset > limit + 1e-9), key=lambda s: -s.offset)
+    if not high:
+        return
+    from ppfab.errors import DesignError
+
+    def one(s: PaneSeat) -> str:
+        bearing = min(s.contacts, key=lambda c: c.gap)
+        return (f"{s.panel} on {bearing.area:.0f} mm² of {bearing.strip}, {s.offset - nominal:.1f} mm above nominal "
+                f"and up to {s.largest_gap:.1f} mm off its other gaskets")
+
+    raise DesignError("glazing.seat", f"{len(high)} pane(s) would rest above the highest seat their own gaskets give "
+                                      f"({limit:.1f} mm, nominal {nominal:g} mm): {'; '.join(one(s) for s in high[:4])}"
+                                      " — a strip end under the pane's corner where its beam kinks towards the "
+                                      "glass; make the kinks smaller (a smaller [surface] spacing, a smoother net) "
+                                      "or let the glass rest on its edges in another way ([glazing] support)")
