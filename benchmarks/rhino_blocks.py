@@ -75,7 +75,8 @@ def main(argv: list[str] | None = None) -> None:
                          read_s))
     parts = len(elements(build))
     print(f"{path.name}{' at ' + args.faces if args.faces else ''}: {parts:,} parts, best of {args.repeat}")
-    print("| model.3dm | write CPU s | MB | objects in the file | blocks | parts + axes + mesh | read and place CPU s |")
+    print("| model.3dm | write CPU s | MB | objects in the file | blocks | parts + axes + mesh "
+          "| read and place CPU s |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     for label, write, mb, objs, blocks, placed, read_s in rows:
         print(f"| {label} | {write:.2f} | {mb:.1f} | {objs:,} | {blocks:,} | {placed:,} | {read_s:.2f} |")

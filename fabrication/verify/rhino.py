@@ -71,9 +71,10 @@ class PlacedObject:
 
 def placed_objects(f: Any) -> tuple[list[PlacedObject], list[tuple[str, str]]]:
     """The model objects of the 3dm archive ``f`` (rhino3dm ``File3dm``) with block instances resolved, and the
-    problems found on the way as ``(subject, message)``: an instance of a missing block, a block of other than one member,
-    a transform that is not a rigid motion, a block member that belongs to no block.  Block members themselves
-    (instance-definition objects) are not model objects."""
+    problems found on the way as ``(subject, message)``: an instance of a missing block, a block of other than
+    one member, a transform that is not a rigid motion (that part is left out, so it is also named as missing), a
+    block member that belongs to no block.  Block members themselves (instance-definition objects) are not model
+    objects."""
     import rhino3dm as _rhino3dm
 
     r: Any = _rhino3dm

@@ -71,8 +71,9 @@ def glb_bytes(build: "BuildRecord", files: Files) -> bytes:
 def _instance_transform(inst: Instance, el: Element, centre: np.ndarray) -> np.ndarray:
     """``(4, 4)`` the glTF node transform that puts the stored mesh of ``inst.shape`` (glTF coordinates about its
     centre ``centre``, mm) where ``el`` is: back to mm, the world motion of :meth:`Instance.placement` (the
-    centre moved as ``Q (c − o) + A t + p``, ``A``, ``p`` ``el``'s frame), into glTF's metres, y up.  Its linear part is a rotation (the two unit
-    conversions cancel)."""
+    centre moved to ``Q (c − o) + A t + p``: ``Q`` :meth:`Instance.rotation`, ``o`` the shape's frame origin,
+    ``A``, ``p`` the axes and origin of ``el``'s frame, ``t`` the motion's shift), into glTF's metres, y up.  Its
+    linear part is a rotation (the two unit conversions cancel)."""
     q = inst.rotation(el)
     to_mm = np.linalg.inv(MM_TO_GLTF)
     out = np.eye(4)

@@ -117,7 +117,7 @@ class PencilPlanes:
         """``(θ_lo, θ_hi, r_lo, r_hi)`` of the region seen from the axis; refused when the axis lies inside it
         or the region spans half a turn or more about it."""
         if loops:
-            pts = np.concatenate([_densify(np.asarray(lp, dtype=float), 50.0) for lp in loops])
+            pts = np.concatenate([densify_loop(np.asarray(lp, dtype=float), 50.0) for lp in loops])
         else:
             X, Y = np.meshgrid(hf.x, hf.y, indexing="ij")
             pts = np.stack([X.ravel(), Y.ravel()], axis=1)
@@ -148,7 +148,7 @@ class PencilPlanes:
 PlaneFamily = ParallelPlanes | PencilPlanes
 
 
-def _densify(loop: np.ndarray, step: float) -> np.ndarray:
+def densify_loop(loop: np.ndarray, step: float) -> np.ndarray:
     """Points along a closed plan loop ``(k, 2)`` at most ``step`` apart."""
     a, b = loop, np.roll(loop, -1, axis=0)
     n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / step)).astype(int)

@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from ..errors import GeometryError
 from ..mesh import QuadGrid, QuadMesh
 from .heightfield import HeightField
-from .families import ParallelPlanes, PlaneFamily
+from .families import ParallelPlanes, PlaneFamily, densify_loop
 from .plan import PlanFrame
 from .trim import faces_inside, inside
 
@@ -96,7 +96,7 @@ def grid_inside(hf: HeightField, loops: Sequence[np.ndarray], margin: float) -> 
     pts = np.stack([X.ravel(), Y.ravel()], axis=1)
     ins = inside(pts, loops) if len(loops) else np.ones(len(pts), dtype=bool)
     if len(loops) and margin > 0:
-        edge = np.concatenate([_densify(lp, margin / 4) for lp in loops])
+        edge = np.concatenate([densify_loop(lp, margin / 4) for lp in loops])
         ins &= cKDTree(edge).query(pts)[0] >= margin
     return pts, ins
 
@@ -124,13 +124,6 @@ def _check_degenerate(hf: HeightField, frame: PlanFrame, loops: Sequence[np.ndar
             f"{w[1]:.0f}) mm{signs}; rotate the section planes ([surface] plane_normal) or choose another net",
             element=f"({w[0]:.0f}, {w[1]:.0f})", value=float(ratio.max()))
     return floor
-
-
-def _densify(loop: np.ndarray, step: float) -> np.ndarray:
-    """Points along a closed plan loop ``(k, 2)`` at most ``step`` apart."""
-    a, b = loop, np.roll(loop, -1, axis=0)
-    n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / step)).astype(int)
-    return np.concatenate([a[k] + (b[k] - a[k]) * (np.arange(n[k])[:, None] / n[k]) for k in range(len(a))])
 
 
 def _rk4(hf: HeightField, fam: PlaneFamily, s0: float, t0: np.ndarray, s1: float, h: float, floor: float,
