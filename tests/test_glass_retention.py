@@ -242,6 +242,29 @@ def test_screw_stations_leave_the_keep_out_and_stay_within_a_pitch():
     assert len(xs) > 4                                      # a screw added where a move left a gap too wide
 
 
+def test_screw_stations_keep_each_end_within_half_a_pitch_after_a_move():
+    """A keep-out that moves the end screw towards the middle (the first screw off a block to 130 mm) gets a screw
+    added nearer the end; over 300 random plates with a few short keep-outs every gap, an end counting twice
+    (as verify counts it, recomputed here), stays within the pitch — before, an end 143.5 mm from its screw
+    passed the builder and failed verify (the default at 44 × 30)."""
+    from fabrication.glazing.screws import screw_stations
+
+    def spacing(xs, length):
+        return max(list(np.diff(xs)) + [2.0 * xs[0], 2.0 * (length - xs[-1])])
+
+    xs = screw_stations(1000.0, 250.0, [(60.0, 130.0)])
+    assert spacing(xs, 1000.0) <= 250.0 and not any(60.0 < x < 130.0 for x in xs)
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        length = float(rng.uniform(300.0, 3000.0))
+        starts = np.sort(rng.uniform(0.0, length, size=int(rng.integers(0, 4))))
+        keep = [(float(a), float(min(a + rng.uniform(10.0, 60.0), length))) for a in starts]
+        keep = [iv for k, iv in enumerate(keep) if k == 0 or iv[0] > keep[k - 1][1] + 80.0]
+        xs = screw_stations(length, 250.0, keep)
+        assert spacing(xs, length) <= 250.0 + 1e-6, (length, keep, xs)
+        assert not any(lo + 1e-3 < x < hi - 1e-3 for x in xs for lo, hi in keep)      # stations to 0.001 mm
+
+
 def test_a_joint_too_narrow_for_block_and_stop_is_refused(tmp_path, capsys):
     design = tmp_path / "d.toml"
     design.write_text(small_design(3, 3, name="narrow", extra="[panels]\ngap = 8.0\n"))

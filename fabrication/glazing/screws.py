@@ -85,7 +85,12 @@ def joint_clearing_screws(kink_deg: float, pane_thickness: float, seat: float, d
 def screw_stations(length: float, pitch: float, keep_out: Sequence[tuple[float, float]]) -> tuple[float, ...]:
     """Screw positions along a plate ``[0, length]``: evenly at most ``pitch`` apart and ``pitch/2`` from the ends,
     each moved out of the ``keep_out`` intervals to the nearer side, then a screw added midway in every gap still
-    wider than ``pitch`` (while one fits outside the intervals).
+    wider than ``pitch`` (while one fits outside the intervals), an end's gap counting at twice its distance as
+    :func:`screw_spacing` and ``ppfab verify`` count it — a screw moved off an interval towards the middle can
+    leave an end more than ``pitch/2`` from its screw (143.5 mm at a 250 mm pitch on the default at 44 × 30).
+
+    >>> screw_stations(1000.0, 250.0, [(60.0, 130.0)])      # the first screw moved off a block to 130 mm
+    (60.0, 130.0, 375.0, 625.0, 875.0)
 
     >>> screw_stations(1000.0, 250.0, [])
     (125.0, 375.0, 625.0, 875.0)
@@ -101,8 +106,10 @@ def screw_stations(length: float, pitch: float, keep_out: Sequence[tuple[float, 
 
     xs = sorted(free(x) for x in xs)
     for _ in range(64):
-        pts = [0.0 if not xs or xs[0] > 0.5 * pitch else xs[0]] + xs
-        gaps = [(pts[k + 1] - pts[k], k) for k in range(len(pts) - 1)]
+        # the gaps as :func:`screw_spacing` counts them: between neighbours, and each end at twice its distance
+        pts = [0.0] + xs + [length]
+        last = len(pts) - 2
+        gaps = [((2.0 if k in (0, last) else 1.0) * (pts[k + 1] - pts[k]), k) for k in range(len(pts) - 1)]
         wide = [(g, k) for g, k in gaps if g > pitch + 1e-6]
         if not wide:
             break
