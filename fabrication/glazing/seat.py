@@ -136,18 +136,20 @@ def seat_panes(panels: Sequence["Panel"], strips: Sequence[Strip], gasket: float
     return tuple(out)
 
 
-def seat_limit(nominal: float, width: float, tilt_deg: float, flatness: float) -> float:
-    """mm: the highest seat the gaskets of a pane's own edges can give it — the nominal ``t_s + t_g``, plus half
-    the strip width times the tangent of the steepest gasket tilt ``tilt_deg`` (at most 45°; the larger of
-    ``glazing.max_tilt_deg`` and the bites' tilts), plus ``flatness`` (``panels.planarity_tolerance``: a face's
-    corners off its plane).  The self-check holds every pane to it (``seat_range`` of
-    :mod:`fabrication.verify._solids`, computed there from the written files)."""
-    return nominal + 0.5 * width * float(np.tan(np.radians(min(tilt_deg, 45.0)))) + flatness
+def seat_range(nominal: float, width: float, tilt_deg: float, flatness: float) -> tuple[float, float]:
+    """mm: where the gaskets of a pane's own edges can put its underside above its face — the nominal
+    ``t_s + t_g`` ± half the strip width times the tangent of the steepest gasket tilt ``tilt_deg`` (at most 45°;
+    the larger of ``glazing.max_tilt_deg`` and the bites' tilts) ± ``flatness`` (``panels.planarity_tolerance``:
+    a face's corners off its plane).  The build refuses panes above it (:func:`refuse_lifted_panes`); the
+    self-check holds every written pane to it (``seat_range`` of :mod:`fabrication.verify._solids`, from the
+    files' values)."""
+    spread = 0.5 * width * float(np.tan(np.radians(min(tilt_deg, 45.0))))
+    return nominal - spread - flatness, nominal + spread + flatness
 
 
 def refuse_lifted_panes(seats: Sequence[PaneSeat], limit: float, nominal: float) -> None:
     """Raise :class:`~ppfab.errors.DesignError` (``glazing.seat``) naming the panes seated above ``limit``
-    (:func:`seat_limit`), each with the strip it bears on and how far it stands off its other gaskets: such a pane
+    (the top of :func:`seat_range`), each with the strip it bears on and how far it stands off its other gaskets: such a pane
     rests on a gasket under its corner — the end of a strip of the next span, where its beam kinks towards the
     glass under an obtuse corner — and stands off its own edges' gaskets; the self-check would refuse the
     written files (the pane off its face's seat range).  Before any file is written."""

@@ -70,7 +70,7 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
         raise
     from ..glazing.retention import refuse_blocks_in_glass, retention_mass_kg, retention_of
     from ..glazing.screws import refuse_screws_in_glass
-    from ..glazing.seat import refuse_lifted_panes, seat_limit, seat_panes
+    from ..glazing.seat import refuse_lifted_panes, seat_panes, seat_range
     from ..parts import parts_table
 
     seats = (seat_panes(panels.panels, glazing.strips, glazing.params.gasket_thickness)
@@ -78,8 +78,8 @@ def build(design: Design, progress: Progress | None = None, allow_large: bool = 
     if seats and glazing is not None:
         gp = glazing.params
         tilt = max([gp.max_tilt_deg] + [b.tilt_deg for b in glazing.bites])
-        refuse_lifted_panes(seats, seat_limit(glazing.offset, gp.width, tilt, design.panels.planarity_tolerance),
-                            glazing.offset)
+        _, limit = seat_range(glazing.offset, gp.width, tilt, design.panels.planarity_tolerance)
+        refuse_lifted_panes(seats, limit, glazing.offset)
     retention = retention_of(panels.panels, seats, glazing, support, float(design.panels.gap))
     refuse_screws_in_glass(retention, design.panels.gap)    # placed on the built panes and strips
     refuse_blocks_in_glass(retention, design.panels.gap)

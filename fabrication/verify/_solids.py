@@ -55,9 +55,10 @@ def seat_range(v: Verification) -> tuple[float, float]:
     rel = m.get("files", {}).get("bites_csv")
     if rel and (v.folder / rel).is_file():
         tilt = max([tilt] + [number(r.get("tilt_deg"), 0.0) for r in read_csv(v.folder / rel)])
-    spread = 0.5 * float(gl.get("width", 0.0)) * float(np.tan(np.radians(min(tilt, 45.0))))
     flat = float(m.get("fabrication", {}).get("planarity_tolerance", 0.1) or 0.1)     # a face's corners off its plane
-    return nominal - spread - flat, nominal + spread + flat
+    from ..glazing.seat import seat_range as bound               # the build refuses panes above the same bound
+
+    return bound(nominal, float(gl.get("width", 0.0)), tilt, flat)
 
 
 def reference_outline(v: Verification, row: dict[str, str]) -> np.ndarray | None:

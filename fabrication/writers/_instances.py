@@ -129,6 +129,11 @@ def fit_motion(shape: Element, el: Element) -> Motion | None:
     return Motion(rotation, shift, err)
 
 
+def frame_axes(el: Element) -> np.ndarray:
+    """``(3, 3)`` the axes of ``el``'s frame as columns ``ex, ey, normal`` (frame → world)."""
+    return np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
+
+
 @dataclass(frozen=True)
 class Instance:
     """A part drawn as another's body moved: ``shape`` (the first part of its type) placed by ``motion`` in the
@@ -140,14 +145,11 @@ class Instance:
     def rotation(self, el: Element) -> np.ndarray:
         """``(3, 3)`` the world rotation that turns ``shape``'s body into ``el``'s: into ``shape``'s frame, the
         motion's rotation in ``el``'s frame, out of ``el``'s frame (proper: a plate turned over is a half turn)."""
-        a_shape = np.column_stack([self.shape.frame.ex, self.shape.frame.ey, self.shape.frame.normal])
-        a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
-        return a_el @ self.motion.rotation @ a_shape.T
+        return frame_axes(el) @ self.motion.rotation @ frame_axes(self.shape).T
 
     def moved(self, el: Element) -> np.ndarray:
         """``(3,)`` where the origin of ``shape``'s frame goes (world mm): the motion's shift in ``el``'s frame."""
-        a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
-        return el.frame.origin + a_el @ self.motion.shift
+        return el.frame.origin + frame_axes(el) @ self.motion.shift
 
     def placement(self, el: Element) -> np.ndarray:
         """``(4, 4)`` the rigid motion of the world (mm) that puts ``shape``'s body where ``el``'s is:

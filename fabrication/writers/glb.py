@@ -21,7 +21,7 @@ import numpy as np
 from ..contract import COLOURS, GLB_FILE
 from . import Files, writer
 from ._elements import Element, elements
-from ._instances import Instance, instances
+from ._instances import Instance, frame_axes, instances
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
@@ -78,8 +78,8 @@ def _instance_transform(inst: Instance, el: Element, centre: np.ndarray) -> np.n
     to_mm = np.linalg.inv(MM_TO_GLTF)
     out = np.eye(4)
     out[:3, :3] = MM_TO_GLTF @ q @ to_mm
-    a_el = np.column_stack([el.frame.ex, el.frame.ey, el.frame.normal])
-    out[:3, 3] = MM_TO_GLTF @ (q @ (centre - inst.shape.frame.origin) + a_el @ inst.motion.shift + el.frame.origin)
+    out[:3, 3] = MM_TO_GLTF @ (q @ (centre - inst.shape.frame.origin) + frame_axes(el) @ inst.motion.shift
+                               + el.frame.origin)
     return out
 
 

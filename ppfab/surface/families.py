@@ -60,12 +60,8 @@ class ParallelPlanes:
         return self.frame.section_plane(s)
 
     def box(self, hf: HeightField, loops: Sequence[np.ndarray]) -> tuple[float, float, float, float]:
-        """``(s_lo, s_hi, t_lo, t_hi)`` of the region (the loops within the fit's box, or the fit's box)."""
-        if loops:
-            allp = np.concatenate(loops)
-            return (max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max()),
-                    max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max()))
-        return float(hf.x[0]), float(hf.x[-1]), float(hf.y[0]), float(hf.y[-1])
+        """``(s_lo, s_hi, t_lo, t_hi)`` of the region: :func:`region_box`."""
+        return region_box(hf, loops)
 
     def reach(self, hf: HeightField, spacing: float, box: tuple[float, float, float, float]) -> tuple[float, ...]:
         """``(s_lo, s_hi, t_lo, t_hi)`` over which planes and seeds are placed: the region and about one spacing
@@ -146,6 +142,16 @@ class PencilPlanes:
 
 
 PlaneFamily = ParallelPlanes | PencilPlanes
+
+
+def region_box(hf: HeightField, loops: Sequence[np.ndarray]) -> tuple[float, float, float, float]:
+    """``(x_lo, x_hi, y_lo, y_hi)``: the plan box of the trim loops within the box of the fit (the fit's box
+    without loops)."""
+    if loops:
+        allp = np.concatenate(loops)
+        return (max(hf.x[0], allp[:, 0].min()), min(hf.x[-1], allp[:, 0].max()),
+                max(hf.y[0], allp[:, 1].min()), min(hf.y[-1], allp[:, 1].max()))
+    return float(hf.x[0]), float(hf.x[-1]), float(hf.y[0]), float(hf.y[-1])
 
 
 def densify_loop(loop: np.ndarray, step: float) -> np.ndarray:

@@ -20,9 +20,10 @@ import numpy as np
 
 from ..errors import GeometryError
 from .curvature import quad_twist
+from .families import region_box
 from .heightfield import HeightField
 from .plan import PlanFrame
-from .sections import SUBSTEPS_PER_SPACING, SectionsNet, _arc_positions, region_box, trim_grid
+from .sections import SUBSTEPS_PER_SPACING, SectionsNet, _arc_positions, trim_grid
 
 MIN_ANGLE_DEG = 30.0
 """The two plane families must cross at this angle or more in plan."""

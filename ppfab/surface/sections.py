@@ -82,12 +82,6 @@ class SectionsNet:
     planes_cols: np.ndarray | None = None
 
 
-def conjugate_slope(hf: HeightField, x: np.ndarray, y: np.ndarray, floor: float, limit: float) -> np.ndarray:
-    """``dy/dx = −f_xy / f_yy`` of the curves conjugate to parallel sections ``x = const``, regularised by
-    ``floor`` where ``f_yy`` vanishes with ``f_xy`` (a flat direction) and clipped to ``±limit``."""
-    return ParallelPlanes(PlanFrame(np.zeros(3), np.eye(3))).slope(hf, x, y, floor, limit)
-
-
 def grid_inside(hf: HeightField, loops: Sequence[np.ndarray], margin: float) -> tuple[np.ndarray, np.ndarray]:
     """The nodes of the fit's plan grid, ``(N, 2)`` in row-major order of ``(hf.x, hf.y)``, and ``(N,)`` whether
     each lies inside the region ``loops`` and ``margin`` mm or more from its boundary (the fit is least sure at
@@ -232,11 +226,6 @@ def _points(hf: HeightField, fam: PlaneFamily, s: np.ndarray, t: np.ndarray) -> 
     """``(..., 3)`` plan-frame points of ``(s, t)`` on the height field."""
     x, y = fam.to_plan(s, t)
     return np.stack([x, y, hf.f(x, y)], axis=-1)
-
-
-def region_box(hf: HeightField, loops: Sequence[np.ndarray]) -> tuple[float, float, float, float]:
-    """``(x_lo, x_hi, y_lo, y_hi)``: the plan box of the trim loops within the box of the fit."""
-    return ParallelPlanes(PlanFrame(np.zeros(3), np.eye(3))).box(hf, loops)
 
 
 def _march(hf: HeightField, fam: PlaneFamily, seeds: np.ndarray, planes_s: np.ndarray, sc: float, h: float,

@@ -17,9 +17,10 @@ import numpy as np
 from ..errors import GeometryError
 from .balance import strip_positions
 from .curvature import quad_twist
+from .families import region_box
 from .heightfield import HeightField
 from .plan import PlanFrame
-from .sections import SUBSTEPS_PER_SPACING, SectionsNet, _arc_positions, region_box, trim_grid
+from .sections import SUBSTEPS_PER_SPACING, SectionsNet, _arc_positions, trim_grid
 from .trim import inside
 
 DirectionField = Callable[[np.ndarray], "tuple[np.ndarray, np.ndarray]"]
