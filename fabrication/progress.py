@@ -26,6 +26,8 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, TextIO
 
+from . import interrupts
+
 
 @dataclass(frozen=True)
 class Event:
@@ -104,6 +106,7 @@ class Progress:
     # -- stages --------------------------------------------------------------------------------------------
 
     def start(self, stage: str, detail: str = "") -> None:
+        interrupts.check()                  # a signal whose interruption was swallowed stops the run here
         with self._lock:
             self._stage, self._t0 = stage, time.perf_counter()
             self._last_shown = self._t0
@@ -137,6 +140,7 @@ class Progress:
 
     def advance(self, done: float, total: float | None = None, text: str = "") -> None:
         """The running stage has done ``done`` of ``total`` (``None``: not known), with a status ``text``."""
+        interrupts.check()
         with self._lock:
             last_done, last_total = self._counts
             if total != last_total or (last_done is not None and done < last_done):
@@ -162,6 +166,7 @@ class Progress:
 
     def iteration(self, record: Any) -> None:
         """Optimiser callback: show an :class:`~ppfab.optimize.solver.IterationRecord` (iteration, stage, δ)."""
+        interrupts.check()
         if self.verbose:
             self.update(record.line())
             return

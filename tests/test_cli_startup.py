@@ -92,3 +92,39 @@ def test_an_import_error_or_a_swallowed_signal_during_the_imports_is_the_interru
                 raise ImportError("no module named build123d")
     finally:
         _SIGNALS["last"] = None
+
+
+# The interruption raised where Python ignores exceptions: the handler runs inside a weak-reference callback (as
+# in the import system's module locks), Python reports "Exception ignored in …" and goes on.
+SWALLOWED = """
+import signal, sys, weakref
+from fabrication import progress
+
+start = progress.Progress.start
+
+def start_swallowing(self, stage, detail=""):
+    if stage == "quality":
+        class Referent:
+            pass
+        referent = Referent()
+        ref = weakref.ref(referent, lambda r: signal.raise_signal(signal.SIGHUP))
+        del referent                    # the callback runs here, the handler raises in it, Python ignores that
+        print("went on", file=sys.stderr)
+    return start(self, stage, detail)
+
+progress.Progress.start = start_swallowing
+from fabrication.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_an_interruption_swallowed_in_a_weakref_callback_still_stops_the_build(tmp_path):
+    """SIGHUP whose handler ran inside a weak-reference callback (Python ignores what it raises there; the
+    build went on and exited 0) stops the build at its next step: 129, the one-line message and no "Exception
+    ignored" report, no output folder, lock or temporary folder."""
+    (tmp_path / "d.toml").write_text(small_design())
+    r = subprocess.run([sys.executable, "-c", SWALLOWED, "build", str(tmp_path / "d.toml"), "-o",
+                        str(tmp_path / "out"), "--quiet"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert r.stderr == "went on\nppfab: interrupted (SIGHUP)\n", r.stderr       # the swallowing did happen
+    assert r.returncode == 128 + signal.SIGHUP
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.toml"]

@@ -33,7 +33,7 @@ FAB_LAYERS = [
     {"model"},                      # the records of a finished build: data only, imports nothing of fabrication
     {"contract", "design", "flatpart", "beams", "panels", "nesting", "nodes", "figures",
      "htmlreport", "marking", "drawings", "node_sheets", "nodetypes", "examples", "starter", "glazing",
-     "repetition", "erection", "erection_drawing", "surfacefile", "paper", "progress"},
+     "repetition", "erection", "erection_drawing", "surfacefile", "paper", "progress", "interrupts"},
     {"records", "parts", "glassorder", "report", "report_glazing"},   # the stages' records of one build, and what reads them whole
     {"writers", "verify", "readers"},
     {"pipeline"},

@@ -10,7 +10,9 @@ Errors derived from :class:`~ppfab.errors.PpfabError` print one line
 ``ppfab: error: …`` and exit with their code (2 for bad input); so does an operating-system error
 (disk full, permission denied: exit 1).  Ctrl-C, SIGTERM and SIGHUP stop a run the same way (an
 exception unwinds it, so output folders are cleaned up) and exit ``128 + signal`` (130, 143, 129) — at any
-moment, also while the CAD kernel and file libraries are imported (:func:`interruptible_imports`).
+moment, also while the CAD kernel and file libraries are imported (:func:`interruptible_imports`), and also when
+the signal lands where Python ignores what its handler raises (a weak-reference callback): the run stops at its
+next step (:mod:`fabrication.interrupts`).
 Path arguments that are empty or hold a control character are refused before a command runs, and control
 characters in an error message (a quoted key, value or path) are escaped, so the error stays one line.
 Library warnings (numpy's overflow and invalid-value RuntimeWarnings, matplotlib's, any other) and the
@@ -29,10 +31,12 @@ import pkgutil
 import signal
 import sys
 import warnings
-from typing import Any, Iterator
+from typing import Iterator
 
 from ppfab import __version__
 from ppfab.errors import PpfabError
+
+from ..interrupts import STOP_SIGNALS, SIGNALS, Interrupted, handled, on_signal, quiet_unraisable
 
 
 def _commands() -> list:
@@ -60,29 +64,8 @@ def make_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Interrupted(KeyboardInterrupt):
-    """Raised in the main thread by SIGTERM or SIGHUP, so a run unwinds exactly as on Ctrl-C."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-STOP_SIGNALS = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
-
-
-_SIGNALS: dict[str, Any] = {"last": None}
-
-
-def _stop(signum: int) -> None:
-    for s in STOP_SIGNALS + (signal.SIGINT,):       # a second signal must not interrupt the clean-up
-        signal.signal(s, signal.SIG_IGN)
-    raise Interrupted(signum)
-
-
-def _on_signal(signum: int, frame: object) -> None:
-    _SIGNALS["last"] = signum
-    _stop(signum)
+_SIGNALS = SIGNALS
+"""The signal state of :mod:`fabrication.interrupts` (the name the tests and :func:`interruptible_imports` use)."""
 
 
 @contextlib.contextmanager
@@ -182,11 +165,11 @@ def main(argv: list[str] | None = None) -> int:
     debug = bool(os.environ.get("PPFAB_DEBUG"))
     previous = {}
     if threading_main():
-        previous = {s: signal.signal(s, _on_signal) for s in STOP_SIGNALS}
+        previous = {s: signal.signal(s, on_signal) for s in STOP_SIGNALS}
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:      # not when started ignoring it
-            previous[signal.SIGINT] = signal.signal(signal.SIGINT, _on_signal)
+            previous[signal.SIGINT] = signal.signal(signal.SIGINT, on_signal)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), quiet_unraisable():
             if not debug:                        # every library warning goes to the log, none to the terminal
                 warnings.simplefilter("always")
                 warnings.showwarning = _showwarning
@@ -221,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ppfab: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
         return 128 + signum
     finally:
-        _SIGNALS["last"] = None
+        handled()
         for s, handler in previous.items():
             signal.signal(s, handler)
 

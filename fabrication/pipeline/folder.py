@@ -33,6 +33,7 @@ from ppfab.errors import PpfabError
 
 from .lock import MARKER, OutputLock, remove_stale, write_marker
 from . import overwrite
+from .. import interrupts
 from .overwrite import rename_noreplace
 
 log = logging.getLogger("ppfab")
@@ -281,6 +282,7 @@ class AtomicFolder:
             self._cleanup()
             return False
         try:
+            interrupts.check()              # a signal whose interruption a library swallowed: commit nothing
             (self.tmp / MARKER).unlink()
             for hook in list(overwrite.COMMIT_HOOKS):
                 hook(self.target, self.tmp)
