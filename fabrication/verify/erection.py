@@ -136,28 +136,36 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
     if not names:
         return out
     steps = np.array([step for pid, step, _ in order if pid in bodies])
+    by_step = np.argsort(steps, kind="stable")
+    sorted_steps = steps[by_step]
     lo_all = np.array([bodies[q].lo for q in names])
     hi_all = np.array([bodies[q].hi for q in names])
     centre, half = 0.5 * (lo_all + hi_all), 0.5 * (hi_all - lo_all)
     for pid, step, d in order:
         body = bodies.get(pid)
-        if body is None or not np.any(steps < step):
+        if body is None:
             continue
-        earlier = steps < step
+        earlier = by_step[:int(np.searchsorted(sorted_steps, step, side="left"))]     # the parts of earlier steps
+        if not len(earlier):
+            continue
         reach = float((centre[earlier] @ -d + half[earlier] @ np.abs(d)).max())   # farthest earlier box along −d
         far = max(reach - float((body.points @ -d).min()) + 1.0, 1.0)
         if approach and pid in approach:
             far = min(far, approach[pid] + float(np.ptp(body.points @ d)))
         allp = np.vstack([body.points, body.points - far * d])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
-        e = normal_pair(d)
-        f2 = allp @ e.T
-        flo, fhi = f2.min(axis=0), f2.max(axis=0)
-        c2, h2 = centre @ e.T, half @ np.abs(e.T)                                  # the boxes seen along d
-        near = earlier & np.all(lo_all <= hi + TOLERANCE, axis=1) & np.all(hi_all >= lo - TOLERANCE, axis=1) \
-            & np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE, axis=1)
+        # the neighbours: boxes overlapping the sweep's box, then (of those) seen along d, in the order of ``order``
+        near = earlier[np.all(lo_all[earlier] <= hi + TOLERANCE, axis=1) & np.all(hi_all[earlier] >= lo - TOLERANCE,
+                                                                                 axis=1)]
+        if len(near):
+            e = normal_pair(d)
+            f2 = allp @ e.T
+            flo, fhi = f2.min(axis=0), f2.max(axis=0)
+            c2, h2 = centre[near] @ e.T, half[near] @ np.abs(e.T)                # the boxes seen along d
+            near = np.sort(near[np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE,
+                                                                                     axis=1)])
         shape = None
-        for k in np.flatnonzero(near):
+        for k in near:
             if welded_on(pid, names[k]) or drilled_through(pid, names[k]):
                 continue
             b = bodies[names[k]]
