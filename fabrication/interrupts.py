@@ -48,11 +48,6 @@ def on_signal(signum: int, frame: object) -> None:
     raise Interrupted(signum)
 
 
-def pending() -> int | None:
-    """The signal that interrupted the run and has not been handled yet, else ``None``."""
-    return SIGNALS["pending"]
-
-
 def handled() -> None:
     """The command line has stopped the run for the pending signal (or the run is over): forget it."""
     SIGNALS["pending"] = None

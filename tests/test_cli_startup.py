@@ -75,23 +75,24 @@ def test_an_import_error_or_a_swallowed_signal_during_the_imports_is_the_interru
     """A C extension interrupted in its initialisation may raise ImportError instead, and a library may catch the
     KeyboardInterrupt and go on: either way the run stops as interrupted by that signal (then 143, not a
     traceback or a build that goes on); an ImportError without a signal stays an ImportError."""
-    from fabrication.cli import Interrupted, _SIGNALS, interruptible_imports
+    from fabrication.cli import Interrupted, interruptible_imports
+    from fabrication.interrupts import SIGNALS
 
     try:
         with pytest.raises(Interrupted) as info:
             with interruptible_imports():
-                _SIGNALS["last"] = signal.SIGTERM          # what the handler records before it raises
+                SIGNALS["last"] = signal.SIGTERM          # what the handler records before it raises
                 raise ImportError("initialisation of _OCP failed")
         assert info.value.signum == signal.SIGTERM and info.value.__cause__ is None
         with pytest.raises(Interrupted) as info:
             with interruptible_imports():
-                _SIGNALS["last"] = signal.SIGINT           # recorded, then swallowed by the library
+                SIGNALS["last"] = signal.SIGINT           # recorded, then swallowed by the library
         assert info.value.signum == signal.SIGINT
         with pytest.raises(ImportError):
             with interruptible_imports():
                 raise ImportError("no module named build123d")
     finally:
-        _SIGNALS["last"] = None
+        SIGNALS["last"] = None
 
 
 # The interruption raised where Python ignores exceptions: the handler runs inside a weak-reference callback (as

@@ -64,10 +64,6 @@ def make_parser() -> argparse.ArgumentParser:
     return parser
 
 
-_SIGNALS = SIGNALS
-"""The signal state of :mod:`fabrication.interrupts` (the name the tests and :func:`interruptible_imports` use)."""
-
-
 @contextlib.contextmanager
 def interruptible_imports() -> Iterator[None]:
     """Import heavy libraries (the CAD kernel, the file libraries) so that SIGINT, SIGTERM and SIGHUP still stop
@@ -75,20 +71,20 @@ def interruptible_imports() -> Iterator[None]:
     raises instead (a C extension interrupted in its initialisation may turn it into an ImportError, a library
     may swallow it) becomes the interruption itself.  Nothing is held: Ctrl-C during a slow import stops the run
     as promptly as anywhere else."""
-    before = _SIGNALS["last"]
-    _SIGNALS["last"] = None
+    before = SIGNALS["last"]
+    SIGNALS["last"] = None
     try:
         yield
     except BaseException as exc:
-        signum = _SIGNALS["last"] or _interrupted(exc)
+        signum = SIGNALS["last"] or _interrupted(exc)
         if signum is not None and not isinstance(exc, Interrupted):
             raise Interrupted(signum) from None
         raise
     else:
-        if _SIGNALS["last"] is not None:             # a library caught the interruption and went on
-            raise Interrupted(_SIGNALS["last"])
+        if SIGNALS["last"] is not None:             # a library caught the interruption and went on
+            raise Interrupted(SIGNALS["last"])
     finally:
-        _SIGNALS["last"] = _SIGNALS["last"] or before
+        SIGNALS["last"] = SIGNALS["last"] or before
 
 
 deferred_signals = interruptible_imports
