@@ -10,6 +10,7 @@ distance of the module docstring computed apart.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def _node(directions: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -55,3 +56,53 @@ def test_the_stop_of_a_strip_next_to_a_nearly_straight_span_is_metres():
     theta = np.radians(180.0 - 0.4)
     stop = (0.5 * p.width + p.clearance + 0.5 * p.width * abs(np.cos(theta))) / np.sin(theta)
     assert stop > 8000.0
+
+
+def _valley_corner(kink_deg: float, corner_deg: float) -> dict:
+    """A strip end along +x from a node at the origin (``ey`` = +y, up = +z) and the corner of a pane it does not
+    carry: the pane's plane through the node turned by ``kink_deg`` about y (positive: the strip rises towards
+    the pane, a valley), one edge back along −x in that plane, the other at ``corner_deg`` from it."""
+    k, a = np.radians(kink_deg), np.radians(corner_deg)
+    t1, t2 = np.array([-np.cos(k), 0.0, np.sin(k)]), np.array([0.0, 1.0, 0.0])
+    ray_a, ray_b = 1500.0 * t1, 1500.0 * (np.cos(a) * t1 + np.sin(a) * t2)
+    return dict(origin=np.zeros(3), own=np.array([1.0, 0, 0]), ey=np.array([0, 1.0, 0]), up=np.array([0, 0, 1.0]),
+                height=11.0, half_width=30.0, reach=1500.0, rays=(ray_a, ray_b), centre=0.4 * (ray_a + ray_b),
+                normal=np.array([np.sin(k), 0.0, np.cos(k)]))
+
+
+def _sampled_reach(c: dict, tol: float) -> float:
+    """The largest x of a 0.01 mm grid over the strip end's band whose point lies in the pane's corner (its angle,
+    seen from above, between those of the two edges) with the gasket top more than ``tol`` above the pane's
+    underside (the plane through ``centre + height·normal``); 0 where none."""
+    x, y = np.meshgrid(np.arange(0.0, 200.0, 0.01), np.linspace(-c["half_width"], c["half_width"], 121))
+    top = np.stack([x, y, np.full_like(x, c["height"])], axis=-1)
+    rise = (top - c["centre"] - c["height"] * c["normal"]) @ c["normal"]
+    angle = np.arctan2(y, x)
+    lo, hi = sorted(float(np.arctan2(r[1], r[0])) for r in c["rays"])
+    if hi - lo > np.pi:                                   # the corner spans ±180° (it opens towards −x)
+        inside = (angle >= hi) | (angle <= lo)
+    else:
+        inside = (angle >= lo) & (angle <= hi)
+    hit = inside & (rise > tol)
+    return float(x[hit].max()) if hit.any() else 0.0
+
+
+def test_a_strip_end_is_cut_back_out_from_under_an_obtuse_corner_in_a_valley_only():
+    """``corner_cutback`` against a sampled grid: under an obtuse corner (120°) in a valley (kink 10°) the strip
+    end reaches the corner's edge at the band's side, ``(w/2)·cot φ`` with φ the edge's angle seen from above
+    (17.0 mm); on a ridge, or under an acute corner, nothing is cut; with a small kink only where the gasket
+    top stands more than the tolerance above the pane."""
+    from fabrication.glazing.strips import CORNER_RISE_TOL, corner_cutback
+
+    c = _valley_corner(10.0, 120.0)
+    cut = corner_cutback(**c)
+    b = c["rays"][1]
+    assert cut == pytest.approx(30.0 * b[0] / b[1], abs=1e-9) and 16.5 < cut < 17.5
+    assert cut == pytest.approx(_sampled_reach(c, CORNER_RISE_TOL), abs=0.02)
+    assert corner_cutback(**_valley_corner(-10.0, 120.0)) == 0.0 == _sampled_reach(_valley_corner(-10.0, 120.0),
+                                                                                   CORNER_RISE_TOL)
+    assert corner_cutback(**_valley_corner(10.0, 80.0)) == 0.0 == _sampled_reach(_valley_corner(10.0, 80.0),
+                                                                                 CORNER_RISE_TOL)
+    for kink, corner in ((0.5, 135.0), (0.2, 150.0), (3.0, 100.0), (25.0, 170.0)):
+        c = _valley_corner(kink, corner)
+        assert corner_cutback(**c) == pytest.approx(_sampled_reach(c, CORNER_RISE_TOL), abs=0.02), (kink, corner)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -154,22 +156,10 @@ def test_a_real_shell_patch_becomes_a_verified_p_package(tmp_path, capsys):
     assert sf.distance(v).max() < 25.0
 
 
-@pytest.mark.slow
-def test_panes_lifted_by_a_strip_end_are_refused_before_writing_and_verify_agrees(tmp_path, capsys, monkeypatch):
+def _botanic_patch_design(tmp_path: Path) -> Path:
     """The 10 m patch (8, 4) of the botanic-garden bubble (WWmore/DOS @ f15cff51, resampled), sections net with
-    the planes searched: where its beams kink towards the glass under obtuse pane corners, a neighbouring span's
-    strip end lifts panes above what their own gaskets give.  The build stops before writing (exit 2, one line,
-    ``glazing.seat``, no folder); the same build written anyway is refused by ``ppfab verify`` for exactly the
-    panes the refusal names (panes off their faces' seat range in panels.step)."""
-    import re
-
+    the planes searched: its beams kink towards the glass under obtuse pane corners."""
     from conftest import shared_file
-    from fabrication import build
-    from fabrication.cli import main
-    from fabrication.design import load_design
-    from fabrication.progress import Progress
-    from fabrication.verify import verify
-    from fabrication.writers import write_all
     from surface_cases import resample_quad_mesh
 
     resample_quad_mesh(shared_file("DOS__botanic-garden-bubble-0.obj"), 1500, 3,
@@ -177,8 +167,48 @@ def test_panes_lifted_by_a_strip_end_are_refused_before_writing_and_verify_agree
     text = ROOF.replace('path = "roof.3dm"', 'path = "patch.ply"\nunits = "m"\nsearch_planes = true') + \
         "\n[nesting]\ntime_budget = 0.5\n\n[beam_nesting]\ntime_budget = 0.5\n"
     (tmp_path / "d.toml").write_text(text, encoding="utf-8")
+    return tmp_path / "d.toml"
+
+
+@pytest.mark.slow
+def test_strip_ends_under_obtuse_pane_corners_are_cut_back_so_the_kinked_patch_builds(tmp_path, capsys):
+    """Where a beam kinks towards the glass under an obtuse pane corner, the next span's strip end is cut back out
+    from under the corner (``corner_cutback``): the patch that lifted five panes 4.8–6.5 mm off their own gaskets
+    builds, its self-check passes, and from the written files no pane enters a strip or gasket (the kernel's
+    boolean common) and every pane bears on its own gaskets (rays cast with trimesh from its underside)."""
+    from fabrication.cli import main
+    from test_assembly_clash import no_pane_enters_a_strip_or_gasket, \
+        rays_from_every_pane_edge_land_on_a_gasket_within_the_bite
+
+    design = _botanic_patch_design(tmp_path)
     capsys.readouterr()
-    assert main(["build", str(tmp_path / "d.toml"), "-o", str(tmp_path / "out")]) == 2
+    assert main(["build", str(design), "-o", str(tmp_path / "out")]) == 0
+    assert main(["verify", str(tmp_path / "out")]) == 0
+    no_pane_enters_a_strip_or_gasket(tmp_path / "out")
+    (tmp_path / "stl").mkdir()
+    rays_from_every_pane_edge_land_on_a_gasket_within_the_bite(tmp_path / "out", tmp_path / "stl")
+
+
+@pytest.mark.slow
+def test_panes_lifted_by_a_strip_end_are_refused_before_writing_and_verify_agrees(tmp_path, capsys, monkeypatch):
+    """The same patch with the strip ends left under the pane corners (``corner_cutback`` off, as before it was
+    written): a neighbouring span's strip end lifts panes above what their own gaskets give.  The build stops
+    before writing (exit 2, one line, ``glazing.seat``, no folder); the same build written anyway is refused by
+    ``ppfab verify`` for exactly the panes the refusal names (panes off their faces' seat range in panels.step)."""
+    import re
+
+    import fabrication.glazing.strips as strips
+    from fabrication import build
+    from fabrication.cli import main
+    from fabrication.design import load_design
+    from fabrication.progress import Progress
+    from fabrication.verify import verify
+    from fabrication.writers import write_all
+
+    design = _botanic_patch_design(tmp_path)
+    monkeypatch.setattr(strips, "corner_cutback", lambda *a, **k: 0.0)
+    capsys.readouterr()
+    assert main(["build", str(design), "-o", str(tmp_path / "out")]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("ppfab: error")]
     assert len(err) == 1 and "glazing.seat:" in err[0] and not (tmp_path / "out").exists()
     named = set(re.findall(r"(P-\d+) on \d+ mm² of GS-", err[0]))
@@ -187,9 +217,11 @@ def test_panes_lifted_by_a_strip_end_are_refused_before_writing_and_verify_agree
     import fabrication.glazing.seat as seat
 
     monkeypatch.setattr(seat, "refuse_lifted_panes", lambda *a, **k: None)      # written anyway
-    b = build(load_design(tmp_path / "d.toml"))
+    b = build(load_design(design))
     (tmp_path / "written").mkdir()
     write_all(b, tmp_path / "written", Progress(quiet=True))
-    found = {f.element for f in verify(tmp_path / "written").findings
-             if f.file == "panels.step" and "outside the seat range" in f.message}
+    findings = verify(tmp_path / "written").findings
+    found = {f.element for f in findings if f.file == "panels.step" and "outside the seat range" in f.message}
     assert len(found) == count and named <= found
+    moved = {f.element for f in findings if f.file == "glazing.step" and "from the box" in f.message}
+    assert moved                                                  # and the strips not cut back are named

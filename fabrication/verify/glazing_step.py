@@ -13,6 +13,10 @@ For the strip of ``parts.csv`` on mesh edge ``a b`` (``edge_nodes``) of beam ``b
   strip and gasket together (``H = t_s + t_g``), and at least ``t_s·tan(κ/2)``: ``H·tan(κ/2)`` in a valley,
   ``t_s·tan(κ/2)`` on a ridge; where it *stops*,
   at ``(w/2 + c + (w/2)|cos θ|) / sin θ`` from the node against each span of the running polyline (``w`` width, ``c`` ``glazing.clearance``, ``t_s`` strip thickness);
+  either way at least as far as the farthest point of its band, seen along ``up``, that lies in the corner of a
+  face of ``mesh.obj`` at the node not holding its edge with the gasket top more than
+  :data:`CORNER_RISE_TOL` above that pane's nominal underside (the face's centre moved ``H`` along its outside
+  normal): found by vertex enumeration (:func:`_corner_reach`), not by the build's polygon clipping;
 * the strip is the box ``x0 ≤ x ≤ x1, |y| ≤ w/2, 0 ≤ z ≤ t_s``, its gasket the same outline at
   ``t_s ≤ z ≤ t_s + t_g``: every vertex of each solid within :data:`GLAZING_TOL` of that box's corners.
 
@@ -37,6 +41,37 @@ GLAZING_TOL = 0.05
 normals here and in the build, which may differ in the last digits)."""
 
 _FAMILY = {"rows": 0, "cols": 1}
+
+CORNER_RISE_TOL = 0.05
+"""mm a strip's gasket top may stand above the nominal underside of a pane it does not carry before its end is
+cut back out from under that pane's corner (the build's rule, restated here)."""
+
+
+def _corner_reach(origin: np.ndarray, own: np.ndarray, ey: np.ndarray, up: np.ndarray, height: float, half: float,
+                  span: float, a: np.ndarray, b: np.ndarray, centre: np.ndarray, normal: np.ndarray) -> float:
+    """The largest ``x`` of the strip end ``{origin + x·own + y·ey : 0 ≤ x ≤ span, |y| ≤ half}`` that lies in the
+    corner of a pane it does not carry — the wedge between the corner's edges ``a``, ``b`` (vectors from the node)
+    seen along ``up`` — with its gasket top (``height`` up) at least :data:`CORNER_RISE_TOL` above the pane's
+    nominal underside (the plane through ``centre + height·normal``); 0 where there is no such point.  By vertex
+    enumeration: the largest ``x`` among the feasible pairwise crossings of the seven constraint lines
+    ``g·(x, y) ≥ h``."""
+    p2 = np.array([[a @ own, a @ ey], [b @ own, b @ ey]])
+    det = float(p2[0, 0] * p2[1, 1] - p2[0, 1] * p2[1, 0])
+    if abs(det) <= 1e-9 * float(np.linalg.norm(p2[0]) * np.linalg.norm(p2[1])):
+        return 0.0
+    first, second = (p2[0], p2[1]) if det > 0 else (p2[1], p2[0])
+    lift = float((origin + height * up - centre - height * normal) @ normal)
+    g = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-first[1], first[0]], [second[1], -second[0]],
+                  [float(own @ normal), float(ey @ normal)]])
+    h = np.array([0.0, -span, -half, -half, 0.0, 0.0, CORNER_RISE_TOL - lift])
+    k1, k2 = np.triu_indices(len(g), 1)
+    m = np.stack([g[k1], g[k2]], axis=1)                                     # (21, 2, 2)
+    dets = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+    ok = np.abs(dets) > 1e-12
+    rhs = np.stack([h[k1], h[k2]], axis=1)[ok]
+    pts = np.linalg.solve(m[ok], rhs[..., None])[..., 0]                    # (k, 2) crossings
+    feasible = pts[(pts @ g.T - h >= -1e-9 * (1.0 + np.abs(h))).all(axis=1)]
+    return float(feasible[:, 0].max()) if len(feasible) else 0.0
 
 
 def _face_normals(mesh) -> np.ndarray:
@@ -113,6 +148,11 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
         else:
             first = line[min(es, key=lambda e: (fam[e], line[e]))]
             running[node] = {e for e in es if line[e] == first}
+    at_node: dict[int, list[tuple[int, int, int]]] = {}                   # node -> (face, previous, next)
+    for fi, f in enumerate(mesh.faces):
+        f = [int(x) for x in f]
+        for k in range(len(f)):
+            at_node.setdefault(f[k], []).append((fi, f[k - 1], f[(k + 1) % len(f)]))
     out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for e, (r, i, j) in enumerate(spans):
         plane = next((p for nodes, p in plates.get(r.get("beam", ""), []) if i in nodes and j in nodes),
@@ -154,6 +194,14 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
                     cos = float(np.clip(own @ of, -1.0, 1.0))
                     sin = max(float(np.sqrt(1.0 - cos * cos)), 1e-3)
                     x = max(x, (b + c_clear + b * abs(cos)) / sin)
+            # out from under the corner of every pane at the node that this strip does not carry
+            far = j if node == i else i
+            start = pa if node == i else pa + span * ex
+            for fi, before, after in at_node.get(node, []):
+                if far not in (before, after):
+                    ring = verts[[int(q) for q in mesh.faces[fi]]]
+                    x = max(x, _corner_reach(start, sgn * ex, ey, up, ts + tg, b, span, verts[before] - verts[node],
+                                             verts[after] - verts[node], ring.mean(axis=0), normals[fi]))
             ends.append(x)
         x0, x1 = ends[0], span - ends[1]
         rect = np.array([[x0, -b], [x1, -b], [x1, b], [x0, b]])
