@@ -300,3 +300,62 @@ def test_principal_net_reseeded_where_its_curves_fan(tmp_path, monkeypatch):
     monkeypatch.setattr(principal, "BALANCED", 0.99)                      # uniform seeds only
     u = edges(remesh(sf.samples, SurfaceSpec(path="dome.3dm", spacing=1500.0, net="principal")))
     assert u.min() < 0.65 and u.max() > 1.6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("net, families", [("sections", "rows")])
+def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spacing(tmp_path, net, families):
+    """The second NURBS surface as a whole build: the saddle (a one-face Brep in feet, rhino3dm) with ``net =
+    sections`` (P: rows planar; measured 32 panels, 0.93–1.07 × the spacing, 0.86 mm from the NURBS; with
+    ``net = "pp"``, ``families = "both"`` the same holds at 0.98–1.02 × but 58.7 mm from the NURBS, measured once
+    and not run here: the dome's PP build is) → optimised with closeness to the NURBS →
+    support, beams, glazing → written, and verify accepts it.  Measured from the built mesh apart from the code
+    under test: δ_f (the diagonals' gap over their mean length, §3.3) and the planar families' distance to their
+    least-squares planes ≤ 1e-6, every edge within 0.75–1.25 × the spacing, every node near the NURBS (rhino3dm's evaluation of it,
+    the nearest point found by scipy's Nelder–Mead from the nearest of 61 × 61 samples)."""
+    import rhino3dm
+    from scipy.optimize import minimize
+
+    from fabrication import build, load_design
+    from test_surface_design import ROOF
+
+    path = tmp_path / "roof.3dm"
+    write_nurbs(path, SADDLE, 40.0, 28.0, "Feet", as_brep=True)
+    text = ROOF.replace("spacing = 1500.0", f'spacing = 1500.0\nnet = "{net}"')
+    text = text.replace('families = "rows"', f'families = "{families}"')
+    (tmp_path / "roof.toml").write_text(text, encoding="utf-8")
+    b = build(load_design(tmp_path / "roof.toml"))
+    mesh = b.geometry.mesh.to_quadmesh() if hasattr(b.geometry.mesh, "to_quadmesh") else b.geometry.mesh
+    v = np.asarray(mesh.vertices, dtype=float)
+    faces = np.asarray(mesh.faces)
+    assert len(faces) >= 20
+    d1, d2 = v[faces[:, 2]] - v[faces[:, 0]], v[faces[:, 3]] - v[faces[:, 1]]
+    n = np.cross(d1, d2)
+    gap = np.abs(np.einsum("ij,ij->i", v[faces[:, 1]] - v[faces[:, 0]], n)) / np.linalg.norm(n, axis=1)
+    assert (gap / (0.5 * (np.linalg.norm(d1, axis=1) + np.linalg.norm(d2, axis=1)))).max() <= 1e-6
+    planar = [0] if families == "rows" else [0, 1]
+    lines = [np.asarray(p.vertices) for p in mesh.polylines if p.family in planar and len(p.vertices) >= 3]
+    assert len(lines) >= 3
+    for r in lines:
+        q = v[r] - v[r].mean(axis=0)
+        assert np.abs(q @ np.linalg.svd(q)[2][-1]).max() <= 1e-6 * float(np.ptp(v[r], axis=0).max())
+    edges = np.linalg.norm(v[faces] - v[np.roll(faces, -1, axis=1)], axis=2) / 1500.0
+    assert 0.75 <= edges.min() and edges.max() <= 1.25, (edges.min(), edges.max())
+    surface = rhino3dm.File3dm.Read(str(path)).Objects[0].Geometry.Faces[0].UnderlyingSurface()
+    (u0, u1), (w0, w1) = [(surface.Domain(k).T0, surface.Domain(k).T1) for k in (0, 1)]
+
+    def at(st: np.ndarray) -> np.ndarray:                            # mm
+        q = surface.PointAt(float(np.clip(st[0], u0, u1)), float(np.clip(st[1], w0, w1)))
+        return 304.8 * np.array([q.X, q.Y, q.Z])                       # the file is in feet
+
+    grid = [(s_, t_) for s_ in np.linspace(u0, u1, 61) for t_ in np.linspace(w0, w1, 61)]
+    samples = np.array([at(np.array(g)) for g in grid])
+    far = 0.0
+    for p in v:                          # the nearest sample, then scipy's Nelder–Mead on rhino3dm's evaluation
+        start = np.array(grid[int(np.argmin(np.linalg.norm(samples - p, axis=1)))])
+        best = minimize(lambda st: float(np.linalg.norm(at(st) - p)), start, method="Nelder-Mead",
+                        options={"xatol": 1e-9 * (u1 - u0), "fatol": 1e-6, "maxiter": 2000})
+        far = max(far, float(best.fun))
+    assert far <= 15.0, far
+    b.write(tmp_path / "out")
+    assert b.verify().ok
