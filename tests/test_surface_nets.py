@@ -312,7 +312,9 @@ def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spa
     support, beams, glazing → written, and verify accepts it.  Measured from the built mesh apart from the code
     under test: δ_f (the diagonals' gap over their mean length, §3.3) and the planar families' distance to their
     least-squares planes ≤ 1e-6, every edge within 0.75–1.25 × the spacing, every node near the NURBS (rhino3dm's evaluation of it,
-    the nearest point found by scipy's Nelder–Mead from the nearest of 61 × 61 samples)."""
+    the nearest point found by scipy's Nelder–Mead from the nearest of 61 × 61 samples), and no crease above the
+    input's (two neighbouring panels meet at most 1° beyond the angle between the NURBS normals nearest their
+    centres)."""
     import rhino3dm
     from scipy.optimize import minimize
 
@@ -350,12 +352,32 @@ def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spa
 
     grid = [(s_, t_) for s_ in np.linspace(u0, u1, 61) for t_ in np.linspace(w0, w1, 61)]
     samples = np.array([at(np.array(g)) for g in grid])
-    far = 0.0
-    for p in v:                          # the nearest sample, then scipy's Nelder–Mead on rhino3dm's evaluation
+    def nearest(p: np.ndarray):          # the nearest sample, then scipy's Nelder–Mead on rhino3dm's evaluation
         start = np.array(grid[int(np.argmin(np.linalg.norm(samples - p, axis=1)))])
-        best = minimize(lambda st: float(np.linalg.norm(at(st) - p)), start, method="Nelder-Mead",
+        return minimize(lambda st: float(np.linalg.norm(at(st) - p)), start, method="Nelder-Mead",
                         options={"xatol": 1e-9 * (u1 - u0), "fatol": 1e-6, "maxiter": 2000})
-        far = max(far, float(best.fun))
+
+    far = max(float(nearest(p).fun) for p in v)
     assert far <= 15.0, far
+    # no crease above the input's: two neighbouring panels meet at most at the angle the NURBS turns between the
+    # points nearest their centres (its own normals, rhino3dm) + 1°
+    def unit(n) -> np.ndarray:
+        n = np.array([n.X, n.Y, n.Z]) if hasattr(n, "X") else np.asarray(n)
+        return n / np.linalg.norm(n)
+
+    surface_n = [unit(surface.NormalAt(*map(float, np.clip(nearest(c).x, [u0, w0], [u1, w1]))))
+                 for c in v[faces].mean(axis=1)]
+    panel_n = [np.linalg.svd(v[f] - v[f].mean(axis=0))[2][2] for f in faces]
+    shared: dict[tuple[int, int], list[int]] = {}
+    for fi, f in enumerate(faces.tolist()):
+        for i, j in zip(f, f[1:] + f[:1]):
+            shared.setdefault((min(i, j), max(i, j)), []).append(fi)
+
+    def angle(m: np.ndarray, n: np.ndarray) -> float:
+        return float(np.degrees(np.arccos(min(1.0, abs(float(m @ n))))))
+
+    pairs = [fs for fs in shared.values() if len(fs) == 2]
+    excess = [angle(panel_n[f1], panel_n[f2]) - angle(surface_n[f1], surface_n[f2]) for f1, f2 in pairs]
+    assert pairs and max(excess) <= 1.0, max(excess)
     b.write(tmp_path / "out")
     assert b.verify().ok
