@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from surface_cases import write_nurbs
+from surface_cases import nurbs_distance_and_crease, write_nurbs
 
 DOME = [[0.0, 0.5, 0.5, 0.0], [0.5, 1.3, 1.2, 0.5], [0.5, 1.2, 1.3, 0.5], [0.0, 0.5, 0.5, 0.0]]
 
@@ -70,7 +70,9 @@ def test_surface_design_refuses_an_unknown_net():
 @pytest.mark.slow
 def test_surface_design_builds_a_p_package(tmp_path):
     """A NURBS dome (9 × 6 m, written with rhino3dm in metres) → sections net → P optimised with closeness to
-    the NURBS → support, beams, glazing, nesting → written and verified."""
+    the NURBS → support, beams, glazing, nesting → written and verified; every edge within 0.75–1.25 × the
+    spacing, the distance to the NURBS as rhino3dm evaluates it the build's own, and no crease more than 1° above
+    the NURBS's own turn between neighbouring panel centres."""
     from fabrication import build, load_design
     from fabrication.surfacefile import read_surface
 
@@ -83,6 +85,12 @@ def test_surface_design_builds_a_p_package(tmp_path):
     v = np.asarray(b.geometry.mesh.vertices).reshape(-1, 3)
     dist = read_surface(tmp_path / "roof.3dm").distance(v)                  # measured again, here
     assert dist.max() < 2.0 and b.geometry.surface_deviation_mm == pytest.approx(dist.max(), abs=1e-6)
+    qm = b.geometry.mesh.to_quadmesh() if hasattr(b.geometry.mesh, "to_quadmesh") else b.geometry.mesh
+    edges = np.asarray(qm.edge_lengths()) / 1500.0
+    assert 0.75 <= edges.min() and edges.max() <= 1.25, (edges.min(), edges.max())
+    far, crease = nurbs_distance_and_crease(tmp_path / "roof.3dm", np.asarray(qm.vertices, dtype=float),
+                                            np.asarray(qm.faces), 1000.0)           # rhino3dm's own evaluation
+    assert far == pytest.approx(dist.max(), abs=0.05) and crease <= 1.0, (far, crease)
     out = tmp_path / "out"
     b.write(out)
     assert b.verify().ok

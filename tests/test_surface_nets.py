@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import shared_file
-from surface_cases import resample_quad_mesh, write_nurbs
+from surface_cases import nurbs_distance_and_crease, resample_quad_mesh, write_nurbs
 from test_surface_sections import SADDLE, plan_grid_twist, quad_twist
 
 
@@ -315,9 +315,6 @@ def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spa
     the nearest point found by scipy's Nelder–Mead from the nearest of 61 × 61 samples), and no crease above the
     input's (two neighbouring panels meet at most 1° beyond the angle between the NURBS normals nearest their
     centres)."""
-    import rhino3dm
-    from scipy.optimize import minimize
-
     from fabrication import build, load_design
     from test_surface_design import ROOF
 
@@ -343,41 +340,7 @@ def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spa
         assert np.abs(q @ np.linalg.svd(q)[2][-1]).max() <= 1e-6 * float(np.ptp(v[r], axis=0).max())
     edges = np.linalg.norm(v[faces] - v[np.roll(faces, -1, axis=1)], axis=2) / 1500.0
     assert 0.75 <= edges.min() and edges.max() <= 1.25, (edges.min(), edges.max())
-    surface = rhino3dm.File3dm.Read(str(path)).Objects[0].Geometry.Faces[0].UnderlyingSurface()
-    (u0, u1), (w0, w1) = [(surface.Domain(k).T0, surface.Domain(k).T1) for k in (0, 1)]
-
-    def at(st: np.ndarray) -> np.ndarray:                            # mm
-        q = surface.PointAt(float(np.clip(st[0], u0, u1)), float(np.clip(st[1], w0, w1)))
-        return 304.8 * np.array([q.X, q.Y, q.Z])                       # the file is in feet
-
-    grid = [(s_, t_) for s_ in np.linspace(u0, u1, 61) for t_ in np.linspace(w0, w1, 61)]
-    samples = np.array([at(np.array(g)) for g in grid])
-    def nearest(p: np.ndarray):          # the nearest sample, then scipy's Nelder–Mead on rhino3dm's evaluation
-        start = np.array(grid[int(np.argmin(np.linalg.norm(samples - p, axis=1)))])
-        return minimize(lambda st: float(np.linalg.norm(at(st) - p)), start, method="Nelder-Mead",
-                        options={"xatol": 1e-9 * (u1 - u0), "fatol": 1e-6, "maxiter": 2000})
-
-    far = max(float(nearest(p).fun) for p in v)
-    assert far <= 15.0, far
-    # no crease above the input's: two neighbouring panels meet at most at the angle the NURBS turns between the
-    # points nearest their centres (its own normals, rhino3dm) + 1°
-    def unit(n) -> np.ndarray:
-        n = np.array([n.X, n.Y, n.Z]) if hasattr(n, "X") else np.asarray(n)
-        return n / np.linalg.norm(n)
-
-    surface_n = [unit(surface.NormalAt(*map(float, np.clip(nearest(c).x, [u0, w0], [u1, w1]))))
-                 for c in v[faces].mean(axis=1)]
-    panel_n = [np.linalg.svd(v[f] - v[f].mean(axis=0))[2][2] for f in faces]
-    shared: dict[tuple[int, int], list[int]] = {}
-    for fi, f in enumerate(faces.tolist()):
-        for i, j in zip(f, f[1:] + f[:1]):
-            shared.setdefault((min(i, j), max(i, j)), []).append(fi)
-
-    def angle(m: np.ndarray, n: np.ndarray) -> float:
-        return float(np.degrees(np.arccos(min(1.0, abs(float(m @ n))))))
-
-    pairs = [fs for fs in shared.values() if len(fs) == 2]
-    excess = [angle(panel_n[f1], panel_n[f2]) - angle(surface_n[f1], surface_n[f2]) for f1, f2 in pairs]
-    assert pairs and max(excess) <= 1.0, max(excess)
+    far, crease = nurbs_distance_and_crease(path, v, faces, 304.8)          # the file is in feet
+    assert far <= 15.0 and crease <= 1.0, (far, crease)
     b.write(tmp_path / "out")
     assert b.verify().ok
