@@ -15,7 +15,7 @@ step  kind          insertion direction (the part moves along it from far away i
 4     ``splice``    the splice cover plates, lowered beside the beam plate's faces along its first piece's
                     direction (pushed on along the normal from far away they would pass through the next beam)
 5     ``strip``     the glazing strips, lowered onto the plates' top edges along the strip's down (−up)
-6     ``gasket``    the gaskets, lowered onto their strips along the same direction
+6     ``gasket``    the gaskets, laid onto their strips by hand along the same direction
 7     ``setting_block``  the setting blocks, lowered onto the gasket under each pane's down-slope edge along
                     the pane's inside normal (−N): the pane comes down against them
 8     ``stop``      the stops behind the blocks (steep panes), the same way

@@ -194,6 +194,9 @@ def test_a_part_fitted_by_hand_comes_from_the_installers_reach_not_from_beyond_t
         return Body(c, True, c[0], np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0]), thick,
                     None)
 
+    from fabrication.verify.erection import BY_HAND
+
+    assert "gasket" in BY_HAND and "cover_cap" in BY_HAND and "strip" not in BY_HAND   # laid on, not lowered
     down = np.array([0.0, 0.0, -1.0])
     for above, hand, passes in ((1000.0, True, False), (1000.0, False, True), (100.0, True, True)):
         bodies = {"P-fold": box(above), "CC-cap": box(0.0)}

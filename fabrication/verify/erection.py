@@ -10,8 +10,8 @@ The solids come from the STEP files (``beams.step`` as the step check read it, `
 nothing is shared with the code that made the order: a convex solid is the hull of its vertices, any other (a
 slotted plate, a cover plate with holes, a non-convex pane) that face's polygon extruded by the solid's
 thickness.  A part moving along ``d`` sweeps the Minkowski sum of itself and the segment ``[−L·d, 0]``, with
-``L`` far enough that it starts beyond every part of the earlier steps (a retention part, fitted by hand, from
-:data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hull of the solid and the solid moved back
+``L`` far enough that it starts beyond every part of the earlier steps (a gasket or a retention part, fitted by
+hand, from :data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hull of the solid and the solid moved back
 by ``L``; for a plate moving in its own plane the extrusion of its polygon's 2D Minkowski sum with the segment;
 otherwise the union of the hulls of the prisms over the polygon's triangles and their moved copies.  The sweep is
 intersected with every part of an
@@ -48,8 +48,10 @@ HAND_APPROACH_MM = 300.0
 it comes from the installer's reach, not from beyond the whole roof (on a surface that folds over itself, a
 cover cap swept from beyond every part went through the panes of the fold above it: Enneper, 17.5 mm)."""
 
-BY_HAND = ("setting_block", "stop", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
-"""The kinds of ``erection.csv`` fitted by hand: the retention parts."""
+BY_HAND = ("gasket", "setting_block", "stop", "pressure_gasket", "pressure_plate", "screw", "cover_cap")
+"""The kinds of ``erection.csv`` fitted by hand: the strips' gaskets (laid on a strip once it is on its plates;
+on the Enneper example, lowered from beyond every part, four of them went through strips of the fold above,
+by 8 mm) and the retention parts."""
 
 TOLERANCE = 0.25
 """mm: the depth up to which a sweep may overlap an earlier part: a pane may sit 0.1 mm into its gasket
