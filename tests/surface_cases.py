@@ -91,6 +91,39 @@ def write_nurbs(path: Path, heights, size_x: float, size_y: float, unit: str = "
     model.Write(str(path), 7)
 
 
+def diagonal_gaps(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """δ_f of every quad (§3.3), ``(F,)``: the distance between the lines of its diagonals over their mean length;
+    ``vertices (n, 3)``, ``faces (F, 4)``."""
+    c = vertices[np.asarray(faces)]
+    d1, d2 = c[:, 2] - c[:, 0], c[:, 3] - c[:, 1]
+    n = np.cross(d1, d2)
+    gap = np.abs(np.einsum("ij,ij->i", c[:, 1] - c[:, 0], n)) / np.linalg.norm(n, axis=1)
+    return gap / (0.5 * (np.linalg.norm(d1, axis=1) + np.linalg.norm(d2, axis=1)))
+
+
+def line_plane_gap(mesh, families: tuple[int, ...]) -> tuple[float, int]:
+    """The largest distance of a vertex of a polyline of ``families`` (3 or more vertices) from that polyline's
+    least-squares plane (SVD), over the polyline's largest extent; and how many polylines were measured."""
+    v = np.asarray(mesh.vertices, dtype=float)
+    worst, count = 0.0, 0
+    for line in mesh.polylines:
+        if line.family in families and len(line.vertices) >= 3:
+            p = v[np.asarray(line.vertices)]
+            q = p - p.mean(axis=0)
+            worst = max(worst, float(np.abs(q @ np.linalg.svd(q)[2][-1]).max()) / float(np.ptp(p, axis=0).max()))
+            count += 1
+    return worst, count
+
+
+def face_pairs(faces: np.ndarray) -> list[tuple[int, int]]:
+    """The pairs of faces of ``faces (F, k)`` that share an edge."""
+    shared: dict[tuple[int, int], list[int]] = {}
+    for fi, f in enumerate(np.asarray(faces).tolist()):
+        for i, j in zip(f, f[1:] + f[:1]):
+            shared.setdefault((min(i, j), max(i, j)), []).append(fi)
+    return [(fs[0], fs[1]) for fs in shared.values() if len(fs) == 2]
+
+
 def nurbs_distance_and_crease(path: Path, vertices: np.ndarray, faces: np.ndarray, mm_per_unit: float
                               ) -> tuple[float, float]:
     """Measured against the NURBS of the ``.3dm`` at ``path`` by its own evaluation (rhino3dm) and not by
@@ -127,14 +160,11 @@ def nurbs_distance_and_crease(path: Path, vertices: np.ndarray, faces: np.ndarra
     surface_n = [unit(surface.NormalAt(*map(float, np.clip(nearest(c).x, lo, hi))))
                  for c in vertices[faces].mean(axis=1)]
     panel_n = [np.linalg.svd(vertices[f] - vertices[f].mean(axis=0))[2][2] for f in faces]
-    shared: dict[tuple[int, int], list[int]] = {}
-    for fi, f in enumerate(np.asarray(faces).tolist()):
-        for i, j in zip(f, f[1:] + f[:1]):
-            shared.setdefault((min(i, j), max(i, j)), []).append(fi)
-
-    def angle(m: np.ndarray, n: np.ndarray) -> float:
-        return float(np.degrees(np.arccos(min(1.0, abs(float(m @ n))))))
-
-    pairs = [fs for fs in shared.values() if len(fs) == 2]
+    pairs = face_pairs(faces)
     assert pairs, "no two faces share an edge"
-    return far, max(angle(panel_n[a], panel_n[b]) - angle(surface_n[a], surface_n[b]) for a, b in pairs)
+    return far, max(turn_deg(panel_n[a], panel_n[b]) - turn_deg(surface_n[a], surface_n[b]) for a, b in pairs)
+
+
+def turn_deg(m: np.ndarray, n: np.ndarray) -> float:
+    """The angle (degrees, 0–90) between two unit normals, whichever way each points."""
+    return float(np.degrees(np.arccos(min(1.0, abs(float(m @ n))))))

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from surface_cases import nurbs_distance_and_crease, write_nurbs
+from surface_cases import diagonal_gaps, face_pairs, line_plane_gap, nurbs_distance_and_crease, turn_deg, write_nurbs
 
 DOME = [[0.0, 0.5, 0.5, 0.0], [0.5, 1.3, 1.2, 0.5], [0.5, 1.2, 1.3, 0.5], [0.0, 0.5, 0.5, 0.0]]
 
@@ -169,17 +169,6 @@ INSPIRED = "compas_libigl__inspired_mesh_quads_Conjugate.off"
 shared data, sha256 1ef89805916a18b2…), 43 × 26 m, in metres."""
 
 
-def _diagonal_gap(q: np.ndarray) -> float:
-    """δ_f of one quad ``q (4, 3)`` (§3.3): the distance between its diagonals' lines over their mean length."""
-    d1, d2 = q[2] - q[0], q[3] - q[1]
-    n = np.cross(d1, d2)
-    return abs(float((q[1] - q[0]) @ n)) / float(np.linalg.norm(n)) / (0.5 * (np.linalg.norm(d1) + np.linalg.norm(d2)))
-
-
-def _turn_deg(a: np.ndarray, b: np.ndarray) -> float:
-    return float(np.degrees(np.arccos(np.clip(abs(float(a @ b)), -1.0, 1.0))))
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("crop", [(12.0, 13.0, 6.0), (8.0, 8.0, 5.0)])
 def test_a_real_roof_patch_becomes_a_verified_p_package_within_a_quarter_of_the_spacing(tmp_path, capsys, crop):
@@ -214,12 +203,9 @@ def test_a_real_roof_patch_becomes_a_verified_p_package_within_a_quarter_of_the_
     spacing = 1500.0
     lengths = np.linalg.norm(v[faces] - v[np.roll(faces, -1, axis=1)], axis=2) / spacing
     assert 0.75 <= lengths.min() and lengths.max() <= 1.25, (lengths.min(), lengths.max())
-    assert max(_diagonal_gap(v[f]) for f in faces) <= 1e-6
-    rows = [np.asarray(p.vertices) for p in mesh.polylines if p.family == 0 and len(p.vertices) >= 3]
-    assert len(rows) >= 3
-    for r in rows:
-        q = v[r] - v[r].mean(axis=0)
-        assert np.abs(q @ np.linalg.svd(q)[2][-1]).max() <= 1e-6 * float(np.ptp(v[r], axis=0).max())
+    assert diagonal_gaps(v, faces).max() <= 1e-6
+    gap, rows = line_plane_gap(mesh, (0,))
+    assert rows >= 3 and gap <= 1e-6
     tri = trimesh.Trimesh(np.asarray(surface.vertices) * 1000.0, np.asarray(surface.faces), process=False)
     triangles = np.asarray(tri.triangles)                                 # every node against every triangle
     near = trimesh.triangles.closest_point(np.tile(triangles, (len(v), 1, 1)), np.repeat(v, len(triangles), axis=0))
@@ -238,13 +224,9 @@ def test_a_real_roof_patch_becomes_a_verified_p_package_within_a_quarter_of_the_
         near = centres.query_ball_point(c, 1000.0) or [int(centres.query(c)[1])]
         n = tri_n[near].sum(axis=0)
         in_n.append(n / np.linalg.norm(n))
-    shared: dict[tuple[int, int], list[int]] = {}
-    for fi, f in enumerate(faces.tolist()):
-        for a, b in zip(f, f[1:] + f[:1]):
-            shared.setdefault((min(a, b), max(a, b)), []).append(fi)
-    pairs = [fs for fs in shared.values() if len(fs) == 2]
-    crease = np.array([_turn_deg(out_n[a], out_n[b]) for a, b in pairs])
-    turn = np.array([_turn_deg(in_n[a], in_n[b]) for a, b in pairs])
+    pairs = face_pairs(faces)
+    crease = np.array([turn_deg(out_n[a], out_n[b]) for a, b in pairs])
+    turn = np.array([turn_deg(in_n[a], in_n[b]) for a, b in pairs])
     assert (crease <= turn + 1.5).all(), float((crease - turn).max())
     assert crease.max() <= turn.max() + 0.5, (crease.max(), turn.max())
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import shared_file
-from surface_cases import nurbs_distance_and_crease, resample_quad_mesh, write_nurbs
+from surface_cases import diagonal_gaps, line_plane_gap, nurbs_distance_and_crease, resample_quad_mesh, write_nurbs
 from test_surface_sections import SADDLE, plan_grid_twist, quad_twist
 
 
@@ -303,15 +303,14 @@ def test_principal_net_reseeded_where_its_curves_fan(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("net, families", [("sections", "rows")])
-def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spacing(tmp_path, net, families):
+def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spacing(tmp_path):
     """The second NURBS surface as a whole build: the saddle (a one-face Brep in feet, rhino3dm) with ``net =
     sections`` (P: rows planar; measured 32 panels, 0.93–1.07 × the spacing, 0.86 mm from the NURBS; with
     ``net = "pp"``, ``families = "both"`` the same holds at 0.98–1.02 × but 58.7 mm from the NURBS, measured once
     and not run here: the dome's PP build is) → optimised with closeness to the NURBS →
     support, beams, glazing → written, and verify accepts it.  Measured from the built mesh apart from the code
     under test: δ_f (the diagonals' gap over their mean length, §3.3) and the planar families' distance to their
-    least-squares planes ≤ 1e-6, every edge within 0.75–1.25 × the spacing, every node near the NURBS (rhino3dm's evaluation of it,
+    least-squares planes ≤ 1e-6 (relative to its extent), every edge within 0.75–1.25 × the spacing, every node near the NURBS (rhino3dm's evaluation of it,
     the nearest point found by scipy's Nelder–Mead from the nearest of 61 × 61 samples), and no crease above the
     input's (two neighbouring panels meet at most 1° beyond the angle between the NURBS normals nearest their
     centres)."""
@@ -320,24 +319,16 @@ def test_the_saddle_brep_builds_a_verified_p_package_within_a_quarter_of_the_spa
 
     path = tmp_path / "roof.3dm"
     write_nurbs(path, SADDLE, 40.0, 28.0, "Feet", as_brep=True)
-    text = ROOF.replace("spacing = 1500.0", f'spacing = 1500.0\nnet = "{net}"')
-    text = text.replace('families = "rows"', f'families = "{families}"')
-    (tmp_path / "roof.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "roof.toml").write_text(ROOF.replace("spacing = 1500.0", 'spacing = 1500.0\nnet = "sections"'),
+                                        encoding="utf-8")
     b = build(load_design(tmp_path / "roof.toml"))
     mesh = b.geometry.mesh.to_quadmesh() if hasattr(b.geometry.mesh, "to_quadmesh") else b.geometry.mesh
     v = np.asarray(mesh.vertices, dtype=float)
     faces = np.asarray(mesh.faces)
     assert len(faces) >= 20
-    d1, d2 = v[faces[:, 2]] - v[faces[:, 0]], v[faces[:, 3]] - v[faces[:, 1]]
-    n = np.cross(d1, d2)
-    gap = np.abs(np.einsum("ij,ij->i", v[faces[:, 1]] - v[faces[:, 0]], n)) / np.linalg.norm(n, axis=1)
-    assert (gap / (0.5 * (np.linalg.norm(d1, axis=1) + np.linalg.norm(d2, axis=1)))).max() <= 1e-6
-    planar = [0] if families == "rows" else [0, 1]
-    lines = [np.asarray(p.vertices) for p in mesh.polylines if p.family in planar and len(p.vertices) >= 3]
-    assert len(lines) >= 3
-    for r in lines:
-        q = v[r] - v[r].mean(axis=0)
-        assert np.abs(q @ np.linalg.svd(q)[2][-1]).max() <= 1e-6 * float(np.ptp(v[r], axis=0).max())
+    assert diagonal_gaps(v, faces).max() <= 1e-6
+    gap, rows = line_plane_gap(mesh, (0,))
+    assert rows >= 3 and gap <= 1e-6
     edges = np.linalg.norm(v[faces] - v[np.roll(faces, -1, axis=1)], axis=2) / 1500.0
     assert 0.75 <= edges.min() and edges.max() <= 1.25, (edges.min(), edges.max())
     far, crease = nurbs_distance_and_crease(path, v, faces, 304.8)          # the file is in feet

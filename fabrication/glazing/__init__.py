@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from .bite import BiteError, EdgeBite, check_bites, edge_normals, measure_bites
 from .params import GlazingParams
 from .slope import warn_flat_panes
@@ -72,7 +74,10 @@ def make_glazing(support, panels, beams, params: GlazingParams, splice_params: S
              + welded_splices(beams.plates))
     if params.support == "none":
         return Glazing(params, splice_params, (), (), tuple(splices), tuple(welds), 0.0)
-    strips = make_strips(support, beam_ids(support), params, normals)
+    on_face = np.zeros((len(support.mesh.faces), 3))
+    for p in panels:
+        on_face[p.face] = p.frame.normal
+    strips = make_strips(support, beam_ids(support), params, normals, on_face)
     short = [s for s in strips if s.length <= 0]
     if short:
         raise FabricationError(f"{len(short)} glazing strip(s) have no length left between the strips running "

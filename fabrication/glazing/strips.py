@@ -196,36 +196,24 @@ def corner_cutback(origin: np.ndarray, own: np.ndarray, ey: np.ndarray, up: np.n
 def face_corners(faces: np.ndarray, vertices: np.ndarray, normals: np.ndarray
                  ) -> dict[int, list[tuple[int, int, np.ndarray, np.ndarray]]]:
     """Node → the corners of the faces there: ``(previous vertex, next vertex, face centre (3,), unit outside
-    normal (3,))``, from ``faces (F, 4)`` and their outside normals ``normals (F, 3)``."""
+    normal (3,))``, from ``faces (F, 4)`` and their outside normals ``normals (F, 3)`` (zero rows: faces without a
+    pane, left out)."""
     out: dict[int, list[tuple[int, int, np.ndarray, np.ndarray]]] = {}
     for f, ring in enumerate(np.asarray(faces).tolist()):
+        if not np.any(normals[f]):
+            continue
         centre = vertices[ring].mean(axis=0)
         for k, node in enumerate(ring):
             out.setdefault(node, []).append((ring[k - 1], ring[(k + 1) % len(ring)], centre, normals[f]))
     return out
 
 
-def outside_face_normals(faces: np.ndarray, vertices: np.ndarray, edges: np.ndarray,
-                         edge_normals: np.ndarray) -> np.ndarray:
-    """``(F, 3)`` unit least-squares normals of the faces, each turned to the side of the panes' outside normals
-    summed on its edges (``edge_normals (E, 3)`` on ``edges (E, 2)``)."""
-    nv = len(vertices)
-    sums = {int(min(i, j)) * nv + int(max(i, j)): n for (i, j), n in zip(edges.tolist(), edge_normals)}
-    out = []
-    for ring in np.asarray(faces).tolist():
-        c = vertices[ring]
-        n = np.linalg.svd(c - c.mean(axis=0))[2][2]
-        side = sum((sums.get(min(a, b) * nv + max(a, b), np.zeros(3)) for a, b in zip(ring, ring[1:] + ring[:1])),
-                   np.zeros(3))
-        out.append(-n if float(n @ side) < 0.0 else n)
-    return np.array(out).reshape(-1, 3)
-
-
 def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingParams,
-                edge_normals: np.ndarray | None = None) -> list[Strip]:
+                edge_normals: np.ndarray | None = None, face_normals: np.ndarray | None = None) -> list[Strip]:
     """One :class:`Strip` per mesh edge (see the module docstring); ``beam_ids`` per polyline;
     ``edge_normals (E, 3)`` the sum of the outside normals of the panes on each edge (zero rows, or ``None``:
-    the strip lies square to its beam plane)."""
+    the strip lies square to its beam plane); ``face_normals (F, 3)`` the outside normal of the pane on each mesh
+    face (zero rows where none; ``None``: no strip end is cut back from under a pane's corner)."""
     mesh = support.mesh
     edges = support.edges
     v = support.vertices
@@ -260,9 +248,7 @@ def make_strips(support: SupportStructure, beam_ids: list[str], params: GlazingP
         ey = np.cross(up, ex)
         frames.append((Frame(pa, ex, ey), span))
     height = ts + params.gasket_thickness
-    corners: dict[int, list[tuple[int, int, np.ndarray, np.ndarray]]] = {}
-    if edge_normals is not None and len(mesh.faces):
-        corners = face_corners(mesh.faces, v, outside_face_normals(mesh.faces, v, edges, edge_normals))
+    corners = face_corners(mesh.faces, v, face_normals) if face_normals is not None else {}
     counters: dict[str, int] = {}
     out: list[Strip] = []
     for e, (i, j) in enumerate(edges.tolist()):

@@ -149,8 +149,10 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
             first = line[min(es, key=lambda e: (fam[e], line[e]))]
             running[node] = {e for e in es if line[e] == first}
     at_node: dict[int, list[tuple[int, int, int]]] = {}                   # node -> (face, previous, next)
+    centres = []
     for fi, f in enumerate(mesh.faces):
         f = [int(x) for x in f]
+        centres.append(verts[f].mean(axis=0))
         for k in range(len(f)):
             at_node.setdefault(f[k], []).append((fi, f[k - 1], f[(k + 1) % len(f)]))
     out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -199,9 +201,8 @@ def _strip_boxes(v: Verification, rows: list[dict[str, str]], sign: float) -> di
             start = pa if node == i else pa + span * ex
             for fi, before, after in at_node.get(node, []):
                 if far not in (before, after):
-                    ring = verts[[int(q) for q in mesh.faces[fi]]]
                     x = max(x, _corner_reach(start, sgn * ex, ey, up, ts + tg, b, span, verts[before] - verts[node],
-                                             verts[after] - verts[node], ring.mean(axis=0), normals[fi]))
+                                             verts[after] - verts[node], centres[fi], normals[fi]))
             ends.append(x)
         x0, x1 = ends[0], span - ends[1]
         rect = np.array([[x0, -b], [x1, -b], [x1, b], [x0, b]])
