@@ -2,7 +2,7 @@
 
     OMP_NUM_THREADS=1 python benchmarks/pipeline.py [--sizes 22x15,44x30,66x45,88x60] [--budget 0.5]
                                                     [--writers serial|parallel|both] [--design FILE]
-                                                    [--baseline TREE] [--jobs N]
+                                                    [--baseline TREE] [--jobs N] [--floor]
     OMP_NUM_THREADS=1 python benchmarks/pipeline.py --per-file 22x15
 
 The default design (or ``--design``) is built at each size ``faces_u x faces_v`` (``[geometry.params]``:
@@ -38,8 +38,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _child(size: str, budget: float, parallel: bool, design_path: str | None) -> None:
-    """Build one size in this process and print one JSON line: per stage [wall, cpu], writers, memory."""
+def _child(size: str, budget: float, parallel: bool, design_path: str | None, floor: bool = False) -> None:
+    """Build one size in this process and print one JSON line: per stage [wall, cpu], writers, memory; with
+    ``floor`` also the CAD kernel's plain write + read of the STEP files just written (``step_floor.py``),
+    measured in this process after the build (so the build's peak memory is its own)."""
     import resource
     import tempfile
     import tomllib
@@ -92,15 +94,23 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None) ->
         w0, cw0 = time.perf_counter(), cpu()
         result.write(Path(tmp) / "out", progress=prog)
         w1, cw1 = time.perf_counter(), cpu()
-    t1, c1 = time.perf_counter(), cpu()
+        t1, c1 = time.perf_counter(), cpu()
+        peak = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
+        floor_rows = []
+        if floor:
+            sys.path.insert(0, str(ROOT / "benchmarks"))
+            from step_floor import measure
+
+            floor_rows = measure(Path(tmp) / "out", 1)
     per_writer = {k: [prog.times[k], prog.cpu.get(k, 0.0)] for k in prog.times if k in names}
     ver = [prog.times.get("verify", 0.0), prog.cpu.get("verify", 0.0)]
     stages["files"] = [w1 - w0 - ver[0], cw1 - cw0 - ver[1]]
     stages["verify"] = ver
     stages["total"] = [t1 - t0, c1 - c0]
-    self_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    kids_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    self_mb, kids_mb = peak
     print("RESULT " + json.dumps({"size": size, "faces": fu * fv, "parallel": parallel, "stages": stages,
+                                  "floor": floor_rows,
                                   "writers": per_writer, "peak_mb": self_mb, "child_peak_mb": kids_mb,
                                   "panels": result.summary.panels, "plates": result.summary.beam_plates,
                                   "glass_sheets": result.summary.glass_sheets,
@@ -250,17 +260,20 @@ def _per_file(size: str, budget: float) -> None:
           f"colours or tree): {1000 * (time.process_time() - c0) / len(plates):.2f} ms per plate")
 
 
-def _command(size: str, budget: float, parallel: bool, design: str | None, root: Path) -> list[str]:
+def _command(size: str, budget: float, parallel: bool, design: str | None, root: Path,
+             floor: bool = False) -> list[str]:
     cmd = [sys.executable, str(root / "benchmarks" / "pipeline.py"), "--child", size, "--budget", str(budget)]
     if parallel:
         cmd.append("--parallel")
+    if floor and root == ROOT:                  # a baseline tree's benchmark may not know --floor
+        cmd.append("--floor")
     if design:
         cmd += ["--design", design]
     return cmd
 
 
 def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str | None, jobs: int,
-            save: Path | None = None, out: dict | None = None) -> dict:
+            save: Path | None = None, out: dict | None = None, floor: bool = False) -> dict:
     """Run ``(variant, size, parallel, source tree)`` tasks, ``jobs`` at a time (largest first); variant →
     size → result (added to ``out``, and written to ``save`` after each build)."""
     pending = sorted(tasks, key=lambda t: -int(t[1].split("x")[0]) * int(t[1].split("x")[1]))
@@ -271,7 +284,7 @@ def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str
             task = pending.pop(0)
             variant, size, parallel, root = task
             env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(root))
-            running.append((task, subprocess.Popen(_command(size, budget, parallel, design, root), env=env,
+            running.append((task, subprocess.Popen(_command(size, budget, parallel, design, root, floor), env=env,
                                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)))
         time.sleep(1.0)
         for item in [r for r in running if r[1].poll() is not None]:
@@ -323,6 +336,17 @@ def table(results: list[dict], label: str) -> None:
         c = [max(r["writers"].get(w, [0, 0])[1], 1e-3) for r in results]
         print(f"{w:<10}{cells}{'':>9}{exponent(faces, c):>9.2f}")
     print("counts    " + "".join(f"{str(r['panels']) + ' pan ' + str(r['plates']) + ' pl':>22}" for r in results))
+    floors = [r for r in results if r.get("floor")]
+    if floors:
+        print(f"\n-- {label}: the build against the CAD kernel's plain write + read of its STEP files "
+              "(step_floor.py, same process, after the build), CPU s --")
+        print(f"{'size':<10}{'build':>10}{'floor':>10}{'build/floor':>13}{'verify':>10}{'verify %':>10}"
+              f"{'peak MB':>10}")
+        for r in floors:
+            fl = sum(x["read"] + x["write"] for x in r["floor"])
+            tot, ver = r["stages"]["total"][1], r["stages"]["verify"][1]
+            print(f"{r['size']:<10}{tot:>10.1f}{fl:>10.1f}{tot / fl:>13.2f}{ver:>10.1f}{100 * ver / tot:>9.1f}%"
+                  f"{r['peak_mb'] + r['child_peak_mb']:>10.0f}")
 
 
 def main(argv: list[str]) -> None:
@@ -340,6 +364,8 @@ def main(argv: list[str]) -> None:
     ap.add_argument("--jobs", type=int, default=1, help="builds run at the same time (CPU times are per build)")
     ap.add_argument("--per-file", default=None, metavar="SIZE",
                     help="only the ms per per-type DXF and per STEP plate at SIZE (e.g. 22x15)")
+    ap.add_argument("--floor", action="store_true",
+                    help="after each build, the CAD kernel's plain write + read of its STEP files (step_floor.py)")
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--parallel", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -347,7 +373,7 @@ def main(argv: list[str]) -> None:
         _per_file(args.per_file, args.budget)
         return
     if args.child:
-        _child(args.child, args.budget, args.parallel, args.design)
+        _child(args.child, args.budget, args.parallel, args.design, args.floor)
         return
     base = Path(args.baseline).resolve() if args.baseline else None
     print(f"ppfab build of {'the bundled default' if not args.design else args.design}; both nesting budgets "
@@ -360,7 +386,8 @@ def main(argv: list[str]) -> None:
         tasks += [("before", size, False, base) for size in sizes]
     results: dict = json.loads(Path(args.reuse).read_text()) if args.reuse else {}
     tasks = [t for t in tasks if t[1] not in results.get(t[0], {})]
-    run_all(tasks, args.budget, args.design, args.jobs, Path(args.save) if args.save else None, results)
+    run_all(tasks, args.budget, args.design, args.jobs, Path(args.save) if args.save else None, results,
+            args.floor)
     for variant in (["before"] if base else []) + [("parallel" if m else "serial") for m in modes]:
         if all(s in results.get(variant, {}) for s in sizes):
             table([results[variant][s] for s in sizes], variant)

@@ -45,8 +45,8 @@ class FolderData:
     ``nodes.csv``; ``cut``: part id → (sheet file, outline ``(k, 2)`` in sheet mm) of every part on a cutting
     sheet (``dxf_outlines`` the same outlines by part id alone); ``dxf_texts`` / ``dxf_marks`` / ``dxf_trim``:
     per sheet file its texts, reference-mark lines and TRIM outline; ``type_outlines``: panel type id → the
-    outline of its per-type DXF; ``type_dxf``: per-type DXF file → its content, or the exception reading it
-    raised; ``beam_solids``: part id → the solid of ``beams.step``; ``plate_outlines`` /
+    outline of its per-type DXF; ``dxf``: DXF file → its content as ezdxf read it, or the exception reading it
+    raised (:mod:`._dxf_read`: one read per file and process); ``beam_solids``: part id → the solid of ``beams.step``; ``plate_outlines`` /
     ``plate_cut_outlines``: part id → a beam plate's flat outline from its solid (the face, and the union of
     its faces as cut from the sheet); ``step_read``: (file, colours) → the solids read (one read per file and
     process); ``erection_passes``: the sweep of every part along its way in (:mod:`.erection`); ``strip_places``:
@@ -64,7 +64,7 @@ class FolderData:
     dxf_marks: dict[str, list[Any]] = field(default_factory=dict)
     dxf_trim: dict[str, Any] = field(default_factory=dict)
     type_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
-    type_dxf: dict[str, "DXFContent | Exception"] = field(default_factory=dict)
+    dxf: dict[str, "DXFContent | Exception"] = field(default_factory=dict)
     beam_solids: dict[str, Any] | None = None
     plate_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
     plate_cut_outlines: dict[str, "np.ndarray"] = field(default_factory=dict)
@@ -78,7 +78,7 @@ PRODUCERS: dict[str, str] = {
     "cut": "dxf", "dxf_outlines": "dxf", "dxf_texts": "dxf", "dxf_marks": "dxf", "dxf_trim": "dxf",
     "type_outlines": "types", "beam_solids": "step", "plate_outlines": "step_geometry",
     "plate_cut_outlines": "step_geometry", "erection_passes": "erection"}
-"""Field of :class:`FolderData` → the check that fills it (``type_dxf`` and ``step_read`` are memos that any
+"""Field of :class:`FolderData` → the check that fills it (``dxf`` and ``step_read`` are memos that any
 check fills as it reads)."""
 
 

@@ -17,7 +17,8 @@ def check_dxf(v: Verification) -> None:
     agreement with parts.csv, and (glass) congruence with the 3D face inset by half the gap."""
     from shapely import Polygon, STRtree
 
-    from ..writers.dxf import check_sheet_dxf
+    from ..writers.dxf import sheet_contract
+    from ._dxf_read import dxf_content
 
     m = v.manifest
     files = m.get("files", {})
@@ -33,7 +34,8 @@ def check_dxf(v: Verification) -> None:
         spacing = float(fab.get(spacing_key, {}).get("spacing", fab.get("part_spacing", 0.0)))
         for sheet_no, rel in enumerate(file_list(files, key), start=1):
             try:
-                content = check_sheet_dxf(v.folder / rel)
+                content = dxf_content(v, rel)
+                sheet_contract(content, rel.rsplit("/", 1)[-1])
             except Exception as exc:  # noqa: BLE001 - reported as a finding
                 v.error(rel, "", str(exc))
                 continue
@@ -97,34 +99,32 @@ def check_splice_label(v: Verification, rel: str) -> None:
     down to the descenders, about its insertion point and rotation) within the outline, crossing no hole."""
     import re
 
-    import ezdxf
     import numpy as np
     from shapely.geometry import Point, Polygon
 
     from ..marking import LABEL_CHAR_WIDTH
+    from ._dxf_read import dxf_content
 
     try:
-        msp = ezdxf.readfile(v.folder / rel).modelspace()
-    except (OSError, ezdxf.DXFError) as exc:
+        content = dxf_content(v, rel)
+    except Exception as exc:  # noqa: BLE001 - reported as a finding
         v.error(rel, "", f"cannot be read as DXF: {exc}")
         return
-    outlines = [Polygon([p[:2] for p in e.get_points()])                   # type: ignore[attr-defined]
-                for e in msp.query("LWPOLYLINE[layer=='CUT']")]
+    outlines = [Polygon(p.points) for p in content.parts]
     if len(outlines) != 1 or not outlines[0].is_valid:
         return                                  # the splice check reports the outline itself
     plate = outlines[0]
-    holes = [Point(tuple(c.dxf.center)[:2]).buffer(float(c.dxf.radius), 24)
-             for c in msp.query("CIRCLE[layer=='CUT']")]
+    holes = [Point(tuple(c.centre)).buffer(0.5 * c.diameter, 24) for c in content.circles]
     stem = rel.rsplit("/", 1)[-1].removesuffix(".dxf")
-    for t in msp.query("TEXT[layer=='LABEL']"):
-        if not re.fullmatch(rf"{re.escape(stem)} x\d+", t.dxf.text):
+    for t in content.texts:
+        if t.layer != "LABEL" or not re.fullmatch(rf"{re.escape(stem)} x\d+", t.text):
             continue
-        h, a = float(t.dxf.height), np.radians(float(t.dxf.rotation))
-        w = LABEL_CHAR_WIDTH * len(t.dxf.text) * h
+        h, a = t.height, np.radians(t.rotation_deg)
+        w = LABEL_CHAR_WIDTH * len(t.text) * h
         u, n = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
-        p = np.array([float(t.dxf.insert[0]), float(t.dxf.insert[1])])
+        p = np.asarray(t.insert if t.insert is not None else t.centre, dtype=float)
         box = Polygon([p - 0.3 * h * n, p + w * u - 0.3 * h * n, p + w * u + h * n, p + h * n])
         if not plate.contains(box):
-            v.error(rel, t.dxf.text, "type label runs over the plate's outline")
+            v.error(rel, t.text, "type label runs over the plate's outline")
         elif any(box.intersects(c) for c in holes):
-            v.error(rel, t.dxf.text, "type label runs over a bolt hole")
+            v.error(rel, t.text, "type label runs over a bolt hole")

@@ -115,7 +115,7 @@ def _dxf_files(files: dict) -> list[str]:
 
 @check("dxf_stock")
 def check_dxf_stock(v: Verification) -> None:
-    import ezdxf
+    from ._dxf_read import dxf_content
 
     m = v.manifest
     parts = v.parts
@@ -128,22 +128,15 @@ def check_dxf_stock(v: Verification) -> None:
             by_type.setdefault(r.get("type_id", ""), r)
     for rel in _dxf_files(m.get("files", {})):
         try:
-            doc = ezdxf.readfile(v.folder / rel)
-        except (OSError, ezdxf.DXFError) as exc:
+            content = dxf_content(v, rel)
+        except Exception as exc:  # noqa: BLE001 - reported as a finding
             v.error(rel, "", f"cannot be read ({exc})")
             continue
         materials: set[str] = set()
         thicknesses: set[str] = set()
-        titles: list[str] = []
-        for e in doc.modelspace():
-            layer = e.dxf.get("layer", "")
-            if e.dxftype() == "TEXT" and layer == "LABEL":
-                titles.append(str(e.dxf.text))
-            if e.dxftype() not in ("LWPOLYLINE", "POLYLINE") or layer != "CUT":
-                continue
-            x = {}
-            if e.has_xdata("PPFAB"):
-                x = dict(str(val).split("=", 1) for code, val in e.get_xdata("PPFAB") if "=" in str(val))
+        titles = list(content.labels)
+        for part in content.parts:                 # the closed outlines on CUT with their XDATA
+            x = part.xdata
             pid = x.get("part_id", "")
             row = by_id.get(pid) or by_type.get(pid)
             if row is None:
@@ -160,9 +153,9 @@ def check_dxf_stock(v: Verification) -> None:
         stock = ("; ".join(sorted(materials)), "; ".join(sorted(thicknesses)))
         if not any(t.endswith(stock_title(*stock)) for t in titles):
             v.error(rel, "LABEL", f"no title names the stock: want text ending {stock_title(*stock)!r}")
-        if doc.dxfversion >= "AC1018":
+        if content.dxfversion >= "AC1018":
             for name, value in zip(STOCK_HEADER_VARS, stock):
-                have = doc.header.custom_vars.get(name)
+                have = content.custom_vars.get(name)
                 if have != value:
                     v.error(rel, f"header {name}", f"{have!r}, the parts on it are {value!r} (parts.csv)")
     v.checked.append("dxf_stock")
@@ -206,7 +199,7 @@ def check_splice_holes(v: Verification) -> None:
     """Every bolt hole of a cover plate (splices.step) is cut in one of the two beam pieces it joins (CUT circles
     of the plate sheets, mapped back through placement and frame into 3D) within :data:`HOLE_TOL`, with
     ``hole_mm``; a piece has no hole that no cover plate of its splices has."""
-    import ezdxf
+    from ._dxf_read import dxf_content
 
     m = v.manifest
     files = m.get("files", {})
@@ -225,20 +218,18 @@ def check_splice_holes(v: Verification) -> None:
     cut: dict[str, list[tuple[np.ndarray, float]]] = {}          # piece → (centre in 3D, diameter)
     for sheet in sorted(sheets):
         try:
-            doc = ezdxf.readfile(v.folder / sheet)
-        except (OSError, ezdxf.DXFError) as exc:
+            content = dxf_content(v, sheet)
+        except Exception as exc:  # noqa: BLE001 - reported as a finding
             v.error(sheet, "", f"cannot be read ({exc})")
             continue
-        for e in doc.modelspace().query('CIRCLE[layer=="CUT"]'):
-            x = dict(str(t.value).split("=", 1) for t in e.get_xdata("PPFAB")) if e.has_xdata("PPFAB") else {}
-            pid = x.get("part_id", "")
+        for hole in content.circles:
+            pid = hole.part_id
             frame = frame_of(by_id[pid]) if pid in by_id else None
             if frame is None:
                 continue                          # the dxf check names CUT entities of no part
-            c = e.dxf.center
-            q = _unplace(np.array([[c[0], c[1]]]), by_id[pid])[0]
+            q = _unplace(hole.centre[None], by_id[pid])[0]
             cut.setdefault(pid, []).append((frame["origin"] + q[0] * frame["x_dir"] + q[1] * frame["y_dir"],
-                                            2.0 * float(e.dxf.radius)))
+                                            hole.diameter))
     used: dict[str, set[int]] = {}
     for r in parts:
         if r.get("kind") != "splice":

@@ -259,7 +259,7 @@ def _sides(ring: np.ndarray) -> np.ndarray:
 
 def check_splice_dxfs(v: Verification, rels: list[str], rows: list[dict[str, str]], solids: dict) -> None:
     """The per-type cover plate DXFs against parts.csv and splices.step (module docstring)."""
-    import ezdxf
+    from ._dxf_read import dxf_content
 
     by_type: dict[str, list[dict[str, str]]] = {}
     for r in rows:
@@ -269,31 +269,28 @@ def check_splice_dxfs(v: Verification, rels: list[str], rows: list[dict[str, str
         tid = rel.rsplit("/", 1)[-1].removesuffix(".dxf")
         seen.add(tid)
         try:
-            doc = ezdxf.readfile(v.folder / rel)
+            content = dxf_content(v, rel)
         except Exception as exc:  # noqa: BLE001 - reported as a finding
             v.error(rel, "", f"cannot be read as DXF ({exc})")
             continue
-        cut = [e for e in doc.modelspace() if e.dxf.layer == "CUT"]
-        outlines = [e for e in cut if e.dxftype() == "LWPOLYLINE"]
-        circles = [e for e in cut if e.dxftype() == "CIRCLE"]
+        outlines = content.parts                  # the LWPOLYLINEs on CUT
+        circles = content.circles
         members = by_type.get(tid, [])
         if len(outlines) != 1 or not members:
             v.error(rel, tid, f"{len(outlines)} CUT outlines for {len(members)} cover plate(s) of this type in "
                               "parts.csv, expected one outline")
             continue
-        xdata = {}
-        if outlines[0].has_xdata("PPFAB"):
-            xdata = dict(str(x).split("=", 1) for c, x in outlines[0].get_xdata("PPFAB") if "=" in str(x))
+        xdata = outlines[0].xdata
         if xdata.get("part_id") != tid or xdata.get("quantity") != str(len(members)):
             v.error(rel, tid, f"XDATA names type {xdata.get('part_id')!r} x {xdata.get('quantity')}, parts.csv has "
                               f"{len(members)} cover plate(s) of type {tid}")
         holes = int(number(members[0].get("holes"), -1))
         diameter = number(members[0].get("hole_mm"))
-        if len(circles) != holes or any(abs(2.0 * float(c.dxf.radius) - diameter) > 1e-6 for c in circles):
+        if len(circles) != holes or any(abs(c.diameter - diameter) > 1e-6 for c in circles):
             v.error(rel, tid, f"{len(circles)} CUT circles of diameter(s) "
-                              f"{sorted({round(2.0 * float(c.dxf.radius), 3) for c in circles})} mm, parts.csv says "
+                              f"{sorted({round(c.diameter, 3) for c in circles})} mm, parts.csv says "
                               f"{holes} holes of {diameter:g} mm")
-        ring = np.array([(p[0], p[1]) for p in getattr(outlines[0], "get_points")("xy")], dtype=float)
+        ring = np.asarray(outlines[0].points, dtype=float)
         solid = solids.get(members[0]["part_id"])
         piece = next((r for r in (v.parts or []) if r["part_id"] == members[0].get("joins", "").split(";")[0]),
                      None)

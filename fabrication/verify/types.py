@@ -6,7 +6,7 @@ of its rendered block is that value to the one decimal the dimension style gives
 finding too).
 
 The outlines are kept in :attr:`FolderData.type_outlines` (type id → outline) for the placement check, and each file as
-read in :attr:`FolderData.type_dxf` (:func:`type_dxf`), so the glass order check reads none of them again.
+read in :attr:`FolderData.dxf` (:func:`type_dxf`), so the glass order check reads none of them again.
 """
 
 from __future__ import annotations
@@ -23,21 +23,14 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def type_dxf(v: Verification, rel: str) -> "DXFContent":
-    """The per-type DXF ``rel`` read and checked once per verification (``check_sheet_dxf`` without a sheet):
-    its content, or the exception that reading raised, raised again at every call.  Kept in
-    :attr:`FolderData.type_dxf` (relative path → content or exception)."""
-    from ..writers.dxf import check_sheet_dxf
+    """The per-type DXF ``rel`` read once per verification (:func:`._dxf_read.dxf_content`) and held to the contract
+    of ``check_sheet_dxf`` without a sheet: its content, or the exception reading or the contract raised."""
+    from ..writers.dxf import sheet_contract
+    from ._dxf_read import dxf_content
 
-    memo = v.read.type_dxf
-    if rel not in memo:
-        try:
-            memo[rel] = check_sheet_dxf(v.folder / rel, require_sheet=False)
-        except Exception as exc:  # noqa: BLE001 - kept and raised again to each caller
-            memo[rel] = exc
-    got = memo[rel]
-    if isinstance(got, Exception):
-        raise got
-    return got
+    content = dxf_content(v, rel)
+    sheet_contract(content, rel.rsplit("/", 1)[-1], require_sheet=False)
+    return content
 
 
 @check("types")

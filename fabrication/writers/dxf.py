@@ -375,6 +375,8 @@ class DXFText:
     rotation_deg: float
     backward: bool
     xdata: dict
+    insert: np.ndarray | None = None
+    """The insertion point ``(2,)`` as written (``centre`` is the alignment point of aligned text)."""
 
 
 @dataclass(frozen=True)
@@ -413,6 +415,10 @@ class DXFContent:
     """The bevelled edges on layer ``BEVEL``: part id and the polyline ``(2, 2)``."""
     bevel_texts: list[DXFText] = field(default_factory=list)
     """The bevel instructions on layer ``BEVEL`` (not part labels)."""
+    circles: list[DXFHole] = field(default_factory=list)
+    """Every CIRCLE on ``CUT``, with or without a part id (a cover plate's bolt holes have none)."""
+    custom_vars: dict[str, str] = field(default_factory=dict)
+    """The header's custom properties (R2004 and newer; empty for older files)."""
 
 
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
@@ -429,6 +435,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     mark_lines: list[tuple[str, np.ndarray]] = []
     dim_texts: list[DXFDimension] = []
     holes: list[DXFHole] = []
+    circles: list[DXFHole] = []
     bevel_lines: list[tuple[str, np.ndarray]] = []
     bevel_texts: list[DXFText] = []
     back = 0
@@ -472,12 +479,19 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
                 labels.append(e.dxf.text)
             align = e.dxf.get("align_point") if e.dxf.get("halign", 0) or e.dxf.get("valign", 0) else None
             where = align if align is not None else e.dxf.insert
+            ins = e.dxf.insert
             texts.append(DXFText(layer, e.dxf.text, np.array([where[0], where[1]], dtype=float), float(e.dxf.height),
                                  float(e.dxf.get("rotation", 0.0)), bool(int(e.dxf.get("text_generation_flag", 0)) & 2),
-                                 xdata_fields(e)))
-        elif kind == "CIRCLE" and layer == "CUT" and xdata_fields(e).get("part_id"):
+                                 xdata_fields(e), np.array([ins[0], ins[1]], dtype=float)))
+        elif kind == "CIRCLE" and layer == "CUT":
             c = e.dxf.center
-            holes.append(DXFHole(xdata_fields(e)["part_id"], np.array([c[0], c[1]], dtype=float), 2.0 * float(e.dxf.radius)))
+            circle = DXFHole(xdata_fields(e).get("part_id", ""), np.array([c[0], c[1]], dtype=float),
+                             2.0 * float(e.dxf.radius))
+            circles.append(circle)
+            if circle.part_id:
+                holes.append(circle)
+            else:
+                other.append(f"{kind} on {layer}")
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
             block = doc.blocks.get(e.dxf.get("geometry", "")) if e.dxf.get("geometry") else None
@@ -485,9 +499,10 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             dim_texts.append(DXFDimension(str(e.dxf.handle), str(e.dxf.get("text", "")), dims[-1], shown))
         else:
             other.append(f"{kind} on {layer}")
+    custom = {str(k): str(val) for k, val in doc.header.custom_vars} if doc.dxfversion >= "AC1018" else {}
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
                       parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts,
-                      holes, bevel_lines, bevel_texts)
+                      holes, bevel_lines, bevel_texts, circles, custom)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
@@ -498,7 +513,13 @@ def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest:
     part ids unique; nothing but those, TEXT and dimensions on DIM; on a sheet, the SHEET and TRIM outlines.
     """
     c = read_sheet_dxf(path)
-    name = Path(path).name
+    sheet_contract(c, Path(path).name, require_sheet, oldest)
+    return c
+
+
+def sheet_contract(c: DXFContent, name: str, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> None:
+    """The contract of :func:`check_sheet_dxf` on content already read: raises :class:`VerificationError` naming
+    the first problem of file ``name``."""
     if c.audit_errors:
         raise VerificationError(f"{name}: ezdxf audit found {len(c.audit_errors)} error(s): {c.audit_errors[0]}")
     if c.dxfversion < oldest:
@@ -521,7 +542,6 @@ def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest:
         seen.add(p.part_id)
     if require_sheet and (c.sheet_outline is None or c.trim_outline is None):
         raise VerificationError(f"{name}: SHEET or TRIM outline missing")
-    return c
 
 
 def write_type_dxfs(parts: list[FlatPart], folder: str | os.PathLike, prefix: str = TYPE_PREFIX,
