@@ -17,8 +17,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="print the result on stdout as JSON: ok, the checks run and every finding with its check "
                         "(code), file, element, value, limit and message")
     p.add_argument("--kernel", action="store_true",
-                   help="read every STEP solid with the CAD kernel (default: a text-level reader, with the kernel "
-                        "loading each file's product tree and one solid of each kind)")
+                   help="read every STEP solid with the CAD kernel and validate every instance of model.ifc "
+                        "against its schema (default: a text-level STEP reader, with the kernel loading each "
+                        "file's product tree and one solid of each kind; the IFC schema validated on the product "
+                        "tree and one shape and property of each kind)")
 
 
 def run(args: argparse.Namespace) -> int:

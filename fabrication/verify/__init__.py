@@ -85,7 +85,8 @@ check fills as it reads)."""
 @dataclass
 class Verification:
     """The findings of a verification, what was checked, and what was read (:attr:`read`); ``kernel``: the
-    CAD kernel reads every STEP solid (else a text-level reader, :mod:`._step_read`).
+    CAD kernel reads every STEP solid (else a text-level reader, :mod:`._step_read`) and ifcopenshell validates
+    every instance of ``model.ifc`` against the schema (else a sample, :func:`.ifc.schema_sample`).
 
     The properties named like the fields of :class:`FolderData` return that field after its producing check
     has run (here, at the first call, when the check has not run yet: its findings are kept and reported when
@@ -300,8 +301,8 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     runs the checks of :data:`SECOND_PROCESS` in a forked process once :data:`READ_FIRST` have run; the
     findings and the list of checks are assembled in :data:`REPORT_ORDER`, so the result equals a serial
     run.  When the second process fails (a check raising, the process dying), its checks run again here, so an
-    error is the check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files
-    (:attr:`Verification.kernel`).  ``progress(done, total, what)`` is called as checks finish here (``what``:
+    error is the check's own.  ``kernel``: the CAD kernel reads every solid of the STEP files and every
+    IFC instance is schema-validated (:attr:`Verification.kernel`).  ``progress(done, total, what)`` is called as checks finish here (``what``:
     the check just run, or what is being waited for), so a long verify shows its count and time left."""
     v = Verification(Path(folder), kernel=kernel)
     if not v.folder.is_dir():
