@@ -171,6 +171,9 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             if welded_on(pid, names[k]) or drilled_through(pid, names[k]):
                 continue
             b = bodies[names[k]]
+            if body.apart(d, far, b):              # a separating plane: they do not meet (most neighbours)
+                out.append(Pass(pid, names[k], 0.0, 0.0, 0.0))
+                continue
             if shape is None:
                 shape = body.swept(d, far)
             depth, vol = depth_of(shape ^ b.shape())
