@@ -302,3 +302,33 @@ def test_union_corner_met_twice_stays_one_corner():
     prev, nxt = np.roll(out, 1, axis=0), np.roll(out, -1, axis=0)
     cross = (out[:, 0] - prev[:, 0]) * (nxt[:, 1] - out[:, 1]) - (out[:, 1] - prev[:, 1]) * (nxt[:, 0] - out[:, 0])
     assert np.all(np.abs(cross) > 1e-6 * np.linalg.norm(nxt - prev, axis=1))      # no point is dropped as straight
+
+
+@pytest.mark.parametrize("along, across, crossings, found", [
+    (0.122, 0.0, True, False),      # a shallow crossing known to eps / sin θ along the outline: not a finding
+    (0.122, 0.0, False, True),      # the same corner held as a vertex read to eps: a finding
+    (0.0, 0.05, True, True),        # off the outline by more than eps: a finding either way
+    (0.0, 0.005, True, False),
+])
+def test_a_crossing_corner_is_held_to_eps_across_its_edges_not_along_them(monkeypatch, tmp_path, along, across,
+                                                                          crossings, found):
+    """check_outline_place with ``crossings``: the union corner where two faces' edges cross at 0.91° (as in a
+    float32 model.glb of the default at 44 × 30 faces) may lie eps / sin θ along the outline, never more than eps
+    across it (eps 0.0118 mm here: 4 × float32's 2e-7 of 15 m)."""
+    from fabrication.verify import Verification
+    from fabrication.verify import _solids
+
+    turn = np.radians(0.91)
+    ring2 = np.array([[0.0, 0.0], [400.0, 0.0], [400.0, 200.0], [200.0, 200.0],
+                      [200.0 - 34.3 * np.cos(turn), 200.0 + 34.3 * np.sin(turn)], [0.0, 210.0]])
+    ring = np.c_[ring2, np.zeros(len(ring2))] + np.array([15000.0, 0.0, 0.0])
+    k = 3                                                        # the corner where the outline turns by 0.91°
+    u = (ring[k] - ring[k - 1]) / np.linalg.norm(ring[k] - ring[k - 1])
+    across_dir = np.array([-u[1], u[0], 0.0])
+    ref = ring.copy()
+    ref[k] = ref[k] + along * u + across * across_dir
+    monkeypatch.setattr(_solids, "reference_outline", lambda v, row: ref)
+    v = Verification(tmp_path)
+    _solids.check_outline_place(v, "model.glb", {"part_id": "B-W12-S00", "kind": "beam"}, ring, 0.0118,
+                                crossings=crossings)
+    assert bool(v.findings) == found
