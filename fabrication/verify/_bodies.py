@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from ._shapes import cross3
+
 SCREW_SIDES = 16
 """A clamping screw is rebuilt as the hull of two 16-gons of its diameter (its foot and its top)."""
 
@@ -74,7 +76,7 @@ class Body:
         crossed with ``d`` (a separating axis proves that the two do not meet; finding none proves nothing)."""
         a = np.empty((8, 3))
         a[0], a[1], a[2], a[3], a[4], a[5] = self.n, self.ex, self.ey, other.n, other.ex, other.ey
-        a[6], a[7] = _cross(self.n, d), _cross(other.n, d)
+        a[6], a[7] = cross3(self.n, d), cross3(other.n, d)
         ln = np.sqrt(np.einsum("ij,ij->i", a, a))
         a = a[ln > 1e-9] / ln[ln > 1e-9, None]
         mine = self.corners @ a.T                               # (k, axes)
@@ -290,15 +292,9 @@ def screw_bodies(row: dict[str, Any]) -> dict[str, Body]:
     return out
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a × b`` of two 3-vectors, written out (``np.cross`` costs some 40 µs a call, and the sweep makes tens of
-    thousands)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def normal_pair(d: np.ndarray) -> np.ndarray:
     """``(2, 3)`` two unit vectors normal to the unit vector ``d`` and to each other."""
     a = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = _cross(d, a)
+    e1 = cross3(d, a)
     e1 /= np.linalg.norm(e1)
-    return np.stack([e1, _cross(d, e1)])
+    return np.stack([e1, cross3(d, e1)])

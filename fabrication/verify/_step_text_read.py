@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ._shapes import cross3
 from ._step_part21 import Ref, StepTextError, Typed, fast_params, parse_params, read_entities
 
 @dataclass(frozen=True)
@@ -190,12 +191,6 @@ class TextSolid:
         return (len(self.points), tuple(faces))
 
 
-def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a × b`` of two 3-vectors, written out (``np.cross`` costs some 10 µs a call in its set-up alone, and the
-    volume of every solid of a roof calls this hundreds of thousands of times)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def _loop_integral(points: np.ndarray, loop: Loop, about: np.ndarray | None = None) -> np.ndarray:
     """``∮ x × dx`` along a loop (twice its vector area), ``x`` taken from ``about`` (default the origin):
     ``p × q`` for a straight edge, ``c × (q − p) + r² θ k`` for an arc of centre ``c``, radius ``r``, sweep ``θ``
@@ -204,14 +199,14 @@ def _loop_integral(points: np.ndarray, loop: Loop, about: np.ndarray | None = No
     if about is not None:
         p = p - about
     a, b = p[:-1], p[1:]                              # the edges p_k → p_k+1, and the closing p_n-1 → p_0
-    total = _cross3(p[-1], p[0]) + np.einsum("ij,ij->j", a[:, [1, 2, 0]], b[:, [2, 0, 1]]) \
+    total = cross3(p[-1], p[0]) + np.einsum("ij,ij->j", a[:, [1, 2, 0]], b[:, [2, 0, 1]]) \
         - np.einsum("ij,ij->j", a[:, [2, 0, 1]], b[:, [1, 2, 0]])
     n = len(p)
     for k, arc in enumerate(loop.arcs):
         if arc is not None:
             c = arc.centre if about is None else arc.centre - about
             pk, qk = p[k], p[(k + 1) % n]
-            total = total - _cross3(pk, qk) + _cross3(c, qk - pk) + arc.radius ** 2 * arc.sweep * arc.axis
+            total = total - cross3(pk, qk) + cross3(c, qk - pk) + arc.radius ** 2 * arc.sweep * arc.axis
     return total
 
 

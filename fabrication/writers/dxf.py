@@ -410,7 +410,6 @@ class DXFContent:
     back_marks: int = 0
     mark_lines: list[tuple[str, np.ndarray]] = field(default_factory=list)
     dimension_texts: list[DXFDimension] = field(default_factory=list)
-    holes: list[DXFHole] = field(default_factory=list)
     bevels: list[tuple[str, np.ndarray]] = field(default_factory=list)
     """The bevelled edges on layer ``BEVEL``: part id and the polyline ``(2, 2)``."""
     bevel_texts: list[DXFText] = field(default_factory=list)
@@ -419,6 +418,11 @@ class DXFContent:
     """Every CIRCLE on ``CUT``, with or without a part id (a cover plate's bolt holes have none)."""
     custom_vars: dict[str, str] = field(default_factory=dict)
     """The header's custom properties (R2004 and newer; empty for older files)."""
+
+    @property
+    def holes(self) -> list[DXFHole]:
+        """The CIRCLEs on ``CUT`` inside a part (with a part id in their XDATA)."""
+        return [c for c in self.circles if c.part_id]
 
 
 def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
@@ -434,7 +438,6 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     texts: list[DXFText] = []
     mark_lines: list[tuple[str, np.ndarray]] = []
     dim_texts: list[DXFDimension] = []
-    holes: list[DXFHole] = []
     circles: list[DXFHole] = []
     bevel_lines: list[tuple[str, np.ndarray]] = []
     bevel_texts: list[DXFText] = []
@@ -488,9 +491,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
             circle = DXFHole(xdata_fields(e).get("part_id", ""), np.array([c[0], c[1]], dtype=float),
                              2.0 * float(e.dxf.radius))
             circles.append(circle)
-            if circle.part_id:
-                holes.append(circle)
-            else:
+            if not circle.part_id:
                 other.append(f"{kind} on {layer}")
         elif kind == "DIMENSION" and layer == DIM_LAYER:
             dims.append(float(e.get_measurement()))
@@ -502,7 +503,7 @@ def read_sheet_dxf(path: str | os.PathLike) -> DXFContent:
     custom = {str(k): str(val) for k, val in doc.header.custom_vars} if doc.dxfversion >= "AC1018" else {}
     return DXFContent(path, doc.dxfversion, int(doc.header.get("$INSUNITS", 0)), [la.dxf.name for la in doc.layers],
                       parts, sheet, trim, labels, marks, errors, other, dims, texts, back, mark_lines, dim_texts,
-                      holes, bevel_lines, bevel_texts, circles, custom)
+                      bevel_lines, bevel_texts, circles, custom)
 
 
 def check_sheet_dxf(path: str | os.PathLike, require_sheet: bool = True, oldest: str = DXF_OLDEST) -> DXFContent:
