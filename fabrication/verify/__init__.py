@@ -51,7 +51,9 @@ class FolderData:
     its faces as cut from the sheet); ``step_read``: (file, colours) → the solids read (one read per file and
     process); ``erection_passes``: the sweep of every part along its way in (:mod:`.erection`); ``strip_places``:
     part id → the corners ``(8, 3)`` of a strip's box for either outside, recomputed from the structure
-    (:func:`.glazing_step.strip_places`, no file of solids read)."""
+    (:func:`.glazing_step.strip_places`, no file of solids read); ``tables``: CSV file → its rows, read once
+(:meth:`Verification.table`); ``parts_by_id``: part id → its readable ``parts.csv`` row
+(:meth:`Verification.part_row`); ``seat``: where a pane's underside may lie (:func:`._solids.seat_range`)."""
 
     manifest: dict[str, Any] | None = None
     mesh: "QuadMesh | None" = None
@@ -71,6 +73,9 @@ class FolderData:
     step_read: dict[tuple[str, bool], "list[StepSolid] | None"] = field(default_factory=dict)
     erection_passes: list["Pass"] | None = None
     strip_places: dict[str, list["np.ndarray"]] | None = None
+    tables: dict[str, list[dict[str, str]]] = field(default_factory=dict)
+    parts_by_id: dict[str, dict[str, str]] | None = None
+    seat: tuple[float, float] | None = None
 
 
 PRODUCERS: dict[str, str] = {
@@ -209,6 +214,20 @@ class Verification:
     @property
     def erection_passes(self) -> list["Pass"] | None:
         return self._field("erection_passes")
+
+    def table(self, rel: str) -> list[dict[str, str]]:
+        """The rows of the CSV file ``rel`` of the folder, read once per verification and process (the same list
+        to every caller: read, do not change it); raises what :func:`read_csv` raises."""
+        got = self.read.tables.get(rel)
+        if got is None:
+            got = self.read.tables[rel] = read_csv(self.folder / rel)
+        return got
+
+    def part_row(self, part_id: str) -> dict[str, str] | None:
+        """The readable ``parts.csv`` row of ``part_id`` (:attr:`parts`), ``None`` when there is none."""
+        if self.read.parts_by_id is None:
+            self.read.parts_by_id = {r["part_id"]: r for r in (self.parts or [])}
+        return self.read.parts_by_id.get(part_id)
 
     def read_table(self, rel: str, columns: list[str] | tuple[str, ...] = ()) -> list[dict[str, str]] | None:
         """The rows of the CSV table ``rel``, or ``None`` after a finding that it cannot be read or lacks one of

@@ -191,7 +191,7 @@ def body_of(solid: Any) -> Body:
         n, off = -n, -off
     ex = axes[0] - (axes[0] @ n) * n
     ex /= np.linalg.norm(ex)
-    ey = np.cross(n, ex)
+    ey = cross3(n, ex)
     thick = float(off.max())
 
     def to2(q: np.ndarray) -> np.ndarray:

@@ -19,6 +19,16 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(k, 3)`` the row-wise cross products of two ``(k, 3)`` arrays, written out (what :func:`cross3` is to one
+    pair: ``np.cross`` moves axes on every call)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
 def number(text: Any, default: float = float("nan")) -> float:
     """A CSV cell as a float (``default`` when empty or not a number)."""
     try:

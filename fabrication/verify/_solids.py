@@ -21,7 +21,7 @@ import numpy as np
 
 from . import Verification
 from ._tolerance import type_tolerance
-from ._shapes import literal
+from ._shapes import cross_rows, literal
 
 
 def parse_list(text: str) -> list:
@@ -34,7 +34,7 @@ def polygon_area_3d(points: np.ndarray) -> float:
     """Area of a planar polygon ``(k, 3)`` (half the norm of the sum of ``p_i × p_{i+1}``)."""
     p = np.asarray(points, dtype=float)
     p = p - p.mean(axis=0)
-    return 0.5 * float(np.linalg.norm(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)))
+    return 0.5 * float(np.linalg.norm(cross_rows(p, np.roll(p, -1, axis=0)).sum(axis=0)))
 
 
 def seat_range(v: Verification) -> tuple[float, float]:
@@ -42,8 +42,13 @@ def seat_range(v: Verification) -> tuple[float, float]:
     ``glazing.offset_mm``, strip + gasket; 0 without strips) ± half the strip width × the tangent of the larger
     of ``glazing.max_tilt_deg`` and the largest ``tilt_deg`` of ``bites.csv`` (a gasket tilted by that angle
     raises or lowers the pane by at most that much over its width), ± ``panels.planarity_tolerance`` for the
-    faces' corners off their least-squares plane."""
-    from . import read_csv
+    faces' corners off their least-squares plane.  Worked out once per verification (:attr:`FolderData.seat`)."""
+    if v.read.seat is None:
+        v.read.seat = _seat_range(v)
+    return v.read.seat
+
+
+def _seat_range(v: Verification) -> tuple[float, float]:
     from ._shapes import number
 
     m = v.manifest
@@ -54,7 +59,7 @@ def seat_range(v: Verification) -> tuple[float, float]:
     tilt = float(gl.get("max_tilt_deg", 0.0))
     rel = m.get("files", {}).get("bites_csv")
     if rel and (v.folder / rel).is_file():
-        tilt = max([tilt] + [number(r.get("tilt_deg"), 0.0) for r in read_csv(v.folder / rel)])
+        tilt = max([tilt] + [number(r.get("tilt_deg"), 0.0) for r in v.table(rel)])
     flat = float(m.get("fabrication", {}).get("planarity_tolerance", 0.1) or 0.1)     # a face's corners off its plane
     from ..glazing.seat import seat_range as bound               # the build refuses panes above the same bound
 

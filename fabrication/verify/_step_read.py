@@ -158,6 +158,17 @@ def _refs(text: str) -> list[int]:
 
 _REF = re.compile(r"'(?:[^']|'')*'|#(\d+)")
 
+_GEOMETRY_KINDS = frozenset({
+    "MANIFOLD_SOLID_BREP", "BREP_WITH_VOIDS", "CLOSED_SHELL", "OPEN_SHELL", "ORIENTED_CLOSED_SHELL", "ADVANCED_FACE",
+    "FACE_SURFACE", "FACE_BOUND", "FACE_OUTER_BOUND", "EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP", "ORIENTED_EDGE",
+    "EDGE_CURVE", "VERTEX_POINT", "CARTESIAN_POINT", "DIRECTION", "VECTOR", "LINE", "CIRCLE", "ELLIPSE", "POLYLINE",
+    "PLANE", "CYLINDRICAL_SURFACE", "CONICAL_SURFACE", "SPHERICAL_SURFACE", "TOROIDAL_SURFACE",
+    "AXIS2_PLACEMENT_3D", "AXIS2_PLACEMENT_2D", "AXIS1_PLACEMENT", "SURFACE_CURVE", "SEAM_CURVE", "PCURVE",
+    "DEFINITIONAL_REPRESENTATION", "B_SPLINE_CURVE_WITH_KNOTS", "B_SPLINE_SURFACE_WITH_KNOTS", "TRIMMED_CURVE",
+})
+"""Entity kinds of geometry and topology: not a root of :func:`sample_file`'s walk (they are kept when something
+kept refers to them: a placement's axes, a kept B-rep's faces)."""
+
 
 def sample_file(data: bytes, solids: list[TextSolid],
                 entities: dict[int, tuple[str, str]] | None = None) -> tuple[bytes, list[bool]]:
@@ -193,16 +204,11 @@ def sample_file(data: bytes, solids: list[TextSolid],
         representation thirty times slower)."""
         return "SHAPE_REPRESENTATION" if i in emptied else entities[i][0]
 
-    inside: set[int] = set()                       # every entity of a B-rep
-    todo = [i for i, (kind, _) in entities.items() if kind == "MANIFOLD_SOLID_BREP"]
-    while todo:
-        i = todo.pop()
-        if i not in inside and i in entities:
-            inside.add(i)
-            todo.extend(_refs(entities[i][1]))
     keep: set[int] = set()
-    todo = [i for i, (kind, _) in entities.items() if i not in inside and kind not in ("STYLED_ITEM",
-                                                                                      "OVER_RIDING_STYLED_ITEM")]
+    # from every entity that is not geometry or topology (the product tree, representations, contexts, styles
+    # kept) through what each refers to: the geometry of placements comes along, that of dropped B-reps does not
+    todo = [i for i, (kind, _) in entities.items() if kind not in _GEOMETRY_KINDS and kind not in (
+        "STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")]
     todo += [s.brep for s, k in zip(solids, kept) if k]
     todo += [i for i, (kind, _) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
              and i not in styles]

@@ -85,6 +85,7 @@ class TextSolid:
     transform: np.ndarray
     brep: int
     _volume: float | None = field(default=None, repr=False)
+    shared: "dict[int, BrepFacts] | None" = field(default=None, repr=False)
 
     def faces(self) -> list[Face]:
         """The faces of the closed shell."""
@@ -95,9 +96,18 @@ class TextSolid:
         """mm³ by the divergence theorem: ⅓ Σ over faces of ∫ x·n dA (exact for straight and circular edges and
         for cylinder bands)."""
         if self._volume is None:
-            c = self.points.mean(axis=0) if len(self.points) else np.zeros(3)   # about the solid: no cancellation
-            self._volume = sum(_flux(self, f, c) for f in self.shell) / 3.0
+            self._volume = self.facts().volume
         return self._volume
+
+    def facts(self) -> "BrepFacts":
+        """What a rigid motion does not change, worked out once per B-rep when :attr:`shared` is given (the
+        reader's: an instanced shape's solids share their B-rep) — else for this solid."""
+        got = self.shared.get(self.brep) if self.shared is not None else None
+        if got is None:
+            got = _brep_facts(self)
+            if self.shared is not None:
+                self.shared[self.brep] = got
+        return got
 
     def face_area(self, face: Face) -> float:
         """Area of a planar face, mm² (its loops' signed areas about its normal summed, outer less holes)."""
@@ -118,7 +128,7 @@ class TextSolid:
             arc = loop.arcs[k]
             if arc is not None and arc_points > 0:
                 e1 = self.points[i] - arc.centre
-                e2 = np.cross(arc.axis, e1)
+                e2 = cross3(arc.axis, e1)
                 for t in np.linspace(0.0, arc.sweep, arc_points + 1)[1:-1]:
                     out.append(arc.centre + e1 * math.cos(t) + e2 * math.sin(t))
         return np.array(out, dtype=float).reshape(-1, 3)
@@ -146,34 +156,14 @@ class TextSolid:
         """What makes the solid invalid at the text level (empty when none): an edge not used exactly twice in
         opposite senses (the shell is not closed and oriented), a vertex off its face's plane or cylinder or a
         circle's end off its circle by more than ``tol`` (relative to the solid's size), a volume not above 0."""
+        facts = self.facts()
         out: list[str] = []
-        use: dict[int, list[bool]] = {}
-        for f in self.shell:
-            for lp in f.loops:
-                for e, fw in zip(lp.edges, lp.forward):
-                    use.setdefault(e, []).append(fw)
-        bad = [e for e, u in use.items() if sorted(u) != [False, True]]
-        if bad:
-            out.append(f"{len(bad)} edge(s) not shared by exactly two faces in opposite senses (#{bad[0]})")
+        if facts.bad_edges:
+            out.append(f"{facts.bad_edges} edge(s) not shared by exactly two faces in opposite senses "
+                       f"(#{facts.first_bad_edge})")
         scale = max(1.0, float(np.abs(self.points).max()) if len(self.points) else 1.0)
-        eps = tol * scale
-        worst = 0.0
-        for f in self.shell:
-            idx = np.concatenate([lp.vertices for lp in f.loops])
-            p = self.points[idx] - f.origin
-            if f.surface == "plane":
-                worst = max(worst, float(np.abs(p @ f.normal).max()))
-            else:
-                radial = p - np.outer(p @ f.normal, f.normal)
-                worst = max(worst, float(np.abs(np.linalg.norm(radial, axis=1) - f.radius).max()))
-            for lp in f.loops:
-                for k, arc in enumerate(lp.arcs):
-                    if arc is not None:
-                        q = self.points[lp.vertices[[k, (k + 1) % len(lp.vertices)]]] - arc.centre
-                        worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
-                                    float(np.abs(q @ arc.axis).max()))
-        if worst > eps:
-            out.append(f"a vertex is {worst:.3g} mm off its face's surface or its edge's circle")
+        if facts.off_surface > tol * scale:
+            out.append(f"a vertex is {facts.off_surface:.3g} mm off its face's surface or its edge's circle")
         if not self.volume > 0:
             out.append(f"volume {self.volume:.6g} mm³ is not positive (faces turned inside out)")
         return out
@@ -189,6 +179,46 @@ class TextSolid:
         faces = sorted((f.surface, tuple(sorted((len(lp.vertices), sum(a is not None for a in lp.arcs))
                                                 for lp in f.loops))) for f in self.shell)
         return (len(self.points), tuple(faces))
+
+
+@dataclass(frozen=True)
+class BrepFacts:
+    """What a rigid motion does not change of a solid, so one B-rep placed many times is measured once:
+    ``bad_edges`` the edges not used exactly twice in opposite senses (``first_bad_edge`` the id of one, else 0),
+    ``off_surface`` the largest distance (mm) of a vertex from its face's plane or cylinder or of a circle's end
+    from its circle, ``volume`` mm³ (:attr:`TextSolid.volume`)."""
+
+    bad_edges: int
+    first_bad_edge: int
+    off_surface: float
+    volume: float
+
+
+def _brep_facts(solid: TextSolid) -> BrepFacts:
+    use: dict[int, list[bool]] = {}
+    for f in solid.shell:
+        for lp in f.loops:
+            for e, fw in zip(lp.edges, lp.forward):
+                use.setdefault(e, []).append(fw)
+    bad = [e for e, u in use.items() if sorted(u) != [False, True]]
+    worst = 0.0
+    for f in solid.shell:
+        idx = np.concatenate([lp.vertices for lp in f.loops])
+        p = solid.points[idx] - f.origin
+        if f.surface == "plane":
+            worst = max(worst, float(np.abs(p @ f.normal).max()))
+        else:
+            radial = p - np.outer(p @ f.normal, f.normal)
+            worst = max(worst, float(np.abs(np.linalg.norm(radial, axis=1) - f.radius).max()))
+        for lp in f.loops:
+            for k, arc in enumerate(lp.arcs):
+                if arc is not None:
+                    q = solid.points[lp.vertices[[k, (k + 1) % len(lp.vertices)]]] - arc.centre
+                    worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
+                                float(np.abs(q @ arc.axis).max()))
+    c = solid.points.mean(axis=0) if len(solid.points) else np.zeros(3)   # about the solid: no cancellation
+    volume = sum(_flux(solid, f, c) for f in solid.shell) / 3.0
+    return BrepFacts(len(bad), bad[0] if bad else 0, worst, float(volume))
 
 
 def _loop_integral(points: np.ndarray, loop: Loop, about: np.ndarray | None = None) -> np.ndarray:
@@ -238,7 +268,7 @@ def _flux(solid: TextSolid, face: Face, about: np.ndarray) -> float:
         if abs(float((arc.centre - face.origin) @ a) - low) > 1e-6 * max(1.0, h):
             continue
         e1 = (start - arc.centre) / arc.radius
-        e2 = np.cross(arc.axis, e1)
+        e2 = cross3(arc.axis, e1)
         integral += e1 * math.sin(arc.sweep) + e2 * (1.0 - math.cos(arc.sweep))   # ∫ u dθ over the arc
         sweep += arc.sweep
     return sign * r * h * (float(o @ integral) + r * sweep)
@@ -252,6 +282,7 @@ class StepModel:
         self.cache: dict[int, list] = {}
         self.topology: dict[int, tuple[np.ndarray, list]] = {}
         self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.facts: dict[int, BrepFacts] = {}
         self.by_kind: dict[str, list[int]] = {}
         for i, (k, _) in entities.items():
             self.by_kind.setdefault(k, []).append(i)
@@ -314,7 +345,7 @@ class StepModel:
         """``(4, 4)`` taking coordinates of the placement ``#i`` into those it is given in."""
         o, z, x = self.axis2(i)
         m = np.eye(4)
-        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(z, x), z, o
+        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, cross3(z, x), z, o
         return m
 
 
@@ -358,7 +389,7 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
                     sweep = 2.0 * math.pi
                 else:
                     e1, e2 = points[start] - centre, points[end] - centre
-                    sweep = math.atan2(float(np.cross(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
+                    sweep = math.atan2(float(cross3(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
                 placed_arcs.append(Arc(centre, axis, r, sweep))
             done.append(Loop(np.array(verts, dtype=int), tuple(placed_arcs), tuple(edges), tuple(fwd)))
         normal = rot @ z
@@ -366,7 +397,7 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
             normal = -normal
         faces.append(Face("plane" if kind == "PLANE" else "cylinder", rot @ o + shift, normal, rot @ x,
                           same, radius, tuple(done)))
-    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep)
+    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep, shared=model.facts)
 
 
 def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:

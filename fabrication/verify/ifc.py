@@ -3,6 +3,7 @@ the property set of parts.csv, in millimetres, each solid on its mesh face or su
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -11,11 +12,36 @@ from ppfab.metrics import polygon_area
 
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
+from ._shapes import cross_rows
 from ._solids import check_screw_points, check_names, check_part_solid, same_value
 from ._tolerance import type_tolerance
 
 
-def body_items(product) -> list[tuple[Any, np.ndarray]]:
+@dataclass
+class IfcReading:
+    """What the geometry readers below keep while one file is checked: each ``IfcLocalPlacement`` 's matrix to the
+    world (a placement's parents are shared by every product under them: each is worked out once) and each
+    extruded solid's profile, by entity id (an instanced type's solid is read once for all its products)."""
+
+    placements: dict[int, np.ndarray] = field(default_factory=dict)
+    prisms: dict[int, "_Prism | None"] = field(default_factory=dict)
+
+    def placement(self, placement) -> np.ndarray:
+        """``(4, 4)`` the ``IfcLocalPlacement`` to the world (``ifcopenshell.util.placement.get_local_placement``,
+        its parents kept)."""
+        import ifcopenshell.util.placement as up
+
+        if placement is None:
+            return np.eye(4)
+        got = self.placements.get(placement.id())
+        if got is None:
+            parent = self.placement(placement.PlacementRelTo)
+            got = parent @ np.asarray(up.get_axis2placement(placement.RelativePlacement), dtype=float)
+            self.placements[placement.id()] = got
+        return got
+
+
+def body_items(product, reading: IfcReading | None = None) -> list[tuple[Any, np.ndarray]]:
     """The solids of a product's body, each with the ``(4, 4)`` matrix from its coordinates to the world (mm):
     its own items under its placement, or the items of the type's shape an ``IfcMappedItem`` places (the
     placement times the mapping's operator and origin)."""
@@ -24,7 +50,7 @@ def body_items(product) -> list[tuple[Any, np.ndarray]]:
     rep = product.Representation
     if rep is None:
         return []
-    m = np.asarray(up.get_local_placement(product.ObjectPlacement), dtype=float)
+    m = (reading or IfcReading()).placement(product.ObjectPlacement)
     out = []
     for r in rep.Representations:
         for it in r.Items:
@@ -72,15 +98,19 @@ def is_mapped(product) -> bool:
     return bool(mapped_items(product))
 
 
-def extruded_prism(product) -> tuple[np.ndarray, float] | None:
-    """The vertices ``(2k, 3)`` (mm, world) and volume (mm³) of a product's single ``IfcExtrudedAreaSolid`` with an
-    ``IfcArbitraryClosedProfileDef`` of an ``IfcPolyline``, from its placement — exact, no tessellation."""
+@dataclass(frozen=True)
+class _Prism:
+    """An ``IfcExtrudedAreaSolid`` of a polyline profile in its own coordinates: its base ring ``(k, 4)``
+    (homogeneous, after its ``Position``), the extrusion vector ``(3,)`` and its volume (mm³)."""
+
+    base: np.ndarray
+    extrusion: np.ndarray
+    volume: float
+
+
+def _prism_of(s) -> _Prism | None:
     import ifcopenshell.util.placement as up
 
-    solids = [(it, m) for it, m in body_items(product) if it.is_a("IfcExtrudedAreaSolid")]
-    if len(solids) != 1:
-        return None
-    s, m = solids[0]
     curve = s.SweptArea.OuterCurve if s.SweptArea.is_a("IfcArbitraryClosedProfileDef") else None
     if curve is None or not curve.is_a("IfcPolyline"):
         return None
@@ -90,10 +120,6 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
     pos = np.asarray(up.get_axis2placement(s.Position), dtype=float)
     direction = np.asarray(s.ExtrudedDirection.DirectionRatios, dtype=float)
     direction = direction / np.linalg.norm(direction)
-    local = np.c_[q, np.zeros(len(q)), np.ones(len(q))] @ pos.T
-    top = local.copy()
-    top[:, :3] += s.Depth * (pos[:3, :3] @ direction)
-    world = np.concatenate([local, top]) @ m.T
     area = abs(float(polygon_area(q)))
     for inner in getattr(s.SweptArea, "InnerCurves", None) or ():      # voids: circles (bolt holes), polylines
         if inner.is_a("IfcCircle"):
@@ -101,15 +127,37 @@ def extruded_prism(product) -> tuple[np.ndarray, float] | None:
         elif inner.is_a("IfcPolyline"):
             area -= abs(float(polygon_area(np.array([p.Coordinates for p in inner.Points], dtype=float))))
     height = s.Depth * abs(float(direction[2]))
-    return world[:, :3], area * height
+    return _Prism(np.c_[q, np.zeros(len(q)), np.ones(len(q))] @ pos.T, s.Depth * (pos[:3, :3] @ direction),
+                  area * height)
 
 
-def faceted_plate(product) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] | None:
+def extruded_prism(product, reading: IfcReading | None = None) -> tuple[np.ndarray, float] | None:
+    """The vertices ``(2k, 3)`` (mm, world) and volume (mm³) of a product's single ``IfcExtrudedAreaSolid`` with an
+    ``IfcArbitraryClosedProfileDef`` of an ``IfcPolyline``, from its placement — exact, no tessellation.
+    ``reading`` keeps placements and profiles read before (one file's)."""
+    reading = reading or IfcReading()
+    solids = [(it, m) for it, m in body_items(product, reading) if it.is_a("IfcExtrudedAreaSolid")]
+    if len(solids) != 1:
+        return None
+    s, m = solids[0]
+    key = s.id()
+    if key not in reading.prisms:
+        reading.prisms[key] = _prism_of(s)
+    prism = reading.prisms[key]
+    if prism is None:
+        return None
+    top = prism.base.copy()
+    top[:, :3] += prism.extrusion
+    world = np.concatenate([prism.base, top]) @ m.T
+    return world[:, :3], prism.volume
+
+
+def faceted_plate(product, reading: IfcReading | None = None) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] | None:
     """A product's single ``IfcFacetedBrep`` (a plate bevelled under its strips): its vertices ``(n, 3)`` (mm,
     world), its volume (mm³, the divergence theorem over its faces: each face's vector area from its loops, the
     inner bounds running against the outer), and the outer rings of its two largest faces (the plate's faces,
     world); ``None`` for any other body."""
-    breps = [(it, m) for it, m in body_items(product) if it.is_a("IfcFacetedBrep")]
+    breps = [(it, m) for it, m in body_items(product, reading) if it.is_a("IfcFacetedBrep")]
     if len(breps) != 1:
         return None
     brep, m = breps[0]
@@ -130,7 +178,7 @@ def faceted_plate(product) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] |
     c0 = pts.mean(axis=0)
     volume, areas = 0.0, []
     for f in faces:
-        vec = sum((0.5 * np.cross(q - c0, np.roll(q, -1, axis=0) - c0).sum(axis=0) for q in f), np.zeros(3))
+        vec = sum((0.5 * cross_rows(q - c0, np.roll(q, -1, axis=0) - c0).sum(axis=0) for q in f), np.zeros(3))
         volume += float((f[0][0] - c0) @ vec) / 3.0
         areas.append(float(np.linalg.norm(vec)))
     big = np.argsort(areas)[::-1][:2]
@@ -139,14 +187,14 @@ def faceted_plate(product) -> tuple[np.ndarray, float, np.ndarray, np.ndarray] |
     return pts, abs(volume), faces[int(big[0])][0], faces[int(big[1])][0]
 
 
-def circle_items(product, sides: int = 16) -> np.ndarray:
+def circle_items(product, sides: int = 16, reading: IfcReading | None = None) -> np.ndarray:
     """``(m·2·sides, 3)`` mm, world: points on the bottom and top circles of every ``IfcExtrudedAreaSolid`` of an
     ``IfcCircleProfileDef`` in the product's body (the screws of a plate), from its placement."""
     import ifcopenshell.util.placement as up
 
     t = 2.0 * np.pi * np.arange(sides) / sides
     out = []
-    for s, m in ((it, m) for it, m in body_items(product) if it.is_a("IfcExtrudedAreaSolid")):
+    for s, m in ((it, m) for it, m in body_items(product, reading) if it.is_a("IfcExtrudedAreaSolid")):
         if not s.SweptArea.is_a("IfcCircleProfileDef"):
             continue
         r = float(s.SweptArea.Radius)
@@ -263,6 +311,7 @@ def check_ifc(v: Verification) -> None:
     rows = {r["part_id"]: r for r in (v.parts or [])}
     products: list[Any] = [p for p in f.by_type("IfcElement") if not p.is_a("IfcElementAssembly") and not p.is_a("IfcRoof")]
     check_names(v, rel, [p.Name for p in products], {k: r["kind"] for k, r in rows.items()}, "IFC element")
+    reading = IfcReading()
     for p in products:
         row = rows.get(p.Name)
         if row is None:
@@ -290,10 +339,10 @@ def check_ifc(v: Verification) -> None:
             v.error(rel, p.Name, problem)
             continue
         if row["kind"] == "screw":
-            check_screw_points(v, rel, row, circle_items(p))
+            check_screw_points(v, rel, row, circle_items(p, reading=reading))
             continue
-        prism = extruded_prism(p)
-        brep = faceted_plate(p) if prism is None and row["kind"] == "beam" else None
+        prism = extruded_prism(p, reading)
+        brep = faceted_plate(p, reading) if prism is None and row["kind"] == "beam" else None
         if brep is not None:                     # a plate bevelled under its strips: the solid between its faces
             check_part_solid(v, rel, row, brep[0], brep[1], volume_tol=1e-4, ring=brep[2], holes=True,
                              top_ring=brep[3])

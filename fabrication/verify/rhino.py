@@ -21,6 +21,11 @@ def _points(curve) -> np.ndarray:
     return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
 
 
+def _mesh_points(mesh) -> np.ndarray:
+    """``(n, 3)`` a rhino3dm mesh's vertices (one call into rhino3dm for all of them, not three per vertex)."""
+    return np.array([(p.X, p.Y, p.Z) for p in mesh.Vertices.ToPoint3dArray()], dtype=float).reshape(-1, 3)
+
+
 def _check_two_face_mesh(v: Verification, rel: str, row: dict[str, str], g) -> None:
     """A beam plate written as a closed mesh (its two faces differ: bevelled under its strips): the writer's vertex
     order — the base rings (the outline's, then each bolt hole's), then the top rings — gives its two outline
@@ -30,7 +35,7 @@ def _check_two_face_mesh(v: Verification, rel: str, row: dict[str, str], g) -> N
     if not g.IsClosed:
         v.error(rel, row["part_id"], "is not a closed mesh")
         return
-    pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+    pts = _mesh_points(g)
     tri = np.array([[g.Faces[i][0], g.Faces[i][1], g.Faces[i][2]] for i in range(g.Faces.Count)], dtype=int)
     c0 = pts.mean(axis=0)                         # about the centre: no cancellation of large coordinates
     a, b, c = pts[tri[:, 0]] - c0, pts[tri[:, 1]] - c0, pts[tri[:, 2]] - c0
@@ -177,7 +182,7 @@ def check_rhino(v: Verification) -> None:
             if not isinstance(g, rhino3dm.Mesh) or not g.IsClosed:
                 v.error(rel, name, "is not a closed mesh")
                 continue
-            pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+            pts = _mesh_points(g)
             # rhino3dm reads a mesh's vertices back in single precision: about 1e-7 of the coordinates
             check_screw_points(v, rel, row, pts, eps=2e-7 * float(np.abs(pts).max(initial=0.0)) + 1e-3)
             continue
@@ -214,7 +219,7 @@ def check_rhino(v: Verification) -> None:
         v.error(rel, "mesh", f"{len(meshes)} objects on layer mesh, expected the mesh")
     elif mesh is not None:
         g = meshes[0].geometry
-        pts = np.array([[g.Vertices[i].X, g.Vertices[i].Y, g.Vertices[i].Z] for i in range(len(g.Vertices))])
+        pts = _mesh_points(g)
         if len(pts) != len(mesh.vertices) or len(g.Faces) != len(mesh.faces) or \
                 np.abs(pts - mesh.vertices).max() > 1e-2:           # read back in single precision
             v.error(rel, "mesh", f"{len(pts)} vertices, {len(g.Faces)} faces differ from mesh.obj")

@@ -30,6 +30,7 @@ splices.step, and one CUT circle of ``hole_mm`` per bolt hole (:func:`check_spli
 from __future__ import annotations
 
 import ast
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -123,6 +124,7 @@ def check_splices(v: Verification) -> None:
             return
         solids = {s.name: s.solid for s in read}
         sides: dict[str, list[str]] = {}
+        strips = StripsOverCuts.of(v)
         for r in splice_rows:
             s = solids.get(r["part_id"])
             if s is None:
@@ -136,7 +138,7 @@ def check_splices(v: Verification) -> None:
             inner = len(s.faces()) - 6                       # a plate with h holes: 6 faces + one per hole
             if inner != holes:
                 v.error(rel, r["part_id"], f"solid has {inner} hole faces, parts.csv says {holes} holes")
-            check_plate_place(v, rel, r, s, sides)
+            check_plate_place(v, rel, r, s, sides, strips)
         for joins, names in sorted(sides.items()):
             if sorted(names) != ["+", "-"]:
                 v.error(rel, joins.replace(";", "/"), f"cover plates lie on faces {names} of the beam plate, expected "
@@ -151,7 +153,7 @@ def _piece_outline(v: Verification, pid: str, frame: dict[str, np.ndarray]) -> n
     """The cutting outline of beam piece ``pid`` mapped back into 3D and then into ``frame`` (2D)."""
     from ._solids import reference_outline
 
-    row = next((r for r in (v.parts or []) if r["part_id"] == pid), None)
+    row = v.part_row(pid)
     ref = reference_outline(v, row) if row is not None else None
     return None if ref is None else to_frame(ref, frame)[:, :2]
 
@@ -172,11 +174,12 @@ def _cut(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return None
 
 
-def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sides: dict[str, list[str]]) -> None:
+def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sides: dict[str, list[str]],
+                      strips: StripsOverCuts) -> None:
     """One cover plate solid against the pieces it joins (module docstring)."""
     pid = row["part_id"]
     first, _, second = row.get("joins", "").partition(";")
-    piece = next((r for r in (v.parts or []) if r["part_id"] == first), None)
+    piece = v.part_row(first)
     frame = frame_of(piece) if piece is not None else None
     if frame is None:
         return
@@ -213,7 +216,7 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
     down = np.array([u[1], -u[0]])
     down = down if down @ s > 0 else -down
     clear = float(((q - c) @ down).min())
-    raised, lean = _raise_at_cut(v, first, second)
+    raised, lean = _raise_at_cut(v, first, second, strips)
     base = float(fab.get("splices", {}).get("top_clear", 0.0)) + raised
     drops = {strip_drop(t, tc, max(0.0, lean + k * LEAN_STEP)) for k in (-1, 0, 1)}     # bevels.csv's rounding
     want = base + strip_drop(t, tc, lean)
@@ -222,33 +225,53 @@ def check_plate_place(v: Verification, rel: str, row: dict[str, str], solid, sid
                           f"{want:g} mm")
 
 
-def _raise_at_cut(v: Verification, first: str, second: str) -> tuple[float, float]:
+@dataclass(frozen=True)
+class StripsOverCuts:
+    """What :func:`_raise_at_cut` reads, gathered once per check: the strips ending at each node (part id and
+    both end nodes, ``edge_nodes`` of ``parts.csv``) and the ``bevels.csv`` rows of each strip with their row
+    numbers."""
+
+    at_node: dict[int, list[tuple[str, frozenset[int]]]]
+    bevels: dict[str, list[tuple[int, dict[str, str]]]]
+
+    @classmethod
+    def of(cls, v: Verification) -> "StripsOverCuts":
+        rel = v.manifest.get("files", {}).get("bevels_csv")
+        if rel is None or not (v.folder / rel).is_file():
+            return cls({}, {})
+        at_node: dict[int, list[tuple[str, frozenset[int]]]] = {}
+        for r in (v.parts or []):
+            if r.get("kind") == "strip":
+                ends = frozenset(int(k) for k in r.get("edge_nodes", "").split(";") if k.strip().lstrip("-").isdigit())
+                if len(ends) == 2:
+                    for k in ends:
+                        at_node.setdefault(k, []).append((r["part_id"], ends))
+        bevels: dict[str, list[tuple[int, dict[str, str]]]] = {}
+        for i, row in enumerate(v.table(rel)):
+            bevels.setdefault(row.get("strip", ""), []).append((i, row))
+        return cls(at_node, bevels)
+
+
+def _raise_at_cut(v: Verification, first: str, second: str, strips: StripsOverCuts) -> tuple[float, float]:
     """``(Δ, λ)`` at the cut between two pieces, from bevels.csv for the strips over the cut (their
     ``edge_nodes`` one node of either piece): how far (mm) the cutting outline's top edge stands above the plate's
-    (the ``delta_mm`` of a strip that bevels the piece's top edge, :mod:`fabrication.beams.bevel_cut`, else 0) and
-    the largest lean (radians, ``lean_deg``) of those strips off the plate, whose underside comes down
-    ``(t/2 + t_c)·tan λ`` over a cover plate's outer face."""
-    rel = v.manifest.get("files", {}).get("bevels_csv")
-    if rel is None or not (v.folder / rel).is_file():
+    (the ``delta_mm`` of the first strip in bevels.csv that bevels the piece's top edge,
+    :mod:`fabrication.beams.bevel_cut`, else 0) and the largest lean (radians, ``lean_deg``) of those strips off
+    the plate, whose underside comes down ``(t/2 + t_c)·tan λ`` over a cover plate's outer face."""
+    one, two = v.part_row(first), v.part_row(second)
+    if not strips.bevels or one is None or two is None:
         return 0.0, 0.0
-    parts = {r["part_id"]: r for r in (v.parts or [])}
     try:
-        a, b = ({int(k) for k in ast.literal_eval(parts[p].get("nodes", "[]"))} for p in (first, second))
-    except (KeyError, ValueError, SyntaxError, TypeError):
+        a, b = ({int(k) for k in ast.literal_eval(r.get("nodes", "[]"))} for r in (one, two))
+    except (ValueError, SyntaxError, TypeError):
         return 0.0, 0.0
-    over = set()
-    for r in parts.values():
-        if r.get("kind") == "strip":
-            ends = {int(k) for k in r.get("edge_nodes", "").split(";") if k.strip().lstrip("-").isdigit()}
-            if len(ends) == 2 and ends & a and ends & b:
-                over.add(r["part_id"])
-    bevelled = bool(number(parts[first].get("bevels"), 0.0))     # else the piece keeps a square top edge
+    over = {pid for k in a for pid, ends in strips.at_node.get(k, ()) if ends & b}
+    bevelled = bool(number(one.get("bevels"), 0.0))     # else the piece keeps a square top edge
     raised, lean = 0.0, 0.0
-    for row in read_csv(v.folder / rel):
-        if row.get("strip") in over:
-            lean = max(lean, float(np.radians(number(row.get("lean_deg"), 0.0))))
-            if bevelled and row.get("bevel", "square") != "square" and not raised:
-                raised = number(row.get("delta_mm"), 0.0)
+    for _, row in sorted((r for pid in over for r in strips.bevels.get(pid, ())), key=lambda r: r[0]):
+        lean = max(lean, float(np.radians(number(row.get("lean_deg"), 0.0))))
+        if bevelled and row.get("bevel", "square") != "square" and not raised:
+            raised = number(row.get("delta_mm"), 0.0)
     return raised, lean
 
 
@@ -292,8 +315,7 @@ def check_splice_dxfs(v: Verification, rels: list[str], rows: list[dict[str, str
                               f"{holes} holes of {diameter:g} mm")
         ring = np.asarray(outlines[0].points, dtype=float)
         solid = solids.get(members[0]["part_id"])
-        piece = next((r for r in (v.parts or []) if r["part_id"] == members[0].get("joins", "").split(";")[0]),
-                     None)
+        piece = v.part_row(members[0].get("joins", "").split(";")[0])
         frame = frame_of(piece) if piece is not None else None
         face = face_outline(solid, frame["normal"]) if solid is not None and frame is not None else None
         if face is not None and frame is not None:
