@@ -268,3 +268,26 @@ def test_a_separating_plane_is_found_only_where_the_sweep_and_the_part_do_not_me
         disjoint += empty
         met += not empty
     assert met > 20 and said >= 0.5 * disjoint
+
+
+def test_the_separating_planes_of_many_neighbours_at_once_are_those_of_each_pair():
+    """Body.apart_from (one part's sweep against all its neighbours in a few array products) says what Body.apart
+    says of each pair, over random prisms, convex and notched, moving in and out of their planes, and bodies whose
+    normal lies along the way in (a cross product of zero length, an axis left out)."""
+    import numpy as np
+
+    rng = np.random.default_rng(11)
+    compared, separated = 0, 0
+    for trial in range(60):
+        a = _random_prism(rng, bool(trial % 2))
+        others = [_random_prism(rng, bool(rng.integers(2))) for _ in range(int(rng.integers(1, 12)))]
+        d = a.n.copy() if trial % 7 == 0 else rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        far = float(rng.uniform(0, 500))
+        many = a.apart_from(d, far, others)
+        one = [a.apart(d, far, b) for b in others]
+        assert many.tolist() == one
+        compared += len(one)
+        separated += sum(one)
+    assert compared > 200 and 0.2 * compared < separated < compared
+

@@ -253,3 +253,33 @@ def test_panes_of_a_real_surface_of_revolution_are_instanced_and_read_back_on_th
             d = np.sort((pts - c.mean(axis=0)) @ n)
             assert len(d) == 8
             assert np.abs(d[:4]).max() <= 1e-6 and np.abs(d[4:] - 10.0).max() <= 1e-6, (s.name, d)
+
+
+def test_an_instanced_shape_is_rebuilt_once_for_the_erection_check_and_moved_where_each_solid_stands(written):
+    """The erection check's bodies of an instanced file (three boxes, one B-rep): each moved from the first box's
+    body (``bodies_of``) is the body rebuilt from that solid alone (``body_of``) — the same corners as point sets,
+    the same polygon area and thickness, the same solid (manifold3d: nothing of either outside the other) — and every
+    solid's placed faces hold its placed vertices."""
+    from fabrication.verify._bodies import bodies_of, body_of
+
+    path, solids, volumes, beams = written
+    read = read_text_solids(path)
+    by_brep: dict[int, list] = {}
+    for s in read:
+        by_brep.setdefault(s.brep, []).append(s)
+    shared = [group for group in by_brep.values() if len(group) > 1]
+    assert [len(g) for g in shared] == [3]
+    moved = bodies_of({s.name: s for s in read})
+    for s in read:
+        alone = body_of(s)
+        got = moved[s.name]
+        assert _distance(got.corners, alone.corners) <= 1e-9
+        assert got.flat.area == pytest.approx(alone.flat.area, rel=1e-12)
+        assert got.thick == pytest.approx(alone.thick, abs=1e-9)
+        assert abs(float(got.n @ alone.n)) == pytest.approx(1.0, abs=1e-12)
+        a, b = got.shape(), alone.shape()
+        assert a.volume() == pytest.approx(alone.flat.area * alone.thick, rel=1e-9)
+        assert (a - b).volume() <= 1e-6 * a.volume() and (b - a).volume() <= 1e-6 * a.volume()
+        for f in s.faces():                                  # the lazily placed faces carry the placed vertices
+            idx = np.concatenate([lp.vertices for lp in f.loops])
+            assert np.abs((s.points[idx] - f.origin) @ f.normal).max() <= 1e-9

@@ -70,6 +70,13 @@ class Body:
                 self._corners = np.vstack([base, base + self.thick * self.n])
         return self._corners
 
+    def moved(self, motion: np.ndarray, points: np.ndarray) -> "Body":
+        """This body moved by the rigid motion ``motion (4, 4)``, whose vertices are then ``points (n, 3)`` (the
+        moved solid's own, as read): its plane, frame and normal moved, polygon and thickness kept."""
+        rot, shift = motion[:3, :3], motion[:3, 3]
+        return Body(np.asarray(points, dtype=float), self.convex, rot @ self.origin + shift, rot @ self.ex,
+                    rot @ self.ey, rot @ self.n, self.thick, self.flat)
+
     def apart(self, d: np.ndarray, far: float, other: "Body", gap: float = 1e-6) -> bool:
         """Whether this body swept along ``[−far·d, 0]`` (:meth:`swept`) and ``other`` are separated by a plane
         with more than ``gap`` mm on either side: one normal to either body's frame axes, or to a frame normal
@@ -85,6 +92,39 @@ class Body:
         hi = mine.max(axis=0) + np.maximum(shift, 0.0)
         theirs = other.corners @ a.T
         return bool(np.any((lo > theirs.max(axis=0) + gap) | (theirs.min(axis=0) > hi + gap)))
+
+    def apart_from(self, d: np.ndarray, far: float, others: list["Body"], gap: float = 1e-6) -> np.ndarray:
+        """:meth:`apart` against each of ``others`` at once, ``(len(others),)`` bool: the same axes (this body's
+        frame and normal crossed with ``d``, and each other body's), the projections of all corners in a few
+        array products instead of one small product per pair."""
+        k = len(others)
+        if k == 0:
+            return np.zeros(0, dtype=bool)
+
+        def unit(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            ln = np.sqrt(np.einsum("...j,...j->...", a, a))
+            ok = ln > 1e-9
+            return np.where(ok[..., None], a / np.where(ok, ln, 1.0)[..., None], 0.0), ok
+
+        mine_axes, mine_ok = unit(np.array([self.n, self.ex, self.ey, cross3(self.n, d)]))          # (4, 3)
+        frames = np.array([[o.n, o.ex, o.ey] for o in others])                                         # (k, 3, 3)
+        nd = np.empty((k, 3))
+        nd[:, 0] = frames[:, 0, 1] * d[2] - frames[:, 0, 2] * d[1]
+        nd[:, 1] = frames[:, 0, 2] * d[0] - frames[:, 0, 0] * d[2]
+        nd[:, 2] = frames[:, 0, 0] * d[1] - frames[:, 0, 1] * d[0]
+        their_axes, their_ok = unit(np.concatenate([frames, nd[:, None, :]], axis=1))                 # (k, 4, 3)
+        axes = np.concatenate([np.broadcast_to(mine_axes, (k, 4, 3)), their_axes], axis=1)          # (k, 8, 3)
+        ok = np.concatenate([np.broadcast_to(mine_ok, (k, 4)), their_ok], axis=1)                   # (k, 8)
+        mine = self.corners @ axes.reshape(-1, 3).T                                                  # (m, 8k)
+        shift = (-far * (axes @ d)).reshape(-1)
+        lo = (mine.min(axis=0) + np.minimum(shift, 0.0)).reshape(k, 8)
+        hi = (mine.max(axis=0) + np.maximum(shift, 0.0)).reshape(k, 8)
+        sizes = np.array([len(o.corners) for o in others])
+        starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        corners = np.concatenate([o.corners for o in others])                                        # (Σm, 3)
+        theirs = np.einsum("rj,raj->ra", corners, np.repeat(axes, sizes, axis=0))                    # (Σm, 8)
+        t_lo, t_hi = np.minimum.reduceat(theirs, starts, axis=0), np.maximum.reduceat(theirs, starts, axis=0)
+        return np.any(ok & ((lo > t_hi + gap) | (t_lo > hi + gap)), axis=1)
 
     def shape(self) -> Any:
         """The solid itself."""
@@ -159,6 +199,24 @@ def _ring(wire: Any, arc_points: int = 16) -> np.ndarray:
 CONVEX_MM2 = 0.5
 """How much area (mm²) a prism's face may miss of the hull of its vertices and still be taken as convex (its hull
 is then its body): a notch or slot is larger, rounding far smaller."""
+
+
+def bodies_of(solids: dict[str, Any]) -> dict[str, Body]:
+    """:func:`body_of` of every solid, by name; solids of the text-level reader that place one B-rep (an instanced
+    shape) are rebuilt once and the body moved by the rigid motion from one placement to the other."""
+    out: dict[str, Body] = {}
+    first: dict[tuple[int, int], tuple[Any, Body]] = {}
+    for name, solid in solids.items():
+        key = (id(solid.shared), solid.brep) if getattr(solid, "shared", None) is not None else None
+        got = first.get(key) if key is not None else None
+        if got is None:
+            out[name] = body_of(solid)
+            if key is not None:
+                first[key] = (solid, out[name])
+        else:
+            motion = solid.transform @ np.linalg.inv(got[0].transform)
+            out[name] = got[1].moved(motion, solid.points)
+    return out
 
 
 def body_of(solid: Any) -> Body:

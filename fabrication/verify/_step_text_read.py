@@ -80,12 +80,25 @@ class TextSolid:
     path: tuple[str, ...]
     colour: tuple[float, float, float, float] | None
     points: np.ndarray
-    shell: list[Face]
+    local_shell: list[Face]
     local: np.ndarray
     transform: np.ndarray
     brep: int
     _volume: float | None = field(default=None, repr=False)
     shared: "dict[int, BrepFacts] | None" = field(default=None, repr=False)
+    _shell: list[Face] | None = field(default=None, repr=False)
+
+    @property
+    def shell(self) -> list[Face]:
+        """The faces of the closed shell, placed (:attr:`local_shell`, the faces in the B-rep's own coordinates
+        shared by every solid placing it, moved by :attr:`transform` when first asked for)."""
+        if self._shell is None:
+            rot, shift = self.transform[:3, :3], self.transform[:3, 3]
+            if np.array_equal(self.transform, np.eye(4)):
+                self._shell = self.local_shell
+            else:
+                self._shell = [_placed_face(f, rot, shift) for f in self.local_shell]
+        return self._shell
 
     def faces(self) -> list[Face]:
         """The faces of the closed shell."""
@@ -283,6 +296,7 @@ class StepModel:
         self.topology: dict[int, tuple[np.ndarray, list]] = {}
         self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.facts: dict[int, BrepFacts] = {}
+        self.faces: dict[int, list[Face]] = {}
         self.by_kind: dict[str, list[int]] = {}
         for i, (k, _) in entities.items():
             self.by_kind.setdefault(k, []).append(i)
@@ -362,9 +376,29 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
     shell = model.args(brep)[1].id
     if model.kind(shell) != "CLOSED_SHELL":
         raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
-    pts_local, raw_faces = _topology(model, brep, shell)
-    rot, shift = transform[:3, :3], transform[:3, 3]
-    points = pts_local @ rot.T + shift
+    pts_local, _ = _topology(model, brep, shell)
+    points = pts_local @ transform[:3, :3].T + transform[:3, 3]
+    return TextSolid(name, path, colour, points, _local_faces(model, brep, shell), pts_local, transform, brep,
+                     shared=model.facts)
+
+
+def _placed_face(face: Face, rot: np.ndarray, shift: np.ndarray) -> Face:
+    """A face moved by the rigid motion ``x ↦ rot x + shift`` (a proper rotation: arcs keep their sweep)."""
+    loops = tuple(lp if not any(a is not None for a in lp.arcs) else
+                  Loop(lp.vertices, tuple(None if a is None else Arc(rot @ a.centre + shift, rot @ a.axis, a.radius,
+                                                                      a.sweep) for a in lp.arcs),
+                       lp.edges, lp.forward)
+                  for lp in face.loops)
+    return Face(face.surface, rot @ face.origin + shift, rot @ face.normal, rot @ face.ref_dir, face.outward,
+                face.radius, loops)
+
+
+def _local_faces(model: StepModel, brep: int, shell: int) -> list[Face]:
+    """The faces of the B-rep ``#brep`` in its own coordinates (worked out once per B-rep)."""
+    got = model.faces.get(brep)
+    if got is not None:
+        return got
+    points, raw_faces = _topology(model, brep, shell)
     faces = []
     for kind, surf, same, loops in raw_faces:
         if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
@@ -375,29 +409,26 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
         radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
         done = []
         for verts, arcs, edges, fwd in loops:
-            placed_arcs: list[Arc | None] = []
+            local_arcs: list[Arc | None] = []
             for item in arcs:
                 if item is None:
-                    placed_arcs.append(None)
+                    local_arcs.append(None)
                     continue
                 c, ccw, start, end = item
                 co, cz, _ = model.axis2(model.args(c)[1].id)
                 r = float(model.args(c)[2])
-                axis = rot @ (cz if ccw else -cz)
-                centre = rot @ co + shift
+                axis = cz if ccw else -cz
                 if start == end:
                     sweep = 2.0 * math.pi
                 else:
-                    e1, e2 = points[start] - centre, points[end] - centre
+                    e1, e2 = points[start] - co, points[end] - co
                     sweep = math.atan2(float(cross3(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
-                placed_arcs.append(Arc(centre, axis, r, sweep))
-            done.append(Loop(np.array(verts, dtype=int), tuple(placed_arcs), tuple(edges), tuple(fwd)))
-        normal = rot @ z
-        if kind == "PLANE" and not same:
-            normal = -normal
-        faces.append(Face("plane" if kind == "PLANE" else "cylinder", rot @ o + shift, normal, rot @ x,
-                          same, radius, tuple(done)))
-    return TextSolid(name, path, colour, points, faces, pts_local, transform, brep, shared=model.facts)
+                local_arcs.append(Arc(co, axis, r, sweep))
+            done.append(Loop(np.array(verts, dtype=int), tuple(local_arcs), tuple(edges), tuple(fwd)))
+        normal = z if kind != "PLANE" or same else -z
+        faces.append(Face("plane" if kind == "PLANE" else "cylinder", o, normal, x, same, radius, tuple(done)))
+    model.faces[brep] = faces
+    return faces
 
 
 def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:

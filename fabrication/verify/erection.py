@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from . import Verification, check, read_csv
-from ._bodies import Body, normal_pair, body_of, depth_of, screw_bodies
+from ._bodies import Body, bodies_of, normal_pair, depth_of, screw_bodies
 
 HAND_APPROACH_MM = 300.0
 """How far (mm) a part fitted by hand (:data:`BY_HAND`) is brought along its direction before it reaches its place:
@@ -167,11 +167,11 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             near = np.sort(near[np.all(c2 - h2 <= fhi + TOLERANCE, axis=1) & np.all(c2 + h2 >= flo - TOLERANCE,
                                                                                      axis=1)])
         shape = None
-        for k in near:
-            if welded_on(pid, names[k]) or drilled_through(pid, names[k]):
-                continue
+        near = [k for k in near if not welded_on(pid, names[k]) and not drilled_through(pid, names[k])]
+        apart = body.apart_from(d, far, [bodies[names[k]] for k in near])
+        for k, separated in zip(near, apart):
             b = bodies[names[k]]
-            if body.apart(d, far, b):              # a separating plane: they do not meet (most neighbours)
+            if separated:                          # a separating plane: they do not meet (most neighbours)
                 out.append(Pass(pid, names[k], 0.0, 0.0, 0.0))
                 continue
             if shape is None:
@@ -228,7 +228,7 @@ def _bodies(v: Verification, files: dict[str, Any], wanted: set[str]) -> dict[st
             for s in read_or_report(v, rel) or []:
                 if s.name in wanted:
                     solids.setdefault(s.name, s.solid)
-    return {name: body_of(solid) for name, solid in solids.items() if name in wanted}
+    return bodies_of({name: solid for name, solid in solids.items() if name in wanted})
 
 
 def _overlap_hint(a: str, b: str) -> str:
