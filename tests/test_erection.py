@@ -291,3 +291,38 @@ def test_the_separating_planes_of_many_neighbours_at_once_are_those_of_each_pair
         separated += sum(one)
     assert compared > 200 and 0.2 * compared < separated < compared
 
+
+
+def test_manifold3d_starts_no_worker_threads_for_the_checks_and_gives_the_affinity_back():
+    """The checks' manifold3d runs on one thread (its workers only doubled the CPU time of tiny booleans): in a
+    fresh process, after ``_bodies.manifold3d()`` a thousand booleans start no thread, and the CPU affinity is what
+    it was; without it the same booleans start oneTBB's workers wherever there is more than one core."""
+    import os
+    import subprocess
+    import sys
+
+    code = """
+import os, sys
+import numpy as np
+if sys.argv[1] == "one":
+    from fabrication.verify._bodies import manifold3d
+    mask = os.sched_getaffinity(0)
+    m3 = manifold3d()
+    assert os.sched_getaffinity(0) == mask, "affinity not given back"
+else:
+    import manifold3d as m3
+before = len(os.listdir("/proc/self/task"))
+rng = np.random.default_rng(0)
+for _ in range(1000):
+    a = m3.Manifold.hull_points(rng.normal(size=(20, 3)))
+    b = m3.Manifold.hull_points(rng.normal(size=(20, 3)) + 0.5)
+    (a ^ b).volume()
+print(len(os.listdir("/proc/self/task")) - before)
+"""
+    if not hasattr(os, "sched_getaffinity") or not os.path.isdir("/proc/self/task"):
+        pytest.skip("needs Linux's CPU affinity and /proc")
+    started = {how: int(subprocess.run([sys.executable, "-c", code, how], capture_output=True, text=True, check=True,
+                                       cwd=ROOT).stdout.split()[-1]) for how in ("one", "default")}
+    assert started["one"] == 0
+    if len(os.sched_getaffinity(0)) > 1:
+        assert started["default"] >= 1

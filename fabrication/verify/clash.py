@@ -54,7 +54,9 @@ def _normal(points: np.ndarray) -> np.ndarray:
 
 def pane_manifold(solid: Any) -> tuple[Any, np.ndarray]:
     """A pane solid as a manifold3d ``Manifold`` and the unit normal ``n`` of its large faces (either sense)."""
-    import manifold3d as m3  # type: ignore[import-not-found]
+    from ._bodies import manifold3d
+
+    m3 = manifold3d()
     import shapely
     from shapely.geometry import Polygon
 
@@ -100,7 +102,9 @@ def measure_pair(pane: Any, n: np.ndarray, other: Any, pane_id: str, part_id: st
 def measure_clashes(panes: dict[str, Any], supports: dict[str, Any]) -> list[PairMeasure]:
     """Every pane (name → solid) against the strips and gaskets (name → solid) whose boxes come within
     :data:`SEARCH` of its own: one :class:`PairMeasure` per pair, in pane order."""
-    import manifold3d as m3
+    from ._bodies import manifold3d
+
+    m3 = manifold3d()
     from scipy.spatial import cKDTree
 
     names = list(supports)
