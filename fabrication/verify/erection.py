@@ -137,28 +137,33 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
     names = [pid for pid, _, _ in order if pid in bodies]
     if not names:
         return out
+    import shapely
+
     steps = np.array([step for pid, step, _ in order if pid in bodies])
-    by_step = np.argsort(steps, kind="stable")
-    sorted_steps = steps[by_step]
     lo_all = np.array([bodies[q].lo for q in names])
     hi_all = np.array([bodies[q].hi for q in names])
     centre, half = 0.5 * (lo_all + hi_all), 0.5 * (hi_all - lo_all)
+    outer = _outermost(steps, lo_all, hi_all)
+    plan = shapely.STRtree(shapely.box(lo_all[:, 0], lo_all[:, 1], hi_all[:, 0], hi_all[:, 1]))
     for pid, step, d in order:
         body = bodies.get(pid)
         if body is None:
             continue
-        earlier = by_step[:int(np.searchsorted(sorted_steps, step, side="left"))]     # the parts of earlier steps
-        if not len(earlier):
+        extreme = outer.get(step)                        # the parts of earlier steps that can be farthest
+        if extreme is None or not len(extreme):
             continue
-        reach = float((centre[earlier] @ -d + half[earlier] @ np.abs(d)).max())   # farthest earlier box along −d
+        reach = float((centre[extreme] @ -d + half[extreme] @ np.abs(d)).max())   # farthest earlier box along −d
         far = max(reach - float((body.points @ -d).min()) + 1.0, 1.0)
         if approach and pid in approach:
             far = min(far, approach[pid] + float(np.ptp(body.points @ d)))
         allp = np.vstack([body.points, body.points - far * d])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
-        # the neighbours: boxes overlapping the sweep's box, then (of those) seen along d, in the order of ``order``
-        near = earlier[np.all(lo_all[earlier] <= hi + TOLERANCE, axis=1) & np.all(hi_all[earlier] >= lo - TOLERANCE,
-                                                                                 axis=1)]
+        # the neighbours: parts of earlier steps whose boxes overlap the sweep's box (found in plan by the tree,
+        # then in 3D), then (of those) seen along d, in the order of ``order``
+        near = plan.query(shapely.box(lo[0] - TOLERANCE - 1.0, lo[1] - TOLERANCE - 1.0, hi[0] + TOLERANCE + 1.0,
+                                      hi[1] + TOLERANCE + 1.0))
+        near = np.sort(near[steps[near] < step])
+        near = near[np.all(lo_all[near] <= hi + TOLERANCE, axis=1) & np.all(hi_all[near] >= lo - TOLERANCE, axis=1)]
         if len(near):
             e = normal_pair(d)
             f2 = allp @ e.T
@@ -179,6 +184,27 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
             depth, vol = depth_of(shape ^ b.shape())
             static = depth_of(body.shape() ^ b.shape())[0] if depth > TOLERANCE else 0.0
             out.append(Pass(pid, names[k], depth, vol, static))
+    return out
+
+
+def _outermost(steps: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> dict[int, np.ndarray]:
+    """Step → indices of the parts of earlier steps that a box corner of theirs puts on the convex hull of all of
+    those parts' boxes (the farthest of them along any direction is one of these; all of them where the hull
+    cannot be made, a flat or tiny set), for every step with earlier parts.  ``lo``, ``hi`` ``(n, 3)`` the
+    parts' boxes, ``steps (n,)`` their steps."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    out: dict[int, np.ndarray] = {}
+    corner = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=bool)     # (8, 3)
+    for step in np.unique(steps):
+        earlier = np.flatnonzero(steps < step)
+        if not len(earlier):
+            continue
+        pts = np.where(corner[None, :, :], hi[earlier, None, :], lo[earlier, None, :]).reshape(-1, 3)
+        try:
+            out[int(step)] = np.unique(earlier[ConvexHull(pts).vertices // 8])
+        except (QhullError, ValueError):
+            out[int(step)] = earlier
     return out
 
 

@@ -36,7 +36,8 @@ def _check_two_face_mesh(v: Verification, rel: str, row: dict[str, str], g) -> N
         v.error(rel, row["part_id"], "is not a closed mesh")
         return
     pts = _mesh_points(g)
-    tri = np.array([[g.Faces[i][0], g.Faces[i][1], g.Faces[i][2]] for i in range(g.Faces.Count)], dtype=int)
+    faces = g.Faces
+    tri = np.array([faces[i][:3] for i in range(faces.Count)], dtype=int).reshape(-1, 3)
     c0 = pts.mean(axis=0)                         # about the centre: no cancellation of large coordinates
     a, b, c = pts[tri[:, 0]] - c0, pts[tri[:, 1]] - c0, pts[tri[:, 2]] - c0
     volume = abs(float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0)
