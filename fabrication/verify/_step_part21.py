@@ -90,6 +90,7 @@ def read_entities(data: bytes) -> dict[int, tuple[str, str]]:
     if end < start:
         raise StepTextError("the DATA section does not end (no ENDSEC; after it): the file is cut short")
     out: dict[int, tuple[str, str]] = {}
+    kinds: dict[str, str] = {}                    # one string per entity type (a million entities, a few dozen types)
     chunks = data[start + 5:end].decode("latin-1").split(";")
     k = 0
     while k < len(chunks):
@@ -108,7 +109,8 @@ def read_entities(data: bytes) -> dict[int, tuple[str, str]]:
         p = body.find("(")
         if p < 0:
             raise StepTextError(f"{head}: no parameter list")
-        out[int(head[1:])] = (body[:p].strip(), body[p:])
+        kind = body[:p].strip()
+        out[int(head[1:])] = (kinds.setdefault(kind, kind), body[p:])
     return out
 
 

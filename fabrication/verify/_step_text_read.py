@@ -287,6 +287,14 @@ def _flux(solid: TextSolid, face: Face, about: np.ndarray) -> float:
     return sign * r * h * (float(o @ integral) + r * sweep)
 
 
+_ONCE = frozenset({"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "EDGE_CURVE", "ORIENTED_EDGE", "EDGE_LOOP",
+                   "FACE_BOUND", "FACE_OUTER_BOUND", "ADVANCED_FACE", "LINE", "VECTOR", "CLOSED_SHELL", "PLANE",
+                   "CYLINDRICAL_SURFACE", "CIRCLE", "AXIS2_PLACEMENT_3D"})
+"""Entity types whose parsed parameters :meth:`StepModel.args` does not keep: read by a B-rep's topology and
+faces, which are kept per B-rep (:func:`_topology`, :func:`_local_faces`), or by an axis placement, kept as
+arrays (:meth:`StepModel.axis2`)."""
+
+
 class StepModel:
     """The entities of one file and the readers of the records the solids are made of."""
 
@@ -308,6 +316,9 @@ class StepModel:
             raise StepTextError(f"#{i} is referenced but not defined") from None
 
     def args(self, i: int) -> list:
+        """The parameters of ``#i`` parsed (:func:`~._step_part21.parse_params`); kept, except those of the
+        entities inside a B-rep (:data:`_ONCE`), which its topology reads once (kept per B-rep) — a million
+        parsed records of a large file need not stay in memory."""
         got = self.cache.get(i)
         if got is None:
             if i not in self.raw:
@@ -316,7 +327,8 @@ class StepModel:
             got = fast_params(kind, text)
             if got is None:
                 got = parse_params(text)
-            self.cache[i] = got
+            if kind not in _ONCE:
+                self.cache[i] = got
         return got
 
     @staticmethod
