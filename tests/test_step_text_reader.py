@@ -49,8 +49,19 @@ END-ISO-10303-21;
                                                                               "SI_UNIT"]
     assert parse_params(ents[2][1])[2] == Typed("SI_UNIT", [".MILLI.", ".METRE."])
     assert parse_params(ents[3][1])[1] == [-1500.0, 2.0, 3.25]
+    assert ents.kind(3) == "CARTESIAN_POINT" and 4 not in ents and ents.get(4) is None
+    assert ents.of_kind("PRODUCT", "CARTESIAN_POINT").tolist() == [1, 3]
     with pytest.raises(StepTextError):
         parse_params("('a',(#1,#2)")
+    # ids far apart (another writer's numbering): looked up by a table, not an array as long as the largest id
+    sparse = read_entities(data.replace(b"#2 =", b"#2000000000 =").replace(b"#3 =", b"#77 ="))
+    assert sorted(sparse) == [1, 77, 2000000000] and sparse.kind(2000000000) == "" and 2 not in sparse
+    assert parse_params(sparse[77][1])[1] == [-1500.0, 2.0, 3.25]
+    # a record cut short (no closing ';' outside its string) and one without parameters are named
+    for broken in (data.replace(b"3.25));", b"3.25))"), data.replace(b"'B-U00'", b"'B-U00"),
+                   data.replace(b"#3 = CARTESIAN_POINT(", b"#3 = CARTESIAN_POINT;(")):
+        with pytest.raises(StepTextError, match="cannot parse the entity"):
+            read_entities(broken)
 
 
 @pytest.mark.parametrize("name", FILES)

@@ -8,8 +8,11 @@ Not a check (the leading underscore keeps it out of the registry).
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
+
+import numpy as np
 
 _TOKEN = re.compile(r"\s*(?:'((?:[^']|'')*)'|#(\d+)|(\.[A-Z_0-9]*\.)|([-+0-9.][0-9.Ee+-]*)|([A-Za-z_][A-Za-z_0-9]*)"
                     r"|(\()|(\))|(,)|(\$)|(\*))")
@@ -80,38 +83,111 @@ def parse_params(text: str) -> list:
     return out                           # a complex entity: its parts
 
 
-def read_entities(data: bytes) -> dict[int, tuple[str, str]]:
-    """``#id`` → (type name, the raw text of its parameters including the parentheses; a complex entity's type is
-    ``''``) for every entity of the DATA section."""
+_RECORD = re.compile(r"\s*#(\d+)\s*=\s*([A-Za-z_][A-Za-z_0-9]*)?\s*(\((?:[^;']++|'(?:[^']|'')*+')*+);")
+"""One entity record ``#id = TYPE(…);`` (a complex entity ``#id = ( A(…) B(…) );`` has no type before its
+parameters); a ``;`` inside a string does not end it."""
+
+
+class Entities(Mapping[int, tuple[str, str]]):
+    """The entities of a DATA section, ``#id`` → (type name, the raw text of its parameters including the
+    parentheses; a complex entity's type is ``''``), kept compactly: the section's text once and, per entity, its
+    id, type and where its parameters stand in the text (a million entities of a large file as a few arrays,
+    where a dictionary of strings held ten times the file's size).  A record is sliced from the text when asked
+    for."""
+
+    def __init__(self, text: str, ids: np.ndarray, kinds: np.ndarray, starts: np.ndarray, stops: np.ndarray,
+                 names: list[str]):
+        self._text, self.ids, self.kinds, self._starts, self._stops = text, ids, kinds, starts, stops
+        self.names = names                      # type code → type name
+        self._codes = {n: k for k, n in enumerate(names)}
+        top = int(ids.max()) if len(ids) else -1
+        self._dense = top < 4 * len(ids) + 1024  # ids 1 … n, as every writer numbers them: an array lookup
+        if self._dense:
+            self._row = np.full(top + 1, -1, dtype=np.int64)
+            self._row[ids] = np.arange(len(ids))
+        else:
+            self._rows = {int(i): k for k, i in enumerate(ids.tolist())}
+
+    def row(self, i: int) -> int:
+        """Where ``#i`` stands among :attr:`ids`, -1 when it is not defined."""
+        if self._dense:
+            return int(self._row[i]) if 0 <= i < len(self._row) else -1
+        return self._rows.get(i, -1)
+
+    def kind(self, i: int) -> str:
+        """The type name of ``#i`` (``''`` for a complex entity); raises ``KeyError`` when it is not defined."""
+        k = self.row(i)
+        if k < 0:
+            raise KeyError(i)
+        return self.names[self.kinds[k]]
+
+    def __getitem__(self, i: int) -> tuple[str, str]:
+        k = self.row(i)
+        if k < 0:
+            raise KeyError(i)
+        return self.names[self.kinds[k]], self._text[self._starts[k]:self._stops[k]]
+
+    def __contains__(self, i: object) -> bool:
+        return isinstance(i, (int, np.integer)) and self.row(int(i)) >= 0
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self.ids.tolist())
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def of_kind(self, *kinds: str) -> np.ndarray:
+        """The ids of the entities of these types, in file order."""
+        codes = [self._codes[k] for k in kinds if k in self._codes]
+        return self.ids[np.isin(self.kinds, codes)] if codes else self.ids[:0]
+
+    def not_of_kind(self, kinds: "frozenset[str] | set[str]") -> np.ndarray:
+        """The ids of the entities of any type but these, in file order."""
+        codes = [self._codes[k] for k in kinds if k in self._codes]
+        return self.ids[~np.isin(self.kinds, codes)]
+
+
+def read_entities(data: bytes) -> Entities:
+    """Every entity of the DATA section (:class:`Entities`)."""
     start = data.find(b"DATA;")
     end = data.rfind(b"ENDSEC;")
     if start < 0:
         raise StepTextError("no DATA section")
     if end < start:
         raise StepTextError("the DATA section does not end (no ENDSEC; after it): the file is cut short")
-    out: dict[int, tuple[str, str]] = {}
-    kinds: dict[str, str] = {}                    # one string per entity type (a million entities, a few dozen types)
-    chunks = data[start + 5:end].decode("latin-1").split(";")
-    k = 0
-    while k < len(chunks):
-        record = chunks[k]
-        k += 1
-        while record.count("'") % 2 and k < len(chunks):     # a ';' inside a string: join the pieces again
-            record += ";" + chunks[k]
-            k += 1
-        record = record.strip()
-        if not record:
-            continue
-        head, eq, body = record.partition("=")
-        head, body = head.strip(), body.strip()
-        if not eq or not head.startswith("#") or not head[1:].isdigit():
-            raise StepTextError(f"cannot parse the entity {record[:60]!r}")
-        p = body.find("(")
-        if p < 0:
-            raise StepTextError(f"{head}: no parameter list")
-        kind = body[:p].strip()
-        out[int(head[1:])] = (kinds.setdefault(kind, kind), body[p:])
-    return out
+    text = data[start + 5:end].decode("latin-1")
+    ids: list[int] = []
+    kinds: list[int] = []
+    starts: list[int] = []
+    stops: list[int] = []
+    codes: dict[str, int] = {}
+    names: list[str] = []
+    pos, size = 0, len(text)
+    match = _RECORD.match
+    while True:
+        m = match(text, pos)
+        if m is None:
+            rest = text[pos:].strip()
+            if rest:
+                raise StepTextError(f"cannot parse the entity {rest[:60]!r}")
+            break
+        kind = m.group(2) or ""
+        code = codes.get(kind)
+        if code is None:
+            code = codes[kind] = len(names)
+            names.append(kind)
+        ids.append(int(m.group(1)))
+        kinds.append(code)
+        a, b = m.span(3)
+        while b > a and text[b - 1] in " \t\r\n":
+            b -= 1
+        starts.append(a)
+        stops.append(b)
+        pos = m.end()
+        if pos >= size:
+            break
+    return Entities(text, np.array(ids, dtype=np.int64), np.array(kinds, dtype=np.int32),
+                    np.array(starts, dtype=np.int64), np.array(stops, dtype=np.int64), names)
 
 
 _REFS = re.compile(r"#(\d+)")

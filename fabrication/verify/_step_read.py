@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._step_part21 import Entities
 from ._step_text_read import TextSolid, StepModel, read_entities, solids_of
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -170,8 +171,7 @@ _GEOMETRY_KINDS = frozenset({
 kept refers to them: a placement's axes, a kept B-rep's faces)."""
 
 
-def sample_file(data: bytes, solids: list[TextSolid],
-                entities: dict[int, tuple[str, str]] | None = None) -> tuple[bytes, list[bool]]:
+def sample_file(data: bytes, solids: list[TextSolid], entities: Entities | None = None) -> tuple[bytes, list[bool]]:
     """A STEP file with the whole product tree of ``data`` (every product, occurrence and placement) but the
     B-rep and colour of one solid per kind (:meth:`TextSolid.shape_key`) only: the representation of every other
     solid is left empty.  Also, per solid, whether it is its kind's first (kept).  ``entities``: those of
@@ -185,8 +185,8 @@ def sample_file(data: bytes, solids: list[TextSolid],
         kept.append(key not in seen)
         seen.add(key)
     dropped = {s.brep for s, k in zip(solids, kept) if not k} - {s.brep for s, k in zip(solids, kept) if k}
-    styles = {i for i, (kind, params) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
-              and any(r in dropped for r in _refs(params))}
+    styled = entities.of_kind("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM").tolist()
+    styles = {i for i in styled if any(r in dropped for r in _refs(entities[i][1]))}
     gone = dropped | styles
 
     def text(i: int) -> str:
@@ -196,22 +196,20 @@ def sample_file(data: bytes, solids: list[TextSolid],
             params = params.replace(",)", ")")
         return params
 
-    emptied = {i for i, (kind, params) in entities.items() if kind == "ADVANCED_BREP_SHAPE_REPRESENTATION"
-               and not any(entities.get(r, ("",))[0] == "MANIFOLD_SOLID_BREP" for r in _refs(text(i)))}
+    emptied = {i for i in entities.of_kind("ADVANCED_BREP_SHAPE_REPRESENTATION").tolist()
+               if not any(r in entities and entities.kind(r) == "MANIFOLD_SOLID_BREP" for r in _refs(text(i)))}
 
     def kind_of(i: int) -> str:
         """An emptied B-rep representation becomes a plain one (the kernel reads an empty B-rep
         representation thirty times slower)."""
-        return "SHAPE_REPRESENTATION" if i in emptied else entities[i][0]
+        return "SHAPE_REPRESENTATION" if i in emptied else entities.kind(i)
 
     keep: set[int] = set()
     # from every entity that is not geometry or topology (the product tree, representations, contexts, styles
     # kept) through what each refers to: the geometry of placements comes along, that of dropped B-reps does not
-    todo = [i for i, (kind, _) in entities.items() if kind not in _GEOMETRY_KINDS and kind not in (
-        "STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")]
+    todo = entities.not_of_kind(_GEOMETRY_KINDS | {"STYLED_ITEM", "OVER_RIDING_STYLED_ITEM"}).tolist()
     todo += [s.brep for s, k in zip(solids, kept) if k]
-    todo += [i for i, (kind, _) in entities.items() if kind in ("STYLED_ITEM", "OVER_RIDING_STYLED_ITEM")
-             and i not in styles]
+    todo += [i for i in styled if i not in styles]
     while todo:
         i = todo.pop()
         if i not in keep and i in entities:
@@ -223,7 +221,7 @@ def sample_file(data: bytes, solids: list[TextSolid],
 
 
 def kernel_sample(path: str | os.PathLike, solids: list[TextSolid], data: bytes | None = None,
-                  entities: dict[int, tuple[str, str]] | None = None) -> list[str]:
+                  entities: Entities | None = None) -> list[str]:
     """Load through the CAD kernel the complete product tree of the STEP file ``path`` and one solid of each kind
     (:func:`sample_file`, written to a temporary file), and compare it with what the text-level reader read:
     the same products in the same order with the same names, assembly paths and placements; each solid loaded

@@ -23,12 +23,12 @@ import math
 import os
 import sys
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from ._shapes import cross3
-from ._step_part21 import Ref, StepTextError, Typed, fast_params, parse_params, read_entities
+from ._step_part21 import Entities, Ref, StepTextError, Typed, fast_params, parse_params, read_entities
 
 @dataclass(frozen=True)
 class Arc:
@@ -298,7 +298,7 @@ arrays (:meth:`StepModel.axis2`)."""
 class StepModel:
     """The entities of one file and the readers of the records the solids are made of."""
 
-    def __init__(self, entities: dict[int, tuple[str, str]]):
+    def __init__(self, entities: Entities):
         self.raw = entities
         self.cache: dict[int, list] = {}
         self.topology: dict[int, tuple[np.ndarray, list]] = {}
@@ -306,12 +306,10 @@ class StepModel:
         self.facts: dict[int, BrepFacts] = {}
         self.faces: dict[int, list[Face]] = {}
         self.by_kind: dict[str, list[int]] = {}
-        for i, (k, _) in entities.items():
-            self.by_kind.setdefault(k, []).append(i)
 
     def kind(self, i: int) -> str:
         try:
-            return self.raw[i][0]
+            return self.raw.kind(i)
         except KeyError:
             raise StepTextError(f"#{i} is referenced but not defined") from None
 
@@ -321,9 +319,10 @@ class StepModel:
         parsed records of a large file need not stay in memory."""
         got = self.cache.get(i)
         if got is None:
-            if i not in self.raw:
+            try:
+                kind, text = self.raw[i]
+            except KeyError:
                 self._missing(i)
-            kind, text = self.raw[i]
             got = fast_params(kind, text)
             if got is None:
                 got = parse_params(text)
@@ -332,11 +331,15 @@ class StepModel:
         return got
 
     @staticmethod
-    def _missing(i: int) -> list:
+    def _missing(i: int) -> NoReturn:
         raise StepTextError(f"#{i} is referenced but not defined")
 
     def ids(self, kind: str) -> list[int]:
-        return self.by_kind.get(kind, [])
+        """The ids of the entities of type ``kind``, in file order."""
+        got = self.by_kind.get(kind)
+        if got is None:
+            got = self.by_kind[kind] = self.raw.of_kind(kind).tolist()
+        return got
 
     def xyz(self, i: int) -> np.ndarray:
         a = self.args(i)
