@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ._shapes import cross3
+from ._shapes import cross3, cross_rows
 
 _ONE_THREAD = False
 
@@ -107,26 +107,12 @@ class Body:
         return Body(np.asarray(points, dtype=float), self.convex, rot @ self.origin + shift, rot @ self.ex,
                     rot @ self.ey, rot @ self.n, self.thick, self.flat)
 
-    def apart(self, d: np.ndarray, far: float, other: "Body", gap: float = 1e-6) -> bool:
-        """Whether this body swept along ``[−far·d, 0]`` (:meth:`swept`) and ``other`` are separated by a plane
-        with more than ``gap`` mm on either side: one normal to either body's frame axes, or to a frame normal
-        crossed with ``d`` (a separating axis proves that the two do not meet; finding none proves nothing)."""
-        a = np.empty((8, 3))
-        a[0], a[1], a[2], a[3], a[4], a[5] = self.n, self.ex, self.ey, other.n, other.ex, other.ey
-        a[6], a[7] = cross3(self.n, d), cross3(other.n, d)
-        ln = np.sqrt(np.einsum("ij,ij->i", a, a))
-        a = a[ln > 1e-9] / ln[ln > 1e-9, None]
-        mine = self.corners @ a.T                               # (k, axes)
-        shift = -far * (a @ d)
-        lo = mine.min(axis=0) + np.minimum(shift, 0.0)
-        hi = mine.max(axis=0) + np.maximum(shift, 0.0)
-        theirs = other.corners @ a.T
-        return bool(np.any((lo > theirs.max(axis=0) + gap) | (theirs.min(axis=0) > hi + gap)))
-
     def apart_from(self, d: np.ndarray, far: float, others: list["Body"], gap: float = 1e-6) -> np.ndarray:
-        """:meth:`apart` against each of ``others`` at once, ``(len(others),)`` bool: the same axes (this body's
-        frame and normal crossed with ``d``, and each other body's), the projections of all corners in a few
-        array products instead of one small product per pair."""
+        """``(len(others),)`` bool: whether this body swept along ``[−far·d, 0]`` (:meth:`swept`) and each of
+        ``others`` are separated by a plane with more than ``gap`` mm on either side: one normal to either body's
+        frame axes, or to a frame normal crossed with ``d`` (a separating axis proves that the two do not meet;
+        finding none proves nothing).  All pairs at once: the projections of all corners in a few array
+        products."""
         k = len(others)
         if k == 0:
             return np.zeros(0, dtype=bool)
@@ -138,10 +124,7 @@ class Body:
 
         mine_axes, mine_ok = unit(np.array([self.n, self.ex, self.ey, cross3(self.n, d)]))          # (4, 3)
         frames = np.array([[o.n, o.ex, o.ey] for o in others])                                         # (k, 3, 3)
-        nd = np.empty((k, 3))
-        nd[:, 0] = frames[:, 0, 1] * d[2] - frames[:, 0, 2] * d[1]
-        nd[:, 1] = frames[:, 0, 2] * d[0] - frames[:, 0, 0] * d[2]
-        nd[:, 2] = frames[:, 0, 0] * d[1] - frames[:, 0, 1] * d[0]
+        nd = cross_rows(frames[:, 0], d[None, :])                                                       # (k, 3)
         their_axes, their_ok = unit(np.concatenate([frames, nd[:, None, :]], axis=1))                 # (k, 4, 3)
         axes = np.concatenate([np.broadcast_to(mine_axes, (k, 4, 3)), their_axes], axis=1)          # (k, 8, 3)
         ok = np.concatenate([np.broadcast_to(mine_ok, (k, 4)), their_ok], axis=1)                   # (k, 8)

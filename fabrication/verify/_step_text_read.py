@@ -84,8 +84,8 @@ class TextSolid:
     local: np.ndarray
     transform: np.ndarray
     brep: int
-    _volume: float | None = field(default=None, repr=False)
     shared: "dict[int, BrepFacts] | None" = field(default=None, repr=False)
+    _facts: "BrepFacts | None" = field(default=None, repr=False)
     _shell: list[Face] | None = field(default=None, repr=False)
 
     @property
@@ -108,19 +108,19 @@ class TextSolid:
     def volume(self) -> float:
         """mm³ by the divergence theorem: ⅓ Σ over faces of ∫ x·n dA (exact for straight and circular edges and
         for cylinder bands)."""
-        if self._volume is None:
-            self._volume = self.facts().volume
-        return self._volume
+        return self.facts().volume
 
     def facts(self) -> "BrepFacts":
         """What a rigid motion does not change, worked out once per B-rep when :attr:`shared` is given (the
-        reader's: an instanced shape's solids share their B-rep) — else for this solid."""
-        got = self.shared.get(self.brep) if self.shared is not None else None
-        if got is None:
-            got = _brep_facts(self)
-            if self.shared is not None:
-                self.shared[self.brep] = got
-        return got
+        reader's: an instanced shape's solids share their B-rep) — else once for this solid."""
+        if self._facts is None:
+            got = self.shared.get(self.brep) if self.shared is not None else None
+            if got is None:
+                got = _brep_facts(self)
+                if self.shared is not None:
+                    self.shared[self.brep] = got
+            self._facts = got
+        return self._facts
 
     def face_area(self, face: Face) -> float:
         """Area of a planar face, mm² (its loops' signed areas about its normal summed, outer less holes)."""
