@@ -7,7 +7,8 @@ extruded once in the strip's frame (:class:`~fabrication.glazing.strips.Strip`),
 pressure plates ``CP-…`` and cover caps ``CC-…``), listed in ``retention.csv`` with every pane's restraint check
 in ``restraint.csv``; written from the template (:mod:`fabrication.writers.step_template`, solids of one shape
 once, placed per part), not through the CAD kernel; ``splices.step``: the two
-cover plates of every splice, each outline with its bolt holes extruded once from the beam plate's face.
+cover plates of every splice, each outline with its bolt holes extruded once from the beam plate's face, written
+from the template too (cover plates of one type are one shape, placed per plate).
 """
 
 from __future__ import annotations
@@ -167,6 +168,21 @@ def splice_solids(glazing) -> list:
     return out
 
 
+def splice_prisms(glazing) -> list:
+    """The solids of :func:`splice_solids` as :class:`~fabrication.writers.step_template.PlanarSolid` records (the
+    same outlines, bolt holes and places, no colour), for the template writer."""
+    from .step_template import PlanarSolid
+
+    out = []
+    for s in glazing.splices:
+        holes = np.c_[np.asarray(s.holes, dtype=float).reshape(-1, 2), np.full(len(s.holes), float(s.hole))]
+        for pid, sign in zip(s.part_ids, (1.0, -1.0)):
+            z0 = 0.5 * s.beam_thickness if sign > 0 else -0.5 * s.beam_thickness - s.thickness
+            out.append(PlanarSolid.prism(pid, None, np.asarray(s.outline, dtype=float), s.frame, z0,
+                                         float(s.thickness), holes))
+    return out
+
+
 def _splice_type_firsts(glazing) -> tuple[dict[str, object], dict[str, int]]:
     """Cover-plate type id → its first splice (in splice order) and → how many cover plates are of it."""
     from ..glazing.rows import splice_types
@@ -283,7 +299,6 @@ def _plain(value: float, digits: int = 3) -> float:
 def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
     """The glazing and joint files of a build (nothing when the build has no glazing stage)."""
     from ._step_text import step_label
-    from .step import export_step
     from .step_template import Assembly, grouped, write_step
 
     g = build.glazing
@@ -332,8 +347,8 @@ def write_glazing(build: "BuildRecord", out: Path, files: Files) -> str:
                          f"(lean up to {max(b.lean_deg for b in bevels):.1f}°)")
     if g.splices:
         beams = [s.beam_id for s in g.splices for _ in s.part_ids]
-        export_step(by_beam(splice_solids(g), beams, f"{name} splices"), out / SPLICES_STEP,
-                    description=f"splice cover plates of {name}")
+        write_step(Assembly(step_label(f"{name} splices"), list(grouped(splice_prisms(g), beams))),
+                   out / SPLICES_STEP, description=f"splice cover plates of {name}")
         write_splice_dxfs(g, out / SPLICE_DIR)
         notes.append(f"{len(g.splices)} splices")
     if g.welds:

@@ -204,6 +204,33 @@ def build_solids(plates: Sequence[BeamPlate], check: bool = True) -> list:
     return solids
 
 
+def plate_prism(plate: BeamPlate) -> PlanarSolid:
+    """The solid of :func:`plate_solid` as a :class:`~fabrication.writers.step_template.PlanarSolid` (the same
+    faces, holes and colour), for the template writer: the outline extruded through the plate's thickness,
+    centred on its support plane, or the solid between its two face outlines where it is bevelled under its
+    strips; the bolt holes as round bores."""
+    t = plate.thickness
+    colour = COLOURS[FAMILY_NAMES[plate.family]]
+    holes = np.asarray(plate.holes, dtype=float).reshape(-1, 3)
+    if plate.bevels:
+        from ..beams.bevel_cut import face_outlines
+
+        front, back = face_outlines(plate)
+        return PlanarSolid.loft(plate.part_id, colour, front, back, plate.frame, t, holes)
+    return PlanarSolid.prism(plate.part_id, colour, plate.outline, plate.frame, -0.5 * t, t, holes)
+
+
+def beam_tree(plates: Sequence[BeamPlate], name: str) -> Assembly:
+    """The product tree of ``beams.step`` for the template writer: ``name`` → family → beam id → the plate
+    solids (:func:`plate_prism`), in plate order (the tree :func:`beam_assembly` builds for the kernel)."""
+    families: dict[str, dict[str, list]] = {}
+    for plate in plates:
+        families.setdefault(FAMILY_NAMES[plate.family], {}).setdefault(plate.beam_id, []).append(plate_prism(plate))
+    kids: list = [Assembly(family, [Assembly(step_label(beam), members) for beam, members in beams.items()])
+                  for family, beams in families.items()]
+    return Assembly(step_label(name), kids)
+
+
 def grouped(solids: Sequence, keys: Sequence[str]) -> list:
     """One assembly per key, labelled by it (folded to ASCII), holding the solids of that key (``keys[k]`` that
     of ``solids[k]``); keys in first-seen order, solids in their given order.  ppfab's STEP trees are built
@@ -519,9 +546,7 @@ def write_step_files(build: "BuildRecord", out: Path, files: Files) -> str:
     """``beams.step`` (one solid per beam plate, grouped by family and beam) and, with ``[output] panels_step``,
     ``panels.step``."""
     name = build.design.info.name
-    plates = list(build.beams.plates)
-    export_step(beam_assembly(plates, build_solids(plates, check=False), name), out / "beams.step",
-                description=f"beam plates of {name}")
+    write_step(beam_tree(list(build.beams.plates), name), out / "beams.step", description=f"beam plates of {name}")
     if build.design.output.panels_step:
 
         export_placed_panes(build.panels.panels, build.pane_offsets(), out / "panels.step", name)

@@ -1,13 +1,18 @@
-"""STEP files of planar-faced solids written as text, without the CAD kernel: ``glazing.step`` and ``panels.step``.
+"""STEP files of planar-faced solids written as text, without the CAD kernel: ``glazing.step``, ``panels.step``,
+``beams.step`` and ``splices.step``.
 
 Every solid of these files is a prism of a planar polygon (strips, gaskets, setting blocks, stops, pressure
-plates, caps, panes), so its boundary representation can be written from a template: a
-``MANIFOLD_SOLID_BREP`` of a ``CLOSED_SHELL`` of ``ADVANCED_FACE``\\ s on ``PLANE``\\ s, bounded by
-``EDGE_LOOP``\\ s of ``EDGE_CURVE``\\ s on ``LINE``\\ s, each vertex and each edge written once and shared by the
-faces that meet there.  The schema, the product tree, the names and the colours are those the kernel writes
-(AP214, ``AUTOMOTIVE_DESIGN``; a ``PRODUCT`` per assembly and per solid, placed in its parent by a
+plates, caps, panes, beam plates, splice cover plates) or, for a beam plate bevelled under its glazing strips, the
+solid between two face outlines whose side faces are planar, some with round through holes (bolt holes), so its
+boundary representation can be written from a template: a ``MANIFOLD_SOLID_BREP`` of a ``CLOSED_SHELL`` of
+``ADVANCED_FACE``\\ s on ``PLANE``\\ s, bounded by ``EDGE_LOOP``\\ s of ``EDGE_CURVE``\\ s on ``LINE``\\ s, each
+vertex and each edge written once and shared by the faces that meet there; a hole (:class:`Bore`) is a
+``CIRCLE`` on each face it passes through (an inner bound of one edge and one vertex) and a face on a
+``CYLINDRICAL_SURFACE`` bounded by the two circles and a straight seam, as the kernel writes a drilled hole.
+
+The schema, the product tree, the names and the colours are those the kernel writes (AP214, ``AUTOMOTIVE_DESIGN``; a ``PRODUCT`` per assembly and per solid, placed in its parent by a
 ``NEXT_ASSEMBLY_USAGE_OCCURRENCE`` with a ``CONTEXT_DEPENDENT_SHAPE_REPRESENTATION``; a ``STYLED_ITEM`` per
-B-rep), the header ppfab's (:func:`~fabrication.writers._step_text.step_header`); the text is a function of
+coloured B-rep), the header ppfab's (:func:`~fabrication.writers._step_text.step_header`); the text is a function of
 the input alone (byte-identical on every write).
 
 **Instancing.**  Solids of one shape — the same vertices in their own coordinates, up to a shift, within
@@ -51,52 +56,180 @@ one shape, written once and placed per solid."""
 
 
 @dataclass(frozen=True)
+class Bore:
+    """A round through hole of a solid: the cylinder of ``radius`` (mm) about the line through ``(x, y)`` along the
+    solid's own z axis, from its planar face ``faces[low]`` at ``z = z_low`` to its face ``faces[high]`` at
+    ``z = z_high`` (both normal to z, the solid between them; ``z_low < z_high``)."""
+
+    x: float
+    y: float
+    radius: float
+    z_low: float
+    z_high: float
+    low: int
+    high: int
+
+
+@dataclass(frozen=True)
 class PlanarSolid:
-    """A closed solid bounded by planar faces, in its own coordinates, and its placement in model space.
+    """A closed solid bounded by planar faces, with round through holes, in its own coordinates, and its placement
+    in model space.
 
     Attributes
     ----------
     label : the product name (a part id)
-    colour : ``(r, g, b, a)`` in 0 … 1; ``a < 1`` is written as a transparency
+    colour : ``(r, g, b, a)`` in 0 … 1 (``a < 1`` is written as a transparency), or ``None``: no style
     vertices : (n, 3) float, mm, in the solid's own coordinates
     faces : per face its loops of vertex indices, the outer loop first, each running counter-clockwise seen from
         outside the solid (holes clockwise)
     placement : (4, 4) float, a rigid motion taking the solid's coordinates into model space
+    bores : the round holes through it (:class:`Bore`), each an inner bound of the two faces it joins
     """
 
     label: str
-    colour: tuple[float, float, float, float]
+    colour: tuple[float, float, float, float] | None
     vertices: np.ndarray
     faces: tuple[tuple[tuple[int, ...], ...], ...]
     placement: np.ndarray
+    bores: tuple[Bore, ...] = ()
 
     @classmethod
-    def prism(cls, label: str, colour: Sequence[float], outline: np.ndarray, frame: Frame, z0: float,
-              height: float) -> "PlanarSolid":
+    def prism(cls, label: str, colour: Sequence[float] | None, outline: np.ndarray, frame: Frame, z0: float,
+              height: float, holes: np.ndarray | None = None) -> "PlanarSolid":
         """The prism over ``outline (n, 2)`` (frame coordinates, either turning sense) from ``z = z0`` to
         ``z0 + height`` along the frame's normal, placed by ``frame`` (the solid the kernel's
-        ``_placed_prism`` makes)."""
+        ``_placed_prism`` makes), less the through holes ``holes (h, 3)`` (centre ``x, y`` in the frame and
+        diameter, mm)."""
         q = np.asarray(outline, dtype=float).reshape(-1, 2)
         if len(q) < 3:
             raise FabricationError(f"{label}: a prism needs an outline of at least 3 points, got {len(q)}")
         if not height > 0:
             raise FabricationError(f"{label}: a prism needs a positive height, got {height}")
-        area = 0.5 * float(np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
-        if area == 0.0:
-            raise FabricationError(f"{label}: the prism's outline has no area")
-        if area < 0:
-            q = q[::-1]
-        n = len(q)
-        lo = np.column_stack([q, np.full(n, float(z0))])
-        hi = np.column_stack([q, np.full(n, float(z0) + float(height))])
-        faces: list[tuple[tuple[int, ...], ...]] = [(tuple(range(n - 1, -1, -1)),), (tuple(range(n, 2 * n)),)]
-        faces += [((k, (k + 1) % n, n + (k + 1) % n, n + k),) for k in range(n)]
-        c4 = tuple(float(c) for c in colour) + (1.0,) * (4 - len(colour))
-        return cls(label, (c4[0], c4[1], c4[2], c4[3]), np.vstack([lo, hi]), tuple(faces), frame_matrix(frame))
+        return cls._between(label, colour, q, q, float(z0), float(z0) + float(height), frame, holes)
+
+    @classmethod
+    def loft(cls, label: str, colour: Sequence[float] | None, top: np.ndarray, bottom: np.ndarray, frame: Frame,
+             thickness: float, holes: np.ndarray | None = None) -> "PlanarSolid":
+        """The solid between ``top (n, 2)`` on ``z = +thickness/2`` and ``bottom (n, 2)`` on ``z = −thickness/2``
+        (frame coordinates, one turning sense, corner ``k`` of one joined to corner ``k`` of the other by a planar
+        side face: :func:`fabrication.beams.bevel_cut.face_outlines`), placed by ``frame``, less ``holes (h, 3)``
+        (centre ``x, y`` and diameter): a beam plate bevelled under its strips (the kernel's ``_placed_loft``)."""
+        a, b = (np.asarray(o, dtype=float).reshape(-1, 2) for o in (top, bottom))
+        if len(a) < 3 or a.shape != b.shape:
+            raise FabricationError(f"{label}: a plate's two faces need outlines of the same 3 or more corners, got "
+                                   f"{len(a)} and {len(b)}")
+        if not thickness > 0:
+            raise FabricationError(f"{label}: a plate needs a positive thickness, got {thickness}")
+        h = 0.5 * float(thickness)
+        return cls._between(label, colour, b, a, -h, h, frame, holes)
+
+    @classmethod
+    def _between(cls, label: str, colour: Sequence[float] | None, lo_q: np.ndarray, hi_q: np.ndarray, z_lo: float,
+                 z_hi: float, frame: Frame, holes: np.ndarray | None) -> "PlanarSolid":
+        """The solid between ``lo_q`` on ``z = z_lo`` and ``hi_q`` on ``z = z_hi`` (corners joined in order),
+        counter-clockwise first; corners that coincide on one face merged (a side face turns into a triangle)."""
+        areas = [0.5 * float(np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
+                 for q in (lo_q, hi_q)]
+        if areas[0] == 0.0 or areas[1] == 0.0:
+            raise FabricationError(f"{label}: the solid's outline has no area")
+        if (areas[0] > 0) != (areas[1] > 0):
+            raise FabricationError(f"{label}: its two face outlines turn opposite ways")
+        if areas[0] < 0:
+            lo_q, hi_q = lo_q[::-1], hi_q[::-1]
+        n = len(lo_q)
+        lo, hi = _merged(lo_q), _merged(hi_q)                  # corner k → the first of its equal neighbours
+        keep_lo = sorted(set(lo))
+        keep_hi = sorted(set(hi))
+        index_lo = {k: i for i, k in enumerate(keep_lo)}
+        index_hi = {k: len(keep_lo) + i for i, k in enumerate(keep_hi)}
+        L = [index_lo[k] for k in lo]
+        H = [index_hi[k] for k in hi]
+        vertices = np.vstack([np.column_stack([lo_q[keep_lo], np.full(len(keep_lo), z_lo)]),
+                              np.column_stack([hi_q[keep_hi], np.full(len(keep_hi), z_hi)])])
+        faces: list[tuple[tuple[int, ...], ...]] = [(_ring(L[::-1]),), (_ring(H),)]
+        for k in range(n):
+            j = (k + 1) % n
+            side = _ring([L[k], L[j], H[j], H[k]])
+            if len(side) >= 3:
+                faces.append((side,))
+        if len(faces[0][0]) < 3 or len(faces[1][0]) < 3:
+            raise FabricationError(f"{label}: a face of the solid has fewer than 3 distinct corners")
+        bores = tuple(Bore(float(x), float(y), 0.5 * float(d), z_lo, z_hi, 0, 1)
+                      for x, y, d in np.asarray(holes if holes is not None else np.zeros((0, 3)),
+                                                dtype=float).reshape(-1, 3).tolist())
+        _holes_inside(label, bores, (lo_q, hi_q))
+        return cls(label, _rgba(colour), vertices, tuple(faces), frame_matrix(frame), bores)
 
     def placed(self) -> np.ndarray:
         """``(n, 3)`` the vertices in model space."""
         return self.vertices @ self.placement[:3, :3].T + self.placement[:3, 3]
+
+
+def _holes_inside(label: str, bores: tuple[Bore, ...], outlines: tuple[np.ndarray, ...]) -> None:
+    """Refuse a hole that is not a positive circle strictly inside every outline (CCW) and apart from the other
+    holes: a hole through an edge or into another is a notch, which a template B-rep cannot hold."""
+    for k, b in enumerate(bores):
+        if not (b.radius > 0 and math.isfinite(b.radius) and math.isfinite(b.x) and math.isfinite(b.y)):
+            raise FabricationError(f"{label}: hole {k + 1} needs a finite centre and a positive diameter, got "
+                                   f"({b.x}, {b.y}), {2.0 * b.radius}")
+        c = np.array([b.x, b.y])
+        for q in outlines:
+            a, d = q, np.roll(q, -1, axis=0) - q
+            length = np.linalg.norm(d, axis=1)
+            ok = length > 0
+            t = np.clip(np.einsum("ij,ij->i", c - a[ok], d[ok]) / length[ok] ** 2, 0.0, 1.0)
+            gap = float(np.linalg.norm(a[ok] + t[:, None] * d[ok] - c, axis=1).min())
+            inside = bool(_winding(q, c))
+            if not inside or gap <= b.radius:
+                raise FabricationError(f"{label}: hole {k + 1} at ({b.x:.1f}, {b.y:.1f}), Ø {2.0 * b.radius:g} mm, is "
+                                       f"not inside the outline with material around it ({gap:.2f} mm from its edge)")
+        for j in range(k):
+            o = bores[j]
+            if math.hypot(b.x - o.x, b.y - o.y) <= b.radius + o.radius:
+                raise FabricationError(f"{label}: holes {j + 1} and {k + 1} at ({o.x:.1f}, {o.y:.1f}) and "
+                                       f"({b.x:.1f}, {b.y:.1f}) overlap")
+
+
+def _winding(q: np.ndarray, c: np.ndarray) -> int:
+    """The winding number of the closed polygon ``q (n, 2)`` about ``c (2,)`` (crossing rule)."""
+    a, b = q - c, np.roll(q, -1, axis=0) - c
+    up = (a[:, 1] <= 0) & (b[:, 1] > 0)
+    down = (a[:, 1] > 0) & (b[:, 1] <= 0)
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return int(np.sum(up & (cross > 0)) - np.sum(down & (cross < 0)))
+
+
+def _merged(q: np.ndarray) -> list[int]:
+    """Per corner of the closed polygon ``q (n, 2)`` the first of its run of equal consecutive corners (cyclic:
+    a run through the last corner and the first maps to corner 0's)."""
+    n = len(q)
+    rep = list(range(n))
+    for k in range(1, n):
+        if q[k, 0] == q[k - 1, 0] and q[k, 1] == q[k - 1, 1]:
+            rep[k] = rep[k - 1]
+    k = n - 1
+    while k > 0 and rep[k] != 0 and q[k, 0] == q[0, 0] and q[k, 1] == q[0, 1]:
+        rep[k] = 0
+        k -= 1
+    return rep
+
+
+def _ring(idx: list[int]) -> tuple[int, ...]:
+    """``idx`` with consecutive repeats dropped (cyclically)."""
+    out: list[int] = []
+    for i in idx:
+        if not out or out[-1] != i:
+            out.append(i)
+    while len(out) > 1 and out[-1] == out[0]:
+        out.pop()
+    return tuple(out)
+
+
+def _rgba(colour: Sequence[float] | None) -> tuple[float, float, float, float] | None:
+    if colour is None:
+        return None
+    c4 = tuple(float(c) for c in colour) + (1.0,) * (4 - len(colour))
+    return (c4[0], c4[1], c4[2], c4[3])
 
 
 @dataclass
@@ -185,13 +318,17 @@ def _placement_axis(data: _Data, m: np.ndarray) -> int:
     return data.axis(m[:3, 3], m[:3, 2], m[:3, 0])
 
 
-def _brep(data: _Data, solid: PlanarSolid, vertices: np.ndarray) -> int:
-    """The MANIFOLD_SOLID_BREP of ``solid``'s faces over ``vertices (n, 3)``: each vertex and each edge once."""
+def _brep(data: _Data, solid: PlanarSolid, origin: np.ndarray) -> int:
+    """The MANIFOLD_SOLID_BREP of ``solid``'s faces and bores in its own coordinates less ``origin (3,)``: each
+    vertex and each edge once."""
+    vertices = solid.vertices - origin
     pts = [data.point(p) for p in vertices]
     vps = [data.add(f"VERTEX_POINT('',#{p})") for p in pts]
     edges: dict[tuple[int, int], int] = {}
+    holes: dict[int, list[int]] = {}                         # face index → its FACE_BOUNDs of bores
+    cylinders = [_bore(data, solid, bore, origin, holes) for bore in solid.bores]
     faces = []
-    for loops in solid.faces:
+    for f, loops in enumerate(solid.faces):
         outer = vertices[list(loops[0])]
         normal = _unit(_newell(outer - outer.mean(axis=0)))
         bounds = []
@@ -214,18 +351,64 @@ def _brep(data: _Data, solid: PlanarSolid, vertices: np.ndarray) -> int:
             loop_id = data.add("EDGE_LOOP('',(" + ",".join(f"#{o}" for o in oriented) + "))")
             kind = "FACE_OUTER_BOUND" if k == 0 else "FACE_BOUND"
             bounds.append(data.add(f"{kind}('',#{loop_id},.T.)"))
+        bounds += holes.pop(f, [])
         ref = _unit(outer[1] - outer[0])
         plane = data.add(f"PLANE('',#{data.axis(pts[loops[0][0]], normal, ref)})")
         faces.append(data.add("ADVANCED_FACE('',(" + ",".join(f"#{b}" for b in bounds) + f"),#{plane},.T.)"))
-    shell = data.add("CLOSED_SHELL('',(" + ",".join(f"#{f}" for f in faces) + "))")
+    if holes:
+        raise FabricationError(f"{solid.label}: a hole ends on face {min(holes)}, which the solid does not have")
+    shell = data.add("CLOSED_SHELL('',(" + ",".join(f"#{f}" for f in faces + cylinders) + "))")
     return data.add(f"MANIFOLD_SOLID_BREP('',#{shell})")
 
 
+_Z = np.array([0.0, 0.0, 1.0])
+_X = np.array([1.0, 0.0, 0.0])
+
+
+def _bore(data: _Data, solid: PlanarSolid, bore: Bore, origin: np.ndarray, holes: dict[int, list[int]]) -> int:
+    """The cylindrical face of ``bore`` (its ADVANCED_FACE), its two circles put in ``holes`` as inner bounds of the
+    faces it joins.
+
+    Each circle is one closed edge from one vertex (on the circle's x axis), running counter-clockwise about +z:
+    the lower face (outward normal −z) takes it forward, the upper face (+z) backwards — a hole runs clockwise
+    seen from outside.  The cylinder's face points to the axis (``same_sense`` false: into the hole), its loop
+    the lower circle backwards, the seam up, the upper circle forwards and the seam down (each edge used twice,
+    in opposite senses)."""
+    if not bore.z_low < bore.z_high or not bore.radius > 0:
+        raise FabricationError(f"{solid.label}: a hole needs a positive radius and length, got r = {bore.radius}, "
+                               f"z {bore.z_low} … {bore.z_high}")
+    circles = []
+    for z in (bore.z_low, bore.z_high):
+        centre = np.array([bore.x, bore.y, z]) - origin
+        start = data.point(centre + bore.radius * _X)
+        v = data.add(f"VERTEX_POINT('',#{start})")
+        circle = data.add(f"CIRCLE('',#{data.axis(centre, _Z, _X)},{real(bore.radius)})")
+        circles.append((v, data.add(f"EDGE_CURVE('',#{v},#{v},#{circle},.T.)"), centre, start))
+    (v_low, c_low, centre_low, start_low), (v_high, c_high, _, _) = circles
+    vector = data.add("VECTOR('',#%d,1.)" % data.direction(_Z))
+    seam_line = data.add(f"LINE('',#{start_low},#{vector})")
+    seam = data.add(f"EDGE_CURVE('',#{v_low},#{v_high},#{seam_line},.T.)")
+    for face, circle, sense in ((bore.low, c_low, ".T."), (bore.high, c_high, ".F.")):
+        oriented = data.add(f"ORIENTED_EDGE('',*,*,#{circle},{sense})")
+        loop = data.add(f"EDGE_LOOP('',(#{oriented}))")
+        holes.setdefault(face, []).append(data.add(f"FACE_BOUND('',#{loop},.T.)"))
+    steps = [(c_low, ".F."), (seam, ".T."), (c_high, ".T."), (seam, ".F.")]
+    oriented_ids = [data.add(f"ORIENTED_EDGE('',*,*,#{e},{sense})") for e, sense in steps]
+    loop = data.add("EDGE_LOOP('',(" + ",".join(f"#{o}" for o in oriented_ids) + "))")
+    bound = data.add(f"FACE_BOUND('',#{loop},.T.)")
+    surface = data.add(f"CYLINDRICAL_SURFACE('',#{data.axis(centre_low, _Z, _X)},{real(bore.radius)})")
+    return data.add(f"ADVANCED_FACE('',(#{bound}),#{surface},.F.)")
+
+
 def _shape_key(solid: PlanarSolid) -> tuple:
-    """What makes two solids one shape: faces, colour and vertices relative to the first on
+    """What makes two solids one shape: faces, colour, and vertices and bores relative to the first vertex on
     :data:`INSTANCE_GRID`."""
     rel = np.round((solid.vertices - solid.vertices[0]) / INSTANCE_GRID).astype(np.int64)
-    return (solid.faces, solid.colour, rel.tobytes(), rel.shape)
+    v0 = solid.vertices[0]
+    bores = np.round(np.array([(b.x - v0[0], b.y - v0[1], b.z_low - v0[2], b.z_high - v0[2], b.radius)
+                               for b in solid.bores]).reshape(-1, 5) / INSTANCE_GRID).astype(np.int64)
+    return (solid.faces, solid.colour, rel.tobytes(), rel.shape, bores.tobytes(),
+            tuple((b.low, b.high) for b in solid.bores))
 
 
 def _shift(m: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -308,8 +491,9 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
         if got is None:
             name = s.label if count[key] == 1 else f"{s.label.split('-')[0]} shape {len(shapes) + 1}"
             pd, pds = product(name)
-            brep = _brep(data, s, s.vertices - s.vertices[0])
-            styled.append((brep, s.colour))
+            brep = _brep(data, s, s.vertices[0])
+            if s.colour is not None:
+                styled.append((brep, s.colour))
             rep = data.add(f"ADVANCED_BREP_SHAPE_REPRESENTATION('',(#{origin},#{brep}),#{ctx})")
             data.add(f"SHAPE_DEFINITION_REPRESENTATION(#{pds},#{rep})")
             got = shapes[key] = (pd, rep)
