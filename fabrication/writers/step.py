@@ -1,12 +1,10 @@
-"""build123d solids of the beam plates, ``beams.step`` and its re-import check.
+"""``beams.step`` and ``panels.step``; the beam plates as build123d solids for tests and the re-import check.
 
-Each plate is one face built from its 2D outline (slots and end cuts already
-drawn in, see :mod:`fabrication.beams.joints`) at ``z = −t/2`` in the plate's own frame,
-extruded once by ``t`` and placed with ``Location(Plane(origin, x_dir, z_dir))``
-— no boolean cuts, and the polygon is exactly planar (a kernel rejects a face
-whose polygon is 1e-4 mm off its plane); a plate whose top edge is bevelled under its strips is the solid
-between its two face outlines (:func:`_placed_loft`, :mod:`fabrication.beams.bevel_cut`).  The STEP file is an assembly written
-without p-curves; a reader sees the product tree (names survive every level)
+Each plate is its 2D outline (slots and end cuts already drawn in, see :mod:`fabrication.beams.joints`) at
+``z = −t/2`` in the plate's own frame, extruded once by ``t`` and placed by the frame — no boolean cuts, and the
+polygon is exactly planar; a plate whose top edge is bevelled under its strips is the solid between its two face
+outlines (:mod:`fabrication.beams.bevel_cut`); the bolt holes of its splices are round through holes.  The files
+are assemblies; a reader sees the product tree (names survive every level)
 
     beams.step                                panels.step
     <design name>                             <design name>
@@ -15,9 +13,11 @@ without p-curves; a reader sees the product tree (names survive every level)
           B-U03-S00 …      one solid per plate      P-U07-V12 … one solid per pane, on its gaskets
 
 with every solid coloured by its family (:data:`fabrication.contract.COLOURS`) and a header naming ppfab, its
-version and the design (:mod:`fabrication.writers._step_text`).  ``panels.step`` (like ``glazing.step``) is
-written as text from :mod:`fabrication.writers.step_template`, not through the kernel: panes of one shape are
-one product placed once per pane, each occurrence named by the pane's part id.
+version and the design (:mod:`fabrication.writers._step_text`).  Both are written as text from
+:mod:`fabrication.writers.step_template` (:func:`plate_prism`, :func:`beam_tree`), not through the kernel: solids
+of one shape are one product placed once per solid, each occurrence named by its part id.  The kernel-built
+solids (:func:`plate_solid`: the polygon faces sewn, the holes cut by boolean subtraction of cylinders) are what
+the tests hold the template's to.
 
 build123d is imported inside the functions (≈3.5 s).
 """
