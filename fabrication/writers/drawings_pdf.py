@@ -34,8 +34,23 @@ def _colour(value: str | None) -> str:
 
 
 def draw_sheet(ax, root: ET.Element) -> None:
-    """Draw the SVG sheet ``root`` (paper mm) onto the matplotlib axes ``ax`` (limits set to the paper)."""
-    from matplotlib.patches import Polygon as Patch
+    """Draw the SVG sheet ``root`` (paper mm) onto the matplotlib axes ``ax`` (limits set to the paper).
+
+    Consecutive shapes of one style (fill, stroke, width, opacity, open or closed) go into one
+    ``PolyCollection``, drawn in the sheet's order: a patch per shape cost matplotlib a transform and a limit
+    update each (most of a page's time on the large views); texts are drawn above the shapes either way."""
+    from matplotlib.collections import PolyCollection
+
+    run: list[np.ndarray] = []
+    style: list[tuple] = [()]
+
+    def flush() -> None:
+        if run:
+            fill, stroke, lw, alpha, closed = style[0]
+            ax.add_collection(PolyCollection(list(run), closed=closed, facecolors=fill, edgecolors=stroke,
+                                             linewidths=lw, alpha=alpha, joinstyle="miter", capstyle="butt"),
+                              autolim=False)
+            run.clear()
 
     def walk(el: ET.Element, origin: np.ndarray, scale: float) -> None:
         for child in el:
@@ -57,9 +72,12 @@ def draw_sheet(ax, root: ET.Element) -> None:
                 fill = _colour(child.get("fill")) if tag != "polyline" else "none"
                 stroke = _colour(child.get("stroke"))
                 lw = float(child.get("stroke-width", 0)) * scale * PT_PER_MM if stroke != "none" else 0.0
-                ax.add_patch(Patch(origin + scale * pts, closed=tag != "polyline", facecolor=fill,
-                                   edgecolor=stroke, linewidth=lw,
-                                   alpha=float(child.get("fill-opacity", 1.0)) if fill != "none" else None))
+                key = (fill, stroke, lw, float(child.get("fill-opacity", 1.0)) if fill != "none" else None,
+                       tag != "polyline")
+                if key != style[0]:
+                    flush()
+                    style[0] = key
+                run.append(origin + scale * pts)
             elif tag == "text" and child.text:
                 rot = re.findall(r"rotate\(([-0-9.e]+)", child.get("transform", ""))
                 x, y = origin + scale * np.array([float(child.get("x", 0)), float(child.get("y", 0))])
@@ -70,6 +88,7 @@ def draw_sheet(ax, root: ET.Element) -> None:
                         va="center")
 
     walk(root, np.zeros(2), 1.0)
+    flush()
 
 
 def write_pdf(sheets: list[Path], path: Path) -> None:
