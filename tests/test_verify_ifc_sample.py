@@ -1,9 +1,11 @@
-"""The IFC schema validation of ``ppfab verify``: ifcopenshell's validator on the product tree and one shape and
-property of each kind (:func:`fabrication.verify.ifc.schema_sample`), every instance with ``--kernel``.
+"""The IFC schema validation of ``ppfab verify``: ifcopenshell's validator on the product tree and one shape,
+placement, property and property set of each kind (:func:`fabrication.verify.ifc.schema_sample`), the GlobalIds
+of every instance, every instance with ``--kernel``.
 
 Each case breaks one instance of a written ``model.ifc`` in the text (a property set with no properties, a point
-with five coordinates, an extrusion depth that is text) and asks the validator, through the sample or over
-every instance, for the finding: the sample is held to what it promises, not to what it leaves out.
+with five coordinates, an extrusion depth that is text, a GlobalId used twice or malformed) and asks the
+validator, through the sample or over every instance, for the finding: the sample is held to what it promises;
+what it leaves out (a part's own property set) is found by the check that reads every part's properties.
 """
 
 from __future__ import annotations
@@ -57,8 +59,13 @@ def test_the_sample_is_smaller_than_the_file_and_holds_every_root_and_one_shape_
     ids = {i.id() for i in schema_sample(f)}
     every = set(f.entity_names())
     assert ids <= every and len(ids) < len(every)
-    assert all(r.id() in ids for r in f.by_type("IfcRoot"))               # every GlobalId: the whole product tree
-    assert all(p.id() in ids for p in f.by_type("IfcObjectPlacement"))
+    per_part = ("IfcRelDefinesByProperties", "IfcPropertySetDefinition")
+    assert all(r.id() in ids for r in f.by_type("IfcRoot") if not any(r.is_a(c) for c in per_part))
+    assert all(e.id() in ids for e in f.by_type("IfcElement"))              # the product tree, every element
+    for cls in ("IfcObjectPlacement", *per_part):                            # one of each kind, and fewer
+        every_of = f.by_type(cls)
+        assert {_kind(i) for i in every_of if i.id() in ids} == {_kind(i) for i in every_of}
+        assert sum(i.id() in ids for i in every_of) < len(every_of) // 4
     not_sampled = [i for i in f if not any(i.is_a(c) for c in SAMPLED_CLASSES)]
     assert all(i.id() in ids for i in not_sampled)
     kinds = {_kind(r) for r in f.by_type("IfcRepresentation")}
@@ -69,13 +76,55 @@ def test_the_sample_is_smaller_than_the_file_and_holds_every_root_and_one_shape_
             assert all(x.id() in ids for x in f.traverse(r) if x.id())
 
 
-def test_an_empty_property_set_is_found_by_the_sample(built, tmp_path):
+def test_an_empty_property_set_is_found_by_the_sample_or_by_the_parts_check(built, tmp_path):
+    """The first property set of its kind emptied: the schema sample finds it.  The last (a part's own, not
+    sampled): the ifc check finds the part's properties missing against parts.csv."""
+    import shutil
+
+    from fabrication.verify import Verification, load_checks
+
     assert _findings(built / "model.ifc", every=False) == []
-    bad = tmp_path / "model.ifc"
-    _tamper(built / "model.ifc", bad, r"#\d+=IFCPROPERTYSET\(", lambda s: re.sub(r",\((#\d+,?)+\)\);", ",());", s),
-            which=-1)
-    found = _findings(bad, every=False)
+    empty = (r"#\d+=IFCPROPERTYSET\(", lambda s: re.sub(r",\((#\d+,?)+\)\);", ",());", s))
+    first = tmp_path / "first.ifc"
+    _tamper(built / "model.ifc", first, *empty, which=0)
+    found = _findings(first, every=False)
     assert found and any(m.startswith("IfcPropertySet:") for m in found)
+    import ifcopenshell
+
+    from fabrication.verify.ifc import schema_sample
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    sampled = {i.id() for i in schema_sample(f)}
+    pset = [p for p in f.by_type("IfcPropertySet") if p.id() not in sampled and p.DefinesOccurrence][-1]
+    part = pset.DefinesOccurrence[0].RelatedObjects[0].Name
+    copy = tmp_path / "copy"
+    shutil.copytree(built, copy)
+    _tamper(built / "model.ifc", copy / "model.ifc", rf"#{pset.id()}=IFCPROPERTYSET\(", empty[1])
+    assert not any(m.startswith("IfcPropertySet:") for m in _findings(copy / "model.ifc", every=False))
+    v = Verification(copy)
+    found_v, _ = v.run_check({c.name: c for c in load_checks()}["ifc"])
+    assert any(f.element == part and "parts.csv has" in f.message for f in found_v), found_v
+
+
+@pytest.mark.parametrize("how", ["twice", "malformed"])
+def test_a_bad_global_id_outside_the_sample_is_found(built, tmp_path, how):
+    """The GlobalId of a part's own property set (not in the sample) set to the first element's, or to text that
+    is no compressed GUID: the GlobalId pass over every instance finds it, naming the rule."""
+    import ifcopenshell
+
+    from fabrication.verify.ifc import schema_sample
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    sampled = {i.id() for i in schema_sample(f)}
+    target = [p for p in f.by_type("IfcPropertySet") if p.id() not in sampled][-1]
+    first = f.by_type("IfcElement")[0].GlobalId
+    new_id = first if how == "twice" else "not-a-guid!"
+    bad = tmp_path / "model.ifc"
+    _tamper(built / "model.ifc", bad, rf"#{target.id()}=IFCPROPERTYSET\(",
+            lambda s: re.sub(r"IFCPROPERTYSET\('[^']*'", f"IFCPROPERTYSET('{new_id}'", s))
+    found = _findings(bad, every=False)
+    want = "IfcRoot.UR1" if how == "twice" else "is not a compressed GUID"
+    assert any(m.startswith("IfcPropertySet:") and want in m for m in found), found
 
 
 def test_a_point_of_the_first_shape_of_a_kind_with_five_coordinates_is_found_by_the_sample(built, tmp_path):
