@@ -470,3 +470,37 @@ def test_verify_counts_the_pdf_pages_and_their_paper(built, tmp_path):
     turned = Verification(copy)
     check_pdf(turned, "drawings/drawings.pdf", sheets)
     assert len(turned.findings) == 1 and "paper sizes" in turned.findings[0].message
+
+
+def test_pdf_shapes_batched_by_style_keep_the_sheet_s_paint_order():
+    """drawings.pdf draws runs of same-style shapes as one collection: a red square, a blue one over it and a red
+    one over that must still paint in that order (rendered with matplotlib's Agg, colours read at the pixels)."""
+    import xml.etree.ElementTree as ET
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fabrication.writers.drawings_pdf import draw_sheet
+
+    svg = ('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+           '<rect x="0" y="0" width="60" height="60" fill="#ff0000" stroke="none"/>'
+           '<rect x="5" y="5" width="10" height="10" fill="#ff0000" stroke="none"/>'
+           '<polygon points="20,20 80,20 80,80 20,80" fill="#0000ff" stroke="none"/>'
+           '<rect x="40" y="40" width="50" height="50" fill="#ff0000" stroke="none"/></svg>')
+    fig = plt.figure(figsize=(1, 1), dpi=100)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_xlim(0, 100)
+    ax.set_ylim(100, 0)
+    ax.set_axis_off()
+    draw_sheet(ax, ET.fromstring(svg))
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[:, :, :3].astype(int)
+    plt.close(fig)
+    at = {name: tuple(img[y, x]) for name, (x, y) in
+          {"red under": (10, 30), "blue over red": (30, 30), "red over blue": (60, 60), "blue alone": (30, 75),
+           "paper": (95, 5)}.items()}
+    assert at["red under"] == (255, 0, 0) and at["red over blue"] == (255, 0, 0)
+    assert at["blue over red"] == (0, 0, 255) and at["blue alone"] == (0, 0, 255)
+    assert at["paper"] == (255, 255, 255)

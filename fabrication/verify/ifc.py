@@ -222,17 +222,10 @@ def _kind_of(cls: str, schema_name: str = IFC_SCHEMA):
     identifier, type and item classes, for a product shape its representations' identifiers, for a property or
     quantity, a property or quantity set its name (and a single value's value class), for a placement whether it
     is relative to another, for a property relation the class and name of the set it gives."""
-    import ifcopenshell.ifcopenshell_wrapper as w
-
-    decl = w.schema_by_name(schema_name).declaration_by_name(cls)
+    supers = _ancestry(schema_name, cls)
 
     def sub(name: str) -> bool:
-        d = decl
-        while d is not None:
-            if d.name() == name:
-                return True
-            d = d.supertype()
-        return False
+        return name in supers
 
     if sub("IfcRepresentation"):
         return lambda i: (cls, i.RepresentationIdentifier, i.RepresentationType,
@@ -254,6 +247,18 @@ def _kind_of(cls: str, schema_name: str = IFC_SCHEMA):
             return (cls, d.is_a(), d.Name)
         return relation
     return lambda i: (cls,)
+
+
+def _ancestry(schema_name: str, cls: str) -> set[str]:
+    """The entity ``cls`` of the IFC schema ``schema_name`` and all its supertypes, by name."""
+    import ifcopenshell.ifcopenshell_wrapper as w
+
+    decl: Any = w.schema_by_name(schema_name).declaration_by_name(cls)
+    out: set[str] = set()
+    while decl is not None:
+        out.add(decl.name())
+        decl = decl.supertype()
+    return out
 
 
 def _kind(inst) -> tuple:
@@ -279,18 +284,10 @@ def schema_sample(f) -> list:
 
     Picked class by class (each instance's class is its file's, no per-instance test of the class tree), the
     kinds over the roots' classes only."""
-    import ifcopenshell.ifcopenshell_wrapper as w
-
-    schema = w.schema_by_name(f.schema)
     keep: set[int] = set()
-    roots = []
+    roots: list[Any] = []
     for cls in sorted(f.types()):
-        decl = schema.declaration_by_name(cls)
-        supers = set()
-        d = decl
-        while d is not None:
-            supers.add(d.name())
-            d = d.supertype()
+        supers = _ancestry(f.schema, cls)
         instances = f.by_type(cls, include_subtypes=False)
         if not supers & set(SAMPLED_CLASSES):
             keep.update(i.id() for i in instances)
