@@ -186,6 +186,22 @@ def test_drilled_and_bevelled_solids_in_random_frames(tmp_path):
             assert len(kc) == 2 * len(c) and on_axis.max() <= 1e-9
         assert _distance(_text_corners(text[s.label]), _kernel_corners_and_centres(k)[0]) <= 1e-9
     assert len(text["B-3"].points) == 4 + 5 + 1 * 2            # the two corners meeting on the top face merged
+    from test_step_template import steputils_solids            # a third reader, apart from ppfab's and the kernel's
+
+    third = steputils_solids(path)
+    assert sorted(third) == sorted(s.label for s in solids)
+    for s, c, f in zip(solids, centres, frames):
+        placed = f.origin + c[:, :1] * f.ex + c[:, 1:2] * f.ey
+        got = third[s.label][2]
+        assert len(got) == 2 * len(c) == 2 * len(s.bores)                 # a circle on each face
+        for centre, radius in got:                                    # on a hole's axis, of its radius
+            k = int(np.argmin(np.linalg.norm(np.cross(centre - placed, f.normal), axis=1)))
+            assert np.linalg.norm(np.cross(centre - placed[k], f.normal)) <= 1e-9
+            assert radius == pytest.approx(s.bores[k].radius, abs=1e-12)
+        corners = _text_corners(text[s.label])                        # the same corners as the text reader
+        far = third[s.label][0]
+        far = far[np.linalg.norm(far[:, None] - corners[None], axis=2).min(axis=1) <= 1e-9]
+        assert len(far) == len(corners)
 
 
 def test_holes_that_are_not_inside_the_plate_are_refused_by_name():
