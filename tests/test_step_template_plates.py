@@ -12,6 +12,7 @@ import pytest
 
 from conftest import REPO
 from kernel_solids import stages
+from test_step_template import _frame, steputils_solids
 from fabrication.contract import COLOURS
 from fabrication.verify._step_read import kernel_sample, read_step_solids
 from fabrication.verify._step_text_read import read_text_solids
@@ -142,14 +143,6 @@ def test_splice_cover_plates_are_one_shape_per_type_each_where_it_stands(plates_
         assert text[name].volume == pytest.approx(solid.volume, rel=1e-9) and text[name].problems() == []
 
 
-def _frame(rng: np.random.Generator) -> Frame:
-    ex = rng.normal(size=3)
-    ex /= np.linalg.norm(ex)
-    ey = np.cross(rng.normal(size=3), ex)
-    ey /= np.linalg.norm(ey)
-    return Frame(rng.uniform(-20000.0, 20000.0, size=3), ex, ey)
-
-
 def test_drilled_and_bevelled_solids_in_random_frames(tmp_path):
     """Prisms with holes (one shape twice, instanced), a loft with a corner that closes on one face (a side face
     turns into a triangle) and holes, a clockwise loft: the kernel and the text reader read each valid, with the
@@ -186,9 +179,7 @@ def test_drilled_and_bevelled_solids_in_random_frames(tmp_path):
             assert len(kc) == 2 * len(c) and on_axis.max() <= 1e-9
         assert _distance(_text_corners(text[s.label]), _kernel_corners_and_centres(k)[0]) <= 1e-9
     assert len(text["B-3"].points) == 4 + 5 + 1 * 2            # the two corners meeting on the top face merged
-    from test_step_template import steputils_solids            # a third reader, apart from ppfab's and the kernel's
-
-    third = steputils_solids(path)
+    third = steputils_solids(path)                             # a third reader, apart from ppfab's and the kernel's
     assert sorted(third) == sorted(s.label for s in solids)
     for s, c, f in zip(solids, centres, frames):
         placed = f.origin + c[:, :1] * f.ex + c[:, 1:2] * f.ey
