@@ -30,16 +30,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 
-def by_beam(solids: list, beams: list[str], name: str):
-    """The product tree ``name → beam id → solids`` (``beams[k]`` the beam of ``solids[k]``)."""
-    from build123d import Compound
-
-    from ._step_text import step_label
-    from .step import grouped
-
-    return Compound(children=grouped(solids, beams), label=step_label(name))
-
-
 def strip_solids(glazing) -> list:
     """The strip and gasket solids of every strip (strip ``GS-…``, gasket ``GK-…``)."""
     from .step import _colour, _placed_prism

@@ -245,7 +245,8 @@ def grouped(solids: Sequence, keys: Sequence[str]) -> list:
 
 
 def beam_assembly(plates: Sequence[BeamPlate], solids: Sequence, name: str):
-    """The product tree of ``beams.step``: ``name`` → family → beam id → the plate solids, in plate order."""
+    """The product tree of ``beams.step`` as the kernel writes it (the benchmarks' baseline; the build writes
+    :func:`beam_tree` from the template): ``name`` → family → beam id → the plate solids, in plate order."""
     from build123d import Compound
 
     families: dict[str, dict[str, list]] = {}
