@@ -216,14 +216,13 @@ items, property and quantity values, the parts' placements, property sets and qu
 giving them to the parts — what ppfab writes once per part, about 96 % of its instances."""
 
 
-def _kind_of(cls: str, schema_name: str = IFC_SCHEMA):
-    """The kind (:func:`_kind`) of an instance of the IFC class ``cls`` (an exact class), as a function of the
-    instance: what makes two instances alike for the schema — their class, and for a representation its
-    identifier, type and item classes, for a product shape its representations' identifiers, for a property or
-    quantity, a property or quantity set its name (and a single value's value class), for a placement whether it
-    is relative to another, for a property relation the class and name of the set it gives."""
-    supers = _ancestry(schema_name, cls)
-
+def _kind_of(cls: str, supers: set[str]):
+    """The kind (:func:`_kind`) of an instance of the IFC class ``cls`` (an exact class; ``supers`` its
+    :func:`_ancestry`), as a function of the instance: what makes two instances alike for the schema — their
+    class, and for a representation its identifier, type and item classes, for a product shape its
+    representations' identifiers, for a property or quantity, a property or quantity set its name (and a single
+    value's value class), for a placement whether it is relative to another, for a property relation the class
+    and name of the set it gives."""
     def sub(name: str) -> bool:
         return name in supers
 
@@ -263,7 +262,8 @@ def _ancestry(schema_name: str, cls: str) -> set[str]:
 
 def _kind(inst) -> tuple:
     """What makes two sampled instances alike for the schema (:func:`_kind_of` of its class)."""
-    return _kind_of(inst.is_a(), inst.file.schema)(inst)
+    cls = inst.is_a()
+    return _kind_of(cls, _ancestry(inst.file.schema, cls))(inst)
 
 
 _ROOT_CLASSES = ("IfcObjectPlacement", "IfcRelDefinesByProperties", "IfcPropertySetDefinition",
@@ -286,13 +286,14 @@ def schema_sample(f) -> list:
     kinds over the roots' classes only."""
     keep: set[int] = set()
     roots: list[Any] = []
+    sampled, rooted = set(SAMPLED_CLASSES), set(_ROOT_CLASSES)
     for cls in sorted(f.types()):
         supers = _ancestry(f.schema, cls)
         instances = f.by_type(cls, include_subtypes=False)
-        if not supers & set(SAMPLED_CLASSES):
+        if not supers & sampled:
             keep.update(i.id() for i in instances)
-        elif supers & set(_ROOT_CLASSES):
-            kind = _kind_of(cls, f.schema)
+        elif supers & rooted:
+            kind = _kind_of(cls, supers)
             seen: set[tuple] = set()
             for inst in instances:
                 k = kind(inst)

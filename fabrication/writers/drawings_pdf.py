@@ -42,17 +42,18 @@ def draw_sheet(ax, root: ET.Element) -> None:
     from matplotlib.collections import PolyCollection
 
     run: list[np.ndarray] = []
-    style: list[tuple] = [()]
+    style: tuple = ()
 
     def flush() -> None:
         if run:
-            fill, stroke, lw, alpha, closed = style[0]
+            fill, stroke, lw, alpha, closed = style
             ax.add_collection(PolyCollection(list(run), closed=closed, facecolors=fill, edgecolors=stroke,
                                              linewidths=lw, alpha=alpha, joinstyle="miter", capstyle="butt"),
                               autolim=False)
             run.clear()
 
     def walk(el: ET.Element, origin: np.ndarray, scale: float) -> None:
+        nonlocal style
         for child in el:
             tag = child.tag.removeprefix(_NS)
             if tag == "svg":
@@ -74,9 +75,9 @@ def draw_sheet(ax, root: ET.Element) -> None:
                 lw = float(child.get("stroke-width", 0)) * scale * PT_PER_MM if stroke != "none" else 0.0
                 key = (fill, stroke, lw, float(child.get("fill-opacity", 1.0)) if fill != "none" else None,
                        tag != "polyline")
-                if key != style[0]:
+                if key != style:
                     flush()
-                    style[0] = key
+                    style = key
                 run.append(origin + scale * pts)
             elif tag == "text" and child.text:
                 rot = re.findall(r"rotate\(([-0-9.e]+)", child.get("transform", ""))

@@ -41,6 +41,7 @@ import numpy as np
 
 from ppfab.errors import FabricationError
 from ppfab.frame import Frame
+from ppfab.metrics import polygon_area
 
 from ._step_text import step_header, step_label, step_string
 
@@ -128,8 +129,7 @@ class PlanarSolid:
                  z_hi: float, frame: Frame, holes: np.ndarray | None) -> "PlanarSolid":
         """The solid between ``lo_q`` on ``z = z_lo`` and ``hi_q`` on ``z = z_hi`` (corners joined in order),
         counter-clockwise first; corners that coincide on one face merged (a side face turns into a triangle)."""
-        areas = [0.5 * float(np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
-                 for q in (lo_q, hi_q)]
+        areas = [float(polygon_area(q)) for q in (lo_q, hi_q)]
         if areas[0] == 0.0 or areas[1] == 0.0:
             raise FabricationError(f"{label}: the solid's outline has no area")
         if (areas[0] > 0) != (areas[1] > 0):
@@ -166,21 +166,19 @@ class PlanarSolid:
 
 
 def _holes_inside(label: str, bores: tuple[Bore, ...], outlines: tuple[np.ndarray, ...]) -> None:
-    """Refuse a hole that is not a positive circle strictly inside every outline (CCW) and apart from the other
-    holes: a hole through an edge or into another is a notch, which a template B-rep cannot hold."""
+    """Refuse a hole that is not a positive circle strictly inside every outline and apart from the other holes: a
+    hole through an edge or into another is a notch, which a template B-rep cannot hold."""
+    from shapely.geometry import Point, Polygon
+
+    polygons = [Polygon(q) for q in outlines]
     for k, b in enumerate(bores):
         if not (b.radius > 0 and math.isfinite(b.radius) and math.isfinite(b.x) and math.isfinite(b.y)):
             raise FabricationError(f"{label}: hole {k + 1} needs a finite centre and a positive diameter, got "
                                    f"({b.x}, {b.y}), {2.0 * b.radius}")
-        c = np.array([b.x, b.y])
-        for q in outlines:
-            a, d = q, np.roll(q, -1, axis=0) - q
-            length = np.linalg.norm(d, axis=1)
-            ok = length > 0
-            t = np.clip(np.einsum("ij,ij->i", c - a[ok], d[ok]) / length[ok] ** 2, 0.0, 1.0)
-            gap = float(np.linalg.norm(a[ok] + t[:, None] * d[ok] - c, axis=1).min())
-            inside = bool(_winding(q, c))
-            if not inside or gap <= b.radius:
+        centre = Point(b.x, b.y)
+        for poly in polygons:
+            gap = float(poly.exterior.distance(centre))
+            if not poly.contains(centre) or gap <= b.radius:
                 raise FabricationError(f"{label}: hole {k + 1} at ({b.x:.1f}, {b.y:.1f}), Ø {2.0 * b.radius:g} mm, is "
                                        f"not inside the outline with material around it ({gap:.2f} mm from its edge)")
         for j in range(k):
@@ -188,15 +186,6 @@ def _holes_inside(label: str, bores: tuple[Bore, ...], outlines: tuple[np.ndarra
             if math.hypot(b.x - o.x, b.y - o.y) <= b.radius + o.radius:
                 raise FabricationError(f"{label}: holes {j + 1} and {k + 1} at ({o.x:.1f}, {o.y:.1f}) and "
                                        f"({b.x:.1f}, {b.y:.1f}) overlap")
-
-
-def _winding(q: np.ndarray, c: np.ndarray) -> int:
-    """The winding number of the closed polygon ``q (n, 2)`` about ``c (2,)`` (crossing rule)."""
-    a, b = q - c, np.roll(q, -1, axis=0) - c
-    up = (a[:, 1] <= 0) & (b[:, 1] > 0)
-    down = (a[:, 1] > 0) & (b[:, 1] <= 0)
-    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return int(np.sum(up & (cross > 0)) - np.sum(down & (cross < 0)))
 
 
 def _merged(q: np.ndarray) -> list[int]:
