@@ -170,3 +170,67 @@ def test_verify_names_a_face_of_a_bevelled_plate_moved_in_the_ifc(built, tmp_pat
     check_ifc(v)
     assert {fi.element for fi in v.findings} == {pid}, [str(fi) for fi in v.findings[:5]]
     assert any("about its support plane" in fi.message for fi in v.findings)
+
+
+def test_the_ifc_checks_reading_of_a_bevelled_plate_is_the_kernels(built):
+    """The ifc check reads a bevelled plate's ``IfcFacetedBrep`` itself (``faceted_plate``: every bound's points
+    at once, each face's vector area from them): its volume is ifcopenshell's kernel's and beams.step's, its
+    vertices are the kernel's tessellation's, and its two largest faces' rings are the plate's two faces (each
+    flat, parallel to the other, a plate's thickness apart)."""
+    import ifcopenshell
+    import ifcopenshell.geom
+
+    from fabrication.verify._step_read import read_step_solids
+    from fabrication.verify._shapes import set_distance
+    from fabrication.verify.ifc import faceted_plate
+
+    plates = sorted({r["plate"] for r in _bevelled(built)})
+    step = {s.name: s.solid for s in read_step_solids(built / "beams.step")}
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    thick = {r["part_id"]: float(r["thickness_mm"]) for r in _rows(built / "parts.csv") if r["part_id"] in plates}
+    seen = 0
+    for member in f.by_type("IfcMember"):
+        if member.Name not in plates:
+            continue
+        got = faceted_plate(member)
+        assert got is not None, member.Name
+        pts, volume, ring_a, ring_b = got
+        want = float(step[member.Name].volume)
+        assert abs(volume - want) <= 1e-6 * want, (member.Name, volume, want)
+        kernel = np.asarray(ifcopenshell.geom.create_shape(settings, member).geometry.verts).reshape(-1, 3) * 1e3
+        assert set_distance(np.unique(np.round(pts, 6), axis=0), kernel) <= 1e-3, member.Name
+        for ring in (ring_a, ring_b):
+            centred = ring - ring.mean(axis=0)
+            assert np.linalg.svd(centred, compute_uv=False)[2] <= 1e-6 * np.abs(centred).max(), member.Name
+        n = np.linalg.svd(ring_a - ring_a.mean(axis=0))[2][2]
+        assert abs(abs(float(((ring_b - ring_a[0]) @ n).mean())) - thick[member.Name]) <= 1e-6, member.Name
+        seen += 1
+    assert seen == len(plates)
+
+
+def test_the_ifc_checks_property_set_is_ifcopenshells(built, tmp_path):
+    """``named_pset`` reads one property set as ``ifcopenshell.util.element.get_psets`` merges it — the type's
+    first, the occurrence's over it — on every element of model.ifc (PPFAB_Part on the occurrences, the common
+    sets on types and occurrences) and on a plate whose type carries a PPFAB_Part set the occurrence's overrides
+    in part."""
+    import ifcopenshell
+    import ifcopenshell.api
+    import ifcopenshell.util.element as ue
+
+    from fabrication.contract import IFC_PSET
+    from fabrication.verify.ifc import named_pset
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    elements = f.by_type("IfcElement")
+    for name in (IFC_PSET, "Pset_PlateCommon", "Pset_MemberCommon", "Qto_PlateBaseQuantities", "no such set"):
+        assert [named_pset(e, name) for e in elements] == [ue.get_psets(e).get(name) for e in elements], name
+    assert sum(named_pset(e, IFC_PSET) is not None for e in elements) >= 40
+    plate = next(e for e in f.by_type("IfcPlate") if ue.get_type(e) is not None)
+    t = ue.get_type(plate)
+    pset = ifcopenshell.api.run("pset.add_pset", f, product=t, name=IFC_PSET)
+    ifcopenshell.api.run("pset.edit_pset", f, pset=pset, properties={"part_id": "from the type", "extra": "kept"})
+    got = named_pset(plate, IFC_PSET)
+    assert got == ue.get_psets(plate)[IFC_PSET]
+    assert got["extra"] == "kept" and got["part_id"] == plate.Name

@@ -78,6 +78,9 @@ def test_text_reader_and_kernel_agree_on_every_solid(built, name):
         assert _apart(pts, mine.points) <= 1e-9
         assert mine.volume == pytest.approx(kern.solid.volume, rel=1e-9)
         assert len(mine.faces()) == len(kern.solid.faces())
+        planes = sorted(f.area for f in kern.solid.faces() if f.geom_type.name == "PLANE")
+        assert np.allclose(sorted(mine.face_area(f) for f in mine.faces() if f.surface == "plane"), planes,
+                           rtol=1e-9, atol=1e-6)
         assert mine.problems() == []
         assert (kern.colour is None) == (mine.colour is None) == (name == "splices.step")   # plates uncoloured
         if mine.colour is not None and kern.colour is not None:
@@ -191,3 +194,19 @@ def test_a_file_written_with_p_curves_is_read(built, tmp_path):
     for mine, kern in zip(again, kernel):
         assert _apart(np.array([tuple(p) for p in kern.solid.vertices()]), mine.points) <= 1e-9
         assert mine.volume == pytest.approx(kern.solid.volume, rel=1e-9) and mine.problems() == []
+
+
+def test_a_solid_turned_inside_out_is_found(built, tmp_path):
+    """Every face bound of panels.step reversed (each loop runs the other way, the shell's edges still used twice in
+    opposite senses): each solid's volume is negative and named, its face areas (kept per B-rep, unsigned) are the
+    original's."""
+    data = (built / "panels.step").read_bytes()
+    flipped = re.sub(rb"(FACE_(?:OUTER_)?BOUND\('[^']*',#\d+,)\.T\.\)", rb"\1.F.)", data)
+    assert flipped != data
+    (tmp_path / "panels.step").write_bytes(flipped)
+    before, after = read_text_solids(built / "panels.step"), read_text_solids(tmp_path / "panels.step")
+    assert len(before) == len(after) > 0
+    for a, b in zip(before, after):
+        assert b.volume == pytest.approx(-a.volume, rel=1e-9)
+        assert any("is not positive" in p for p in b.problems()), b.name
+        assert sorted(b.face_area(f) for f in b.faces()) == pytest.approx(sorted(a.face_area(f) for f in a.faces()))

@@ -87,6 +87,7 @@ class TextSolid:
     shared: "dict[int, BrepFacts] | None" = field(default=None, repr=False)
     _facts: "BrepFacts | None" = field(default=None, repr=False)
     _shell: list[Face] | None = field(default=None, repr=False)
+    _areas: dict[int, float] | None = field(default=None, repr=False)
 
     @property
     def shell(self) -> list[Face]:
@@ -123,12 +124,17 @@ class TextSolid:
         return self._facts
 
     def face_area(self, face: Face) -> float:
-        """Area of a planar face, mm² (its loops' signed areas about its normal summed, outer less holes)."""
-        c = self.points[face.loops[0].vertices].mean(axis=0)
-        return abs(sum(_loop_area(self.points, lp, face.normal, c) for lp in face.loops))
+        """Area of a planar face of :attr:`shell`, mm² (its loops' signed areas about its normal summed, outer
+        less holes): :attr:`BrepFacts.face_areas`, worked out once per B-rep; of any other face, computed."""
+        if self._areas is None:
+            self._areas = {id(f): a for f, a in zip(self.shell, self.facts().face_areas)}
+        got = self._areas.get(id(face))
+        return got if got is not None else _face_area(self.points, face)
 
     def outer_loop(self, face: Face) -> Loop:
         """The loop of a planar face enclosing the largest area (its outer boundary)."""
+        if len(face.loops) == 1:
+            return face.loops[0]
         c = self.points[face.loops[0].vertices].mean(axis=0)
         return max(face.loops, key=lambda lp: abs(_loop_area(self.points, lp, face.normal, c)))
 
@@ -199,12 +205,14 @@ class BrepFacts:
     """What a rigid motion does not change of a solid, so one B-rep placed many times is measured once:
     ``bad_edges`` the edges not used exactly twice in opposite senses (``first_bad_edge`` the id of one, else 0),
     ``off_surface`` the largest distance (mm) of a vertex from its face's plane or cylinder or of a circle's end
-    from its circle, ``volume`` mm³ (:attr:`TextSolid.volume`)."""
+    from its circle, ``volume`` mm³ (:attr:`TextSolid.volume`), ``face_areas`` mm² per face of the shell in its
+    order (a plane's area, outer loop less holes; 0 for a cylinder)."""
 
     bad_edges: int
     first_bad_edge: int
     off_surface: float
     volume: float
+    face_areas: tuple[float, ...] = ()
 
 
 def _brep_facts(solid: TextSolid) -> BrepFacts:
@@ -230,8 +238,22 @@ def _brep_facts(solid: TextSolid) -> BrepFacts:
                     worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
                                 float(np.abs(q @ arc.axis).max()))
     c = solid.points.mean(axis=0) if len(solid.points) else np.zeros(3)   # about the solid: no cancellation
-    volume = sum(_flux(solid, f, c) for f in solid.shell) / 3.0
-    return BrepFacts(len(bad), bad[0] if bad else 0, worst, float(volume))
+    signed = [_signed_area(solid.points, f) if f.surface == "plane" else 0.0 for f in solid.shell]
+    volume = sum(_flux(solid, f, c, a) for f, a in zip(solid.shell, signed)) / 3.0
+    return BrepFacts(len(bad), bad[0] if bad else 0, worst, float(volume), tuple(abs(a) for a in signed))
+
+
+def _signed_area(points: np.ndarray, face: Face) -> float:
+    """The signed area (mm²) of a planar face whose vertices are ``points``: its loops' signed areas about its
+    normal summed (outer less holes), taken about the first loop's centre; negative when the outer loop runs
+    clockwise about the normal (the face turned inside out)."""
+    c = points[face.loops[0].vertices].mean(axis=0)
+    return float(sum(_loop_area(points, lp, face.normal, c) for lp in face.loops))
+
+
+def _face_area(points: np.ndarray, face: Face) -> float:
+    """The area (mm²) of a planar face (:func:`_signed_area`, its magnitude)."""
+    return abs(_signed_area(points, face))
 
 
 def _loop_integral(points: np.ndarray, loop: Loop, about: np.ndarray | None = None) -> np.ndarray:
@@ -257,12 +279,11 @@ def _loop_area(points: np.ndarray, loop: Loop, normal: np.ndarray, about: np.nda
     return 0.5 * float(_loop_integral(points, loop, about) @ normal)
 
 
-def _flux(solid: TextSolid, face: Face, about: np.ndarray) -> float:
-    """``∫ (x − about)·n dA`` over a face, ``n`` the solid's outward normal."""
+def _flux(solid: TextSolid, face: Face, about: np.ndarray, area: float) -> float:
+    """``∫ (x − about)·n dA`` over a face, ``n`` the solid's outward normal; ``area`` a plane's signed area
+    (:func:`_signed_area`)."""
     sign = 1.0 if face.outward else -1.0
     if face.surface == "plane":
-        c = solid.points[face.loops[0].vertices].mean(axis=0)
-        area = sum(_loop_area(solid.points, lp, face.normal, c) for lp in face.loops)
         return float((face.origin - about) @ face.normal) * area
     # a cylinder band θ0 … θ1 × s0 … s1 about the axis (origin o, unit a, radius r): x·u = o·u + r, so the flux
     # is r h (o · ∫u dθ + r Δθ), the arcs at the band's lower end giving the angles

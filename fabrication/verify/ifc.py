@@ -93,6 +93,27 @@ def mapping_problem(product) -> str | None:
     return None
 
 
+def named_pset(product, name: str) -> dict[str, Any] | None:
+    """``ifcopenshell.util.element.get_psets(product).get(name)``, reading that one set only: the properties of
+    every definition named ``name`` of the product's type, then of the product itself (later ones updating
+    earlier ones, as ``get_psets`` merges them); ``None`` when neither has one.  ``get_psets`` reads every set
+    and quantity set of the product and its type: a fifth of the ifc check's time on the bundled default."""
+    import ifcopenshell.util.element as ue
+
+    out: dict[str, Any] | None = None
+    t = ue.get_type(product)
+    definitions = list(t.HasPropertySets or ()) if t is not None and t.is_a("IfcTypeObject") else []
+    for rel in product.IsDefinedBy or ():
+        if rel.is_a("IfcRelDefinesByProperties"):
+            d = rel.RelatingPropertyDefinition
+            definitions += list(d.wrappedValue) if d.is_a("IfcPropertySetDefinitionSet") else [d]
+    for d in definitions:
+        if d.Name == name:
+            out = out if out is not None else {}
+            out.update(ue.get_property_definition(d))
+    return out
+
+
 def is_mapped(product) -> bool:
     """Whether the product's body is its type's shape placed by an ``IfcMappedItem``."""
     return bool(mapped_items(product))
@@ -161,30 +182,39 @@ def faceted_plate(product, reading: IfcReading | None = None) -> tuple[np.ndarra
     if len(breps) != 1:
         return None
     brep, m = breps[0]
-    faces: list[list[np.ndarray]] = []
-    for face in brep.Outer.CfsFaces:
-        loops = []
+    loops: list[tuple[int, bool, list]] = []           # (face, outer bound, points in the brep's coordinates)
+    for k, face in enumerate(brep.Outer.CfsFaces):
         for bound in face.Bounds:
-            if not bound.Bound.is_a("IfcPolyLoop"):
+            loop = bound.Bound
+            if not loop.is_a("IfcPolyLoop"):
                 return None
-            q = np.array([pt.Coordinates for pt in bound.Bound.Polygon], dtype=float)
-            q = (np.c_[q, np.ones(len(q))] @ m.T)[:, :3]
-            loops.append((q if bound.Orientation else q[::-1], bound.is_a("IfcFaceOuterBound")))
-        loops.sort(key=lambda x: not x[1])                 # the outer bound first
-        faces.append([q for q, _ in loops])
-    if not faces:
+            q = [pt.Coordinates for pt in loop.Polygon]
+            loops.append((k, bound.is_a("IfcFaceOuterBound"), q if bound.Orientation else q[::-1]))
+    if not loops:
         return None
-    pts = np.concatenate([q for f in faces for q in f])
+    loops.sort(key=lambda x: (x[0], not x[1]))          # face by face, the outer bound first
+    sizes = np.array([len(q) for _, _, q in loops])
+    local = np.array([p for _, _, q in loops for p in q], dtype=float).reshape(-1, 3)
+    pts = local @ m[:3, :3].T + m[:3, 3]                                                     # (N, 3) world
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    nxt = np.arange(len(pts)) + 1                                        # each point's successor in its loop
+    nxt[starts + sizes - 1] = starts
+    face_of = np.repeat([k for k, _, _ in loops], sizes)
     c0 = pts.mean(axis=0)
-    volume, areas = 0.0, []
-    for f in faces:
-        vec = sum((0.5 * cross_rows(q - c0, np.roll(q, -1, axis=0) - c0).sum(axis=0) for q in f), np.zeros(3))
-        volume += float((f[0][0] - c0) @ vec) / 3.0
-        areas.append(float(np.linalg.norm(vec)))
-    big = np.argsort(areas)[::-1][:2]
-    if len(big) < 2:
+    # each face's vector area: half the sum of (p − c0) × (p_next − c0) over its loops (inner bounds reversed)
+    twice = cross_rows(pts - c0, pts[nxt] - c0)
+    n_faces = int(face_of.max()) + 1
+    vec = 0.5 * np.stack([np.bincount(face_of, weights=twice[:, j], minlength=n_faces) for j in range(3)], axis=1)
+    outer: dict[int, tuple[int, int]] = {}              # face → where its outer ring starts among pts, its size
+    for (k, _, _), st, n in zip(loops, starts.tolist(), sizes.tolist()):
+        outer.setdefault(k, (st, n))
+    if len(outer) < 2:
         return None
-    return pts, abs(volume), faces[int(big[0])][0], faces[int(big[1])][0]
+    present = np.array(sorted(outer))
+    volume = float(np.einsum("ij,ij->", pts[[outer[k][0] for k in present.tolist()]] - c0, vec[present])) / 3.0
+    areas = np.linalg.norm(vec[present], axis=1)
+    (s0, n0), (s1, n1) = (outer[int(k)] for k in present[np.argsort(areas)[::-1][:2]])
+    return pts, abs(volume), pts[s0:s0 + n0], pts[s1:s1 + n1]
 
 
 def circle_items(product, sides: int = 16, reading: IfcReading | None = None) -> np.ndarray:
@@ -406,7 +436,7 @@ def check_ifc(v: Verification) -> None:
         cls, predefined = IFC_CLASSES.get(row["kind"], ("IfcMember", "USERDEFINED"))
         if not p.is_a(cls) or p.PredefinedType != predefined:
             v.error(rel, p.Name, f"is {p.is_a()} {p.PredefinedType}, expected {cls} {predefined}")
-        pset = ue.get_psets(p).get(IFC_PSET)
+        pset = named_pset(p, IFC_PSET)
         if pset is None:
             v.error(rel, p.Name, f"has no property set {IFC_PSET}")
         else:
