@@ -2,7 +2,7 @@
 
     OMP_NUM_THREADS=1 python benchmarks/pipeline.py [--sizes 22x15,44x30,66x45,88x60] [--budget 0.5]
                                                     [--writers serial|parallel|both] [--design FILE]
-                                                    [--baseline TREE] [--jobs N] [--floor]
+                                                    [--baseline TREE] [--jobs N] [--floor] [--paper A0]
     OMP_NUM_THREADS=1 python benchmarks/pipeline.py --per-file 22x15
 
 The default design (or ``--design``) is built at each size ``faces_u x faces_v`` (``[geometry.params]``:
@@ -38,7 +38,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _child(size: str, budget: float, parallel: bool, design_path: str | None, floor: bool = False) -> None:
+def _child(size: str, budget: float, parallel: bool, design_path: str | None, floor: bool = False,
+           paper: str | None = None) -> None:
     """Build one size in this process and print one JSON line: per stage [wall, cpu], writers, memory; with
     ``floor`` also the CAD kernel's plain write + read of the STEP files just written (``step_floor.py``),
     measured in this process after the build (so the build's peak memory is its own)."""
@@ -57,6 +58,8 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
     for section in ("nesting", "beam_nesting"):
         doc.setdefault(section, {})["time_budget"] = budget
     doc.setdefault("output", {})
+    if paper:
+        doc["output"]["paper"] = paper
     os.environ["PPFAB_PARALLEL_WRITERS"] = "1" if parallel else "0"
 
     def cpu() -> float:
@@ -268,7 +271,7 @@ def _per_file(size: str, budget: float) -> None:
 
 
 def _command(size: str, budget: float, parallel: bool, design: str | None, root: Path,
-             floor: bool = False) -> list[str]:
+             floor: bool = False, paper: str | None = None) -> list[str]:
     cmd = [sys.executable, str(root / "benchmarks" / "pipeline.py"), "--child", size, "--budget", str(budget)]
     if parallel:
         cmd.append("--parallel")
@@ -276,11 +279,13 @@ def _command(size: str, budget: float, parallel: bool, design: str | None, root:
         cmd.append("--floor")
     if design:
         cmd += ["--design", design]
+    if paper:
+        cmd += ["--paper", paper]
     return cmd
 
 
 def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str | None, jobs: int,
-            save: Path | None = None, out: dict | None = None, floor: bool = False) -> dict:
+            save: Path | None = None, out: dict | None = None, floor: bool = False, paper: str | None = None) -> dict:
     """Run ``(variant, size, parallel, source tree)`` tasks, ``jobs`` at a time (largest first); variant →
     size → result (added to ``out``, and written to ``save`` after each build)."""
     pending = sorted(tasks, key=lambda t: -int(t[1].split("x")[0]) * int(t[1].split("x")[1]))
@@ -291,7 +296,7 @@ def run_all(tasks: list[tuple[str, str, bool, Path]], budget: float, design: str
             task = pending.pop(0)
             variant, size, parallel, root = task
             env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(root))
-            running.append((task, subprocess.Popen(_command(size, budget, parallel, design, root, floor), env=env,
+            running.append((task, subprocess.Popen(_command(size, budget, parallel, design, root, floor, paper), env=env,
                                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)))
         time.sleep(1.0)
         for item in [r for r in running if r[1].poll() is not None]:
@@ -373,6 +378,9 @@ def main(argv: list[str]) -> None:
                     help="only the ms per per-type DXF and per STEP plate at SIZE (e.g. 22x15)")
     ap.add_argument("--floor", action="store_true",
                     help="after each build, the CAD kernel's plain write + read of its STEP files (step_floor.py)")
+    ap.add_argument("--paper", default=None,
+                    help="[output] paper of every build (A1, the default's, has no room for the key plan's list of "
+                         "ids at 88x60: A0)")
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--parallel", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -380,12 +388,13 @@ def main(argv: list[str]) -> None:
         _per_file(args.per_file, args.budget)
         return
     if args.child:
-        _child(args.child, args.budget, args.parallel, args.design, args.floor)
+        _child(args.child, args.budget, args.parallel, args.design, args.floor, args.paper)
         return
     base = Path(args.baseline).resolve() if args.baseline else None
     print(f"ppfab build of {'the bundled default' if not args.design else args.design}; both nesting budgets "
           f"{args.budget:g} s at every size; OMP_NUM_THREADS=1; {os.cpu_count()} cores; one subprocess per size "
-          f"and variant, {args.jobs} at a time" + (f"; before = the tree {base}" if base else ""))
+          f"and variant, {args.jobs} at a time" + (f"; before = the tree {base}" if base else "")
+          + (f"; paper {args.paper}" if args.paper else ""))
     sizes = args.sizes.split(",")
     modes = {"serial": [False], "parallel": [True], "both": [False, True], "none": []}[args.writers]
     tasks = [(("parallel" if m else "serial"), size, m, ROOT) for size in sizes for m in modes]
@@ -394,7 +403,7 @@ def main(argv: list[str]) -> None:
     results: dict = json.loads(Path(args.reuse).read_text()) if args.reuse else {}
     tasks = [t for t in tasks if t[1] not in results.get(t[0], {})]
     run_all(tasks, args.budget, args.design, args.jobs, Path(args.save) if args.save else None, results,
-            args.floor)
+            args.floor, args.paper)
     for variant in (["before"] if base else []) + [("parallel" if m else "serial") for m in modes]:
         if all(s in results.get(variant, {}) for s in sizes):
             table([results[variant][s] for s in sizes], variant)

@@ -74,7 +74,7 @@ class OutputSection:
                                   "node axes, the mesh)")
     glb: bool = param(True, doc="write model.glb (glTF binary for viewing; node names are the part ids)")
     paper: str = param("A1", doc="paper size of the drawings in drawings/ (frame, title block, standard scale)",
-                       choices=("A1", "A3"))
+                       choices=("A0", "A1", "A3"))
     classification: dict = param({}, doc="classification of the parts in model.ifc ([output.classification]): "
                                          "system (e.g. \"Uniclass 2015\"), optional edition and source, and a code "
                                          "per part kind (panel, beam, strip, splice, setting_block, …), e.g. "

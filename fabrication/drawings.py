@@ -32,7 +32,7 @@ import numpy as np
 from .contract import one_line
 from .marking import LABEL_CHAR_WIDTH, TextLine, place_label, upright_deg
 from .paper import (DEFAULT_PAPER, GAP, TEXT_MM, PaperSheet, SheetInfo, drawing_area, fitting_scales,
-                    scale_text)
+                    paper_advice, scale_text)
 
 SVG_NS = "http://www.w3.org/2000/svg"
 FONT = "DejaVu Sans Mono, monospace"
@@ -229,8 +229,8 @@ def view_svg(view: str, panels: Sequence, plates: Sequence, title: str, paper: s
         from ppfab.errors import DesignError
 
         raise DesignError("output.paper", f"{VIEW_TITLES[view]}: the view and the ids without room at their place "
-                                          f"do not fit {info.paper} paper at any standard scale: use a larger paper "
-                                          "([output] paper = \"A1\")")
+                                          f"do not fit {info.paper} paper at any standard scale: "
+                                          f"{paper_advice(info.paper)}")
     s, laid, rows, per_row = chosen
     page = PaperSheet(info, s)
     page.frame()

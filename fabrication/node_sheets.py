@@ -12,7 +12,7 @@ import numpy as np
 
 from .drawings import LIST_PITCH, SvgSheet
 from .marking import LABEL_CHAR_WIDTH, upright_deg
-from .paper import DEFAULT_PAPER, GAP, TEXT_MM, PaperSheet, SheetInfo, drawing_area
+from .paper import DEFAULT_PAPER, GAP, TEXT_MM, PaperSheet, SheetInfo, drawing_area, paper_advice
 
 
 def direction_deg(t2: np.ndarray) -> float:
@@ -84,8 +84,8 @@ def node_pages(ntype, depth: float, thickness: float, paper: str = DEFAULT_PAPER
     if cap <= 0:
         from ppfab.errors import DesignError
 
-        raise DesignError("output.paper", f"{paper} paper has no room for the node list of {ntype.type_id}: use "
-                                          "[output] paper = \"A1\"")
+        raise DesignError("output.paper", f"{paper} paper has no room for the node list of {ntype.type_id}: "
+                                          f"{paper_advice(paper)}")
     return [range(a, min(a + cap, n)) for a in range(0, max(n, 1), cap)]
 
 

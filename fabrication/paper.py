@@ -34,15 +34,15 @@ from .marking import LABEL_CHAR_WIDTH
 SVG_NS = "http://www.w3.org/2000/svg"
 FONT = "DejaVu Sans Mono, monospace"
 
-PAPER_SIZES = {"A1": (841.0, 594.0), "A3": (420.0, 297.0)}
-"""Paper name → (width, height) in mm, landscape (ISO 216)."""
+PAPER_SIZES = {"A0": (1189.0, 841.0), "A1": (841.0, 594.0), "A3": (420.0, 297.0)}
+"""Paper name → (width, height) in mm, landscape (ISO 216), largest first."""
 
 DEFAULT_PAPER = "A1"
 
 STANDARD_SCALES = (1, 2, 5, 10, 20, 25, 50, 100, 200, 250, 500, 1000, 2000, 2500, 5000, 10000, 20000, 50000)
 """Denominators of the scales a view is drawn at (ISO 5455: 1, 2 and 5 × 10^k, and the common 1:25, 1:250)."""
 
-GRID_FIELDS = {"A1": (16, 12), "A3": (8, 6)}
+GRID_FIELDS = {"A0": (24, 16), "A1": (16, 12), "A3": (8, 6)}
 """Fields of the grid reference system (ISO 5457) per paper: numbered along the top and bottom margins, lettered
 along the left and right ones, so a part is found as "D7"."""
 
@@ -71,6 +71,27 @@ def paper_size(name: str) -> tuple[float, float]:
         return PAPER_SIZES[name]
     except KeyError:
         raise ValueError(f"paper {name!r} is not a known size: use one of {', '.join(PAPER_SIZES)}") from None
+
+
+def larger_paper(name: str) -> str | None:
+    """The next larger paper of :data:`PAPER_SIZES` than ``name`` (by area), ``None`` for the largest.
+
+    >>> larger_paper("A3"), larger_paper("A1"), larger_paper("A0")
+    ('A1', 'A0', None)
+    """
+    w, h = paper_size(name)
+    bigger = [(pw * ph, p) for p, (pw, ph) in PAPER_SIZES.items() if pw * ph > w * h]
+    return min(bigger)[1] if bigger else None
+
+
+def paper_advice(name: str) -> str:
+    """What to do when a drawing does not fit the paper ``name``: the design key giving the next larger paper, or,
+    on the largest, fewer and larger panels."""
+    bigger = larger_paper(name)
+    if bigger is not None:
+        return f"use a larger paper ([output] paper = \"{bigger}\")"
+    return (f"{name} is the largest paper ppfab draws on: fewer, larger panels (the geometry's faces) or shorter part "
+            "ids")
 
 
 def frame_box(paper: str) -> tuple[float, float, float, float]:

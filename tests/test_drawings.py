@@ -373,7 +373,7 @@ def test_a3_sheet_scales_the_view_down_and_keeps_text_at_2_5_mm(tmp_path):
     assert sorted(a3.labelled + a3.unfit) == sorted(p.part_id for p in panes)
     design = tmp_path / "d.toml"
     design.write_text(small_vault("paper").replace("[panels]", '[output]\npaper = "A2"\n[panels]'))
-    with pytest.raises(DesignError, match="'A1', 'A3'"):
+    with pytest.raises(DesignError, match="'A0', 'A1', 'A3'"):
         load_design(design)
 
 
@@ -414,6 +414,52 @@ def test_a_list_that_fits_no_scale_is_refused_naming_the_paper():
 
     with pytest.raises(ValueError, match=r'Key plan .*do not fit A3 paper .*\[output\] paper = "A1"'):
         view_svg("plan", [Pane(k) for k in range(100)], [], "stack", paper="A3")
+
+
+def test_a_view_too_large_for_a1_goes_on_a0_and_the_largest_paper_says_what_else_to_do(tmp_path):
+    """A 48 m row of panes is drawn at 1:100 on A1 (960 mm at 1:50 is wider than A1's drawing area) and at 1:50 on
+    A0, whose sheet is 1189 x 841 mm with the grid reference of 24 by 16 fields, every part named and the sheet
+    clean for verify's sheet check; a list of ids that fits no scale on A1 is refused naming A0, and on A0 (the
+    largest paper) naming what else gives room."""
+    from fabrication.drawings import view_svg
+    from fabrication.paper import GRID_FIELDS, SheetInfo
+    from fabrication.verify import Verification
+    from fabrication.verify.drawings import check_sheet
+
+    class Pane:
+        def __init__(self, i, j, name=""):
+            self.part_id = name or f"P-{i:02d}-{j:02d}"
+            self._pts = np.array([[1500.0 * i, 1200.0 * j, 0], [1500.0 * (i + 1), 1200.0 * j, 0],
+                                  [1500.0 * (i + 1), 1200.0 * (j + 1), 0], [1500.0 * i, 1200.0 * (j + 1), 0]])
+
+        def outline_3d(self):
+            return self._pts
+
+    panes = [Pane(i, j) for i in range(32) for j in range(2)]            # 48 m x 2.4 m
+    a1 = view_svg("plan", panes, [], "row")
+    a0 = view_svg("plan", panes, [], "row", sheet=SheetInfo("row", "Key plan", 1, 1, "A0"))
+    assert (a1.scale, a0.scale) == (100, 50)
+    (tmp_path / "drawings").mkdir()
+    (tmp_path / "drawings" / "a0.svg").write_text(a0.svg)
+    root, texts, lines = svg_sheet(tmp_path / "drawings" / "a0.svg")
+    assert (root.get("width"), root.get("height"), root.get("viewBox")) == ("1189mm", "841mm", "0 0 1189 841")
+    grid = {t.text for t in root.iter("{http://www.w3.org/2000/svg}text") if t.get("data-class") == "grid"}
+    cols, rows = GRID_FIELDS["A0"]
+    assert grid == {str(k) for k in range(1, cols + 1)} | set("ABCDEFGHJKLMNPRS"), grid     # ISO 5457: no I, O, Q
+    assert rows == 16
+    assert not overlaps(texts) and not crossings(texts, lines)
+    assert sorted(a0.labelled + a0.unfit) == sorted(p.part_id for p in panes)
+    v = Verification(tmp_path)
+    check_sheet(v, "drawings/a0.svg")
+    assert not v.findings, [str(f) for f in v.findings]
+    stacked = [Pane(0, 0, f"P-{k:03d}-" + "X" * 400) for k in range(250)]  # one id per row, 250 rows on any paper
+    for k, p in enumerate(stacked):
+        p._pts = p._pts + [0.0, 0.0, 10.0 * k]
+    with pytest.raises(ValueError, match=r'do not fit A1 paper .*\[output\] paper = "A0"'):
+        view_svg("plan", stacked, [], "stack")
+    with pytest.raises(ValueError, match=r"do not fit A0 paper .*A0 is the largest paper ppfab draws on: fewer, "
+                                         r"larger panels"):
+        view_svg("plan", stacked, [], "stack", sheet=SheetInfo("stack", "Key plan", 1, 1, "A0"))
 
 
 def test_title_block_dates_and_fits_long_names(monkeypatch):
