@@ -73,7 +73,8 @@ class OutputSection:
     rhino: bool = param(True, doc="write model.3dm (Rhino: layers per family, objects named by part id, user text, "
                                   "node axes, the mesh)")
     glb: bool = param(True, doc="write model.glb (glTF binary for viewing; node names are the part ids)")
-    paper: str = param("A1", doc="paper size of the drawings in drawings/ (frame, title block, standard scale)",
+    paper: str = param("A1", doc="paper size of the drawings in drawings/ (frame, title block, standard scale): "
+                                 "A1, A0 (a large roof's key plan) or A3",
                        choices=("A0", "A1", "A3"))
     classification: dict = param({}, doc="classification of the parts in model.ifc ([output.classification]): "
                                          "system (e.g. \"Uniclass 2015\"), optional edition and source, and a code "
