@@ -161,12 +161,13 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
     pole of inaccessibility at ``min_height``.
     """
     from shapely.geometry import LineString, Polygon
-    from shapely.ops import polylabel
 
     poly = Polygon(outline)
     if not poly.is_valid:
         poly = poly.buffer(0)
     angle = upright_deg(_long_side_deg(poly))
+    if not _room_for(poly, block_size(lines, min_height), margin):
+        return _pole(poly, lines, min_height, angle)
     region = poly.buffer(-margin, join_style="mitre")
     for m in keep_out:
         if len(m) >= 2:
@@ -183,8 +184,33 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
             if best is not None:
                 return _placed(lines, best, height, ang, True)
             height *= 0.85
+    return _pole(poly, lines, min_height, angle)
+
+
+def _pole(poly, lines: list[TextLine], height: float, angle: float) -> LabelPlacement:
+    """The block that does not fit: at the outline's pole of inaccessibility, ``height`` high."""
+    from shapely.ops import polylabel
+
     pole = polylabel(poly, tolerance=max(np.sqrt(max(poly.area, 1e-9)) * 0.01, 0.1))
-    return _placed(lines, np.array([pole.x, pole.y]), min_height, angle, False)
+    return _placed(lines, np.array([pole.x, pole.y]), height, angle, False)
+
+
+def _room_for(poly, size: tuple[float, float, np.ndarray], margin: float) -> bool:
+    """Whether the outline ``poly`` may hold a block of ``size`` (:func:`block_size`: the smallest one tried) with
+    ``margin`` all round, by two tests any fitting block passes: a box ``depth`` deep inside the outline shrunk by
+    ``margin`` holds a disc of that diameter, so the outline shrunk by ``margin + depth / 2`` is not empty; its
+    diagonal, at least ``width`` long, lies inside the outline, so two of the outline's vertices are at least
+    that far apart.  On a drawing at a small scale most panes fail the first (an elevation of the bundled
+    default at 88 x 60 faces labels none), and the search among keep-outs is then skipped."""
+    width, depth, _ = size
+    hull = poly.convex_hull
+    if hull.geom_type != "Polygon":             # an empty or degenerate outline holds nothing
+        return False
+    pts = np.asarray(hull.exterior.coords)
+    gaps = np.sqrt(((pts[:, None, :] - pts[None, :, :]) ** 2).sum(axis=-1))
+    if float(gaps.max()) < width:
+        return False
+    return not poly.buffer(-(margin + 0.5 * depth)).is_empty
 
 
 def _fit(region, inner, width: float, depth: float, angle: float, centroid: np.ndarray) -> np.ndarray | None:

@@ -207,3 +207,42 @@ def test_a_label_fits_a_region_left_as_a_geometry_collection():
     a, b = centre - [60.0, 10.0], centre + [60.0, 10.0]
     box = shapely.box(a[0], a[1], b[0], b[1])
     assert ell.contains(box)
+
+
+def test_the_shortcut_for_an_outline_with_no_room_changes_no_placement(monkeypatch):
+    """``place_label`` skips its search where an outline cannot hold the smallest block (``_room_for``: the outline
+    shrunk by the margin and half the block's depth is empty, or no two of its vertices are the block's width
+    apart).  On 300 random quadrilaterals and slivers, with keep-out lines through them, every placement is the one
+    the full search gives (fits, box, height, angle), and the shortcut is taken for some and not for others."""
+    import fabrication.marking as mk
+
+    rng = np.random.default_rng(7)
+    cases = []
+    for k in range(300):
+        w, h = rng.uniform(5.0, 120.0), rng.uniform(1.0, 40.0)
+        q = np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]) + rng.normal(0.0, 0.1 * min(w, h), (4, 2))
+        a = rng.uniform(0.0, np.pi)
+        q = q @ np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+        lines = [mk.TextLine(f"P-U{k:02d}-V07" if k % 3 else "P-1", "LABEL")]
+        keep = (q[[0, 2]],) if k % 4 == 0 else ()
+        cases.append((q, lines, keep, rng.uniform(0.3, 1.5)))
+    taken = []
+    room = mk._room_for
+
+    def counted(*args):
+        got = room(*args)
+        taken.append(not got)
+        return got
+
+    monkeypatch.setattr(mk, "_room_for", counted)
+    fast = [mk.place_label(q, lines, margin=m, max_height=5.0, min_height=2.5, keep_out=keep, prefer_deg=0.0)
+            for q, lines, keep, m in cases]
+    monkeypatch.setattr(mk, "_room_for", lambda *args: True)
+    full = [mk.place_label(q, lines, margin=m, max_height=5.0, min_height=2.5, keep_out=keep, prefer_deg=0.0)
+            for q, lines, keep, m in cases]
+    assert 30 <= sum(taken) <= 270, sum(taken)
+    for a, b in zip(fast, full):
+        assert a.fits == b.fits
+        assert np.array_equal(a.box, b.box)
+        assert [(x.height, x.rotation_deg) for x in a.lines] == [(x.height, x.rotation_deg) for x in b.lines]
+    assert sum(p.fits for p in full) >= 30
