@@ -234,3 +234,41 @@ def test_the_ifc_checks_property_set_is_ifcopenshells(built, tmp_path):
     got = named_pset(plate, IFC_PSET)
     assert got == ue.get_psets(plate)[IFC_PSET]
     assert got["extra"] == "kept" and got["part_id"] == plate.Name
+
+
+def test_the_glb_checks_closedness_and_volumes_are_trimeshs(built, tmp_path):
+    """``mesh_facts`` measures every mesh of model.glb at once: closed where trimesh's ``is_watertight`` says so and
+    the volume of trimesh's ``volume`` (1e-9 relative) — on the written meshes and on copies with a triangle taken
+    away, one doubled, and every triangle turned (closed, the volume negated); and the glb check names a part
+    whose mesh lost a triangle."""
+    import shutil
+
+    import trimesh
+
+    from fabrication.verify import Verification
+    from fabrication.verify.glb import check_glb, mesh_facts
+
+    scene = trimesh.load(str(built / "model.glb"), force="scene", process=False)
+    meshes = dict(scene.geometry)
+    for k, (name, mesh) in enumerate(list(meshes.items())[:30]):
+        f = np.asarray(mesh.faces)
+        f = (f[1:], np.vstack([f, f[:1]]), f[:, ::-1])[k % 3]
+        meshes[f"{name} changed"] = trimesh.Trimesh(np.asarray(mesh.vertices), f, process=False)
+    closed, volumes = mesh_facts(meshes)
+    assert sum(not c for c in closed.values()) == 20
+    for name, mesh in meshes.items():
+        assert closed[name] == mesh.is_watertight, name
+        if closed[name]:
+            assert volumes[name] == pytest.approx(float(mesh.volume), rel=1e-9), name
+    # a part's mesh with a triangle taken away, written back: the check names it
+    node = next(n for n in scene.graph.nodes_geometry if n.startswith("P-"))
+    geometry = scene.graph[node][1]
+    broken = scene.geometry[geometry]
+    scene.geometry[geometry] = trimesh.Trimesh(broken.vertices, broken.faces[1:], process=False)
+    folder = tmp_path / "out"
+    shutil.copytree(built, folder)
+    (folder / "model.glb").write_bytes(trimesh.exchange.gltf.export_glb(scene))
+    v = Verification(folder)
+    check_glb(v)
+    named = {f.element for f in v.findings if "mesh is not closed" in f.message}
+    assert node in named and all(n.startswith("P-") for n in named), named

@@ -31,13 +31,12 @@ def check_glb(v: Verification) -> None:
     names = list(scene.graph.nodes_geometry)
     check_names(v, rel, names, {k: r["kind"] for k, r in rows.items()}, "glTF node")
     back = np.linalg.inv(MM_TO_GLTF)
-    for name in names:
-        row = rows.get(name)
-        if row is None:
-            continue
-        transform, geometry = scene.graph[name]
+    placed = {name: scene.graph[name] for name in names if name in rows}
+    closed, volumes = mesh_facts({g: scene.geometry[g] for _, g in placed.values()})
+    for name, (transform, geometry) in placed.items():
+        row = rows[name]
         mesh = scene.geometry[geometry]
-        if not mesh.is_watertight:
+        if not closed[geometry]:
             v.error(rel, name, "mesh is not closed")
             continue
         pts = trimesh.transform_points(mesh.vertices, transform) @ back.T
@@ -46,7 +45,7 @@ def check_glb(v: Verification) -> None:
             continue
         # float32 vertices: about 1e-7 of the structure's size
         eps = 2e-7 * float(np.abs(pts).max()) + 1e-6
-        volume = abs(float(mesh.volume)) * abs(np.linalg.det(transform[:3, :3])) * 1e9
+        volume = abs(volumes[geometry]) * abs(np.linalg.det(transform[:3, :3])) * 1e9
         # the writer's vertex order: the base rings (the outline's, then each bolt hole's), then the top rings;
         # a hole is a polygon of its circle's area, so the volume is the area less the holes times the thickness
         holes = int(float(row.get("holes") or 0)) if row["kind"] in ("beam", "splice") else 0
@@ -56,3 +55,33 @@ def check_glb(v: Verification) -> None:
         check_part_solid(v, rel, row, pts, volume, eps=eps, volume_tol=1e-4, ring=pts[:max(k, 0)], holes=True,
                          top_ring=pts[half:half + max(k, 0)])
     v.checked.append("glb")
+
+
+def mesh_facts(meshes: dict[str, Any]) -> tuple[dict[str, bool], dict[str, float]]:
+    """Of every mesh (name → a trimesh with ``vertices (n, 3)`` and ``faces (m, 3)``), all at once: whether it is
+    closed — every edge shared by exactly two of its triangles, as trimesh's ``is_watertight`` has it — and its
+    signed volume (the divergence theorem over its triangles, about its vertices' centre), in its own units.
+    An instanced shape (one mesh placed by many nodes) is measured once."""
+    names = list(meshes)
+    if not names:
+        return {}, {}
+    verts = [np.asarray(meshes[n].vertices, dtype=float).reshape(-1, 3) for n in names]
+    faces = [np.asarray(meshes[n].faces, dtype=np.int64).reshape(-1, 3) for n in names]
+    n_verts = np.array([len(x) for x in verts])
+    n_faces = np.array([len(f) for f in faces])
+    offset = np.concatenate([[0], np.cumsum(n_verts)[:-1]])
+    mesh_of_face = np.repeat(np.arange(len(names)), n_faces)
+    tri = np.concatenate(faces) + np.repeat(offset, n_faces)[:, None]                      # (F, 3) global ids
+    centre = np.stack([np.bincount(np.repeat(np.arange(len(names)), n_verts), weights=c, minlength=len(names))
+                       for c in np.concatenate(verts).T], axis=1) / np.maximum(n_verts, 1)[:, None]
+    p = np.concatenate(verts) - np.repeat(centre, n_verts, axis=0)                         # about each centre
+    a, b, c = p[tri[:, 0]], p[tri[:, 1]], p[tri[:, 2]]
+    six = np.einsum("ij,ij->i", a, np.cross(b, c))
+    volume = np.bincount(mesh_of_face, weights=six, minlength=len(names)) / 6.0
+    # every edge (its two vertex ids, smaller first) once per triangle using it: closed iff each appears twice
+    e = np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    key = e[:, 0] * (int(n_verts.sum()) + 1) + e[:, 1]
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    bad = np.bincount(np.repeat(mesh_of_face, 3), weights=counts[inverse.reshape(-1)] != 2, minlength=len(names))
+    return ({n: bool(bad[k] == 0 and n_faces[k] > 0) for k, n in enumerate(names)},
+            {n: float(volume[k]) for k, n in enumerate(names)})
