@@ -344,6 +344,18 @@ def test_drawings_pdf_has_a_page_per_sheet_at_its_paper_size_and_is_reproducible
     assert len(re.findall(rb"/Type /Page\b", one.read_bytes())) == 2
 
 
+class _GridPane:
+    """A 1.5 x 1.2 m pane in plan at column ``i``, row ``j`` of a grid, named ``name`` or by its place."""
+
+    def __init__(self, i: int, j: int, name: str = ""):
+        self.part_id = name or f"P-{i:02d}-{j:02d}"
+        self._pts = np.array([[1500.0 * i, 1200.0 * j, 0], [1500.0 * (i + 1), 1200.0 * j, 0],
+                              [1500.0 * (i + 1), 1200.0 * (j + 1), 0], [1500.0 * i, 1200.0 * (j + 1), 0]])
+
+    def outline_3d(self):
+        return self._pts
+
+
 def test_a3_sheet_scales_the_view_down_and_keeps_text_at_2_5_mm(tmp_path):
     """The same panes on A3: the sheet is 420 x 297 mm, the view at a standard scale no larger than on A1, every
     text at least 2.5 mm on paper; a paper that does not exist is refused naming the ones that do."""
@@ -351,16 +363,7 @@ def test_a3_sheet_scales_the_view_down_and_keeps_text_at_2_5_mm(tmp_path):
     from fabrication.drawings import view_svg
     from ppfab.errors import DesignError
 
-    class Pane:
-        def __init__(self, i, j):
-            self.part_id = f"P-{i:02d}-{j:02d}"
-            self._pts = np.array([[1500.0 * i, 1200.0 * j, 0], [1500.0 * (i + 1), 1200.0 * j, 0],
-                                  [1500.0 * (i + 1), 1200.0 * (j + 1), 0], [1500.0 * i, 1200.0 * (j + 1), 0]])
-
-        def outline_3d(self):
-            return self._pts
-
-    panes = [Pane(i, j) for i in range(24) for j in range(2)]            # 36 m x 2.4 m
+    panes = [_GridPane(i, j) for i in range(24) for j in range(2)]       # 36 m x 2.4 m
     a1 = view_svg("plan", panes, [], "grid")
     a3 = view_svg("plan", panes, [], "grid", paper="A3")
     assert (a1.scale, a3.scale) == (50, 100)            # 36 m: 720 mm at 1:50 fits A1's 803 mm, not A3's 382 mm
@@ -426,16 +429,7 @@ def test_a_view_too_large_for_a1_goes_on_a0_and_the_largest_paper_says_what_else
     from fabrication.verify import Verification
     from fabrication.verify.drawings import check_sheet
 
-    class Pane:
-        def __init__(self, i, j, name=""):
-            self.part_id = name or f"P-{i:02d}-{j:02d}"
-            self._pts = np.array([[1500.0 * i, 1200.0 * j, 0], [1500.0 * (i + 1), 1200.0 * j, 0],
-                                  [1500.0 * (i + 1), 1200.0 * (j + 1), 0], [1500.0 * i, 1200.0 * (j + 1), 0]])
-
-        def outline_3d(self):
-            return self._pts
-
-    panes = [Pane(i, j) for i in range(32) for j in range(2)]            # 48 m x 2.4 m
+    panes = [_GridPane(i, j) for i in range(32) for j in range(2)]       # 48 m x 2.4 m
     a1 = view_svg("plan", panes, [], "row")
     a0 = view_svg("plan", panes, [], "row", sheet=SheetInfo("row", "Key plan", 1, 1, "A0"))
     assert (a1.scale, a0.scale) == (100, 50)
@@ -452,7 +446,7 @@ def test_a_view_too_large_for_a1_goes_on_a0_and_the_largest_paper_says_what_else
     v = Verification(tmp_path)
     check_sheet(v, "drawings/a0.svg")
     assert not v.findings, [str(f) for f in v.findings]
-    stacked = [Pane(0, 0, f"P-{k:03d}-" + "X" * 400) for k in range(250)]  # one id per row, 250 rows on any paper
+    stacked = [_GridPane(0, 0, f"P-{k:03d}-" + "X" * 400) for k in range(250)]  # one id per row, 250 rows on any paper
     for k, p in enumerate(stacked):
         p._pts = p._pts + [0.0, 0.0, 10.0 * k]
     with pytest.raises(ValueError, match=r'do not fit A1 paper .*\[output\] paper = "A0"'):
