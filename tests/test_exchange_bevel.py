@@ -254,7 +254,12 @@ def test_the_glb_checks_closedness_and_volumes_are_trimeshs(built, tmp_path):
         f = np.asarray(mesh.faces)
         f = (f[1:], np.vstack([f, f[:1]]), f[:, ::-1])[k % 3]
         meshes[f"{name} changed"] = trimesh.Trimesh(np.asarray(mesh.vertices), f, process=False)
+    first = next(iter(scene.geometry.values()))
+    meshes["a vertex it does not have"] = trimesh.Trimesh(np.asarray(first.vertices), np.asarray(first.faces) + 1,
+                                                          process=False, validate=False)
     closed, volumes = mesh_facts(meshes)
+    assert not closed.pop("a vertex it does not have")
+    meshes.pop("a vertex it does not have")
     assert sum(not c for c in closed.values()) == 20
     for name, mesh in meshes.items():
         assert closed[name] == mesh.is_watertight, name

@@ -67,6 +67,9 @@ def mesh_facts(meshes: dict[str, Any]) -> tuple[dict[str, bool], dict[str, float
         return {}, {}
     verts = [np.asarray(meshes[n].vertices, dtype=float).reshape(-1, 3) for n in names]
     faces = [np.asarray(meshes[n].faces, dtype=np.int64).reshape(-1, 3) for n in names]
+    # a triangle naming a vertex the mesh does not have: the mesh is not closed (and is left out of the sums)
+    broken = [len(f) > 0 and (int(f.min()) < 0 or int(f.max()) >= len(v)) for v, f in zip(verts, faces)]
+    faces = [f[:0] if bad else f for f, bad in zip(faces, broken)]
     n_verts = np.array([len(x) for x in verts])
     n_faces = np.array([len(f) for f in faces])
     offset = np.concatenate([[0], np.cumsum(n_verts)[:-1]])
@@ -83,5 +86,5 @@ def mesh_facts(meshes: dict[str, Any]) -> tuple[dict[str, bool], dict[str, float
     key = e[:, 0] * (int(n_verts.sum()) + 1) + e[:, 1]
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     bad = np.bincount(np.repeat(mesh_of_face, 3), weights=counts[inverse.reshape(-1)] != 2, minlength=len(names))
-    return ({n: bool(bad[k] == 0 and n_faces[k] > 0) for k, n in enumerate(names)},
+    return ({n: bool(bad[k] == 0 and n_faces[k] > 0 and not broken[k]) for k, n in enumerate(names)},
             {n: float(volume[k]) for k, n in enumerate(names)})
