@@ -190,7 +190,7 @@ def faceted_plate(product, reading: IfcReading | None = None) -> tuple[np.ndarra
                 return None
             q = [pt.Coordinates for pt in loop.Polygon]
             loops.append((k, bound.is_a("IfcFaceOuterBound"), q if bound.Orientation else q[::-1]))
-    if not loops:
+    if not loops or any(len(q) < 3 for _, _, q in loops):     # an IfcPolyLoop has three points or more
         return None
     loops.sort(key=lambda x: (x[0], not x[1]))          # face by face, the outer bound first
     sizes = np.array([len(q) for _, _, q in loops])
