@@ -143,3 +143,24 @@ def test_a_writer_that_writes_an_undeclared_file_stops_the_build(tmp_path, small
     with pytest.raises(FabricationError, match=r"not declared \['stray.txt'\]"):
         small_build.write(tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_closing_a_forked_job_kills_a_child_that_ignores_sigterm(monkeypatch):
+    """``Forked.close`` terminates a child still running; one that ignores SIGTERM (a handler it inherited before
+    it set its own) is killed after ``CLOSE_WAIT_S`` instead of being waited for without end."""
+    import signal
+    import time
+
+    import fabrication.writers._parallel as par
+
+    def stubborn():
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        time.sleep(60.0)
+
+    monkeypatch.setattr(par, "CLOSE_WAIT_S", 0.5)
+    job = par.Forked(stubborn, "ppfab-test")
+    time.sleep(0.5)                                   # the child has set its handler
+    t0 = time.monotonic()
+    job.close()
+    assert time.monotonic() - t0 < 10.0
+    assert not job._proc.is_alive() and job._proc.exitcode == -signal.SIGKILL

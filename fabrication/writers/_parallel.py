@@ -92,8 +92,15 @@ class Forked:
     def close(self) -> None:
         if self._proc.is_alive():
             self._proc.terminate()
+            self._proc.join(CLOSE_WAIT_S)
+            if self._proc.is_alive():           # SIGTERM ignored (a handler inherited before the child set its
+                self._proc.kill()               # own): a test run hung on such a child in join()
         self._proc.join()
         self._recv.close()
+
+
+CLOSE_WAIT_S = 10.0
+"""Seconds :meth:`Forked.close` gives a terminated child before it kills it (SIGKILL)."""
 
 
 def _die_with_parent(parent: int) -> None:
