@@ -51,9 +51,19 @@ keep a length on both faces and the faces' side walls stay planar quads, :mod:`f
 END_MM = 100.0
 """A notch that comes within this (mm, along the top edge) of the plate's end runs out over the end: no sliver of
 top edge is left between it and the end cut (an edge shorter than a bevel moves it cannot be bevelled).  Where
-that end is a splice cut (the plate one piece of a longer beam) the notch is not made: the cover plates of the
-splice sit a set distance under the full top edge there, and the two pieces' cut edges must stay the same; the
-strip's overlap there stays a warning of the erection check."""
+that end is a splice cut (the plate one piece of a longer beam) the notch never runs over it — the two pieces'
+cut edges must stay the same: beside a **bolted** splice the notch is not made (its cover plates sit a set
+distance under the full top edge there; its cuts keep 240 mm more than the joints from a node, so this is rare),
+beside a **welded** one it ends where it ends, leaving a sliver of full top edge of at least
+:func:`weld_sliver_mm` before the cut, and is not made when it would leave less.  A strip left overlapping a
+plate deeper than 0.25 mm is a finding of the erection check."""
+
+
+def weld_sliver_mm(thickness: float) -> float:
+    """The shortest full top edge (mm) a notch leaves before a welded splice cut: one plate thickness — square
+    plate for the butt weld's end and its run-off tab (on a piece of the default at 88 × 60 faces, whose welded
+    cuts stand 50 mm more than the joints from a node, the notches end 36 mm or more before the cut)."""
+    return float(thickness)
 
 HEADROOM_MM = 1.0e4
 """How far above the strip's underside the region to cut reaches (it only bounds the polytope: the plate below
@@ -164,6 +174,8 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float],
     rects: list[np.ndarray] = []
     deepest, length = 0.0, 0.0
     first_node, last_node = _end_is_node(plate)
+    # how much full top edge a notch must leave before a splice cut (END_MM): all of it beside a bolted splice
+    sliver = weld_sliver_mm(plate.thickness) if plate.meta.get("splice") == "welded" else np.inf
     for c in range(len(top) - 1):
         p0, p1 = top[c], top[c + 1]
         e = p1 - p0
@@ -190,13 +202,15 @@ def _square_notch(plate: BeamPlate, taken: np.ndarray, deltas: dict[int, float],
         lo -= D if lo <= 1e-6 else NOTCH_CLEARANCE_MM
         hi += D if hi >= L - 1e-6 else NOTCH_CLEARANCE_MM
         if c == 0 and lo < END_MM:
-            if not first_node:                           # a splice cut: its cover plates need the full top edge
+            if first_node:
+                lo = -HEADROOM_MM                        # at the plate's end: the notch runs out over its end cut
+            elif lo < sliver:                            # a splice cut keeps its edge (END_MM)
                 return [], 0.0, 0.0
-            lo = -HEADROOM_MM                            # at the plate's end: the notch runs out over its end cut
         if c == len(top) - 2 and hi > L - END_MM:
-            if not last_node:
+            if last_node:
+                hi = L + HEADROOM_MM
+            elif hi > L - sliver:
                 return [], 0.0, 0.0
-            hi = L + HEADROOM_MM
         up = -inward * HEADROOM_MM
         rects.append(np.array([p0 + lo * e + up, p0 + lo * e + D * inward, p0 + hi * e + D * inward,
                                p0 + hi * e + up]))

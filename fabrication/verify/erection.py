@@ -261,8 +261,9 @@ def _overlap_hint(a: str, b: str) -> str:
     """What to look at when parts of kinds ``a`` and ``b`` overlap in place."""
     pair = {a, b}
     if pair & {"strip", "gasket"} and pair & {"row", "column", "splice"}:
-        return ("; the plate's bevel or notch does not clear the strip (docs/glazing.md): a splice cut keeps its "
-                "plate's full top edge, so a cut beside a node may need another beams.max_length")
+        return ("; the plate's bevel or notch does not clear the strip (docs/glazing.md): a bolted splice cut keeps "
+                "its plate's full top edge and a welded one a plate thickness of it, so a cut beside a node may "
+                "need another beams.max_length or splices.kind = \"welded\"")
     if pair <= {"strip", "gasket"}:
         return "; strips meeting at a node should clear each other (docs/glazing.md, at the nodes)"
     return ""
