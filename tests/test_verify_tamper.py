@@ -616,6 +616,44 @@ def test_every_file_of_a_build_is_read_by_a_check(built, monkeypatch):
     assert unread == [], f"files no check reads: {unread}"
 
 
+def test_a_verify_reads_each_step_file_once_and_lets_its_solids_go(built):
+    """A serial verify of a real build reads every STEP file once (the text reader's ``fabrication.verify.read``
+    events, the kernel's reads of its samples being of temporary files), and once the last check reading solids
+    (:data:`~fabrication.verify.SOLID_READERS`) has run they are let go: the memo of STEP files is empty after
+    the verify and the beam solids are gone.  A check reading solids that the set does not name would run after
+    the release and read its file a second time.  Asked for again, the beam solids are read again."""
+    import collections
+    import os
+    import sys
+
+    from fabrication.verify import SOLID_READERS, load_checks, verify
+
+    folder = os.path.realpath(built)
+    reads: collections.Counter[str] = collections.Counter()
+    recording = [True]
+
+    def hook(event, args):
+        if recording[0] and event == "fabrication.verify.read" and args:
+            path = os.path.realpath(os.fsdecode(args[0]))
+            if path.startswith(folder + os.sep):
+                reads[os.path.relpath(path, folder)] += 1
+
+    sys.addaudithook(hook)            # hooks cannot be removed: this one records nothing once recording is off
+    try:
+        v = verify(built, parallel=False)
+    finally:
+        recording[0] = False
+    assert v.ok, [str(f) for f in v.findings[:5]]
+    steps = sorted(p.name for p in built.glob("*.step"))
+    assert len(steps) >= 4 and set(reads) == set(steps), (reads, steps)
+    assert all(n == 1 for n in reads.values()), reads
+    assert v.read.step_read == {} and v.read.beam_solids is None and v.read.erection_passes is None
+    names = [c.name for c in load_checks()]
+    assert max(names.index(n) for n in SOLID_READERS) < names.index("ifc")     # the models come after
+    beams = {r["part_id"] for r in v.parts or [] if r.get("kind") == "beam"}
+    assert len(beams) >= 20 and set(v.beam_solids or {}) == beams
+
+
 def test_every_shared_field_is_filled_by_the_check_named_for_it(built, monkeypatch):
     """:data:`~fabrication.verify.PRODUCERS` is true: on a real build each field of ``FolderData`` it names is
     filled once that check has run on a fresh verification; asking for it runs the producer once, and the

@@ -146,6 +146,18 @@ class Verification:
             self._found[c.name] = got
         return self._found[c.name]
 
+    def release_solids(self) -> None:
+        """Let go of the solids read from the STEP files (:attr:`FolderData.step_read`, ``beam_solids``) and the
+        erection sweep built from them (``erection_passes``), once no check left to run in this process reads
+        them (:data:`SOLID_READERS`): at 44 × 30 faces they are 0.5 GB of a serial verify's 1.5 GB.  A check
+        that asks for them afterwards has them read again (their producers run again; their findings were kept
+        at their turn)."""
+        self.read.step_read.clear()
+        self.read.beam_solids = None
+        self.read.erection_passes = None
+        for producer in ("step", "erection"):
+            self._found.pop(producer, None)
+
     def _field(self, name: str) -> Any:
         """The field ``name`` of :attr:`read` once its producer (:data:`PRODUCERS`) has run."""
         return getattr(self.after(PRODUCERS[name]), name)
@@ -303,6 +315,26 @@ def load_checks() -> list[Check]:
     return first + sorted((c for c in table.values() if c.name not in REPORT_ORDER), key=lambda c: c.name)
 
 
+SOLID_READERS: frozenset[str] = frozenset({
+    "splices", "step", "splice_holes", "panels_step", "bite", "step_geometry", "clash", "glazing_step", "bevels",
+    "retention", "erection"})
+"""The checks that read solids of the STEP files (:func:`._step_read.read_or_report`,
+:attr:`Verification.beam_solids`, :attr:`Verification.erection_passes`): after the last of them a process runs,
+:meth:`Verification.release_solids` lets go of what they read (the exchange models, the drawings and their
+checks come after).  A test reads every STEP file once in a verify: a check reading solids that is not named here
+would read its file a second time."""
+
+
+def _run_releasing(v: Verification, c: Check, checks: list[Check]) -> tuple[list[Finding], list[str]]:
+    """:meth:`Verification.run_check` of ``c``, then :meth:`Verification.release_solids` when ``c`` is the last of
+    ``checks`` (a process's list, in order) to read solids (:data:`SOLID_READERS`)."""
+    got = v.run_check(c)
+    readers = [k.name for k in checks if k.name in SOLID_READERS]
+    if readers and c.name == readers[-1]:
+        v.release_solids()
+    return got
+
+
 SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "glazing_step", "ifc")
 """Checks that run in a forked process beside the others on two cores, once :data:`READ_FIRST` has run here.
 Chosen by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30
@@ -339,7 +371,7 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
     report = progress or (lambda done_, total_, what_: None)
     try:
         for c in first:
-            done[c.name] = v.run_check(c)
+            done[c.name] = _run_releasing(v, c, first)
             report(len(done), len(checks), c.name)
             if v.read.manifest is None:
                 return _assembled(v, checks, done)
@@ -374,4 +406,4 @@ def _assembled(v: Verification, checks: list[Check], done: dict[str, tuple[list[
 
 def _run_all(v: Verification, checks: list[Check]) -> dict[str, tuple[list[Finding], list[str]]]:
     """The second process's work: ``checks`` run on its copy of ``v``; what each found and checked."""
-    return {c.name: v.run_check(c) for c in checks}
+    return {c.name: _run_releasing(v, c, checks) for c in checks}
