@@ -57,11 +57,37 @@ def check_glb(v: Verification) -> None:
     v.checked.append("glb")
 
 
-def mesh_facts(meshes: dict[str, Any]) -> tuple[dict[str, bool], dict[str, float]]:
-    """Of every mesh (name → a trimesh with ``vertices (n, 3)`` and ``faces (m, 3)``), all at once: whether it is
-    closed — every edge shared by exactly two of its triangles, as trimesh's ``is_watertight`` has it — and its
-    signed volume (the divergence theorem over its triangles, about its vertices' centre), in its own units.
-    An instanced shape (one mesh placed by many nodes) is measured once."""
+BATCH_TRIANGLES = 200_000
+"""Triangles :func:`mesh_facts` measures at once: the arrays of a batch take about 0.3 kB a triangle (60 MB),
+where the whole of model.glb at 44 × 30 faces at once took 370 MB more than the scene."""
+
+
+def mesh_facts(meshes: dict[str, Any], batch: int = BATCH_TRIANGLES) -> tuple[dict[str, bool], dict[str, float]]:
+    """Of every mesh (name → a trimesh with ``vertices (n, 3)`` and ``faces (m, 3)``), in batches of meshes of
+    about ``batch`` triangles: whether it is closed — every edge shared by exactly two of its triangles, as
+    trimesh's ``is_watertight`` has it — and its signed volume (the divergence theorem over its triangles, about
+    its vertices' centre), in its own units.  An instanced shape (one mesh placed by many nodes) is measured
+    once."""
+    closed: dict[str, bool] = {}
+    volumes: dict[str, float] = {}
+    names: list[str] = []
+    count = 0
+    for name, mesh in meshes.items():
+        names.append(name)
+        count += len(mesh.faces)
+        if count >= batch:
+            c, w = _batch_facts({n: meshes[n] for n in names})
+            closed.update(c)
+            volumes.update(w)
+            names, count = [], 0
+    c, w = _batch_facts({n: meshes[n] for n in names})
+    closed.update(c)
+    volumes.update(w)
+    return closed, volumes
+
+
+def _batch_facts(meshes: dict[str, Any]) -> tuple[dict[str, bool], dict[str, float]]:
+    """:func:`mesh_facts` of a batch of meshes, all at once."""
     names = list(meshes)
     if not names:
         return {}, {}
