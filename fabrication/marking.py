@@ -168,12 +168,7 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
     angle = upright_deg(_long_side_deg(poly))
     if not _room_for(poly, block_size(lines, min_height), margin):
         return _pole(poly, lines, min_height, angle)
-    region = poly.buffer(-margin, join_style="mitre")
-    for m in keep_out:
-        if len(m) >= 2:
-            region = region.difference(LineString(m).buffer(margin, cap_style="flat"))
-    for q in keep_out_areas:
-        region = region.difference(Polygon(q).buffer(margin, join_style="mitre"))
+    region = free_region(poly, keep_out, keep_out_areas, margin)
     angles = [angle] if prefer_deg is None else [upright_deg(prefer_deg), angle]
     centroid = np.array(region.centroid.coords[0]) if not region.is_empty else np.zeros(2)
     for ang in angles:
@@ -185,6 +180,20 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
                 return _placed(lines, best, height, ang, True)
             height *= 0.85
     return _pole(poly, lines, min_height, angle)
+
+
+def free_region(poly, keep_out: tuple[np.ndarray, ...], keep_out_areas: tuple[np.ndarray, ...], margin: float):
+    """Where a label block of :func:`place_label` may lie: the outline ``poly`` (shapely) shrunk by ``margin``
+    (mitred), less every keep-out line ``(p, 2)`` grown by ``margin`` (flat ends) and every keep-out polygon grown
+    by ``margin`` (mitred) — taken away at once, by their union: an elevation's plate face among hundreds of
+    lines was cut down one difference per line, each on a region of more and more edges."""
+    import shapely
+    from shapely.geometry import LineString, Polygon
+
+    region = poly.buffer(-margin, join_style="mitre")
+    cuts = [LineString(m).buffer(margin, cap_style="flat") for m in keep_out if len(m) >= 2]
+    cuts += [Polygon(q).buffer(margin, join_style="mitre") for q in keep_out_areas]
+    return region.difference(shapely.union_all(cuts)) if cuts else region
 
 
 def _pole(poly, lines: list[TextLine], height: float, angle: float) -> LabelPlacement:

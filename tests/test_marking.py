@@ -246,3 +246,51 @@ def test_the_shortcut_for_an_outline_with_no_room_changes_no_placement(monkeypat
         assert np.array_equal(a.box, b.box)
         assert [(x.height, x.rotation_deg) for x in a.lines] == [(x.height, x.rotation_deg) for x in b.lines]
     assert sum(p.fits for p in full) >= 30
+
+
+def test_the_free_region_is_the_outline_less_each_keep_out_in_turn():
+    """``free_region`` takes the keep-outs away at once (their union): on 20 random outlines, each with 5 to 250
+    keep-out lines (pane outlines as closed convex rings, plate lines of one or two segments) and up to 20 label
+    boxes, it is the region one difference per
+    keep-out leaves (symmetric difference under 1e-6 of its area), and a point sample agrees with the distances:
+    no point of it within the margin of a keep-out line's segments away from its ends."""
+    import shapely
+    from shapely.geometry import LineString, Polygon
+
+    from fabrication.marking import free_region
+
+    rng = np.random.default_rng(11)
+    for k in range(20):
+        w, h = rng.uniform(200.0, 4000.0), rng.uniform(50.0, 400.0)
+        poly = Polygon(np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]) + rng.normal(0.0, 5.0, (4, 2)))
+        margin = rng.uniform(0.5, 15.0)
+        lines = []
+        for _ in range(int(rng.integers(5, 250))):
+            p = rng.uniform([0.0, -0.2 * h], [w, 1.2 * h])
+            if rng.random() < 0.5:                  # a pane's outline seen in the view: a closed convex ring
+                a = np.sort(rng.uniform(0.0, 2.0 * np.pi, 4))
+                q = p + rng.uniform(0.1, 0.4) * h * np.c_[np.cos(a), np.sin(a)] * [rng.uniform(1.0, 4.0), 1.0]
+                lines.append(np.vstack([q, q[:1]]))
+            else:                                   # a plate's top line: one or two segments
+                q = p + rng.normal(0.0, 0.2 * h, (int(rng.integers(1, 3)), 2)).cumsum(axis=0)
+                lines.append(np.vstack([p, q]))
+        boxes = []
+        for _ in range(int(rng.integers(0, 20))):
+            c = rng.uniform([0.0, 0.0], [w, h])
+            boxes.append(c + np.array([[-20.0, -4.0], [20.0, -4.0], [20.0, 4.0], [-20.0, 4.0]]))
+        got = free_region(poly, tuple(lines), tuple(boxes), margin)
+        want = poly.buffer(-margin, join_style="mitre")
+        for m in lines:
+            want = want.difference(LineString(m).buffer(margin, cap_style="flat"))
+        for b in boxes:
+            want = want.difference(Polygon(b).buffer(margin, join_style="mitre"))
+        assert got.symmetric_difference(want).area <= 1e-6 * max(want.area, 1.0), k
+        pts = rng.uniform([0.0, 0.0], [w, h], (2000, 2))
+        inside = pts[shapely.contains_xy(got, pts[:, 0], pts[:, 1])]
+        for m in lines:
+            seg_a, seg_b = m[:-1], m[1:]
+            d = seg_b - seg_a
+            t = np.einsum("pij,ij->pi", inside[:, None, :] - seg_a[None], d) / np.maximum((d * d).sum(1), 1e-12)
+            foot = seg_a[None] + np.clip(t, 0.0, 1.0)[..., None] * d[None]
+            near = np.linalg.norm(inside[:, None, :] - foot, axis=2) < 0.999 * margin
+            assert not np.any(near & (t > 1e-3) & (t < 1.0 - 1e-3)), k
