@@ -160,7 +160,7 @@ def place_label(outline: np.ndarray, lines: list[TextLine], margin: float, max_h
     LabelPlacement — ``fits`` is False when no height down to ``min_height`` fits; the block is then put at the
     pole of inaccessibility at ``min_height``.
     """
-    from shapely.geometry import LineString, Polygon
+    from shapely.geometry import Polygon
 
     poly = Polygon(outline)
     if not poly.is_valid:
