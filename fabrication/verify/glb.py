@@ -68,21 +68,16 @@ def mesh_facts(meshes: dict[str, Any], batch: int = BATCH_TRIANGLES) -> tuple[di
     trimesh's ``is_watertight`` has it — and its signed volume (the divergence theorem over its triangles, about
     its vertices' centre), in its own units.  An instanced shape (one mesh placed by many nodes) is measured
     once."""
+    import itertools
+
     closed: dict[str, bool] = {}
     volumes: dict[str, float] = {}
-    names: list[str] = []
-    count = 0
-    for name, mesh in meshes.items():
-        names.append(name)
-        count += len(mesh.faces)
-        if count >= batch:
-            c, w = _batch_facts({n: meshes[n] for n in names})
-            closed.update(c)
-            volumes.update(w)
-            names, count = [], 0
-    c, w = _batch_facts({n: meshes[n] for n in names})
-    closed.update(c)
-    volumes.update(w)
+    # a mesh's batch: the triangles before it, in whole batches
+    before = np.cumsum([0] + [len(m.faces) for m in meshes.values()])[:-1] // max(batch, 1)
+    for _, group in itertools.groupby(zip(before.tolist(), meshes), key=lambda kn: kn[0]):
+        c, w = _batch_facts({n: meshes[n] for _, n in group})
+        closed.update(c)
+        volumes.update(w)
     return closed, volumes
 
 
