@@ -155,8 +155,8 @@ class Verification:
         self.read.step_read.clear()
         self.read.beam_solids = None
         self.read.erection_passes = None
-        for producer in ("step", "erection"):
-            self._found.pop(producer, None)
+        for name in ("beam_solids", "erection_passes"):
+            self._found.pop(PRODUCERS[name], None)
 
     def _field(self, name: str) -> Any:
         """The field ``name`` of :attr:`read` once its producer (:data:`PRODUCERS`) has run."""
