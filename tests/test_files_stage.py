@@ -86,6 +86,84 @@ def test_a_failing_second_process_raises_the_writers_own_error(tmp_path, small_b
     assert not (tmp_path / "out").exists()
 
 
+def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
+    """Wrap the writers ``names`` so that each appends ``"<name> <pid>"`` to ``log`` as it runs (in any process)."""
+    import dataclasses
+    import os
+
+    from fabrication import writers
+
+    writers.load_writers()
+    for name in names:
+        original = writers.WRITERS[name]
+
+        def write(build, out, files, _name=name, _write=original.write):
+            with open(log, "a") as f:
+                f.write(f"{_name} {os.getpid()}\n")
+            return _write(build, out, files)
+
+        monkeypatch.setitem(writers.WRITERS, name, dataclasses.replace(original, write=write))
+
+
+def test_the_ifc_and_3dm_files_are_written_in_processes_that_end(tmp_path, small_build, monkeypatch):
+    """IfcOpenShell keeps every instance of a file it made until the process ends (and openNURBS its heap), so
+    writing on one core the IFC and the 3dm writers each run in a forked process of their own, and on two cores
+    in the second process: never in this one.  Without fork they run here and write the same bytes."""
+    import os
+
+    from fabrication.progress import Progress
+    from fabrication.writers import _parallel, write_all
+
+    def written(folder: str, parallel: bool) -> dict[str, int]:
+        log = tmp_path / f"{folder}.pids"
+        out = tmp_path / folder
+        out.mkdir()
+        write_all(small_build, out, Progress(quiet=True), parallel=parallel)
+        runs = [line.split() for line in log.read_text().splitlines()]
+        assert sorted(name for name, _ in runs) == ["ifc", "rhino"]          # each ran once
+        return {name: int(pid) for name, pid in runs}
+
+    _recording_pids(monkeypatch, tmp_path / "apart.pids", ("ifc", "rhino"))
+    apart = written("apart", parallel=False)
+    assert os.getpid() not in apart.values() and apart["ifc"] != apart["rhino"]
+    _recording_pids(monkeypatch, tmp_path / "second.pids", ("ifc", "rhino"))
+    second = written("second", parallel=True)
+    assert os.getpid() not in second.values() and second["ifc"] == second["rhino"]
+
+    monkeypatch.setattr(_parallel, "fork_available", lambda: False)
+    _recording_pids(monkeypatch, tmp_path / "here.pids", ("ifc", "rhino"))
+    assert set(written("here", parallel=False).values()) == {os.getpid()}
+    for name in ("model.ifc", "model.3dm"):
+        here = (tmp_path / "here" / name).read_bytes()
+        assert len(here) > 10_000
+        assert (tmp_path / "apart" / name).read_bytes() == here == (tmp_path / "second" / name).read_bytes()
+
+
+def test_a_failing_confined_writer_raises_its_own_error_on_one_core(tmp_path, small_build, monkeypatch):
+    """The IFC writer fails in its forked process; it runs again here, so the error is its own, and the temporary
+    folder is gone."""
+    import dataclasses
+
+    from ppfab.errors import FabricationError
+
+    from fabrication import writers
+
+    calls = []
+
+    def boom(build, out, files):
+        calls.append(1)
+        raise FabricationError("model.ifc: cannot write")
+
+    writers.load_writers()
+    monkeypatch.setitem(writers.WRITERS, "ifc", dataclasses.replace(writers.WRITERS["ifc"], write=boom))
+    monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", "0")
+    with pytest.raises(FabricationError, match="model.ifc: cannot write"):
+        small_build.write(tmp_path / "out")
+    assert calls == [1]                                   # the rerun here (the child's call is another process)
+    assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".lock" in p.name] == []
+    assert not (tmp_path / "out").exists()
+
+
 def test_parallel_writing_is_off_on_one_core_and_by_environment(monkeypatch):
     from fabrication.writers import _parallel
 

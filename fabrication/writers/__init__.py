@@ -73,12 +73,14 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
     """Run every enabled writer in order into ``out``; returns the ``files`` table.
 
     With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
-    per-type DXFs are written in a second process beside the others (:mod:`fabrication.writers._parallel`); the files
-    and the table are the same either way.  An optional file that fails stops the build with an error naming the
+    per-type DXFs, the IFC and the 3dm file are written in a second process beside the others
+    (:mod:`fabrication.writers._parallel`); without it the IFC and the 3dm file are still each written in a forked
+    process of their own (:data:`~fabrication.writers._parallel.CONFINED`: their libraries keep their memory).  The
+    files and the table are the same either way.  An optional file that fails stops the build with an error naming the
     file, the part and the ``[output]`` key that skips it (:mod:`fabrication.writers._failures`).
     """
     from ._failures import guarded
-    from ._parallel import SECOND_PROCESS, parallel_enabled, write_split
+    from ._parallel import CONFINED, SECOND_PROCESS, parallel_enabled, run_confined, write_split
 
     enabled = [guarded(w) for w in load_writers() if w.enabled(build.design)]
     files = declared_files(build, enabled)
@@ -90,7 +92,8 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
         progress.watch(out)                       # the status counts the files written so far
         try:
             for k, w in enumerate(enabled):
-                run_writer(w, build, out, files, progress, (k, len(enabled)))
+                run = run_confined if w.name in CONFINED else run_writer
+                run(w, build, out, files, progress, (k, len(enabled)))
         finally:
             progress.watch(None)
     check_declared(out, files, enabled)
