@@ -7,7 +7,9 @@
 
 The default design (or ``--design``) is built at each size ``faces_u x faces_v`` (``[geometry.params]``:
 the same surface cut into more, smaller panels) in a fresh subprocess, so that each size has its own peak
-memory (``ru_maxrss`` of that process, and of its writer processes when the files are written in parallel)
+memory (``ru_maxrss`` of that process and of its forked processes, and the peak of the whole process tree's
+proportional set size sampled every 0.5 s from outside, :mod:`tree_memory`: a forked process's resident set
+counts the pages it shares with the build again)
 and no import or cache is shared between sizes.  Both nesting budgets are set to ``--budget`` seconds at
 every size (the default's 6 + 3 s would make the nesting dominate and hide the other stages; the budget buys
 a fixed work count, so the nesting time is about the same at every size and its exponent is near 0).
@@ -90,6 +92,8 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
     from fabrication import build
 
     prog = Timed()
+    monitor = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "tree_memory.py"), str(os.getpid())],
+                               stdout=subprocess.PIPE, text=True)          # waited for after the CPU is read
     t0, c0 = time.perf_counter(), cpu()
     result = build(design, progress=prog, allow_large=True)
     stages = {k: [prog.times[k], prog.cpu.get(k, 0.0)] for k in prog.times}
@@ -100,6 +104,9 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
         t1, c1 = time.perf_counter(), cpu()
         peak = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                 resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
+        monitor.terminate()
+        said = monitor.communicate()[0].split()
+        tree_mb = float(said[1]) if len(said) == 3 else float("nan")
         floor_rows = []
         if floor:
             sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -115,6 +122,7 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
     print("RESULT " + json.dumps({"size": size, "faces": fu * fv, "parallel": parallel, "stages": stages,
                                   "floor": floor_rows,
                                   "writers": per_writer, "peak_mb": self_mb, "child_peak_mb": kids_mb,
+                                  "tree_pss_mb": tree_mb,
                                   "panels": result.summary.panels, "plates": result.summary.beam_plates,
                                   "glass_sheets": result.summary.glass_sheets,
                                   "plate_sheets": result.summary.plate_sheets}))
@@ -337,9 +345,10 @@ def table(results: list[dict], label: str) -> None:
         print(f"{s:<10}{cells}{exponent(faces, w):>9.2f}{exponent(faces, c):>9.2f}")
     share = "".join(f"{100 * r['stages']['files'][1] / r['stages']['total'][1]:>21.1f}%" for r in results)
     print(f"{'files %':<10}{share}   (share of the total CPU)")
-    mem = "".join(f"{r['peak_mb']:>15.0f} MB{r['child_peak_mb']:>4.0f}" if r["parallel"] else f"{r['peak_mb']:>19.0f} MB"
-                  for r in results)
-    print(f"{'peak RSS':<10}{mem}   (build process{'; writer processes' if results[0]['parallel'] else ''})")
+    mem = "".join(f"{r['peak_mb']:>13.0f} MB{r['child_peak_mb']:>6.0f}" for r in results)
+    print(f"{'peak RSS':<10}{mem}   (build process; forked processes, with the pages they share with it)")
+    tree = "".join(f"{r.get('tree_pss_mb', float('nan')):>19.0f} MB" for r in results)
+    print(f"{'peak PSS':<10}{tree}   (the build and every process below it, summed; tree_memory.py)")
     print(f"\n-- {label}: writers inside the files stage, seconds wall / CPU (CPU of this process only when "
           "parallel) --")
     for w in results[-1]["writers"]:
@@ -353,12 +362,12 @@ def table(results: list[dict], label: str) -> None:
         print(f"\n-- {label}: the build against the CAD kernel's plain write + read of its STEP files "
               "(step_floor.py, same process, after the build), CPU s --")
         print(f"{'size':<10}{'build':>10}{'floor':>10}{'build/floor':>13}{'verify':>10}{'verify %':>10}"
-              f"{'peak MB':>10}")
+              f"{'peak RSS':>10}{'peak PSS':>10}")
         for r in floors:
             fl = sum(x["read"] + x["write"] for x in r["floor"])
             tot, ver = r["stages"]["total"][1], r["stages"]["verify"][1]
             print(f"{r['size']:<10}{tot:>10.1f}{fl:>10.1f}{tot / fl:>13.2f}{ver:>10.1f}{100 * ver / tot:>9.1f}%"
-                  f"{r['peak_mb'] + r['child_peak_mb']:>10.0f}")
+                  f"{r['peak_mb']:>10.0f}{r.get('tree_pss_mb', float('nan')):>10.0f}")
 
 
 def main(argv: list[str]) -> None:

@@ -8,6 +8,7 @@ Not a check (the leading underscore keeps it out of the registry).
 from __future__ import annotations
 
 import re
+from array import array
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -155,11 +156,9 @@ def read_entities(data: bytes) -> Entities:
         raise StepTextError("no DATA section")
     if end < start:
         raise StepTextError("the DATA section does not end (no ENDSEC; after it): the file is cut short")
-    text = data[start + 5:end].decode("latin-1")
-    ids: list[int] = []
-    kinds: list[int] = []
-    starts: list[int] = []
-    stops: list[int] = []
+    text = str(memoryview(data)[start + 5:end], "latin-1")      # no copy of the section's bytes first
+    ids, kinds = array("q"), array("i")         # 8 and 4 bytes an entity where a list of ints takes 36
+    starts, stops = array("q"), array("q")
     codes: dict[str, int] = {}
     names: list[str] = []
     pos, size = 0, len(text)
@@ -186,8 +185,8 @@ def read_entities(data: bytes) -> Entities:
         pos = m.end()
         if pos >= size:
             break
-    return Entities(text, np.array(ids, dtype=np.int64), np.array(kinds, dtype=np.int32),
-                    np.array(starts, dtype=np.int64), np.array(stops, dtype=np.int64), names)
+    return Entities(text, np.frombuffer(ids, dtype=np.int64), np.frombuffer(kinds, dtype=np.int32),
+                    np.frombuffer(starts, dtype=np.int64), np.frombuffer(stops, dtype=np.int64), names)
 
 
 _REFS = re.compile(r"#(\d+)")

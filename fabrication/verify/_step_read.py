@@ -175,7 +175,8 @@ def sample_file(data: bytes, solids: list[TextSolid], entities: Entities | None 
     """A STEP file with the whole product tree of ``data`` (every product, occurrence and placement) but the
     B-rep and colour of one solid per kind (:meth:`TextSolid.shape_key`) only: the representation of every other
     solid is left empty.  Also, per solid, whether it is its kind's first (kept).  ``entities``: those of
-    ``data`` when already read (:func:`~._step_text_read.read_entities`)."""
+    ``data`` when already read (:func:`~._step_text_read.read_entities`); ``data`` may then be the file's bytes up
+    to its ``DATA;`` only."""
     if entities is None:
         entities = read_entities(data)
     seen: set[tuple] = set()
@@ -308,6 +309,7 @@ def _read_text(v: "Verification", rel: str) -> list[StepSolid] | None:
         sys.audit("fabrication.verify.read", os.fspath(v.folder / rel))
         data = (v.folder / rel).read_bytes()
         entities = read_entities(data)
+        data = data[:data.find(b"DATA;") + 5]          # the header is all the kernel's sample needs of the bytes
         solids = solids_of(StepModel(entities))
     except (OSError, ValueError, IndexError, KeyError, TypeError, AttributeError) as exc:
         v.error(rel, "", f"cannot be read at the text level ({exc})")

@@ -30,7 +30,7 @@ import numpy as np
 from ._shapes import cross3
 from ._step_part21 import Entities, Ref, StepTextError, Typed, fast_params, parse_params, read_entities
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Arc:
     """A circular edge: centre, unit axis about which it runs counter-clockwise from its start to its end vertex,
     radius and sweep (radians, in (0, 2π])."""
@@ -41,7 +41,7 @@ class Arc:
     sweep: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Loop:
     """A boundary loop of a face: indices into the solid's vertices, edge ``k`` running from ``vertices[k]`` to
     ``vertices[k + 1]`` (cyclic), straight or ``arcs[k]``; ``edges[k]`` the id of its EDGE_CURVE and ``forward[k]``
@@ -53,7 +53,7 @@ class Loop:
     forward: tuple[bool, ...]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Face:
     """A face: ``surface`` ``"plane"`` or ``"cylinder"``; ``origin`` a point of the surface (on the axis of a
     cylinder); ``normal`` the outward unit normal of a plane (the axis of a cylinder); ``outward`` whether the
@@ -68,7 +68,7 @@ class Face:
     loops: tuple[Loop, ...]
 
 
-@dataclass
+@dataclass(slots=True)
 class TextSolid:
     """One placed solid of a STEP file as the text-level reader sees it: its product name, the names of the
     assemblies above it (root first), its colour ``(r, g, b, a)`` or ``None``, its vertices placed in the

@@ -35,7 +35,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence, Union
+from typing import Iterator, Sequence, Union
 
 import numpy as np
 
@@ -299,7 +299,12 @@ class _Data:
         return self.add(f"AXIS2_PLACEMENT_3D('',#{o},#{self.direction(z)},#{self.direction(x)})")
 
     def text(self) -> str:
-        return "".join(f"#{k} = {line};\n" for k, line in enumerate(self.lines, 1))
+        return "".join(self.chunks())
+
+    def chunks(self, size: int = 20_000) -> Iterator[str]:
+        """The records ``#k = …;`` one per line, ``size`` records a piece (a large file need not be one string)."""
+        for start in range(0, len(self.lines), size):
+            yield "".join(f"#{k} = {line};\n" for k, line in enumerate(self.lines[start:start + size], start + 1))
 
 
 def _placement_axis(data: _Data, m: np.ndarray) -> int:
@@ -421,6 +426,11 @@ def _check(solid: PlanarSolid) -> None:
 def step_text(root: Assembly, file_name: str, description: str = "", instance: bool = True) -> bytes:
     """The whole STEP file of the product tree ``root`` (see the module docstring); ``instance``: solids of
     one shape share one product and B-rep, else every solid is a product of its own."""
+    return "".join(_step_pieces(root, file_name, description, instance)).encode("ascii")
+
+
+def _step_pieces(root: Assembly, file_name: str, description: str, instance: bool) -> Iterator[str]:
+    """:func:`step_text` as pieces of text: the header, the DATA section in pieces, the end."""
     data = _Data()
     app = data.add("APPLICATION_CONTEXT('core data for automotive mechanical design processes')")
     data.add(f"APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2000,#{app})")
@@ -508,7 +518,9 @@ def step_text(root: Assembly, file_name: str, description: str = "", instance: b
     _styles(data, styled, ctx)
     head = ("ISO-10303-21;\nHEADER;\n" + step_header(file_name, description, PREPROCESSOR).decode("ascii")
             + f"FILE_SCHEMA(('{SCHEMA}'));\nENDSEC;\nDATA;\n")
-    return (head + data.text() + "ENDSEC;\nEND-ISO-10303-21;\n").encode("ascii")
+    yield head
+    yield from data.chunks()
+    yield "ENDSEC;\nEND-ISO-10303-21;\n"
 
 
 def _leaves(node: Assembly):
@@ -549,7 +561,13 @@ def _styles(data: _Data, styled: list[tuple[int, tuple[float, float, float, floa
 
 
 def write_step(root: Assembly, path: str | os.PathLike, description: str = "", instance: bool = True) -> Path:
-    """Write the product tree ``root`` to the STEP file ``path`` (:func:`step_text`)."""
+    """Write the product tree ``root`` to the STEP file ``path``: the bytes of :func:`step_text`, written piece by
+    piece (at 88 × 60 faces glazing.step is some 300 MB: its text and its bytes need not be held at once)."""
     path = Path(path)
-    path.write_bytes(step_text(root, path.name, description, instance))
+    pieces = _step_pieces(root, path.name, description, instance)
+    first = next(pieces)                            # the checks of every solid run before the file is opened
+    with open(path, "w", encoding="ascii", newline="\n") as fh:
+        fh.write(first)
+        for piece in pieces:
+            fh.write(piece)
     return path
