@@ -297,3 +297,20 @@ def test_an_instanced_shape_is_rebuilt_once_for_the_erection_check_and_moved_whe
         for f in s.faces():                                  # the lazily placed faces carry the placed vertices
             idx = np.concatenate([lp.vertices for lp in f.loops])
             assert np.abs((s.points[idx] - f.origin) @ f.normal).max() <= 1e-9
+
+
+def test_the_file_is_written_in_pieces_with_the_bytes_of_the_whole_text(tmp_path, monkeypatch):
+    """``write_step`` writes the DATA section a few records at a time (a large file is never one string): the file
+    holds exactly the bytes of ``step_text``, whatever the size of the pieces, and the text-level reader reads
+    every solid from it."""
+    from fabrication.writers import step_template
+
+    solids, _, beams = _solids()
+    whole = step_text(_tree(solids, beams), "glazing.step", "glazing of a demo")
+    assert whole.count(b";\n#") > 300
+    for size in (1, 7, 20_000):
+        monkeypatch.setattr(step_template, "PIECE_RECORDS", size)
+        (tmp_path / f"p{size}").mkdir()
+        path = write_step(_tree(solids, beams), tmp_path / f"p{size}" / "glazing.step", "glazing of a demo")
+        assert path.read_bytes() == whole
+    assert len(read_text_solids(path)) == len(solids)

@@ -278,6 +278,10 @@ def _newell(points: np.ndarray) -> np.ndarray:
     return np.cross(points, nxt).sum(axis=0)
 
 
+PIECE_RECORDS = 20_000
+"""Records of the DATA section written at a time by :func:`write_step` (a piece of about 2 MB)."""
+
+
 class _Data:
     """The DATA section being written: entities numbered in order."""
 
@@ -301,8 +305,10 @@ class _Data:
     def text(self) -> str:
         return "".join(self.chunks())
 
-    def chunks(self, size: int = 20_000) -> Iterator[str]:
-        """The records ``#k = …;`` one per line, ``size`` records a piece (a large file need not be one string)."""
+    def chunks(self) -> Iterator[str]:
+        """The records ``#k = …;`` one per line, :data:`PIECE_RECORDS` records a piece (a large file need not be
+        one string)."""
+        size = PIECE_RECORDS
         for start in range(0, len(self.lines), size):
             yield "".join(f"#{k} = {line};\n" for k, line in enumerate(self.lines[start:start + size], start + 1))
 
