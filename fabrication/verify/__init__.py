@@ -157,6 +157,9 @@ class Verification:
         self.read.erection_passes = None
         for name in ("beam_solids", "erection_passes"):
             self._found.pop(PRODUCERS[name], None)
+        from ._step_read import give_back_memory
+
+        give_back_memory()
 
     def _field(self, name: str) -> Any:
         """The field ``name`` of :attr:`read` once its producer (:data:`PRODUCERS`) has run."""

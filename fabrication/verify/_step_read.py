@@ -228,14 +228,21 @@ def kernel_sample(path: str | os.PathLike, solids: list[TextSolid], data: bytes 
     the same products in the same order with the same names, assembly paths and placements; each solid loaded
     valid (BRepCheck), with the text reader's vertices, volume and colour.  What disagrees, one line each
     (empty when all agree)."""
-    import tempfile
-
-    from ._shapes import set_distance
-
     if data is None:
         with open(path, "rb") as fh:
             data = fh.read()
     sample, kept = sample_file(data, solids, entities)
+    return kernel_compare(sample, kept, solids)
+
+
+def kernel_compare(sample: bytes, kept: list[bool], solids: list[TextSolid]) -> list[str]:
+    """:func:`kernel_sample` once the sample file is made (:func:`sample_file`: its bytes, and per solid whether
+    its B-rep is in it): the kernel reads it and what disagrees with ``solids`` is returned, one line each.
+    Apart so that a caller can let go of the file's text and entity tables before the kernel reads."""
+    import tempfile
+
+    from ._shapes import set_distance
+
     fd, tmp = tempfile.mkstemp(suffix=".step")
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -318,9 +325,26 @@ def _read_text(v: "Verification", rel: str) -> list[StepSolid] | None:
         for problem in s.problems():
             v.error(rel, s.name or "(unnamed)", f"solid is not valid: {problem}")
     try:
-        for problem in kernel_sample(v.folder / rel, solids, data, entities):
+        sample, kept = sample_file(data, solids, entities)
+        del entities                    # the text and its tables go before the kernel reads: at 88 × 60 faces
+        for problem in kernel_compare(sample, kept, solids):       # about 0.4 GB of glazing.step's peak
             v.error(rel, "", f"the CAD kernel check of the file: {problem}")
     except Exception as exc:  # noqa: BLE001 - reported as a finding
         v.error(rel, "", f"cannot be read by the CAD kernel ({exc})")
         return None
+    give_back_memory()
     return [StepSolid(s.name, s.path, s, s.colour) for s in solids]
+
+
+def give_back_memory() -> None:
+    """Return the C heap's free memory to the system (glibc's ``malloc_trim``; elsewhere nothing).
+
+    Reading a large STEP file frees as much as it keeps (the text, its tables, the kernel's sample), and the
+    C allocator holds on to it: at 88 × 60 faces glazing.step's read leaves 1,317 MB resident of which 425 MB
+    are free, under every check that follows.  A few milliseconds."""
+    import ctypes
+
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # pragma: no cover - not glibc
+        pass
