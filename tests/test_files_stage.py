@@ -61,9 +61,10 @@ def test_parallel_and_serial_writing_give_identical_files(tmp_path, small_build)
     assert any(k.startswith("splices/") for k in same) and "bites.csv" in same and "welds.csv" in same
 
 
-def test_a_failing_second_process_raises_the_writers_own_error(tmp_path, small_build, monkeypatch):
-    """The per-type DXF writer fails in the forked process; the build reruns it here, so the error is its own,
-    and the temporary folder is gone."""
+@pytest.mark.parametrize("writer, file, parallel", [("dxf_types", "types/T01.dxf", "1"), ("ifc", "model.ifc", "0")])
+def test_a_failing_forked_writer_raises_its_own_error(tmp_path, small_build, monkeypatch, writer, file, parallel):
+    """A writer fails in a forked process (the per-type DXFs in the second process on two cores, the IFC file in
+    its own on one); the build reruns it here, so the error is its own, and the temporary folder is gone."""
     import dataclasses
 
     from ppfab.errors import FabricationError
@@ -74,12 +75,12 @@ def test_a_failing_second_process_raises_the_writers_own_error(tmp_path, small_b
 
     def boom(build, out, files):
         calls.append(1)
-        raise FabricationError("types/T01.dxf: cannot write")
+        raise FabricationError(f"{file}: cannot write")
 
     writers.load_writers()
-    monkeypatch.setitem(writers.WRITERS, "dxf_types", dataclasses.replace(writers.WRITERS["dxf_types"], write=boom))
-    monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", "1")
-    with pytest.raises(FabricationError, match="T01.dxf: cannot write"):
+    monkeypatch.setitem(writers.WRITERS, writer, dataclasses.replace(writers.WRITERS[writer], write=boom))
+    monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", parallel)
+    with pytest.raises(FabricationError, match=f"{file}: cannot write"):
         small_build.write(tmp_path / "out")
     assert calls == [1]                                   # the rerun here (the child's call is another process)
     assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".lock" in p.name] == []
@@ -137,31 +138,6 @@ def test_the_ifc_and_3dm_files_are_written_in_processes_that_end(tmp_path, small
         here = (tmp_path / "here" / name).read_bytes()
         assert len(here) > 10_000
         assert (tmp_path / "apart" / name).read_bytes() == here == (tmp_path / "second" / name).read_bytes()
-
-
-def test_a_failing_confined_writer_raises_its_own_error_on_one_core(tmp_path, small_build, monkeypatch):
-    """The IFC writer fails in its forked process; it runs again here, so the error is its own, and the temporary
-    folder is gone."""
-    import dataclasses
-
-    from ppfab.errors import FabricationError
-
-    from fabrication import writers
-
-    calls = []
-
-    def boom(build, out, files):
-        calls.append(1)
-        raise FabricationError("model.ifc: cannot write")
-
-    writers.load_writers()
-    monkeypatch.setitem(writers.WRITERS, "ifc", dataclasses.replace(writers.WRITERS["ifc"], write=boom))
-    monkeypatch.setenv("PPFAB_PARALLEL_WRITERS", "0")
-    with pytest.raises(FabricationError, match="model.ifc: cannot write"):
-        small_build.write(tmp_path / "out")
-    assert calls == [1]                                   # the rerun here (the child's call is another process)
-    assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".lock" in p.name] == []
-    assert not (tmp_path / "out").exists()
 
 
 def test_parallel_writing_is_off_on_one_core_and_by_environment(monkeypatch):
