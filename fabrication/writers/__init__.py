@@ -80,7 +80,7 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
     file, the part and the ``[output]`` key that skips it (:mod:`fabrication.writers._failures`).
     """
     from ._failures import guarded
-    from ._parallel import CONFINED, SECOND_PROCESS, parallel_enabled, run_confined, write_split
+    from ._parallel import CONFINED, SECOND_PROCESS, confined, parallel_enabled, write_split
 
     enabled = [guarded(w) for w in load_writers() if w.enabled(build.design)]
     files = declared_files(build, enabled)
@@ -92,8 +92,7 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
         progress.watch(out)                       # the status counts the files written so far
         try:
             for k, w in enumerate(enabled):
-                run = run_confined if w.name in CONFINED else run_writer
-                run(w, build, out, files, progress, (k, len(enabled)))
+                run_writer(confined(w) if w.name in CONFINED else w, build, out, files, progress, (k, len(enabled)))
         finally:
             progress.watch(None)
     check_declared(out, files, enabled)

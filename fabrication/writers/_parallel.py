@@ -16,7 +16,7 @@ removed.  When the child fails, its writers run again here, so the error raised 
 Used when fork is available and the process may run on at least two cores (:func:`parallel_enabled`);
 ``PPFAB_PARALLEL_WRITERS=0`` turns it off, ``=1`` on.  Without the second process, the writers of
 :data:`CONFINED` (whose libraries keep their memory) still run each in a forked process of its own, one at a
-time (:func:`run_confined`), under the same rules.
+time (:func:`confined`), under the same rules.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ CONFINED: tuple[str, ...] = ("ifc", "rhino")
 file's instances (a ``file`` of 200,000 points deleted leaves its 28 MB resident, and a second one adds 28 MB
 more; IfcOpenShell issue 7185), and openNURBS's heap stays with the process.  At 44 × 30 faces the IFC writer
 left 370 MB and the 3dm writer 210 MB resident, under the whole self-check that follows.  Each runs in a forked
-process that ends when its file is written (:func:`run_confined`; in the second process when there is one), so
+process that ends when its file is written (:func:`confined`; in the second process when there is one), so
 that memory goes back to the system.  Where fork is not available they run here."""
 
 SECOND_PROCESS: tuple[str, ...] = ("dxf_types",) + CONFINED
@@ -160,34 +160,30 @@ def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer], files:
     return results
 
 
-def run_confined(w: Writer, build: "BuildRecord", out: Path, files: Files, progress: "Progress",
-                 place: tuple[int, int] | None = None) -> None:
-    """:func:`~fabrication.writers.base.run_writer` for a writer of :data:`CONFINED` in one process: the writer runs
-    in a forked process of its own, waited for here, so what its library keeps goes when that process ends.
-    Without fork, or when no process can be had, it runs here; when the process fails it runs again here, so the
-    error raised is the writer's own.  The file written is the same either way."""
-    if not fork_available():
-        run_writer(w, build, out, files, progress, place)
-        return
-    try:
-        proc = Forked(lambda: _side_writers(build, out, [w], files), f"ppfab-{w.name}")
-    except OSError:                             # no process to be had
-        run_writer(w, build, out, files, progress, place)
-        return
-    progress.start(w.name)
-    if place is not None:
-        progress.advance(place[0], None, f"file set {place[0] + 1} of {place[1]}")
-    try:
-        status, payload = proc.result()
-    except BaseException:
-        progress.fail()
-        raise
-    finally:
-        proc.close()
-    if status == "ok":
-        progress.done(payload[0][1])
-        return
-    run_writer(w, build, out, files, progress, place)
+def confined(w: Writer) -> Writer:
+    """``w`` writing in a forked process of its own, waited for (for the writers of :data:`CONFINED` when there is
+    no second process): what its library keeps goes when that process ends.  Without fork, or when no process can
+    be had, it writes here; when the process fails it writes again here, so the error raised is the writer's own.
+    The file written is the same either way (like :func:`~fabrication.writers._failures.guarded`, a writer with
+    another ``write``: :func:`~fabrication.writers.base.run_writer` shows and times it as any other)."""
+    import dataclasses
+
+    write = w.write
+
+    def confined_write(build: "BuildRecord", out: Path, files: Files) -> str:
+        if not fork_available():
+            return write(build, out, files)
+        try:
+            proc = Forked(lambda: write(build, out, files), f"ppfab-{w.name}")
+        except OSError:                         # no process to be had
+            return write(build, out, files)
+        try:
+            status, note = proc.result()
+        finally:
+            proc.close()
+        return note if status == "ok" else write(build, out, files)
+
+    return dataclasses.replace(w, write=confined_write)
 
 
 def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: list[Writer], files: Files) -> None:

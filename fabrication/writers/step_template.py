@@ -302,9 +302,6 @@ class _Data:
         o = origin if isinstance(origin, int) else self.point(origin)
         return self.add(f"AXIS2_PLACEMENT_3D('',#{o},#{self.direction(z)},#{self.direction(x)})")
 
-    def text(self) -> str:
-        return "".join(self.chunks())
-
     def chunks(self) -> Iterator[str]:
         """The records ``#k = …;`` one per line, :data:`PIECE_RECORDS` records a piece (a large file need not be
         one string)."""
