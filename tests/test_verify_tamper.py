@@ -344,10 +344,10 @@ def test_the_strip_bound_follows_the_angle_of_the_top_edge_to_the_axis():
 
 
 def test_verify_on_two_cores_finds_what_one_core_finds(copy):
-    """Findings on both sides of the split (a cover plate row gone: the splices check, second process; a plate
-    outline moved in its cutting sheet: the dxf and placement checks, this process) come out the same, in the
-    same order, whether the checks run in one process or two; a check that raises in the second process is
-    run again here and raises its own error."""
+    """Findings on both sides of the split (a cover plate row gone: the splices check, this process; a plate
+    outline moved in its cutting sheet: the dxf check here and the placement check in the second process) come
+    out the same, in the same order, whether the checks run in one process or two; a check that raises in the
+    second process is run again here and raises its own error."""
     from fabrication import verify as verify_mod
 
     rows = read_rows(copy / "parts.csv")
@@ -360,8 +360,9 @@ def test_verify_on_two_cores_finds_what_one_core_finds(copy):
     assert [str(f) for f in one.findings] == [str(f) for f in two.findings]
     assert one.checked == two.checked
     files = {f.file for f in two.findings}
-    assert "parts.csv" in files and rel in files                  # both halves found something
-    assert any(c in verify_mod.SECOND_PROCESS for c in ("splices",))
+    assert "parts.csv" in files and rel in files
+    codes = {f.code for f in two.findings}
+    assert codes & set(verify_mod.SECOND_PROCESS) and codes - set(verify_mod.SECOND_PROCESS)   # both halves found
 
     def broken(v):
         raise RuntimeError("the ifc check broke")
@@ -373,6 +374,56 @@ def test_verify_on_two_cores_finds_what_one_core_finds(copy):
             verify_mod.verify(copy, parallel=True)
     finally:
         verify_mod._TABLE.entries["ifc"] = ifc
+
+
+def test_the_exchange_model_checks_run_in_processes_that_end(copy, monkeypatch, tmp_path):
+    """IfcOpenShell and openNURBS keep what they read until the process ends, so the ifc, rhino and glb checks
+    each run in a forked process of their own (on two cores, below the second process): never in this process
+    and never two in one.  Without fork they run here.  A model.3dm and a model.glb cut short are found the same
+    either way, and what the second process's checks found comes back in report order."""
+    import os
+
+    from fabrication import verify as verify_mod
+    from fabrication.writers import _parallel
+
+    for name in ("model.3dm", "model.glb"):
+        data = (copy / name).read_bytes()
+        (copy / name).write_bytes(data[: len(data) // 2])
+    reseal(copy, "model.3dm", "model.glb")
+    confined = verify_mod.CONFINED
+    assert set(confined) == {"ifc", "rhino", "glb"}
+    table = verify_mod.load_table()
+
+    def recording(log):
+        for name in confined:
+            original = table[name]
+
+            def run(v, _name=name, _run=original.run):
+                with open(log, "a") as f:
+                    f.write(f"{_name} {os.getpid()}\n")
+                _run(v)
+
+            monkeypatch.setitem(verify_mod._TABLE.entries, name, verify_mod.Check(name, run))
+
+    def pids(log):
+        runs = [line.split() for line in log.read_text().splitlines()]
+        assert sorted(n for n, _ in runs) == sorted(confined)           # each ran once
+        return {n: int(p) for n, p in runs}
+
+    results = {}
+    for mode, parallel in (("serial", False), ("two", True)):
+        recording(tmp_path / f"{mode}.pids")
+        results[mode] = verify_mod.verify(copy, parallel=parallel)
+        got = pids(tmp_path / f"{mode}.pids")
+        assert os.getpid() not in got.values() and len(set(got.values())) == len(confined)
+    monkeypatch.setattr(_parallel, "fork_available", lambda: False)
+    recording(tmp_path / "here.pids")
+    results["here"] = verify_mod.verify(copy, parallel=False)
+    assert set(pids(tmp_path / "here.pids").values()) == {os.getpid()}
+    found = {mode: [str(f) for f in v.findings] for mode, v in results.items()}
+    assert found["serial"] == found["two"] == found["here"]
+    assert {"model.3dm", "model.glb"} <= {f.file for f in results["here"].findings}
+    assert results["serial"].checked == results["two"].checked == results["here"].checked
 
 
 def test_checks_get_what_they_read_in_any_order_and_either_process(copy, monkeypatch):

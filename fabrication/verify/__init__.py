@@ -305,7 +305,7 @@ sheets, the STEP files, the exchange models, the drawings — what a reader shou
 command prints the first findings).  Presentation only: a check not named here runs and reports after these,
 by name, and every check gets what it reads whatever the order (:meth:`Verification.after`)."""
 
-READ_FIRST: tuple[str, ...] = ("manifest", "mesh", "parts", "nodes", "dxf", "types")
+READ_FIRST: tuple[str, ...] = ("manifest", "mesh", "parts", "nodes", "dxf")
 """The checks that fill what most others read (:data:`PRODUCERS`): the second process
 (:data:`SECOND_PROCESS`) starts once they have run here, so that it starts with it all read; a matter of time
 only."""
@@ -328,23 +328,59 @@ checks come after).  A test reads every STEP file once in a verify: a check read
 would read its file a second time."""
 
 
+CONFINED: tuple[str, ...] = ("ifc", "rhino", "glb")
+"""Checks that run in a forked process of their own which ends with them (:func:`_run_confined`), because the
+libraries that read their files keep what they allocated: IfcOpenShell never frees a file's instances, openNURBS
+keeps its heap (as the writers of :data:`fabrication.writers._parallel.CONFINED`), and glTF's meshes are read in
+batches whose arrays the allocator keeps in fragments.  At 44 × 30 faces a serial verify held +181 MB after the
+3dm check and +93 MB after the glb check; on two cores they ran after one another in the second process, which
+peaked at 1,227 MB.  None of them fills anything another check reads (:data:`PRODUCERS`)."""
+
+
+def _run_confined(v: Verification, c: Check) -> tuple[list[Finding], list[str]]:
+    """:meth:`Verification.run_check` of ``c`` in a forked process that ends with it, its findings sent back; here
+    when fork is not available, no process can be had, or the process fails (so an error raised is the check's
+    own)."""
+    from ..writers._parallel import Forked, fork_available
+
+    if not fork_available() or c.name in v._found:
+        return v.run_check(c)
+    try:
+        proc = Forked(lambda: v.run_check(c), f"ppfab-verify-{c.name}")
+    except OSError:                             # no process to be had
+        return v.run_check(c)
+    try:
+        status, got = proc.result()
+    finally:
+        proc.close()
+    if status != "ok":
+        return v.run_check(c)
+    v._found[c.name] = got
+    return got
+
+
 def _run_releasing(v: Verification, c: Check, checks: list[Check]) -> tuple[list[Finding], list[str]]:
-    """:meth:`Verification.run_check` of ``c``, then :meth:`Verification.release_solids` when ``c`` is the last of
-    ``checks`` (a process's list, in order) to read solids (:data:`SOLID_READERS`)."""
-    got = v.run_check(c)
+    """:meth:`Verification.run_check` of ``c`` (in a process of its own for the checks of :data:`CONFINED`), then
+    :meth:`Verification.release_solids` when ``c`` is the last of ``checks`` (a process's list, in order) to read
+    solids (:data:`SOLID_READERS`)."""
+    got = _run_confined(v, c) if c.name in CONFINED else v.run_check(c)
     readers = [k.name for k in checks if k.name in SOLID_READERS]
     if readers and c.name == readers[-1]:
         v.release_solids()
     return got
 
 
-SECOND_PROCESS: tuple[str, ...] = ("splices", "glass_order", "bite", "glazing_step", "ifc")
-"""Checks that run in a forked process beside the others on two cores, once :data:`READ_FIRST` has run here.
-Chosen by the CPU seconds of each check on the bundled default (one process, docs/performance.md): at 44 × 30
-faces the fork gets bite 21, ifc 11, splices 6 and glass order 1 against step 16, panels_step 6, step_geometry
-4, rhino and glb 2 each here; at 88 × 60 the bite check alone (glazing.step, 21,416 solids) is about a quarter
-of the whole.  The glazing_step check reads glazing.step too, and runs beside the bite check so that the file
-is read once.  What they read that this process had not read when it forked they read themselves."""
+SECOND_PROCESS: tuple[str, ...] = ("types", "marking", "glass_order", "dxf_stock", "placement", "ifc", "rhino",
+                                   "glb", "drawings")
+"""Checks that run in a forked process beside the others on two cores, once :data:`READ_FIRST` has run here:
+none of them reads a STEP file, so every STEP file, and above all glazing.step (74,160 solids at 88 × 60
+faces), is read and held in one process only (:data:`SOLID_READERS` all run here).  With the bite check in the
+second process and the clash, retention and erection checks here, both processes read glazing.step: at 88 × 60
+the process tree held 4.9 GB (docs/performance.md).  The split also balances the CPU: in a serial verify at
+88 × 60 the checks named here take about 270 CPU s (ifc 142, rhino 61, types 25, glb 22, drawings 16) and the
+STEP checks about 290.  What they read that this process had not read when it forked they read themselves: the
+per-type DXFs are read there only, by the types check, and the dxf_stock check, which reads every DXF file,
+runs beside it (here it read them a second time: +22 CPU s at 88 × 60)."""
 
 
 def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = False,
@@ -380,7 +416,7 @@ def verify(folder: str | Path, parallel: bool | None = None, kernel: bool = Fals
                 return _assembled(v, checks, done)
             if second and child is None and all(n in done for n in READ_FIRST if n in CHECKS):
                 try:
-                    child = Forked(lambda: _run_all(v, second), "ppfab-verify")
+                    child = Forked(lambda: _run_all(v, second), "ppfab-verify", may_fork=True)
                 except OSError:                 # no process to be had: the checks run here
                     child = None
         if child is not None:

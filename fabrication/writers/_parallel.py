@@ -85,14 +85,19 @@ class Forked:
     SIGTERM/SIGHUP and with its parent (:func:`_die_with_parent`), and ends with ``os._exit`` (never
     unwinding the parent's ``with`` blocks).  :meth:`result` waits for it: ``("ok", value)``, or ``("failed", why)`` when ``job`` raised or the process died first;
     :meth:`close` terminates it if still running and joins it (call it in a ``finally``).  Used by the writers
-    here and by ``ppfab verify`` (:func:`fabrication.verify.verify`)."""
+    here and by ``ppfab verify`` (:func:`fabrication.verify.verify`).
 
-    def __init__(self, job: Callable[[], Any], name: str):
+    ``may_fork``: the child may fork processes of its own (``multiprocessing`` forbids that to a daemon
+    process).  It is then no daemon, which changes nothing here: :meth:`close` ends and joins it either way,
+    and it dies with its parent."""
+
+    def __init__(self, job: Callable[[], Any], name: str, may_fork: bool = False):
         import multiprocessing
 
         ctx = multiprocessing.get_context("fork")
         self._recv, send = ctx.Pipe(duplex=False)
-        self._proc = ctx.Process(target=_forked_main, args=(job, send, os.getpid()), name=name, daemon=True)
+        self._proc = ctx.Process(target=_forked_main, args=(job, send, os.getpid()), name=name,
+                                 daemon=not may_fork)
         self._proc.start()
         send.close()
 
