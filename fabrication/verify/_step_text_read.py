@@ -66,6 +66,66 @@ class Face:
     outward: bool
     radius: float
     loops: tuple[Loop, ...]
+    index: int = -1
+    """Its place in the solid's shell (:attr:`TextSolid.shell`)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ShellCode:
+    """The faces of one B-rep in its own coordinates, packed into a few arrays (kept once per B-rep, shared by
+    every solid placing it): :meth:`faces` unpacks them into :class:`Face` records, placed, when a check asks.
+
+    Why packed: at 88 × 60 faces glazing.step has 74,160 solids, and a shell kept as records (a face with its
+    loops, arcs, edge tuples and small arrays: about 30 Python objects) held about 1 kB per face.
+
+    ``planes (f, 10)``: per face its surface's origin, normal (outward for a plane; a cylinder's axis), reference
+    direction and radius (0 for a plane); ``kinds (f, 2)``: whether it is a cylinder, whether the face's normal is
+    the surface's; ``face_loops (f + 1,)``: face ``i``'s loops are ``face_loops[i]`` … ``face_loops[i + 1] - 1``;
+    ``loop_steps (L + 1,)``: loop ``j``'s edges are the rows ``loop_steps[j]`` … of ``steps (V, 4)`` (the vertex
+    it starts from, the EDGE_CURVE's id, 1 when the loop runs along it, the row of ``arcs`` or -1 when straight);
+    ``arcs (A, 8)``: centre, unit axis, radius and sweep of each circular edge (as :class:`Arc`)."""
+
+    planes: np.ndarray
+    kinds: np.ndarray
+    face_loops: np.ndarray
+    loop_steps: np.ndarray
+    steps: np.ndarray
+    arcs: np.ndarray
+
+    def faces(self, rot: np.ndarray | None = None, shift: np.ndarray | None = None) -> list[Face]:
+        """The faces, moved by the rigid motion ``x ↦ rot x + shift`` when given (a proper rotation: arcs keep
+        their sweep)."""
+        planes, arcs = self.planes, self.arcs
+        origin, normal, ref_dir = planes[:, 0:3], planes[:, 3:6], planes[:, 6:9]
+        centre, axis = arcs[:, 0:3], arcs[:, 3:6]
+        if rot is not None:
+            move = rot.T
+            origin, normal, ref_dir = origin @ move + shift, normal @ move, ref_dir @ move
+            centre, axis = centre @ move + shift, axis @ move
+        arc_records = [Arc(centre[k], axis[k], float(arcs[k, 6]), float(arcs[k, 7])) for k in range(len(arcs))]
+        steps, bounds = self.steps, self.loop_steps.tolist()
+        loops: list[Loop] = []
+        for j in range(len(bounds) - 1):
+            rows = steps[bounds[j]:bounds[j + 1]]
+            which = rows[:, 3].tolist()
+            loops.append(Loop(rows[:, 0], tuple(None if k < 0 else arc_records[k] for k in which),
+                              tuple(rows[:, 1].tolist()), tuple(bool(x) for x in rows[:, 2].tolist())))
+        first = self.face_loops.tolist()
+        cylinder, outward = self.kinds[:, 0].tolist(), self.kinds[:, 1].tolist()
+        radius = planes[:, 9].tolist()
+        return [Face("cylinder" if cylinder[i] else "plane", origin[i], normal[i], ref_dir[i], bool(outward[i]),
+                     radius[i], tuple(loops[first[i]:first[i + 1]]), i) for i in range(len(first) - 1)]
+
+    def key(self) -> tuple:
+        """Per face its surface and the edge counts and arcs of its loops, sorted (:meth:`TextSolid.shape_key`)."""
+        bounds = self.loop_steps
+        arcs: list[int] = (np.add.reduceat((self.steps[:, 3] >= 0).astype(int), bounds[:-1]).tolist()
+                           if len(self.steps) else [])
+        counts = list(zip(np.diff(bounds).tolist(), arcs))
+        first = self.face_loops.tolist()
+        cylinder = self.kinds[:, 0].tolist()
+        return tuple(sorted(("cylinder" if cylinder[i] else "plane", tuple(sorted(counts[first[i]:first[i + 1]])))
+                            for i in range(len(first) - 1)))
 
 
 @dataclass(slots=True)
@@ -80,26 +140,21 @@ class TextSolid:
     path: tuple[str, ...]
     colour: tuple[float, float, float, float] | None
     points: np.ndarray
-    local_shell: list[Face]
+    code: ShellCode
     local: np.ndarray
     transform: np.ndarray
     brep: int
     shared: "dict[int, BrepFacts] | None" = field(default=None, repr=False)
     _facts: "BrepFacts | None" = field(default=None, repr=False)
-    _shell: list[Face] | None = field(default=None, repr=False)
-    _areas: dict[int, float] | None = field(default=None, repr=False)
 
     @property
     def shell(self) -> list[Face]:
-        """The faces of the closed shell, placed (:attr:`local_shell`, the faces in the B-rep's own coordinates
-        shared by every solid placing it, moved by :attr:`transform` when first asked for)."""
-        if self._shell is None:
-            rot, shift = self.transform[:3, :3], self.transform[:3, 3]
-            if np.array_equal(self.transform, np.eye(4)):
-                self._shell = self.local_shell
-            else:
-                self._shell = [_placed_face(f, rot, shift) for f in self.local_shell]
-        return self._shell
+        """The faces of the closed shell, placed: :attr:`code` (the faces in the B-rep's own coordinates, packed,
+        shared by every solid placing it) unpacked and moved by :attr:`transform`.  Made anew at each call and
+        not kept (a check reading a solid's faces takes them once)."""
+        if np.array_equal(self.transform, np.eye(4)):
+            return self.code.faces()
+        return self.code.faces(self.transform[:3, :3], self.transform[:3, 3])
 
     def faces(self) -> list[Face]:
         """The faces of the closed shell."""
@@ -125,11 +180,12 @@ class TextSolid:
 
     def face_area(self, face: Face) -> float:
         """Area of a planar face of :attr:`shell`, mm² (its loops' signed areas about its normal summed, outer
-        less holes): :attr:`BrepFacts.face_areas`, worked out once per B-rep; of any other face, computed."""
-        if self._areas is None:
-            self._areas = {id(f): a for f, a in zip(self.shell, self.facts().face_areas)}
-        got = self._areas.get(id(face))
-        return got if got is not None else _face_area(self.points, face)
+        less holes): :attr:`BrepFacts.face_areas` at the face's :attr:`Face.index`, worked out once per B-rep; of
+        a face without an index, computed."""
+        areas = self.facts().face_areas
+        if 0 <= face.index < len(areas):
+            return areas[face.index]
+        return _face_area(self.points, face)
 
     def outer_loop(self, face: Face) -> Loop:
         """The loop of a planar face enclosing the largest area (its outer boundary)."""
@@ -195,9 +251,7 @@ class TextSolid:
     def shape_key(self) -> tuple:
         """What kind of solid this is, whatever its size and place: per face its surface and the edge counts and
         arcs of its loops, sorted.  Solids of one key are read by the CAD kernel once (one instance each)."""
-        faces = sorted((f.surface, tuple(sorted((len(lp.vertices), sum(a is not None for a in lp.arcs))
-                                                for lp in f.loops))) for f in self.shell)
-        return (len(self.points), tuple(faces))
+        return (len(self.points), self.code.key())
 
 
 @dataclass(frozen=True)
@@ -216,14 +270,15 @@ class BrepFacts:
 
 
 def _brep_facts(solid: TextSolid) -> BrepFacts:
+    shell = solid.shell
     use: dict[int, list[bool]] = {}
-    for f in solid.shell:
+    for f in shell:
         for lp in f.loops:
             for e, fw in zip(lp.edges, lp.forward):
                 use.setdefault(e, []).append(fw)
     bad = [e for e, u in use.items() if sorted(u) != [False, True]]
     worst = 0.0
-    for f in solid.shell:
+    for f in shell:
         idx = np.concatenate([lp.vertices for lp in f.loops])
         p = solid.points[idx] - f.origin
         if f.surface == "plane":
@@ -238,8 +293,8 @@ def _brep_facts(solid: TextSolid) -> BrepFacts:
                     worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
                                 float(np.abs(q @ arc.axis).max()))
     c = solid.points.mean(axis=0) if len(solid.points) else np.zeros(3)   # about the solid: no cancellation
-    signed = [_signed_area(solid.points, f) if f.surface == "plane" else 0.0 for f in solid.shell]
-    volume = sum(_flux(solid, f, c, a) for f, a in zip(solid.shell, signed)) / 3.0
+    signed = [_signed_area(solid.points, f) if f.surface == "plane" else 0.0 for f in shell]
+    volume = sum(_flux(solid, f, c, a) for f, a in zip(shell, signed)) / 3.0
     return BrepFacts(len(bad), bad[0] if bad else 0, worst, float(volume), tuple(abs(a) for a in signed))
 
 
@@ -312,7 +367,7 @@ _ONCE = frozenset({"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "EDGE_CURVE",
                    "FACE_BOUND", "FACE_OUTER_BOUND", "ADVANCED_FACE", "LINE", "VECTOR", "CLOSED_SHELL", "PLANE",
                    "CYLINDRICAL_SURFACE", "CIRCLE", "AXIS2_PLACEMENT_3D"})
 """Entity types whose parsed parameters :meth:`StepModel.args` does not keep: read by a B-rep's topology and
-faces, which are kept per B-rep (:func:`_topology`, :func:`_local_faces`), or by an axis placement, kept as
+faces, which are kept per B-rep (:func:`_topology`, :func:`_shell_code`), or by an axis placement, kept as
 arrays (:meth:`StepModel.axis2`)."""
 
 
@@ -325,7 +380,7 @@ class StepModel:
         self.topology: dict[int, tuple[np.ndarray, list]] = {}
         self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.facts: dict[int, BrepFacts] = {}
-        self.faces: dict[int, list[Face]] = {}
+        self.codes: dict[int, ShellCode] = {}
         self.by_kind: dict[str, list[int]] = {}
 
     def kind(self, i: int) -> str:
@@ -368,12 +423,15 @@ class StepModel:
             raise StepTextError(f"#{i} is a {self.kind(i)}, not a 3D point or direction")
         return np.array(a[1], dtype=float)
 
-    def axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def axis2(self, i: int, keep: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0).
-        Kept per entity (a face plane of a shared B-rep is met once per solid placing it)."""
+        Kept per entity (one placement may place many products) unless ``keep`` is false: a B-rep's surfaces and
+        circles are read once per B-rep (:func:`_shell_code`), and a large file has hundreds of thousands."""
         got = self.axes.get(i)
         if got is None:
-            got = self.axes[i] = self._axis2(i)
+            got = self._axis2(i)
+            if keep:
+                self.axes[i] = got
         return got
 
     def _axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -414,57 +472,58 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
         raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
     pts_local, _ = _topology(model, brep, shell)
     points = pts_local @ transform[:3, :3].T + transform[:3, 3]
-    return TextSolid(name, path, colour, points, _local_faces(model, brep, shell), pts_local, transform, brep,
+    return TextSolid(name, path, colour, points, _shell_code(model, brep, shell), pts_local, transform, brep,
                      shared=model.facts)
 
 
-def _placed_face(face: Face, rot: np.ndarray, shift: np.ndarray) -> Face:
-    """A face moved by the rigid motion ``x ↦ rot x + shift`` (a proper rotation: arcs keep their sweep)."""
-    loops = tuple(lp if not any(a is not None for a in lp.arcs) else
-                  Loop(lp.vertices, tuple(None if a is None else Arc(rot @ a.centre + shift, rot @ a.axis, a.radius,
-                                                                      a.sweep) for a in lp.arcs),
-                       lp.edges, lp.forward)
-                  for lp in face.loops)
-    return Face(face.surface, rot @ face.origin + shift, rot @ face.normal, rot @ face.ref_dir, face.outward,
-                face.radius, loops)
-
-
-def _local_faces(model: StepModel, brep: int, shell: int) -> list[Face]:
-    """The faces of the B-rep ``#brep`` in its own coordinates (worked out once per B-rep)."""
-    got = model.faces.get(brep)
+def _shell_code(model: StepModel, brep: int, shell: int) -> ShellCode:
+    """The faces of the B-rep ``#brep`` in its own coordinates, packed (:class:`ShellCode`; worked out once per
+    B-rep)."""
+    got = model.codes.get(brep)
     if got is not None:
         return got
     points, raw_faces = _topology(model, brep, shell)
-    faces = []
+    planes: list[list[float]] = []
+    kinds: list[tuple[bool, bool]] = []
+    face_loops, loop_steps = [0], [0]
+    steps: list[tuple[int, int, int, int]] = []
+    arcs: list[list[float]] = []
     for kind, surf, same, loops in raw_faces:
         if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
             raise StepTextError(f"#{surf} is a {kind}: planes and cylinders only (ppfab verify --kernel reads any "
                                 "STEP file)")
         sa = model.args(surf)
-        o, z, x = model.axis2(sa[1].id)
+        o, z, x = model.axis2(sa[1].id, keep=False)
         radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
-        done = []
-        for verts, arcs, edges, fwd in loops:
-            local_arcs: list[Arc | None] = []
-            for item in arcs:
-                if item is None:
-                    local_arcs.append(None)
-                    continue
-                c, ccw, start, end = item
-                co, cz, _ = model.axis2(model.args(c)[1].id)
-                r = float(model.args(c)[2])
-                axis = cz if ccw else -cz
-                if start == end:
-                    sweep = 2.0 * math.pi
-                else:
-                    e1, e2 = points[start] - co, points[end] - co
-                    sweep = math.atan2(float(cross3(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
-                local_arcs.append(Arc(co, axis, r, sweep))
-            done.append(Loop(np.array(verts, dtype=int), tuple(local_arcs), tuple(edges), tuple(fwd)))
+        for verts, loop_arcs, edges, fwd in loops:
+            for vert, item, edge, forward in zip(verts, loop_arcs, edges, fwd):
+                which = -1
+                if item is not None:
+                    c, ccw, start, end = item
+                    co, cz, _ = model.axis2(model.args(c)[1].id, keep=False)
+                    r = float(model.args(c)[2])
+                    axis = cz if ccw else -cz
+                    if start == end:
+                        sweep = 2.0 * math.pi
+                    else:
+                        e1, e2 = points[start] - co, points[end] - co
+                        sweep = math.atan2(float(cross3(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
+                    which = len(arcs)
+                    arcs.append([*co.tolist(), *axis.tolist(), r, sweep])
+                steps.append((vert, edge, int(forward), which))
+            loop_steps.append(len(steps))
+        face_loops.append(len(loop_steps) - 1)
         normal = z if kind != "PLANE" or same else -z
-        faces.append(Face("plane" if kind == "PLANE" else "cylinder", o, normal, x, same, radius, tuple(done)))
-    model.faces[brep] = faces
-    return faces
+        planes.append([*o.tolist(), *normal.tolist(), *x.tolist(), radius])
+        kinds.append((kind != "PLANE", bool(same)))
+    got = ShellCode(np.array(planes, dtype=float).reshape(-1, 10), np.array(kinds, dtype=bool).reshape(-1, 2),
+                    np.array(face_loops, dtype=np.int64), np.array(loop_steps, dtype=np.int64),
+                    np.array(steps, dtype=np.int64).reshape(-1, 4), np.array(arcs, dtype=float).reshape(-1, 8))
+    for array in (got.planes, got.kinds, got.face_loops, got.loop_steps, got.steps, got.arcs):
+        array.flags.writeable = False                   # shared by every solid placing the B-rep
+    model.codes[brep] = got
+    model.topology[brep] = (points, [])                 # the faces as read are in the code now
+    return got
 
 
 def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:
