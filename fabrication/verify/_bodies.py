@@ -292,7 +292,7 @@ def _opposite_ring(solid: Any, face: Any, n: np.ndarray, text: bool) -> np.ndarr
     if text:
         area = solid.face_area(face)
         for f in solid.faces():
-            if f is not face and f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9 \
+            if f.index != face.index and f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9 \
                     and solid.face_area(f) > 0.5 * area:
                 return solid.ring(solid.outer_loop(f), 16)
         return None

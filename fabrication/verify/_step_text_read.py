@@ -151,7 +151,8 @@ class TextSolid:
     def shell(self) -> list[Face]:
         """The faces of the closed shell, placed: :attr:`code` (the faces in the B-rep's own coordinates, packed,
         shared by every solid placing it) unpacked and moved by :attr:`transform`.  Made anew at each call and
-        not kept (a check reading a solid's faces takes them once)."""
+        not kept (a check reading a solid's faces takes them once): two calls give equal faces but not the same
+        objects, so a face is told from another by its :attr:`Face.index`, never by identity."""
         if np.array_equal(self.transform, np.eye(4)):
             return self.code.faces()
         return self.code.faces(self.transform[:3, :3], self.transform[:3, 3])
