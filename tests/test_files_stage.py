@@ -106,14 +106,17 @@ def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
         monkeypatch.setitem(writers.WRITERS, name, dataclasses.replace(original, write=write))
 
 
-def test_the_ifc_and_3dm_files_are_written_in_processes_that_end(tmp_path, small_build, monkeypatch):
-    """IfcOpenShell keeps every instance of a file it made until the process ends (and openNURBS its heap), so
-    writing on one core the IFC and the 3dm writers each run in a forked process of their own, and on two cores
-    in the second process: never in this one.  Without fork they run here and write the same bytes."""
+def test_the_ifc_3dm_and_glb_files_are_written_in_processes_that_end(tmp_path, small_build, monkeypatch):
+    """IfcOpenShell keeps every instance of a file it made until the process ends (and openNURBS its heap, and the
+    glTF writer's meshes their fragments), so writing on one core the IFC, 3dm and glTF writers each run in a
+    forked process of their own, and on two cores the IFC and 3dm writers in the second process and the glTF
+    writer in a process of its own: never in this one.  Without fork they run here and write the same bytes."""
     import os
 
     from fabrication.progress import Progress
     from fabrication.writers import _parallel, write_all
+
+    names = ("glb", "ifc", "rhino")
 
     def written(folder: str, parallel: bool) -> dict[str, int]:
         log = tmp_path / f"{folder}.pids"
@@ -121,20 +124,20 @@ def test_the_ifc_and_3dm_files_are_written_in_processes_that_end(tmp_path, small
         out.mkdir()
         write_all(small_build, out, Progress(quiet=True), parallel=parallel)
         runs = [line.split() for line in log.read_text().splitlines()]
-        assert sorted(name for name, _ in runs) == ["ifc", "rhino"]          # each ran once
+        assert sorted(name for name, _ in runs) == list(names)          # each ran once
         return {name: int(pid) for name, pid in runs}
 
-    _recording_pids(monkeypatch, tmp_path / "apart.pids", ("ifc", "rhino"))
+    _recording_pids(monkeypatch, tmp_path / "apart.pids", names)
     apart = written("apart", parallel=False)
-    assert os.getpid() not in apart.values() and apart["ifc"] != apart["rhino"]
-    _recording_pids(monkeypatch, tmp_path / "second.pids", ("ifc", "rhino"))
+    assert os.getpid() not in apart.values() and len(set(apart.values())) == 3
+    _recording_pids(monkeypatch, tmp_path / "second.pids", names)
     second = written("second", parallel=True)
-    assert os.getpid() not in second.values() and second["ifc"] == second["rhino"]
+    assert os.getpid() not in second.values() and second["ifc"] == second["rhino"] != second["glb"]
 
     monkeypatch.setattr(_parallel, "fork_available", lambda: False)
-    _recording_pids(monkeypatch, tmp_path / "here.pids", ("ifc", "rhino"))
+    _recording_pids(monkeypatch, tmp_path / "here.pids", names)
     assert set(written("here", parallel=False).values()) == {os.getpid()}
-    for name in ("model.ifc", "model.3dm"):
+    for name in ("model.ifc", "model.3dm", "model.glb"):
         here = (tmp_path / "here" / name).read_bytes()
         assert len(here) > 10_000
         assert (tmp_path / "apart" / name).read_bytes() == here == (tmp_path / "second" / name).read_bytes()

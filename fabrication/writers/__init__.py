@@ -74,8 +74,9 @@ def write_all(build: "BuildRecord", out: Path, progress: "Progress", parallel: b
 
     With ``parallel`` (default: :func:`~fabrication.writers._parallel.parallel_enabled`, on with two cores) the
     per-type DXFs, the IFC and the 3dm file are written in a second process beside the others
-    (:mod:`fabrication.writers._parallel`); without it the IFC and the 3dm file are still each written in a forked
-    process of their own (:data:`~fabrication.writers._parallel.CONFINED`: their libraries keep their memory).  The
+    (:mod:`fabrication.writers._parallel`); the glTF file (and without a second process the IFC and the 3dm file
+    too) is written in a forked process of its own (:data:`~fabrication.writers._parallel.CONFINED`: what they
+    allocate stays with the process).  The
     files and the table are the same either way.  An optional file that fails stops the build with an error naming the
     file, the part and the ``[output]`` key that skips it (:mod:`fabrication.writers._failures`).
     """

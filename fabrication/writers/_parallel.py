@@ -33,18 +33,19 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..progress import Progress
     from ..records import BuildRecord
 
-CONFINED: tuple[str, ...] = ("ifc", "rhino")
+CONFINED: tuple[str, ...] = ("ifc", "rhino", "glb")
 """Writers whose libraries keep what they allocated after the file is written: IfcOpenShell never frees a
 file's instances (a ``file`` of 200,000 points deleted leaves its 28 MB resident, and a second one adds 28 MB
 more; IfcOpenShell issue 7185), and openNURBS's heap stays with the process.  At 44 × 30 faces the IFC writer
-left 370 MB and the 3dm writer 210 MB resident, under the whole self-check that follows.  Each runs in a forked
-process that ends when its file is written (:func:`confined`; in the second process when there is one), so
-that memory goes back to the system.  Where fork is not available they run here."""
+left 370 MB and the 3dm writer 210 MB resident, under the whole self-check that follows; at 88 × 60 the glTF
+writer (trimesh's scene and the manifold meshes it is built from) left 355 MB.  Each runs in a forked process
+that ends when its file is written (:func:`confined`; the IFC and 3dm writers in the second process when there
+is one, which ends too), so that memory goes back to the system.  Where fork is not available they run here."""
 
-SECOND_PROCESS: tuple[str, ...] = ("dxf_types",) + CONFINED
-"""Writers that run in the second process: the per-type DXFs (one file per panel type) and the
-:data:`CONFINED` exchange files, beside STEP, the sheets, tables, glTF, drawings and report (at 44 × 30 faces
-about 72 against 67 CPU s, one process)."""
+SECOND_PROCESS: tuple[str, ...] = ("dxf_types", "ifc", "rhino")
+"""Writers that run in the second process: the per-type DXFs (one file per panel type) and the IFC and 3dm
+files, beside STEP, the sheets, tables, glTF, drawings and report (at 44 × 30 faces about 72 against 67 CPU s,
+one process)."""
 
 READS_EVERY_FILE: tuple[str, ...] = ("manifest",)
 """Writers that read the files of the second process's writers (the manifest digests every file): the second
@@ -206,7 +207,8 @@ def write_split(build: "BuildRecord", out: Path, progress: "Progress", writers: 
             if not joined and w.name in READS_EVERY_FILE:
                 _join(build, out, progress, proc, side, files)
                 joined = True
-            run_writer(w, build, out, files, progress, (main.index(w.name), len(main)))
+            run_writer(confined(w) if w.name in CONFINED else w, build, out, files, progress,
+                       (main.index(w.name), len(main)))
         if not joined:
             _join(build, out, progress, proc, side, files)
     finally:
