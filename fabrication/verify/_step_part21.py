@@ -99,9 +99,9 @@ class Entities(Mapping[int, tuple[str, str]]):
     where a dictionary of strings held ten times the file's size).  A record is sliced from the bytes and
     decoded (Latin-1) when asked for."""
 
-    def __init__(self, text: bytes, ids: np.ndarray, kinds: np.ndarray, starts: np.ndarray, stops: np.ndarray,
+    def __init__(self, data: bytes, ids: np.ndarray, kinds: np.ndarray, starts: np.ndarray, stops: np.ndarray,
                  names: list[str]):
-        self._text, self.ids, self.kinds, self._starts, self._stops = text, ids, kinds, starts, stops
+        self._data, self.ids, self.kinds, self._starts, self._stops = data, ids, kinds, starts, stops
         self.names = names                      # type code → type name
         self._codes = {n: k for k, n in enumerate(names)}
         top = int(ids.max()) if len(ids) else -1
@@ -129,7 +129,7 @@ class Entities(Mapping[int, tuple[str, str]]):
         k = self.row(i)
         if k < 0:
             raise KeyError(i)
-        return self.names[self.kinds[k]], self._text[self._starts[k]:self._stops[k]].decode("latin-1")
+        return self.names[self.kinds[k]], self._data[self._starts[k]:self._stops[k]].decode("latin-1")
 
     def __contains__(self, i: object) -> bool:
         return isinstance(i, (int, np.integer)) and self.row(int(i)) >= 0

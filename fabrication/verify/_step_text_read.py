@@ -368,7 +368,7 @@ _ONCE = frozenset({"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "EDGE_CURVE",
                    "FACE_BOUND", "FACE_OUTER_BOUND", "ADVANCED_FACE", "LINE", "VECTOR", "CLOSED_SHELL", "PLANE",
                    "CYLINDRICAL_SURFACE", "CIRCLE", "AXIS2_PLACEMENT_3D"})
 """Entity types whose parsed parameters :meth:`StepModel.args` does not keep: read by a B-rep's topology and
-faces, which are kept per B-rep (:func:`_topology`, :func:`_shell_code`), or by an axis placement, kept as
+faces, which are kept per B-rep (:func:`_brep_of`), or by an axis placement, kept as
 arrays (:meth:`StepModel.axis2`)."""
 
 
@@ -378,10 +378,9 @@ class StepModel:
     def __init__(self, entities: Entities):
         self.raw = entities
         self.cache: dict[int, list] = {}
-        self.topology: dict[int, tuple[np.ndarray, list]] = {}
+        self.breps: dict[int, tuple[np.ndarray, ShellCode]] = {}
         self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self.facts: dict[int, BrepFacts] = {}
-        self.codes: dict[int, ShellCode] = {}
         self.by_kind: dict[str, list[int]] = {}
 
     def kind(self, i: int) -> str:
@@ -427,7 +426,7 @@ class StepModel:
     def axis2(self, i: int, keep: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0).
         Kept per entity (one placement may place many products) unless ``keep`` is false: a B-rep's surfaces and
-        circles are read once per B-rep (:func:`_shell_code`), and a large file has hundreds of thousands."""
+        circles are read once per B-rep (:func:`_brep_of`), and a large file has hundreds of thousands."""
         got = self.axes.get(i)
         if got is None:
             got = self._axis2(i)
@@ -471,19 +470,25 @@ def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, pat
     shell = model.args(brep)[1].id
     if model.kind(shell) != "CLOSED_SHELL":
         raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
-    pts_local, _ = _topology(model, brep, shell)
+    pts_local, code = _brep_of(model, brep, shell)
     points = pts_local @ transform[:3, :3].T + transform[:3, 3]
-    return TextSolid(name, path, colour, points, _shell_code(model, brep, shell), pts_local, transform, brep,
-                     shared=model.facts)
+    return TextSolid(name, path, colour, points, code, pts_local, transform, brep, shared=model.facts)
 
 
-def _shell_code(model: StepModel, brep: int, shell: int) -> ShellCode:
-    """The faces of the B-rep ``#brep`` in its own coordinates, packed (:class:`ShellCode`; worked out once per
-    B-rep)."""
-    got = model.codes.get(brep)
-    if got is not None:
-        return got
-    points, raw_faces = _topology(model, brep, shell)
+def _brep_of(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, ShellCode]:
+    """The vertices ``(n, 3)`` of the B-rep ``#brep`` in its own coordinates and its faces packed, read once per
+    B-rep (a B-rep shared by many products, an instanced shape, is placed once per product); the topology as read
+    (:func:`_topology`) is not kept."""
+    got = model.breps.get(brep)
+    if got is None:
+        points, raw_faces = _topology(model, brep, shell)
+        got = model.breps[brep] = (points, _shell_code(model, points, raw_faces))
+    return got
+
+
+def _shell_code(model: StepModel, points: np.ndarray, raw_faces: list) -> ShellCode:
+    """The faces of a B-rep as :func:`_topology` reads them (``points`` its vertices), packed
+    (:class:`ShellCode`)."""
     planes: list[list[float]] = []
     kinds: list[tuple[bool, bool]] = []
     face_loops, loop_steps = [0], [0]
@@ -522,17 +527,12 @@ def _shell_code(model: StepModel, brep: int, shell: int) -> ShellCode:
                     np.array(steps, dtype=np.int64).reshape(-1, 4), np.array(arcs, dtype=float).reshape(-1, 8))
     for array in (got.planes, got.kinds, got.face_loops, got.loop_steps, got.steps, got.arcs):
         array.flags.writeable = False                   # shared by every solid placing the B-rep
-    model.codes[brep] = got
-    model.topology[brep] = (points, [])                 # the faces as read are in the code now
     return got
 
 
 def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:
     """The vertices ``(n, 3)`` of the B-rep ``#brep`` in its own coordinates and its faces as index loops (read
-    once per B-rep: a B-rep shared by many products, an instanced shape, is placed once per product)."""
-    got = model.topology.get(brep)
-    if got is not None:
-        return got
+    once per B-rep, by :func:`_brep_of`)."""
     index: dict[int, int] = {}
     local: list[np.ndarray] = []
 
@@ -589,8 +589,7 @@ def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list
                                         "reads any STEP file)")
             loops.append((verts, arcs, edges, fwd))
         raw_faces.append((model.kind(surf.id), surf.id, bool(same), loops))
-    got = model.topology[brep] = (np.array(local, dtype=float).reshape(-1, 3), raw_faces)
-    return got
+    return np.array(local, dtype=float).reshape(-1, 3), raw_faces
 
 
 def _colours(model: StepModel) -> dict[int, tuple[float, float, float, float]]:
