@@ -341,22 +341,11 @@ def _run_confined(v: Verification, c: Check) -> tuple[list[Finding], list[str]]:
     """:meth:`Verification.run_check` of ``c`` in a forked process that ends with it, its findings sent back; here
     when fork is not available, no process can be had, or the process fails (so an error raised is the check's
     own)."""
-    from ..writers._parallel import Forked, fork_available
+    from ..writers._parallel import in_own_process
 
-    if not fork_available() or c.name in v._found:
-        return v.run_check(c)
-    try:
-        proc = Forked(lambda: v.run_check(c), f"ppfab-verify-{c.name}")
-    except OSError:                             # no process to be had
-        return v.run_check(c)
-    try:
-        status, got = proc.result()
-    finally:
-        proc.close()
-    if status != "ok":
-        return v.run_check(c)
-    v._found[c.name] = got
-    return got
+    if c.name not in v._found:
+        v._found[c.name] = in_own_process(lambda: v.run_check(c), f"ppfab-verify-{c.name}")
+    return v._found[c.name]
 
 
 def _run_releasing(v: Verification, c: Check, checks: list[Check]) -> tuple[list[Finding], list[str]]:

@@ -166,6 +166,24 @@ def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer], files:
     return results
 
 
+def in_own_process(job: Callable[[], Any], name: str) -> Any:
+    """``job()`` run in a forked process of its own that ends with it (:class:`Forked`), its result sent back, so
+    what its libraries keep goes when that process ends.  Without fork, or when no process can be had, it runs
+    here; when the process fails it runs again here, so an error raised is the job's own.  For the writers of
+    :data:`CONFINED` (:func:`confined`) and verify's checks of :data:`fabrication.verify.CONFINED`."""
+    if not fork_available():
+        return job()
+    try:
+        proc = Forked(job, name)
+    except OSError:                             # no process to be had
+        return job()
+    try:
+        status, value = proc.result()
+    finally:
+        proc.close()
+    return value if status == "ok" else job()
+
+
 def confined(w: Writer) -> Writer:
     """``w`` writing in a forked process of its own, waited for (for the writers of :data:`CONFINED` when there is
     no second process): what its library keeps goes when that process ends.  Without fork, or when no process can
@@ -177,17 +195,7 @@ def confined(w: Writer) -> Writer:
     write = w.write
 
     def confined_write(build: "BuildRecord", out: Path, files: Files) -> str:
-        if not fork_available():
-            return write(build, out, files)
-        try:
-            proc = Forked(lambda: write(build, out, files), f"ppfab-{w.name}")
-        except OSError:                         # no process to be had
-            return write(build, out, files)
-        try:
-            status, note = proc.result()
-        finally:
-            proc.close()
-        return note if status == "ok" else write(build, out, files)
+        return in_own_process(lambda: write(build, out, files), f"ppfab-{w.name}")
 
     return dataclasses.replace(w, write=confined_write)
 
