@@ -838,3 +838,55 @@ def test_ifc_shares_its_materials_types_panes_and_passes_the_express_rules(built
     log = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(f, log, express_rules=True)
     assert log.statements == []
+
+
+def test_ifc_properties_are_shared_by_the_sets_that_hold_the_same_value(built, parts):
+    """One IfcPropertySingleValue per distinct name, value and unit, held by every property set that has it (IFC4
+    lets a property belong to any number of sets); each part still reads its own values (ifcopenshell's
+    ``get_psets``, compared with parts.csv above)."""
+    import ifcopenshell
+    import ifcopenshell.util.element as ue
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    props = f.by_type("IfcPropertySingleValue")
+    keys = [(p.Name, p.NominalValue.is_a(), p.NominalValue.wrappedValue, p.Unit.id() if p.Unit else 0) for p in props]
+    assert len(set(keys)) == len(keys)                               # no two alike
+    held = sum(len(s.HasProperties) for s in f.by_type("IfcPropertySet"))
+    assert held > 2 * len(props)                                     # most are shared
+    kinds = {p.Name: ue.get_psets(p)["PPFAB_Part"]["kind"] for p in f.by_type("IfcElement") if p.Name in parts}
+    assert kinds == {k: r["kind"] for k, r in parts.items() if k in kinds}
+    (kind_panel,) = [p for p in props if p.Name == "kind" and p.NominalValue.wrappedValue == "panel"]
+    assert len(kind_panel.PartOfPset) == sum(r["kind"] == "panel" for r in parts.values())
+
+
+def test_the_ifc_checks_placements_agree_with_ifcopenshells_and_project_the_reference_direction(built):
+    """:func:`fabrication.verify.ifc.axis2placement` and :func:`transformation_operator` against
+    ``ifcopenshell.util.placement`` on every placement and mapped item of the file (to 1e-12), and on a reference
+    direction that is not normal to the axis, against Gram–Schmidt by hand (IFC4's IfcBuildAxes projects it;
+    ifcopenshell's ``a2p`` does not)."""
+    import ifcopenshell
+    import ifcopenshell.util.placement as up
+
+    from fabrication.verify.ifc import IfcReading, axis2placement, transformation_operator
+
+    f = ifcopenshell.open(str(built / "model.ifc"))
+    reading = IfcReading()
+    for lp in f.by_type("IfcLocalPlacement"):
+        assert np.abs(reading.placement(lp) - up.get_local_placement(lp)).max() < 1e-9
+    items = f.by_type("IfcMappedItem")
+    assert items
+    for it in items:
+        assert np.abs(reading.mapped(it) - up.get_mappeditem_transformation(it)).max() < 1e-9
+        assert np.abs(transformation_operator(it.MappingTarget)
+                      - up.get_cartesiantransformationoperator3d(it.MappingTarget)).max() < 1e-12
+    g = ifcopenshell.file(schema="IFC4")
+    z, ref = np.array([0.0, 0.6, 0.8]), np.array([1.0, 1.0, 0.0])
+    p = g.createIfcAxis2Placement3D(g.createIfcCartesianPoint((5.0, -2.0, 7.0)), g.createIfcDirection(tuple(z)),
+                                    g.createIfcDirection(tuple(ref)))
+    x = ref - ref.dot(z) * z
+    x /= np.linalg.norm(x)
+    want = np.eye(4)
+    want[:3, 0], want[:3, 1], want[:3, 2], want[:3, 3] = x, np.cross(z, x), z, (5.0, -2.0, 7.0)
+    got = axis2placement(p)
+    assert np.abs(got - want).max() < 1e-12
+    assert np.abs(got[:3, :3].T @ got[:3, :3] - np.eye(3)).max() < 1e-12

@@ -148,6 +148,7 @@ class IfcModel:
         self._references: dict[str, tuple[Any, list[Any]]] = {}
         self._styles: dict[str, Any] = {}
         self._profiles: dict[str, Any] = {}
+        self._properties: dict[tuple[str, str, Any], Any] = {}
 
     # -- small entities ------------------------------------------------------------------------------
     def guid(self, key: str) -> str:
@@ -198,6 +199,19 @@ class IfcModel:
         if key in ("part_id", "nest_tag", "type_id", "beam_id"):
             return f.create_entity("IfcIdentifier", value)
         return f.create_entity("IfcLabel", value)
+
+    def _property(self, key: str, value: Any) -> Any:
+        """The ``IfcPropertySingleValue`` ``key`` = ``value`` (:meth:`_value`; area in mm²), one per distinct name
+        and value, shared by every property set that holds it: IFC4 lets a property belong to any number of sets
+        (``IfcProperty.PartOfPset`` is a set).  Most of the parts' properties repeat (kind, material, sheet,
+        quantity, thickness): on the bundled default at 44 × 30 faces 243,533 properties were 70,400 values."""
+        k = (key, type(value).__name__, value)
+        got = self._properties.get(k)
+        if got is None:
+            got = self._properties[k] = self.f.create_entity(
+                "IfcPropertySingleValue", Name=key, NominalValue=self._value(key, value),
+                Unit=self.mm2 if key == "area_mm2" else None)
+        return got
 
     # -- elements ------------------------------------------------------------------------------------
     def plan_types(self, els: list[Element]) -> None:
@@ -351,10 +365,7 @@ class IfcModel:
                                   Description=str(el.props.get("type_id", "")) or None, ObjectPlacement=placement,
                                   Representation=f.create_entity("IfcProductDefinitionShape", Representations=[shape]),
                                   Tag=el.part_id, PredefinedType=predefined, **extra)
-        props = []
-        for key, value in el.props.items():
-            props.append(f.create_entity("IfcPropertySingleValue", Name=key, NominalValue=self._value(key, value),
-                                         Unit=self.mm2 if key == "area_mm2" else None))
+        props = [self._property(key, value) for key, value in el.props.items()]
         pset = f.create_entity("IfcPropertySet", GlobalId=self.guid(f"{el.part_id}/pset"), Name=IFC_PSET,
                                HasProperties=props)
         f.create_entity("IfcRelDefinesByProperties", GlobalId=self.guid(f"{el.part_id}/pset/rel"),
@@ -422,13 +433,20 @@ class IfcModel:
         f = self.f
         cls = IFC_CLASSES.get(kind, ("IfcMember", ""))[0]
         name = "Pset_PlateCommon" if kind == "panel" else f"Pset_{cls[3:]}Common"
-        props = [f.create_entity("IfcPropertySingleValue", Name="Reference",
-                                 NominalValue=f.create_entity("IfcIdentifier", reference)),
-                 f.create_entity("IfcPropertySingleValue", Name="IsExternal",
-                                 NominalValue=f.create_entity("IfcBoolean", True)),
-                 f.create_entity("IfcPropertySingleValue", Name="LoadBearing",
-                                 NominalValue=f.create_entity("IfcBoolean", kind != "panel"))]
+        props = [self._common_property("Reference", "IfcIdentifier", reference),
+                 self._common_property("IsExternal", "IfcBoolean", True),
+                 self._common_property("LoadBearing", "IfcBoolean", kind != "panel")]
         return f.create_entity("IfcPropertySet", GlobalId=self.guid(key), Name=name, HasProperties=props)
+
+    def _common_property(self, key: str, value_type: str, value: Any) -> Any:
+        """A property of the common sets (:meth:`_common_pset`), one per distinct name and value, shared as
+        :meth:`_property`'s."""
+        k = (f"common/{key}", value_type, value)
+        got = self._properties.get(k)
+        if got is None:
+            got = self._properties[k] = self.f.create_entity(
+                "IfcPropertySingleValue", Name=key, NominalValue=self.f.create_entity(value_type, value))
+        return got
 
     def _classify(self, kind: str, obj: Any) -> None:
         """Note ``obj`` (a part or a type) for the classification reference of its kind, if the design gives one
