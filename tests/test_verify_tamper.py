@@ -410,12 +410,26 @@ def test_the_exchange_model_checks_run_in_processes_that_end(copy, monkeypatch, 
         assert sorted(n for n, _ in runs) == sorted(confined)           # each ran once
         return {n: int(p) for n, p in runs}
 
+    from fabrication.verify import glazing_step
+
+    boxes = glazing_step._strip_boxes
+
+    def strip_boxes(v, rows, sign, _log=tmp_path / "strips.pids"):
+        with open(_log, "a") as f:
+            f.write(f"{os.getpid()}\n")
+        return boxes(v, rows, sign)
+
+    monkeypatch.setattr(glazing_step, "_strip_boxes", strip_boxes)
     results = {}
     for mode, parallel in (("serial", False), ("two", True)):
         recording(tmp_path / f"{mode}.pids")
+        (tmp_path / "strips.pids").write_text("")
         results[mode] = verify_mod.verify(copy, parallel=parallel)
         got = pids(tmp_path / f"{mode}.pids")
         assert os.getpid() not in got.values() and len(set(got.values())) == len(confined)
+        # the strips' boxes, which all three read, are worked out before they fork, not in each of them
+        strips = {int(p) for p in (tmp_path / "strips.pids").read_text().split()}
+        assert strips and not strips & set(got.values())
     monkeypatch.setattr(_parallel, "fork_available", lambda: False)
     recording(tmp_path / "here.pids")
     results["here"] = verify_mod.verify(copy, parallel=False)

@@ -144,17 +144,23 @@ def mapped_items(product) -> list[Any]:
     return [it for r in (rep.Representations if rep else ()) for it in r.Items if it.is_a("IfcMappedItem")]
 
 
+def type_of(product) -> Any | None:
+    """The type object a product is an occurrence of (``IsTypedBy``, IFC4), ``None`` when it has none:
+    ``ifcopenshell.util.element.get_type`` for an occurrence, without its look-up of the file's schema (a third
+    of its time)."""
+    rels = product.IsTypedBy
+    return rels[0].RelatingType if rels else None
+
+
 def mapping_problem(product) -> str | None:
     """What is wrong with how a product maps its type's shape, ``None`` when nothing is (or it has its own body):
     the shape must be one of its type's ``RepresentationMaps`` and the operator a rigid motion (orthonormal
     axes, right-handed, scale 1).  Where the moved shape lies is judged like any body (a pane's outline to its
     type tolerance: the glass is cut to its type's outline)."""
-    import ifcopenshell.util.element as ue
-
     items = mapped_items(product)
     if not items:
         return None
-    t = ue.get_type(product)
+    t = type_of(product)
     maps = list(t.RepresentationMaps or ()) if t is not None else []
     for it in items:
         if it.MappingSource not in maps:
@@ -177,7 +183,7 @@ def named_pset(product, name: str) -> dict[str, Any] | None:
     import ifcopenshell.util.element as ue
 
     out: dict[str, Any] | None = None
-    t = ue.get_type(product)
+    t = type_of(product)
     definitions = list(t.HasPropertySets or ()) if t is not None and t.is_a("IfcTypeObject") else []
     for rel in product.IsDefinedBy or ():
         if rel.is_a("IfcRelDefinesByProperties"):
@@ -570,7 +576,7 @@ def _check_material_and_type(v: Verification, rel: str, product: Any, row: dict[
             if abs(total - float(row.get("thickness_mm") or "nan")) > 1e-6:
                 v.error(rel, product.Name, f"layers add up to {total:g} mm, parts.csv thickness_mm is "
                                            f"{row.get('thickness_mm')}")
-        t = ue.get_type(product)
+        t = type_of(product)
         if t is None or not t.is_a("IfcPlateType") or t.Name != csv_value(row.get("type_id", "")):
             v.error(rel, product.Name, f"is not an occurrence of the IfcPlateType {row.get('type_id')}")
         return

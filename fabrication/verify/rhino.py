@@ -17,7 +17,8 @@ from ._solids import check_names, check_screw_points, check_part_solid, polygon_
 
 
 def _points(curve) -> np.ndarray:
-    pts = np.array([[curve.Point(i).X, curve.Point(i).Y, curve.Point(i).Z] for i in range(curve.PointCount)])
+    """``(n, 3)`` a polyline curve's points, the closing point left out (one call into rhino3dm per point)."""
+    pts = np.array([(p.X, p.Y, p.Z) for p in map(curve.Point, range(curve.PointCount))], dtype=float).reshape(-1, 3)
     return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
 
 
@@ -56,7 +57,7 @@ def _curve_area(curve, samples: int = 720) -> float:
         return float(np.pi * curve.Radius ** 2)
     d = curve.Domain
     ts = np.linspace(d.T0, d.T1, samples, endpoint=False)
-    pts = np.array([[curve.PointAt(t).X, curve.PointAt(t).Y, curve.PointAt(t).Z] for t in ts])
+    pts = np.array([(p.X, p.Y, p.Z) for p in map(curve.PointAt, ts)], dtype=float)
     return polygon_area_3d(pts)
 
 
