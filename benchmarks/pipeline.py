@@ -21,8 +21,9 @@ and, for parallel writing, its writer processes (``RUSAGE_CHILDREN``).  Then the
 stage: the slope ``b`` of the least-squares fit ``log t = a + b log F`` over the sizes (F = faces).
 
 With ``--writers both`` each size is built twice, serial and parallel writing, side by side in one run; with
-``--baseline TREE`` also with the source tree ``TREE`` (e.g. ``git worktree add TREE <commit>``), and a table
-of CPU seconds before → after.  ``--jobs`` runs that many builds at once (CPU seconds are per build; wall
+``--baseline TREE`` also with the source tree ``TREE`` (e.g. ``git worktree add TREE <commit>``), writing as the
+variant it is compared with does (parallel with ``--writers parallel`` or ``both``), and a table of CPU seconds
+before → after.  ``--jobs`` runs that many builds at once (CPU seconds are per build; wall
 times then include the waiting).  ``--per-file SIZE`` prints only the ms per per-type DXF (by part of the
 work, and the document set-up alternatives) and per STEP plate against the kernel writing the same prisms.
 """
@@ -407,8 +408,8 @@ def main(argv: list[str]) -> None:
     sizes = args.sizes.split(",")
     modes = {"serial": [False], "parallel": [True], "both": [False, True], "none": []}[args.writers]
     tasks = [(("parallel" if m else "serial"), size, m, ROOT) for size in sizes for m in modes]
-    if base is not None:
-        tasks += [("before", size, False, base) for size in sizes]
+    if base is not None:               # the tree before, writing as the tree after is compared (table below)
+        tasks += [("before", size, True in modes, base) for size in sizes]
     results: dict = json.loads(Path(args.reuse).read_text()) if args.reuse else {}
     tasks = [t for t in tasks if t[1] not in results.get(t[0], {})]
     run_all(tasks, args.budget, args.design, args.jobs, Path(args.save) if args.save else None, results,
