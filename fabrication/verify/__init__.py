@@ -19,7 +19,7 @@ import csv
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from ppfab.finding import Finding
 from ppfab.registry import Registry
@@ -349,19 +349,28 @@ def _run_confined(v: Verification, c: Check) -> tuple[list[Finding], list[str]]:
     return v._found[c.name]
 
 
-def _read_for_confined(v: Verification) -> None:
-    """Work out here, once, what every check of :data:`CONFINED` reads about the parts and would otherwise work
-    out again in each of their processes (which end, and take it with them): the strips' recomputed boxes
-    (:func:`.glazing_step.strip_places`; at 44 × 30 faces about 2.5 CPU s each time) and the panes' seat
-    (:func:`._solids.seat_range`)."""
-    if v.read.strip_places is not None and v.read.seat is not None:
-        return
-    from ._solids import seat_range
-    from .glazing_step import strip_places
+SHARED_BY_CONFINED: list[Callable[[Verification], Any]] = []
+"""What every check of :data:`CONFINED` reads about the parts and works out once per process (registered by the
+modules that define it, :func:`shared_by_confined`): the strips' recomputed boxes
+(:func:`.glazing_step.strip_places`; at 44 × 30 faces about 2.5 CPU s each time) and the panes' seat
+(:func:`._solids.seat_range`)."""
 
+
+_Work = TypeVar("_Work", bound=Callable[[Verification], Any])
+
+
+def shared_by_confined(fn: _Work) -> _Work:
+    """Decorator adding ``fn(verification)`` to :data:`SHARED_BY_CONFINED`."""
+    SHARED_BY_CONFINED.append(fn)
+    return fn
+
+
+def _read_for_confined(v: Verification) -> None:
+    """Work out here, once, what :data:`SHARED_BY_CONFINED` names, which each confined check would otherwise work
+    out again in its own process (which ends, and takes it with it)."""
     if v.mesh is None or v.parts is None:
         return
-    for work in (strip_places, seat_range):
+    for work in SHARED_BY_CONFINED:
         try:
             work(v)
         except Exception:  # noqa: BLE001 - a table it cannot read: the check that reads it reports that itself

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import Verification
+from . import Verification, shared_by_confined
 from ._tolerance import type_tolerance
 from ._shapes import cross_rows, literal
 
@@ -37,6 +37,7 @@ def polygon_area_3d(points: np.ndarray) -> float:
     return 0.5 * float(np.linalg.norm(cross_rows(p, np.roll(p, -1, axis=0)).sum(axis=0)))
 
 
+@shared_by_confined
 def seat_range(v: Verification) -> tuple[float, float]:
     """Where a pane's underside may lie above its face's plane, mm: the glazing offset (``manifest.json``
     ``glazing.offset_mm``, strip + gasket; 0 without strips) ± half the strip width × the tangent of the larger

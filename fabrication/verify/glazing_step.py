@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contract import RETENTION_PREFIXES, gasket_id
-from . import Verification, check
+from . import Verification, check, shared_by_confined
 from ._shapes import literal, number, set_distance, solid_points
 
 STRAIGHT_ON_DEG = 30.0
@@ -229,6 +229,7 @@ def _bad_spans(v: Verification, rows: list[dict[str, str]]) -> list[str]:
     return bad
 
 
+@shared_by_confined
 def strip_places(v: Verification) -> dict[str, list[np.ndarray]]:
     """Part id → the corners ``(8, 3)`` of the strip's box recomputed from the structure (module docstring) for
     either outside — a file without the gaskets (model.3dm, model.ifc, model.glb) does not say which side is
