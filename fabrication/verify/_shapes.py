@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import ast
 import json
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 
-def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def cross3(a: np.ndarray | Sequence[float], b: np.ndarray | Sequence[float]) -> np.ndarray:
     """``a × b`` of two 3-vectors, written out (``np.cross`` costs 10–40 µs a call in its set-up alone; the text
     reader's volumes and the erection sweep call it hundreds of thousands of times)."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])

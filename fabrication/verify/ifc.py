@@ -13,7 +13,7 @@ from ppfab.metrics import polygon_area
 
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
-from ._shapes import cross_rows
+from ._shapes import cross3, cross_rows
 from ._solids import check_screw_points, check_names, check_part_solid, same_value
 from ._tolerance import type_tolerance
 
@@ -27,16 +27,12 @@ def _unit(v: tuple[float, ...] | None, default: tuple[float, float, float]) -> t
     return (x / n, y / n, z / n) if n > 0.0 else default
 
 
-def _cross(a: tuple[float, float, float], b: tuple[float, float, float]) -> tuple[float, float, float]:
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
 def _frame(origin, z: tuple[float, float, float], ref: tuple[float, float, float]) -> np.ndarray:
     """``(4, 4)`` the placement with origin ``origin``, z axis ``z`` (unit) and x axis ``ref`` made orthogonal to
     it (IFC4's ``IfcBuildAxes``: the reference direction projected onto the plane normal to z)."""
     d = ref[0] * z[0] + ref[1] * z[1] + ref[2] * z[2]
     x = _unit((ref[0] - d * z[0], ref[1] - d * z[1], ref[2] - d * z[2]), (1.0, 0.0, 0.0))
-    y = _cross(z, x)
+    y = cross3(z, x)
     o = (tuple(float(c) for c in origin) + (0.0, 0.0))[:3]
     return np.array([[x[0], y[0], z[0], o[0]], [x[1], y[1], z[1], o[1]], [x[2], y[2], z[2], o[2]],
                      [0.0, 0.0, 0.0, 1.0]])

@@ -148,7 +148,7 @@ class IfcModel:
         self._references: dict[str, tuple[Any, list[Any]]] = {}
         self._styles: dict[str, Any] = {}
         self._profiles: dict[str, Any] = {}
-        self._properties: dict[tuple[str, str, Any], Any] = {}
+        self._properties: dict[tuple[str, str, str, Any], Any] = {}
 
     # -- small entities ------------------------------------------------------------------------------
     def guid(self, key: str) -> str:
@@ -184,32 +184,31 @@ class IfcModel:
             self._styles[layer] = self.f.create_entity("IfcSurfaceStyle", Name=layer, Side="BOTH", Styles=[shading])
         return self._styles[layer]
 
-    def _value(self, key: str, value) -> Any:
-        f = self.f
+    @staticmethod
+    def _value_type(key: str, value: Any) -> str:
+        """The IFC type of the property ``key``'s value ``value``: a measure by the column, else by Python type."""
         if isinstance(value, int):
-            return f.create_entity("IfcInteger", value)
+            return "IfcInteger"
         if isinstance(value, float):
             if key == "weight_kg":
-                return f.create_entity("IfcMassMeasure", value)
+                return "IfcMassMeasure"
             if key == "area_mm2":
-                return f.create_entity("IfcAreaMeasure", value)
-            if key in LENGTH_KEYS:
-                return f.create_entity("IfcLengthMeasure", value)
-            return f.create_entity("IfcReal", value)
-        if key in ("part_id", "nest_tag", "type_id", "beam_id"):
-            return f.create_entity("IfcIdentifier", value)
-        return f.create_entity("IfcLabel", value)
+                return "IfcAreaMeasure"
+            return "IfcLengthMeasure" if key in LENGTH_KEYS else "IfcReal"
+        return "IfcIdentifier" if key in ("part_id", "nest_tag", "type_id", "beam_id") else "IfcLabel"
 
-    def _property(self, key: str, value: Any) -> Any:
-        """The ``IfcPropertySingleValue`` ``key`` = ``value`` (:meth:`_value`; area in mm²), one per distinct name
-        and value, shared by every property set that holds it: IFC4 lets a property belong to any number of sets
-        (``IfcProperty.PartOfPset`` is a set).  Most of the parts' properties repeat (kind, material, sheet,
-        quantity, thickness): on the bundled default at 44 × 30 faces 243,533 properties were 70,400 values."""
-        k = (key, type(value).__name__, value)
+    def _property(self, key: str, value: Any, value_type: str | None = None) -> Any:
+        """The ``IfcPropertySingleValue`` ``key`` = ``value`` (of ``value_type``, by default :meth:`_value_type`;
+        area in mm²), one per distinct name, type and value, shared by every property set that holds it: IFC4 lets
+        a property belong to any number of sets (``IfcProperty.PartOfPset`` is a set).  Most of the parts'
+        properties repeat (kind, material, sheet, quantity, thickness): on the bundled default at 44 × 30 faces
+        243,533 properties were 70,400 values."""
+        value_type = value_type or self._value_type(key, value)
+        k = (key, value_type, type(value).__name__, value)
         got = self._properties.get(k)
         if got is None:
             got = self._properties[k] = self.f.create_entity(
-                "IfcPropertySingleValue", Name=key, NominalValue=self._value(key, value),
+                "IfcPropertySingleValue", Name=key, NominalValue=self.f.create_entity(value_type, value),
                 Unit=self.mm2 if key == "area_mm2" else None)
         return got
 
@@ -433,20 +432,10 @@ class IfcModel:
         f = self.f
         cls = IFC_CLASSES.get(kind, ("IfcMember", ""))[0]
         name = "Pset_PlateCommon" if kind == "panel" else f"Pset_{cls[3:]}Common"
-        props = [self._common_property("Reference", "IfcIdentifier", reference),
-                 self._common_property("IsExternal", "IfcBoolean", True),
-                 self._common_property("LoadBearing", "IfcBoolean", kind != "panel")]
+        props = [self._property("Reference", reference, "IfcIdentifier"),
+                 self._property("IsExternal", True, "IfcBoolean"),
+                 self._property("LoadBearing", kind != "panel", "IfcBoolean")]
         return f.create_entity("IfcPropertySet", GlobalId=self.guid(key), Name=name, HasProperties=props)
-
-    def _common_property(self, key: str, value_type: str, value: Any) -> Any:
-        """A property of the common sets (:meth:`_common_pset`), one per distinct name and value, shared as
-        :meth:`_property`'s."""
-        k = (f"common/{key}", value_type, value)
-        got = self._properties.get(k)
-        if got is None:
-            got = self._properties[k] = self.f.create_entity(
-                "IfcPropertySingleValue", Name=key, NominalValue=self.f.create_entity(value_type, value))
-        return got
 
     def _classify(self, kind: str, obj: Any) -> None:
         """Note ``obj`` (a part or a type) for the classification reference of its kind, if the design gives one
