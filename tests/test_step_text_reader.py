@@ -203,7 +203,7 @@ def test_kernel_option_reads_every_solid_with_the_kernel(built):
     assert text is not None and all(isinstance(s.solid.points, np.ndarray) for s in text)
 
 
-def test_a_file_written_with_p_curves_is_read(built, tmp_path):
+def test_a_file_written_with_p_curves_is_read(built, tmp_path, monkeypatch):
     """Another writer's file (build123d's export with p-curves: every edge a SURFACE_CURVE or SEAM_CURVE over its
     3D line or circle) gives the same solids: vertices to 1e-9 mm, volumes to 1e-9."""
     from build123d import Compound, export_step
@@ -214,7 +214,13 @@ def test_a_file_written_with_p_curves_is_read(built, tmp_path):
     out = tmp_path / "again.step"
     export_step(Compound(children=[s.solid for s in kernel]), str(out))
     assert b"SURFACE_CURVE(" in out.read_bytes()
+    import fabrication.verify._step_breps as breps
+
+    general = []                                   # records the B-rep tables' patterns leave to the full parser
+    canonical = breps._canonical
+    monkeypatch.setattr(breps, "_canonical", lambda *a: general.append(a[2]) or canonical(*a))
     again = read_text_solids(out)
+    assert "CARTESIAN_POINT" in general            # the p-curves' 2D points: read, never taken for vertices
     assert [s.name for s in again] == [s.name for s in kernel]
     for mine, kern in zip(again, kernel):
         assert _apart(np.array([tuple(p) for p in kern.solid.vertices()]), mine.points) <= 1e-9
@@ -235,3 +241,50 @@ def test_a_solid_turned_inside_out_is_found(built, tmp_path):
         assert b.volume == pytest.approx(-a.volume, rel=1e-9)
         assert any("is not positive" in p for p in b.problems()), b.name
         assert sorted(b.face_area(f) for f in b.faces()) == pytest.approx(sorted(a.face_area(f) for f in a.faces()))
+
+
+def test_records_in_another_layout_give_the_same_solids(built, tmp_path):
+    """The B-rep tables are matched chunk by chunk by one pattern per type; records spaced and broken across lines
+    as another writer may write them, with lower-case exponents, give the same solids (vertices, faces, volumes)
+    as the file as written."""
+    data = (built / "splices.step").read_bytes()
+    spaced = re.sub(rb"(#\d+ = EDGE_CURVE\('',#\d+),(#\d+)", rb"\1 ,\n  \2", data)
+    spaced = re.sub(rb"(ORIENTED_EDGE\('',\*),\*", rb"\1 , * ", spaced)
+    spaced = re.sub(rb"(CARTESIAN_POINT\('',\()([-0-9.]+)E([-+]?\d+)", rb"\1\2e\3", spaced)
+    spaced = re.sub(rb"(CLOSED_SHELL\('',\()#", rb"\1 #", spaced)
+    assert spaced != data and spaced.count(b",\n  #") > 100
+    (tmp_path / "splices.step").write_bytes(spaced)
+    before, after = read_text_solids(built / "splices.step"), read_text_solids(tmp_path / "splices.step")
+    assert [s.name for s in after] == [s.name for s in before]
+    for a, b in zip(before, after):
+        assert np.array_equal(a.points, b.points)
+        assert np.array_equal(a.code.steps, b.code.steps) and np.allclose(a.code.planes, b.code.planes)
+        assert b.volume == pytest.approx(a.volume, rel=1e-12) and b.problems() == []
+
+
+def test_a_brep_reference_to_the_wrong_entity_is_named(built, tmp_path):
+    """A face bound pointing at a vertex, and a shell pointing at an entity that is not there, are refused with
+    the entity named."""
+    data = (built / "panels.step").read_bytes()
+    ents = read_entities(data)
+    bound = int(ents.of_kind("FACE_OUTER_BOUND")[3])
+    vertex = int(ents.of_kind("VERTEX_POINT")[0])
+    wrong = re.sub(rb"(#%d = FACE_OUTER_BOUND\('',)#\d+" % bound, rb"\1#%d" % vertex, data)
+    assert wrong != data
+    (tmp_path / "wrong.step").write_bytes(wrong)
+    with pytest.raises(StepTextError, match=f"#{vertex} is a VERTEX_POINT, not an EDGE_LOOP"):
+        read_text_solids(tmp_path / "wrong.step")
+    shell = int(ents.of_kind("CLOSED_SHELL")[0])
+    top = int(ents.ids.max()) + 10
+    dangling = re.sub(rb"(#%d = CLOSED_SHELL\('',\()#\d+" % shell, rb"\1#%d" % top, data)
+    (tmp_path / "dangling.step").write_bytes(dangling)
+    with pytest.raises(StepTextError, match=f"#{top} is referenced but not defined"):
+        read_text_solids(tmp_path / "dangling.step")
+
+
+def test_ranges_concatenates_aranges():
+    from fabrication.verify._step_breps import ranges
+
+    starts, counts = np.array([5, 0, 9, 2]), np.array([3, 0, 1, 2])
+    assert ranges(starts, counts).tolist() == [5, 6, 7, 9, 2, 3]
+    assert ranges(np.zeros(0, int), np.zeros(0, int)).tolist() == []

@@ -104,6 +104,8 @@ class Entities(Mapping[int, tuple[str, str]]):
         self._data, self.ids, self.kinds, self._starts, self._stops = data, ids, kinds, starts, stops
         self.names = names                      # type code → type name
         self._codes = {n: k for k, n in enumerate(names)}
+        self._sorted: np.ndarray | None = None
+        self._nul: bool | None = None
         top = int(ids.max()) if len(ids) else -1
         self._dense = top < 4 * len(ids) + 1024  # ids 1 … n, as every writer numbers them: an array lookup
         if self._dense:
@@ -139,6 +141,44 @@ class Entities(Mapping[int, tuple[str, str]]):
 
     def __len__(self) -> int:
         return len(self.ids)
+
+    def code(self, kind: str) -> int:
+        """The code of the type name ``kind`` in :attr:`kinds`, -1 when no entity has it."""
+        return self._codes.get(kind, -1)
+
+    def rows(self, ids: np.ndarray) -> np.ndarray:
+        """Where each of the ids stands among :attr:`ids` (:meth:`row` of many at once), -1 for one not defined."""
+        ids = np.asarray(ids, dtype=np.int64)
+        if self._dense:
+            out = np.full(len(ids), -1, dtype=np.int64)
+            inside = (ids >= 0) & (ids < len(self._row))
+            out[inside] = self._row[ids[inside]]
+            return out
+        if self._sorted is None:
+            self._sorted = np.argsort(self.ids, kind="stable")
+        order = self._sorted
+        if not len(order):
+            return np.full(len(ids), -1, dtype=np.int64)
+        at = np.clip(np.searchsorted(self.ids[order], ids), 0, len(order) - 1)
+        return np.where(self.ids[order][at] == ids, order[at], -1)
+
+    def texts(self, rows: np.ndarray) -> list[bytes]:
+        """The parameter texts of the entities at ``rows`` (positions in :attr:`ids`), as bytes."""
+        data = self._data
+        return [data[a:b] for a, b in zip(self._starts[rows].tolist(), self._stops[rows].tolist())]
+
+    def joined(self, rows: np.ndarray, sep: bytes) -> bytes:
+        """The parameter texts of the entities at ``rows`` joined by ``sep`` (each slice a small copy: four times
+        cheaper to make than a memoryview of it)."""
+        data = self._data
+        return sep.join([data[a:b] for a, b in zip(self._starts[rows].tolist(), self._stops[rows].tolist())])
+
+    @property
+    def has_nul(self) -> bool:
+        """Whether the file holds a NUL byte (which :meth:`joined` text uses as a separator)."""
+        if self._nul is None:
+            self._nul = b"\x00" in self._data
+        return self._nul
 
     def of_kind(self, *kinds: str) -> np.ndarray:
         """The ids of the entities of these types, in file order."""

@@ -23,11 +23,12 @@ import math
 import os
 import sys
 from dataclasses import dataclass, field
-from typing import Any, NoReturn
+from typing import NoReturn
 
 import numpy as np
 
 from ._shapes import cross3
+from ._step_breps import read_breps
 from ._step_part21 import Entities, Ref, StepTextError, Typed, fast_params, parse_params, read_entities
 
 @dataclass(frozen=True, slots=True)
@@ -462,136 +463,6 @@ def _name(args: list) -> str:
     return str(args[1] or args[0]) if len(args) > 1 else str(args[0])
 
 
-def _solid_of(model: StepModel, brep: int, transform: np.ndarray, name: str, path: tuple[str, ...],
-              colour: tuple[float, float, float, float] | None) -> TextSolid:
-    """The B-rep ``#brep`` as a :class:`TextSolid` placed by ``transform``."""
-    if model.kind(brep) != "MANIFOLD_SOLID_BREP":
-        raise StepTextError(f"#{brep} is a {model.kind(brep)}, not a MANIFOLD_SOLID_BREP")
-    shell = model.args(brep)[1].id
-    if model.kind(shell) != "CLOSED_SHELL":
-        raise StepTextError(f"#{shell} is a {model.kind(shell)}, not a CLOSED_SHELL")
-    pts_local, code = _brep_of(model, brep, shell)
-    points = pts_local @ transform[:3, :3].T + transform[:3, 3]
-    return TextSolid(name, path, colour, points, code, pts_local, transform, brep, shared=model.facts)
-
-
-def _brep_of(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, ShellCode]:
-    """The vertices ``(n, 3)`` of the B-rep ``#brep`` in its own coordinates and its faces packed, read once per
-    B-rep (a B-rep shared by many products, an instanced shape, is placed once per product); the topology as read
-    (:func:`_topology`) is not kept."""
-    got = model.breps.get(brep)
-    if got is None:
-        points, raw_faces = _topology(model, brep, shell)
-        got = model.breps[brep] = (points, _shell_code(model, points, raw_faces))
-    return got
-
-
-def _shell_code(model: StepModel, points: np.ndarray, raw_faces: list) -> ShellCode:
-    """The faces of a B-rep as :func:`_topology` reads them (``points`` its vertices), packed
-    (:class:`ShellCode`)."""
-    planes: list[list[float]] = []
-    kinds: list[tuple[bool, bool]] = []
-    face_loops, loop_steps = [0], [0]
-    steps: list[tuple[int, int, int, int]] = []
-    arcs: list[list[float]] = []
-    for kind, surf, same, loops in raw_faces:
-        if kind not in ("PLANE", "CYLINDRICAL_SURFACE"):
-            raise StepTextError(f"#{surf} is a {kind}: planes and cylinders only (ppfab verify --kernel reads any "
-                                "STEP file)")
-        sa = model.args(surf)
-        o, z, x = model.axis2(sa[1].id, keep=False)
-        radius = float(sa[2]) if kind == "CYLINDRICAL_SURFACE" else 0.0
-        for verts, loop_arcs, edges, fwd in loops:
-            for vert, item, edge, forward in zip(verts, loop_arcs, edges, fwd):
-                which = -1
-                if item is not None:
-                    c, ccw, start, end = item
-                    co, cz, _ = model.axis2(model.args(c)[1].id, keep=False)
-                    r = float(model.args(c)[2])
-                    axis = cz if ccw else -cz
-                    if start == end:
-                        sweep = 2.0 * math.pi
-                    else:
-                        e1, e2 = points[start] - co, points[end] - co
-                        sweep = math.atan2(float(cross3(e1, e2) @ axis), float(e1 @ e2)) % (2.0 * math.pi)
-                    which = len(arcs)
-                    arcs.append([*co.tolist(), *axis.tolist(), r, sweep])
-                steps.append((vert, edge, int(forward), which))
-            loop_steps.append(len(steps))
-        face_loops.append(len(loop_steps) - 1)
-        normal = z if kind != "PLANE" or same else -z
-        planes.append([*o.tolist(), *normal.tolist(), *x.tolist(), radius])
-        kinds.append((kind != "PLANE", bool(same)))
-    got = ShellCode(np.array(planes, dtype=float).reshape(-1, 10), np.array(kinds, dtype=bool).reshape(-1, 2),
-                    np.array(face_loops, dtype=np.int64), np.array(loop_steps, dtype=np.int64),
-                    np.array(steps, dtype=np.int64).reshape(-1, 4), np.array(arcs, dtype=float).reshape(-1, 8))
-    for array in (got.planes, got.kinds, got.face_loops, got.loop_steps, got.steps, got.arcs):
-        array.flags.writeable = False                   # shared by every solid placing the B-rep
-    return got
-
-
-def _topology(model: StepModel, brep: int, shell: int) -> tuple[np.ndarray, list]:
-    """The vertices ``(n, 3)`` of the B-rep ``#brep`` in its own coordinates and its faces as index loops (read
-    once per B-rep, by :func:`_brep_of`)."""
-    index: dict[int, int] = {}
-    local: list[np.ndarray] = []
-
-    def vertex(v: int) -> int:
-        k = index.get(v)
-        if k is None:
-            if model.kind(v) != "VERTEX_POINT":
-                raise StepTextError(f"#{v} is a {model.kind(v)}, not a VERTEX_POINT")
-            k = index[v] = len(local)
-            local.append(model.xyz(model.args(v)[1].id))
-        return k
-
-    raw_faces: list[tuple[str, int, bool, list[tuple[list[int], list[Any], list[int], list[bool]]]]] = []
-    for f in model.args(shell)[1]:
-        if model.kind(f.id) != "ADVANCED_FACE":
-            raise StepTextError(f"#{f.id} is a {model.kind(f.id)}, not an ADVANCED_FACE")
-        _, bounds, surf, same = model.args(f.id)
-        loops = []
-        for b in bounds:
-            if model.kind(b.id) not in ("FACE_BOUND", "FACE_OUTER_BOUND"):
-                raise StepTextError(f"#{b.id} is a {model.kind(b.id)}, not a FACE_BOUND")
-            _, loop, orient = model.args(b.id)
-            if model.kind(loop.id) != "EDGE_LOOP":
-                raise StepTextError(f"#{loop.id} is a {model.kind(loop.id)}, not an EDGE_LOOP (supported: edge loops)")
-            steps = []
-            for oe in model.args(loop.id)[1]:
-                if model.kind(oe.id) != "ORIENTED_EDGE":
-                    raise StepTextError(f"#{oe.id} is a {model.kind(oe.id)}, not an ORIENTED_EDGE")
-                ec, o = model.args(oe.id)[3].id, model.args(oe.id)[4]
-                if model.kind(ec) != "EDGE_CURVE":
-                    raise StepTextError(f"#{ec} is a {model.kind(ec)}, not an EDGE_CURVE")
-                _, v1, v2, curve, sense = model.args(ec)
-                steps.append((ec, bool(o), vertex(v1.id), vertex(v2.id), curve.id, bool(sense)))
-            if not orient:                               # the loop runs backwards: reverse it, edge by edge
-                steps = [(ec, not o, a, b, c, s) for ec, o, a, b, c, s in reversed(steps)]
-            verts: list[int] = []
-            arcs: list[tuple[int, bool, int, int] | None] = []
-            edges: list[int] = []
-            fwd: list[bool] = []
-            for ec, o, a, b, c, s in steps:
-                verts.append(a if o else b)
-                edges.append(ec)
-                fwd.append(o)
-                kind = model.kind(c)
-                while kind in ("SURFACE_CURVE", "SEAM_CURVE"):      # written with p-curves: its 3D curve
-                    c = model.args(c)[1].id
-                    kind = model.kind(c)
-                if kind == "LINE":
-                    arcs.append(None)
-                elif kind == "CIRCLE":
-                    arcs.append((c, o == s, a if o else b, b if o else a))
-                else:
-                    raise StepTextError(f"#{c} is a {kind}: edges on lines and circles only (ppfab verify --kernel "
-                                        "reads any STEP file)")
-            loops.append((verts, arcs, edges, fwd))
-        raw_faces.append((model.kind(surf.id), surf.id, bool(same), loops))
-    return np.array(local, dtype=float).reshape(-1, 3), raw_faces
-
-
 def _colours(model: StepModel) -> dict[int, tuple[float, float, float, float]]:
     """Styled item (a B-rep or any other entity) → its colour, an overriding style winning over a plain one;
     alpha 1 less a SURFACE_STYLE_TRANSPARENT's transparency."""
@@ -702,6 +573,8 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             todo.extend(linked.get(r, []))
         return found
 
+    placed: list[tuple[int, np.ndarray, str, tuple[str, ...]]] = []
+
     def walk(pd: int, transform: np.ndarray, above: tuple[str, ...], occurrence: str = "") -> None:
         name = name_of(pd)
         kids = children.get(pd, [])
@@ -711,9 +584,16 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             return
         name = occurrence or name                      # a shape used by many occurrences: each one's name
         for b in breps(pd):
-            out.append(_solid_of(model, b, transform, name, above, colours.get(b)))
+            placed.append((b, transform, name, above))
 
     for pd in sorted(model.ids("PRODUCT_DEFINITION")):
         if pd not in is_child:
             walk(pd, np.eye(4), ())
+    missing = sorted({b for b, *_ in placed} - model.breps.keys())
+    if missing:
+        model.breps.update(read_breps(model.raw, missing))
+    for b, transform, name, above in placed:
+        local, code = model.breps[b]
+        points = local @ transform[:3, :3].T + transform[:3, 3]
+        out.append(TextSolid(name, above, colours.get(b), points, code, local, transform, b, shared=model.facts))
     return out
