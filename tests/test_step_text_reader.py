@@ -288,3 +288,26 @@ def test_ranges_concatenates_aranges():
     starts, counts = np.array([5, 0, 9, 2]), np.array([3, 0, 1, 2])
     assert ranges(starts, counts).tolist() == [5, 6, 7, 9, 2, 3]
     assert ranges(np.zeros(0, int), np.zeros(0, int)).tolist() == []
+
+
+def test_a_shell_missing_a_face_names_an_edge_of_the_hole(built, tmp_path):
+    """One face left out of a pane's closed shell: the edges around the hole are used once; the reader counts
+    them (a pane's face is a quad: 4) and names the first its loops reach, an edge of the face left out."""
+    data = (built / "panels.step").read_bytes()
+    ents = read_entities(data)
+    shell = int(ents.of_kind("CLOSED_SHELL")[0])
+    faces = parse_params(ents[shell][1])[1]
+    gone = faces[-1].id
+    edges = set()
+    bound = parse_params(ents[gone][1])[1][0].id
+    loop = parse_params(ents[bound][1])[1].id
+    for oe in parse_params(ents[loop][1])[1]:
+        edges.add(parse_params(ents[oe.id][1])[3].id)
+    cut = re.sub(rb"(#%d = CLOSED_SHELL\('',\([^)]*),#%d\)" % (shell, gone), rb"\1)", data)
+    assert cut != data
+    (tmp_path / "panels.step").write_bytes(cut)
+    hit = [s for s in read_text_solids(tmp_path / "panels.step") if s.problems()]
+    assert hit
+    facts = hit[0].facts()
+    assert facts.bad_edges == len(edges) == 4 and facts.first_bad_edge in edges
+    assert f"(#{facts.first_bad_edge})" in hit[0].problems()[0]

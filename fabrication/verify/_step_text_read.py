@@ -28,6 +28,7 @@ from typing import NoReturn
 import numpy as np
 
 from ._shapes import cross3
+from ._step_brep_facts import BrepFacts, facts_of
 from ._step_breps import read_breps
 from ._step_part21 import Entities, Ref, StepTextError, Typed, fast_params, parse_params, read_entities
 
@@ -168,13 +169,14 @@ class TextSolid:
         for cylinder bands)."""
         return self.facts().volume
 
-    def facts(self) -> "BrepFacts":
-        """What a rigid motion does not change, worked out once per B-rep when :attr:`shared` is given (the
-        reader's: an instanced shape's solids share their B-rep) — else once for this solid."""
+    def facts(self) -> BrepFacts:
+        """What a rigid motion does not change (:func:`~._step_brep_facts.facts_of`): the reader works it out for
+        all B-reps of a file at once and keeps it per B-rep in :attr:`shared` (an instanced shape's solids share
+        their B-rep); a solid made otherwise works out its own."""
         if self._facts is None:
             got = self.shared.get(self.brep) if self.shared is not None else None
             if got is None:
-                got = _brep_facts(self)
+                got = facts_of([(self.local, self.code)])[0]
                 if self.shared is not None:
                     self.shared[self.brep] = got
             self._facts = got
@@ -182,19 +184,17 @@ class TextSolid:
 
     def face_area(self, face: Face) -> float:
         """Area of a planar face of :attr:`shell`, mm² (its loops' signed areas about its normal summed, outer
-        less holes): :attr:`BrepFacts.face_areas` at the face's :attr:`Face.index`, worked out once per B-rep; of
-        a face without an index, computed."""
-        areas = self.facts().face_areas
-        if 0 <= face.index < len(areas):
-            return areas[face.index]
-        return _face_area(self.points, face)
+        less holes; 0 for a cylinder): :attr:`BrepFacts.face_areas` at the face's :attr:`Face.index`."""
+        return self.facts().face_areas[face.index]
 
     def outer_loop(self, face: Face) -> Loop:
-        """The loop of a planar face enclosing the largest area (its outer boundary)."""
+        """The loop of a planar face enclosing the largest area (its outer boundary;
+        :attr:`BrepFacts.loop_areas`)."""
         if len(face.loops) == 1:
             return face.loops[0]
-        c = self.points[face.loops[0].vertices].mean(axis=0)
-        return max(face.loops, key=lambda lp: abs(_loop_area(self.points, lp, face.normal, c)))
+        first = int(self.code.face_loops[face.index])
+        areas = self.facts().loop_areas
+        return max(zip(face.loops, range(first, first + len(face.loops))), key=lambda x: abs(areas[x[1]]))[0]
 
     def ring(self, loop: Loop, arc_points: int = 0) -> np.ndarray:
         """``(k, 3)`` the loop's points in order: its vertices, with ``arc_points - 1`` more along each circular
@@ -254,115 +254,6 @@ class TextSolid:
         """What kind of solid this is, whatever its size and place: per face its surface and the edge counts and
         arcs of its loops, sorted.  Solids of one key are read by the CAD kernel once (one instance each)."""
         return (len(self.points), self.code.key())
-
-
-@dataclass(frozen=True)
-class BrepFacts:
-    """What a rigid motion does not change of a solid, so one B-rep placed many times is measured once:
-    ``bad_edges`` the edges not used exactly twice in opposite senses (``first_bad_edge`` the id of one, else 0),
-    ``off_surface`` the largest distance (mm) of a vertex from its face's plane or cylinder or of a circle's end
-    from its circle, ``volume`` mm³ (:attr:`TextSolid.volume`), ``face_areas`` mm² per face of the shell in its
-    order (a plane's area, outer loop less holes; 0 for a cylinder)."""
-
-    bad_edges: int
-    first_bad_edge: int
-    off_surface: float
-    volume: float
-    face_areas: tuple[float, ...] = ()
-
-
-def _brep_facts(solid: TextSolid) -> BrepFacts:
-    shell = solid.shell
-    use: dict[int, list[bool]] = {}
-    for f in shell:
-        for lp in f.loops:
-            for e, fw in zip(lp.edges, lp.forward):
-                use.setdefault(e, []).append(fw)
-    bad = [e for e, u in use.items() if sorted(u) != [False, True]]
-    worst = 0.0
-    for f in shell:
-        idx = np.concatenate([lp.vertices for lp in f.loops])
-        p = solid.points[idx] - f.origin
-        if f.surface == "plane":
-            worst = max(worst, float(np.abs(p @ f.normal).max()))
-        else:
-            radial = p - np.outer(p @ f.normal, f.normal)
-            worst = max(worst, float(np.abs(np.linalg.norm(radial, axis=1) - f.radius).max()))
-        for lp in f.loops:
-            for k, arc in enumerate(lp.arcs):
-                if arc is not None:
-                    q = solid.points[lp.vertices[[k, (k + 1) % len(lp.vertices)]]] - arc.centre
-                    worst = max(worst, float(np.abs(np.linalg.norm(q, axis=1) - arc.radius).max()),
-                                float(np.abs(q @ arc.axis).max()))
-    c = solid.points.mean(axis=0) if len(solid.points) else np.zeros(3)   # about the solid: no cancellation
-    signed = [_signed_area(solid.points, f) if f.surface == "plane" else 0.0 for f in shell]
-    volume = sum(_flux(solid, f, c, a) for f, a in zip(shell, signed)) / 3.0
-    return BrepFacts(len(bad), bad[0] if bad else 0, worst, float(volume), tuple(abs(a) for a in signed))
-
-
-def _signed_area(points: np.ndarray, face: Face) -> float:
-    """The signed area (mm²) of a planar face whose vertices are ``points``: its loops' signed areas about its
-    normal summed (outer less holes), taken about the first loop's centre; negative when the outer loop runs
-    clockwise about the normal (the face turned inside out)."""
-    c = points[face.loops[0].vertices].mean(axis=0)
-    return float(sum(_loop_area(points, lp, face.normal, c) for lp in face.loops))
-
-
-def _face_area(points: np.ndarray, face: Face) -> float:
-    """The area (mm²) of a planar face (:func:`_signed_area`, its magnitude)."""
-    return abs(_signed_area(points, face))
-
-
-def _loop_integral(points: np.ndarray, loop: Loop, about: np.ndarray | None = None) -> np.ndarray:
-    """``∮ x × dx`` along a loop (twice its vector area), ``x`` taken from ``about`` (default the origin):
-    ``p × q`` for a straight edge, ``c × (q − p) + r² θ k`` for an arc of centre ``c``, radius ``r``, sweep ``θ``
-    about ``k``."""
-    p = points[loop.vertices]
-    if about is not None:
-        p = p - about
-    a, b = p[:-1], p[1:]                              # the edges p_k → p_k+1, and the closing p_n-1 → p_0
-    total = cross3(p[-1], p[0]) + np.einsum("ij,ij->j", a[:, [1, 2, 0]], b[:, [2, 0, 1]]) \
-        - np.einsum("ij,ij->j", a[:, [2, 0, 1]], b[:, [1, 2, 0]])
-    n = len(p)
-    for k, arc in enumerate(loop.arcs):
-        if arc is not None:
-            c = arc.centre if about is None else arc.centre - about
-            pk, qk = p[k], p[(k + 1) % n]
-            total = total - cross3(pk, qk) + cross3(c, qk - pk) + arc.radius ** 2 * arc.sweep * arc.axis
-    return total
-
-
-def _loop_area(points: np.ndarray, loop: Loop, normal: np.ndarray, about: np.ndarray | None = None) -> float:
-    return 0.5 * float(_loop_integral(points, loop, about) @ normal)
-
-
-def _flux(solid: TextSolid, face: Face, about: np.ndarray, area: float) -> float:
-    """``∫ (x − about)·n dA`` over a face, ``n`` the solid's outward normal; ``area`` a plane's signed area
-    (:func:`_signed_area`)."""
-    sign = 1.0 if face.outward else -1.0
-    if face.surface == "plane":
-        return float((face.origin - about) @ face.normal) * area
-    # a cylinder band θ0 … θ1 × s0 … s1 about the axis (origin o, unit a, radius r): x·u = o·u + r, so the flux
-    # is r h (o · ∫u dθ + r Δθ), the arcs at the band's lower end giving the angles
-    a, o, r = face.normal, face.origin - about, face.radius
-    idx = np.concatenate([lp.vertices for lp in face.loops])
-    s = (solid.points[idx] - face.origin) @ a
-    h = float(s.max() - s.min())
-    arcs = [(arc, solid.points[lp.vertices[k]]) for lp in face.loops for k, arc in enumerate(lp.arcs)
-            if arc is not None]
-    if not arcs:
-        return 0.0
-    low = min(float((arc.centre - face.origin) @ a) for arc, _ in arcs)
-    integral = np.zeros(3)
-    sweep = 0.0
-    for arc, start in arcs:
-        if abs(float((arc.centre - face.origin) @ a) - low) > 1e-6 * max(1.0, h):
-            continue
-        e1 = (start - arc.centre) / arc.radius
-        e2 = cross3(arc.axis, e1)
-        integral += e1 * math.sin(arc.sweep) + e2 * (1.0 - math.cos(arc.sweep))   # ∫ u dθ over the arc
-        sweep += arc.sweep
-    return sign * r * h * (float(o @ integral) + r * sweep)
 
 
 _ONCE = frozenset({"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "EDGE_CURVE", "ORIENTED_EDGE", "EDGE_LOOP",
@@ -592,6 +483,7 @@ def solids_of(model: StepModel) -> list[TextSolid]:
     missing = sorted({b for b, *_ in placed} - model.breps.keys())
     if missing:
         model.breps.update(read_breps(model.raw, missing))
+        model.facts.update(zip(missing, facts_of([model.breps[b] for b in missing])))
     for b, transform, name, above in placed:
         local, code = model.breps[b]
         points = local @ transform[:3, :3].T + transform[:3, 3]
