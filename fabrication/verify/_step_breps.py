@@ -139,12 +139,14 @@ def _canonical(layout: Layout, i: int, kind: str, text: str) -> tuple[bytes, ...
 def parse_table(ents: Entities, layout: Layout) -> Table:
     """Every record of the layout's types (:class:`Table`): chunks of records joined by NUL and matched whole by
     the layout's pattern; a chunk with a record that does not match is matched record by record, and those
-    records parsed in full (:func:`_canonical`)."""
+    records parsed in full (:func:`_canonical`).  Each chunk's matches become numbers before the next is read."""
     codes = [ents.code(t) for t in layout.types]
     rows = np.flatnonzero(np.isin(ents.kinds, [c for c in codes if c >= 0]))
-    groups = sum(_FIELDS[f][1] for f in layout.fields)
     anchored, alone = layout.pattern(True), layout.pattern(False)
-    parts: list[np.ndarray] = []
+    ints: list[np.ndarray] = []
+    reals: list[np.ndarray] = []
+    counts: list[np.ndarray] = []
+    items: list[np.ndarray] = []
     for k in range(0, len(rows), CHUNK):
         chunk = rows[k:k + CHUNK]
         found: list = anchored.findall(b"\x00" + ents.joined(chunk, b"\x00") + b"\x00")
@@ -157,33 +159,45 @@ def parse_table(ents: Entities, layout: Layout) -> Table:
                 else:
                     i = int(ents.ids[r])
                     found.append(_canonical(layout, i, ents.names[ents.kinds[r]], text.decode("latin-1")))
-        cols = np.array(found, dtype=bytes).reshape(len(chunk), groups)
-        parts.append(cols)
-    cols = np.concatenate(parts) if parts else np.zeros((0, groups), dtype=bytes)
+        columns = list(zip(*found)) if found and isinstance(found[0], tuple) else [found]
+        chunk_ints, chunk_reals = _columns(layout, columns, counts, items)
+        ints.append(chunk_ints.reshape(len(chunk), -1))
+        reals.append(chunk_reals.reshape(len(chunk), -1))
+    n_ints = sum(f in ("ref", "ref?", "bool") for f in layout.fields)
+    n_reals = sum(1 if f == "real" else 3 if f == "xyz" else 0 for f in layout.fields)
+    return Table(ents.ids[rows], _type_index(codes, ents.kinds[rows]),
+                 np.concatenate(ints) if ints else np.zeros((0, n_ints), dtype=np.int64),
+                 np.concatenate(reals) if reals else np.zeros((0, n_reals)),
+                 np.concatenate([[0], np.cumsum(np.concatenate(counts))]).astype(np.int64) if counts
+                 else np.zeros(1, dtype=np.int64),
+                 np.concatenate(items) if items else np.zeros(0, dtype=np.int64))
+
+
+def _columns(layout: Layout, columns: list, counts: list[np.ndarray], items: list[np.ndarray]
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """One chunk's captures, a tuple of bytes per captured value, as ``(m, i)`` integers and ``(m, r)`` reals
+    (:class:`Table`); a list of references appended to ``counts`` (per record) and ``items``."""
     ints: list[np.ndarray] = []
     reals: list[np.ndarray] = []
-    first, items = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64)
     j = 0
     for field in layout.fields:
-        if field == "ref":
-            ints.append(cols[:, j].astype(np.int64))
-        elif field == "ref?":
-            ints.append(np.where(cols[:, j] == b"", b"-1", cols[:, j]).astype(np.int64))
+        if field in ("ref", "ref?"):
+            col = columns[j] if field == "ref" else [x or b"-1" for x in columns[j]]
+            ints.append(np.array(col, dtype=bytes).astype(np.int64))
         elif field == "bool":
-            ints.append((cols[:, j] == b"T").astype(np.int64))
+            ints.append(np.array([x == b"T" for x in columns[j]], dtype=np.int64))
         elif field == "real":
-            reals.append(cols[:, j].astype(np.float64))
+            reals.append(np.array(columns[j], dtype=bytes).astype(np.float64))
         elif field == "refs":
-            first = np.concatenate([[0], np.cumsum(np.char.count(cols[:, j], b"#"))]).astype(np.int64)
-            refs = re.findall(rb"#(\d+)", b",".join(cols[:, j].tolist()))
-            items = np.array(refs, dtype=bytes).astype(np.int64) if refs else items
+            counts.append(np.array([x.count(b"#") for x in columns[j]], dtype=np.int64))
+            refs = re.findall(rb"#(\d+)", b",".join(columns[j]))
+            items.append(np.array(refs, dtype=bytes).astype(np.int64) if refs else np.zeros(0, dtype=np.int64))
         elif field == "xyz":
-            reals.extend(cols[:, j + c].astype(np.float64) for c in range(3))
+            reals.extend(np.array(columns[j + c], dtype=bytes).astype(np.float64) for c in range(3))
         j += _FIELDS[field][1]
-    count = len(rows)
-    return Table(ents.ids[rows], _type_index(codes, ents.kinds[rows]),
-                 np.stack(ints, axis=1) if ints else np.zeros((count, 0), dtype=np.int64),
-                 np.stack(reals, axis=1) if reals else np.zeros((count, 0)), first, items)
+    m = len(columns[0]) if columns else 0
+    return (np.stack(ints, axis=1) if ints else np.zeros((m, 0), dtype=np.int64),
+            np.stack(reals, axis=1) if reals else np.zeros((m, 0)))
 
 
 def _type_index(codes: list[int], kinds: np.ndarray) -> np.ndarray:
@@ -207,15 +221,14 @@ class Tables:
     def __init__(self, ents: Entities):
         self.ents = ents
         self._tables: dict[str, Table] = {}
-        self._place: dict[str, np.ndarray] = {}
+        self._place = np.full(len(ents), -1, dtype=np.int64)
+        """Each entity's row in the table of its type (a type is in one layout only), -1 before it is read."""
 
     def table(self, name: str) -> Table:
         got = self._tables.get(name)
         if got is None:
             got = self._tables[name] = parse_table(self.ents, LAYOUTS[name])
-            place = np.full(len(self.ents), -1, dtype=np.int64)
-            place[self.ents.rows(got.ids)] = np.arange(len(got.ids))
-            self._place[name] = place
+            self._place[self.ents.rows(got.ids)] = np.arange(len(got.ids))
         return got
 
     def follow(self, refs: np.ndarray, name: str, types: Sequence[str] | None = None) -> np.ndarray:
@@ -233,7 +246,7 @@ class Tables:
             bad = int(refs[~ok][0])
             article = "an" if wanted[0][0] in "AEIOU" else "a"
             raise StepTextError(f"#{bad} is a {self.ents.kind(bad)}, not {article} {' or '.join(wanted)}")
-        return self._place[name][rows]
+        return self._place[rows]
 
     def kinds_of(self, refs: np.ndarray) -> np.ndarray:
         """The type codes of the entities ``refs`` (:meth:`Entities.code`); :class:`StepTextError` for one not
@@ -253,7 +266,7 @@ class Tables:
 
     def frames(self, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """AXIS2_PLACEMENT_3Ds ``refs`` → origins, unit z, unit x square to z, each ``(k, 3)``; defaults
-        z = (0, 0, 1), x = (1, 0, 0) (or (0, 1, 0) when z is near x), as :meth:`StepModel.axis2`."""
+        z = (0, 0, 1), x = (1, 0, 0) (or (0, 1, 0) when z is near x)."""
         axes = self.table("axis").ints[self.follow(refs, "axis")]
         k = len(axes)
         o = self.points(axes[:, 0])
@@ -267,6 +280,15 @@ class Tables:
         x -= np.einsum("ij,ij->i", x, z)[:, None] * z
         x /= np.linalg.norm(x, axis=1)[:, None]
         return o, z, x
+
+
+    def matrices(self, refs: np.ndarray) -> np.ndarray:
+        """``(k, 4, 4)`` taking coordinates in each AXIS2_PLACEMENT_3D of ``refs`` into those it is given in:
+        columns x, z × x, z and the origin (:meth:`frames`)."""
+        o, z, x = self.frames(refs)
+        m = np.zeros((len(o), 4, 4))
+        m[:, :3, 0], m[:, :3, 1], m[:, :3, 2], m[:, :3, 3], m[:, 3, 3] = x, np.cross(z, x), z, o, 1.0
+        return m
 
 
 def _curves(tables: Tables, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -293,7 +315,7 @@ def _curves(tables: Tables, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return curves, kinds == circle
 
 
-def read_breps(ents: Entities, breps: Sequence[int]) -> dict[int, tuple[np.ndarray, "ShellCode"]]:
+def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarray, "ShellCode"]]:
     """Each MANIFOLD_SOLID_BREP ``breps`` → its vertices ``(n, 3)`` in its own coordinates (in the order its loops
     first reach them, each EDGE_CURVE's start before its end) and its faces packed (:class:`ShellCode`).
 
@@ -304,7 +326,7 @@ def read_breps(ents: Entities, breps: Sequence[int]) -> dict[int, tuple[np.ndarr
     circle)."""
     from ._step_text_read import ShellCode
 
-    tables = Tables(ents)
+    ents = tables.ents
     wanted = np.array(sorted(set(breps)), dtype=np.int64)
     nb = len(wanted)
     shells = tables.table("brep").ints[tables.follow(wanted, "brep"), 0]

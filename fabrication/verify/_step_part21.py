@@ -234,37 +234,31 @@ def read_entities(data: bytes) -> Entities:
                     np.frombuffer(starts, dtype=np.int64), np.frombuffer(stops, dtype=np.int64), names)
 
 
-_REFS = re.compile(r"#(\d+)")
+_FLAT_TOKEN = r"\s*(?:'[^',()]*'|#\d+|\$|\*|\.[A-Z_0-9]*\.|[-+0-9.][0-9.Ee+-]*)\s*"
+_FLAT = re.compile(r"\(" + _FLAT_TOKEN + r"(?:," + _FLAT_TOKEN + r")*\)")
+"""A flat parameter list: strings without commas, parentheses or quotes, references, ``$``, ``*``,
+enumerations and numbers (a product's, an occurrence's, a placement's record): split at its commas."""
 
-_FAST = {"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "MANIFOLD_SOLID_BREP", "CLOSED_SHELL", "EDGE_LOOP",
-         "FACE_BOUND", "FACE_OUTER_BOUND", "ORIENTED_EDGE", "EDGE_CURVE", "ADVANCED_FACE", "PLANE", "CIRCLE",
-         "CYLINDRICAL_SURFACE", "AXIS2_PLACEMENT_3D"}
 
-
-def fast_params(kind: str, text: str) -> list | None:
-    """:func:`parse_params` of the B-rep entities whose names are empty, by their fixed layout (five times
-    faster); ``None`` for any other entity, which the full parser reads."""
-    if kind not in _FAST or text.count("'") != 2 * text.count("''"):
+def flat_params(text: str) -> list | None:
+    """:func:`parse_params` of a flat parameter list (:data:`_FLAT`: a product's, an occurrence's, a placement's
+    record; three times faster), ``None`` for any other, which the full parser reads."""
+    if _FLAT.fullmatch(text) is None:
         return None
-    if kind in ("CARTESIAN_POINT", "DIRECTION"):
-        inner = text[text.index("(", 1) + 1:text.index(")")]
-        return ["", [float(x) for x in inner.split(",")]]
-    refs = [Ref(int(x)) for x in _REFS.findall(text)]
-    flag = text.rstrip().endswith(".T.)")
-    if kind in ("VERTEX_POINT", "MANIFOLD_SOLID_BREP", "PLANE") and len(refs) == 1:
-        return ["", refs[0]]
-    if kind in ("CLOSED_SHELL", "EDGE_LOOP"):
-        return ["", refs]
-    if kind in ("FACE_BOUND", "FACE_OUTER_BOUND") and len(refs) == 1:
-        return ["", refs[0], flag]
-    if kind == "ORIENTED_EDGE" and len(refs) == 1 and text.count("*") == 2:
-        return ["", "*", "*", refs[0], flag]
-    if kind == "EDGE_CURVE" and len(refs) == 3:
-        return ["", refs[0], refs[1], refs[2], flag]
-    if kind == "ADVANCED_FACE" and len(refs) >= 2:
-        return ["", refs[:-1], refs[-1], flag]
-    if kind in ("CIRCLE", "CYLINDRICAL_SURFACE") and len(refs) == 1:
-        return ["", refs[0], float(text[text.rindex(",") + 1:text.rindex(")")])]
-    if kind == "AXIS2_PLACEMENT_3D" and len(refs) == 3:
-        return ["", refs[0], refs[1], refs[2]]
-    return None
+    out: list = []
+    for token in text[1:-1].split(","):
+        t = token.strip()
+        head = t[0]
+        if head == "'":
+            out.append(t[1:-1])
+        elif head == "#":
+            out.append(Ref(int(t[1:])))
+        elif head == "$":
+            out.append(None)
+        elif head == "*":
+            out.append("*")
+        elif head == "." and t[-1] == "." and len(t) > 1 and not t[1].isdigit():
+            out.append(True if t == ".T." else False if t == ".F." else t)
+        else:
+            out.append(float(t))
+    return out

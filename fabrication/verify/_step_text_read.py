@@ -29,8 +29,8 @@ import numpy as np
 
 from ._shapes import cross3
 from ._step_brep_facts import BrepFacts, facts_of
-from ._step_breps import read_breps
-from ._step_part21 import Entities, Ref, StepTextError, Typed, fast_params, parse_params, read_entities
+from ._step_breps import Tables, read_breps
+from ._step_part21 import Entities, Ref, StepTextError, Typed, flat_params, parse_params, read_entities
 
 @dataclass(frozen=True, slots=True)
 class Arc:
@@ -256,14 +256,6 @@ class TextSolid:
         return (len(self.points), self.code.key())
 
 
-_ONCE = frozenset({"CARTESIAN_POINT", "DIRECTION", "VERTEX_POINT", "EDGE_CURVE", "ORIENTED_EDGE", "EDGE_LOOP",
-                   "FACE_BOUND", "FACE_OUTER_BOUND", "ADVANCED_FACE", "LINE", "VECTOR", "CLOSED_SHELL", "PLANE",
-                   "CYLINDRICAL_SURFACE", "CIRCLE", "AXIS2_PLACEMENT_3D"})
-"""Entity types whose parsed parameters :meth:`StepModel.args` does not keep: read by a B-rep's topology and
-faces, which are kept per B-rep (:func:`_brep_of`), or by an axis placement, kept as
-arrays (:meth:`StepModel.axis2`)."""
-
-
 class StepModel:
     """The entities of one file and the readers of the records the solids are made of."""
 
@@ -271,7 +263,7 @@ class StepModel:
         self.raw = entities
         self.cache: dict[int, list] = {}
         self.breps: dict[int, tuple[np.ndarray, ShellCode]] = {}
-        self.axes: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.tables = Tables(entities)
         self.facts: dict[int, BrepFacts] = {}
         self.by_kind: dict[str, list[int]] = {}
 
@@ -282,20 +274,18 @@ class StepModel:
             raise StepTextError(f"#{i} is referenced but not defined") from None
 
     def args(self, i: int) -> list:
-        """The parameters of ``#i`` parsed (:func:`~._step_part21.parse_params`); kept, except those of the
-        entities inside a B-rep (:data:`_ONCE`), which its topology reads once (kept per B-rep) — a million
-        parsed records of a large file need not stay in memory."""
+        """The parameters of ``#i`` parsed (:func:`~._step_part21.parse_params`), kept: the product tree's and
+        the styles' records (a B-rep's are read into :attr:`tables`, never one by one)."""
         got = self.cache.get(i)
         if got is None:
             try:
-                kind, text = self.raw[i]
+                _, text = self.raw[i]
             except KeyError:
                 self._missing(i)
-            got = fast_params(kind, text)
+            got = flat_params(text)
             if got is None:
                 got = parse_params(text)
-            if kind not in _ONCE:
-                self.cache[i] = got
+            self.cache[i] = got
         return got
 
     @staticmethod
@@ -308,45 +298,6 @@ class StepModel:
         if got is None:
             got = self.by_kind[kind] = self.raw.of_kind(kind).tolist()
         return got
-
-    def xyz(self, i: int) -> np.ndarray:
-        a = self.args(i)
-        if self.kind(i) not in ("CARTESIAN_POINT", "DIRECTION") or len(a[1]) != 3:
-            raise StepTextError(f"#{i} is a {self.kind(i)}, not a 3D point or direction")
-        return np.array(a[1], dtype=float)
-
-    def axis2(self, i: int, keep: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """AXIS2_PLACEMENT_3D → (origin, unit z, unit x square to z); defaults z = (0, 0, 1), x = (1, 0, 0).
-        Kept per entity (one placement may place many products) unless ``keep`` is false: a B-rep's surfaces and
-        circles are read once per B-rep (:func:`_brep_of`), and a large file has hundreds of thousands."""
-        got = self.axes.get(i)
-        if got is None:
-            got = self._axis2(i)
-            if keep:
-                self.axes[i] = got
-        return got
-
-    def _axis2(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if self.kind(i) != "AXIS2_PLACEMENT_3D":
-            raise StepTextError(f"#{i} is a {self.kind(i)}, not an AXIS2_PLACEMENT_3D")
-        a = self.args(i)
-        o = self.xyz(a[1].id)
-        z = self.xyz(a[2].id) if isinstance(a[2], Ref) else np.array([0.0, 0.0, 1.0])
-        z = z / np.linalg.norm(z)
-        x = self.xyz(a[3].id) if isinstance(a[3], Ref) else (np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9
-                                                             else np.array([0.0, 1.0, 0.0]))
-        x = x - (x @ z) * z
-        x = x / np.linalg.norm(x)
-        for vec in (o, z, x):
-            vec.flags.writeable = False                  # shared by every caller (kept per entity)
-        return o, z, x
-
-    def matrix(self, i: int) -> np.ndarray:
-        """``(4, 4)`` taking coordinates of the placement ``#i`` into those it is given in."""
-        o, z, x = self.axis2(i)
-        m = np.eye(4)
-        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, cross3(z, x), z, o
-        return m
 
 
 def _name(args: list) -> str:
@@ -424,6 +375,7 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             linked.setdefault(a[2].id, []).append(a[3].id)
             linked.setdefault(a[3].id, []).append(a[2].id)
     placement: dict[int, np.ndarray] = {}                    # NAUO → child coordinates → parent coordinates
+    moves: list[tuple[int, int, int]] = []                   # NAUO, the placements it takes from and to
     for i in model.ids("CONTEXT_DEPENDENT_SHAPE_REPRESENTATION"):
         rr, pds = model.args(i)[:2]
         nauo = model.args(pds.id)[2]
@@ -435,7 +387,12 @@ def solids_of(model: StepModel) -> list[TextSolid]:
         if model.kind(idt) != "ITEM_DEFINED_TRANSFORMATION":
             raise StepTextError(f"#{idt} is a {model.kind(idt)}: placements by ITEM_DEFINED_TRANSFORMATION only")
         a1, a2 = model.args(idt)[2:4]
-        placement[nauo.id] = model.matrix(a2.id) @ np.linalg.inv(model.matrix(a1.id))
+        moves.append((nauo.id, a1.id, a2.id))
+    if moves:                                                # all placements' frames at once
+        occurrences, from_, to = (np.array(c, dtype=np.int64) for c in zip(*moves))
+        for nauo_id, m in zip(occurrences.tolist(), model.tables.matrices(to) @ np.linalg.inv(
+                model.tables.matrices(from_))):
+            placement[nauo_id] = m
     children: dict[int, list[tuple[int, int, str]]] = {}
     is_child: set[int] = set()
     for i in sorted(model.ids("NEXT_ASSEMBLY_USAGE_OCCURRENCE")):
@@ -482,7 +439,7 @@ def solids_of(model: StepModel) -> list[TextSolid]:
             walk(pd, np.eye(4), ())
     missing = sorted({b for b, *_ in placed} - model.breps.keys())
     if missing:
-        model.breps.update(read_breps(model.raw, missing))
+        model.breps.update(read_breps(model.tables, missing))
         model.facts.update(zip(missing, facts_of([model.breps[b] for b in missing])))
     for b, transform, name, above in placed:
         local, code = model.breps[b]
