@@ -312,6 +312,46 @@ def test_the_separating_planes_of_many_neighbours_at_once_are_those_of_each_pair
     assert compared > 200 and 0.2 * compared < separated < compared
 
 
+def test_a_move_of_the_least_overlap_along_its_axis_pulls_the_sweep_and_the_part_apart():
+    """Body.overlaps (how far the other part must move along a candidate axis to clear the sweep, the least over
+    the axes) against manifold3d: for random pairs that meet, the other part moved by that much (and 1 µm) along
+    the axis that gives it, found axis by axis apart from the code under test, no longer meets the sweep; the
+    least overlap is what the axis-by-axis computation gives."""
+    import numpy as np
+
+    rng = np.random.default_rng(5)
+    moved = 0
+    for trial in range(300):
+        a, b = _random_prism(rng, bool(trial % 2)), _random_prism(rng, True)
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        far = float(rng.uniform(0, 300))
+        least = float(a.overlaps(d, far, [b])[0])
+        best = (np.inf, None, 0.0)
+        for axis in [a.n, a.ex, a.ey, b.n, b.ex, b.ey, np.cross(a.n, d), np.cross(b.n, d)]:
+            length = float(np.linalg.norm(axis))
+            if length <= 1e-9:
+                continue
+            u = axis / length
+            mine, theirs = a.corners @ u, b.corners @ u
+            shift = -far * float(u @ d)
+            lo, hi = mine.min() + min(shift, 0.0), mine.max() + max(shift, 0.0)
+            up, down = hi - theirs.min(), theirs.max() - lo          # move the other up past hi, or down past lo
+            if min(up, down) < best[0]:
+                best = (min(up, down), u, up if up <= down else -down)
+        assert least == pytest.approx(best[0], abs=1e-9)
+        common = a.swept(d, far) ^ b.shape()
+        if least < 0 or common.is_empty() or common.volume() <= 1e-6:
+            continue
+        step = best[2] + np.sign(best[2]) * 1e-3
+        away = b.moved(np.block([[np.eye(3), (step * best[1])[:, None]], [np.zeros((1, 3)), np.ones((1, 1))]]),
+                       b.points + step * best[1])
+        after = a.swept(d, far) ^ away.shape()
+        assert after.is_empty() or after.volume() <= 1e-6, (trial, least)
+        moved += 1
+    assert moved > 30
+
+
 def test_manifold3d_starts_no_worker_threads_for_the_checks_and_gives_the_affinity_back():
     """The checks' manifold3d runs on one thread (its workers only doubled the CPU time of tiny booleans): in a
     fresh process, after ``_bodies.manifold3d()`` a thousand booleans start no thread, and the CPU affinity is what

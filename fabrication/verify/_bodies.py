@@ -109,13 +109,21 @@ class Body:
 
     def apart_from(self, d: np.ndarray, far: float, others: list["Body"], gap: float = 1e-6) -> np.ndarray:
         """``(len(others),)`` bool: whether this body swept along ``[−far·d, 0]`` (:meth:`swept`) and each of
-        ``others`` are separated by a plane with more than ``gap`` mm on either side: one normal to either body's
-        frame axes, or to a frame normal crossed with ``d`` (a separating axis proves that the two do not meet;
-        finding none proves nothing).  All pairs at once: the projections of all corners in a few array
-        products."""
+        ``others`` are separated by a plane with more than ``gap`` mm on either side (:meth:`overlaps` below
+        ``−gap``: a separating axis proves that the two do not meet; finding none proves nothing)."""
+        return self.overlaps(d, far, others) < -gap
+
+    def overlaps(self, d: np.ndarray, far: float, others: list["Body"]) -> np.ndarray:
+        """``(len(others),)`` the least overlap (mm) of this body swept along ``[−far·d, 0]`` (:meth:`swept`) and
+        each of ``others`` projected on a candidate axis (the normals of either body's frame axes and of a frame
+        normal crossed with ``d``): on an axis, with the intervals ``[lo, hi]`` of the sweep and ``[t_lo, t_hi]``
+        of the other, ``min(hi − t_lo, t_hi − lo)``, how far the other must move along it, one way or the other,
+        to clear the sweep.  Negative when they are that far apart, ``inf`` when no axis can be used; ``w`` ≥ 0 is
+        an upper bound of how deep the two are in one another.  All pairs at once: the projections of all
+        corners in a few array products."""
         k = len(others)
         if k == 0:
-            return np.zeros(0, dtype=bool)
+            return np.zeros(0)
 
         def unit(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             ln = np.sqrt(np.einsum("...j,...j->...", a, a))
@@ -137,7 +145,7 @@ class Body:
         corners = np.concatenate([o.corners for o in others])                                        # (Σm, 3)
         theirs = np.einsum("rj,raj->ra", corners, np.repeat(axes, sizes, axis=0))                    # (Σm, 8)
         t_lo, t_hi = np.minimum.reduceat(theirs, starts, axis=0), np.maximum.reduceat(theirs, starts, axis=0)
-        return np.any(ok & ((lo > t_hi + gap) | (t_lo > hi + gap)), axis=1)
+        return np.where(ok, np.minimum(hi - t_lo, t_hi - lo), np.inf).min(axis=1)
 
     def shape(self) -> Any:
         """The solid itself."""

@@ -15,10 +15,11 @@ hand, from :data:`HAND_APPROACH_MM` beyond its place): for a convex solid the hu
 by ``L``; for a plate moving in its own plane the extrusion of its polygon's 2D Minkowski sum with the segment;
 otherwise the union of the hulls of the prisms over the polygon's triangles and their moved copies.  The sweep is
 intersected with every part of an
-earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours); the *depth* of an
-intersection is the thinnest extent of its thickest connected piece (the smallest width over the piece's face
-normals), how far the two would have to move apart.  Deeper than :data:`TOLERANCE` is a finding naming the part,
-the part it passes through and the depth.
+earlier step whose box, and whose box seen along ``d``, overlaps its own (the neighbours) unless a move of at most
+:data:`TOLERANCE` along one of a few axes (the frames' axes, their normals crossed with ``d``) pulls the two
+apart; the *depth* of an intersection is the thinnest extent of its thickest connected piece (the smallest width
+over the piece's face normals), how far the two would have to move apart.  Deeper than :data:`TOLERANCE` is a
+finding naming the part, the part it passes through and the depth.
 
 Two parts that overlap where they stand (a pass's ``static`` depth: the common of the part in its place and
 the earlier one) by more than :data:`TOLERANCE` are a finding of the finished model, whatever the order: a part
@@ -86,6 +87,9 @@ class Pass:
         return self.depth - self.static
 
 
+SEPARATED_MM = 1e-6
+"""A gap (mm) on a separating axis beyond which the sweep and a part do not meet at all."""
+
 MIN_VOLUME_MM3 = 1.0
 """A common part of a swept part and a placed one smaller than this (mm³) is a touch, not a pass."""
 
@@ -132,7 +136,13 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
     """Every part of ``order`` (id, step, unit direction) with a body, swept along its direction from beyond every
     part of an earlier step (from ``approach[id]`` mm beyond its place where given: a part fitted by hand), against
     those whose boxes (3D and seen along the direction) overlap its sweep: one :class:`Pass` per pair measured
-    (depth and volume 0 when they do not intersect)."""
+    (depth and volume 0 when they do not intersect).
+
+    A pair whose projections on a candidate axis (:meth:`Body.overlaps`) overlap by no more than
+    :data:`TOLERANCE` is not intersected: a move of that overlap along the axis pulls the two apart, so they are
+    no deeper in one another than that.  Its pass has that overlap for its depth and no volume (a touch: a pane
+    on its gasket, a gasket on its strip, a block under a pane — most pairs that meet).  Every other pair is
+    intersected with manifold3d and measured (:func:`~._bodies.depth_of`)."""
     out: list[Pass] = []
     names = [pid for pid, _, _ in order if pid in bodies]
     if not names:
@@ -173,11 +183,14 @@ def sweep_passes(order: list[tuple[str, int, np.ndarray]], bodies: dict[str, Bod
                                                                                      axis=1)])
         shape = None
         near = [k for k in near if not welded_on(pid, names[k]) and not drilled_through(pid, names[k])]
-        apart = body.apart_from(d, far, [bodies[names[k]] for k in near])
-        for k, separated in zip(near, apart):
+        least = body.overlaps(d, far, [bodies[names[k]] for k in near])
+        for k, overlap in zip(near, least.tolist()):
             b = bodies[names[k]]
-            if separated:                          # a separating plane: they do not meet (most neighbours)
+            if overlap < -SEPARATED_MM:            # a separating plane: they do not meet (most neighbours)
                 out.append(Pass(pid, names[k], 0.0, 0.0, 0.0))
+                continue
+            if overlap <= TOLERANCE:               # a move of at most TOLERANCE along an axis pulls them apart
+                out.append(Pass(pid, names[k], max(overlap, 0.0), 0.0, 0.0))
                 continue
             if shape is None:
                 shape = body.swept(d, far)
