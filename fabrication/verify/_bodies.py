@@ -248,18 +248,20 @@ def body_of(solid: Any) -> Body:
     text = hasattr(solid, "face_area")                  # a record of the text-level reader
     if text:
         pts = solid.points
-        planes = [f for f in solid.faces() if f.surface == "plane"]
+        faces = solid.faces()                           # unpacked once: the opposite face is sought among them
+        planes = [f for f in faces if f.surface == "plane"]
         face = max(planes, key=solid.face_area)
         outer = solid.outer_loop(face)
         outer_ring = solid.ring(outer, 16)
         inner_rings = [solid.ring(lp, 16) for lp in face.loops if lp is not outer]
     else:
         pts = np.array([tuple(p) for p in solid.vertices()], dtype=float).reshape(-1, 3)
-        face = max(solid.faces(), key=lambda f: f.area)
+        faces = solid.faces()
+        face = max(faces, key=lambda f: f.area)
         outer_ring = _ring(face.outer_wire())
         inner_rings = [_ring(w) for w in face.inner_wires()]
     c = pts.mean(axis=0)
-    axes = np.linalg.svd(pts - c)[2]
+    axes = np.linalg.svd(pts - c, full_matrices=False)[2]   # (3, 3); the (n, n) left factor is not wanted
     n = axes[2]
     own = np.asarray(face.normal if text else tuple(face.normal_at()), dtype=float)
     if abs(float(own @ n)) < 1.0 - 1e-12:               # a bevelled plate's corners tilt the fitted plane
@@ -277,7 +279,7 @@ def body_of(solid: Any) -> Body:
         return np.stack([(q - fo) @ ex, (q - fo) @ ey], axis=1)
 
     flat = Polygon(to2(outer_ring), [to2(r) for r in inner_rings]).buffer(0)
-    other = _opposite_ring(solid, face, n, text)
+    other = _opposite_ring(solid, face, n, text, faces)
     if other is not None:                               # a bevelled plate's faces differ: the part both hold
         flat = flat.intersection(Polygon(to2(other)).buffer(0))
         if flat.geom_type == "GeometryCollection":      # the faces meet along a notch's wall: a line beside it
@@ -292,19 +294,23 @@ def body_of(solid: Any) -> Body:
     return Body(pts, convex, fo, ex, ey, n, thick, flat)
 
 
-def _opposite_ring(solid: Any, face: Any, n: np.ndarray, text: bool) -> np.ndarray | None:
+def _opposite_ring(solid: Any, face: Any, n: np.ndarray, text: bool,
+                   faces: list | None = None) -> np.ndarray | None:
     """The outer boundary of the solid's other large face parallel to ``face`` (a plate's other side), ``None``
-    when there is none.  A plate whose top edge is bevelled under its strip has two faces of different outline
-    (:mod:`fabrication.beams.bevel_cut`); its body is the prism over what both hold, inside the solid by at most
-    the bevel's wedge, so that a square plate's overlap with its strip is still measured in full."""
+    when there is none; ``faces`` the solid's when already at hand.  A plate whose top edge is bevelled under its
+    strip has two faces of different outline (:mod:`fabrication.beams.bevel_cut`); its body is the prism over what
+    both hold, inside the solid by at most the bevel's wedge, so that a square plate's overlap with its strip is
+    still measured in full."""
+    if faces is None:
+        faces = solid.faces()
     if text:
         area = solid.face_area(face)
-        for f in solid.faces():
+        for f in faces:
             if f.index != face.index and f.surface == "plane" and abs(float(f.normal @ n)) >= 1.0 - 1e-9 \
                     and solid.face_area(f) > 0.5 * area:
                 return solid.ring(solid.outer_loop(f), 16)
         return None
-    for f in solid.faces():
+    for f in faces:
         if f.is_same(face) or f.area <= 0.5 * face.area:
             continue
         try:

@@ -334,6 +334,7 @@ def check_erection(v: Verification) -> None:
     kind_of = {pid: kind for pid, kind, *_ in rows}
     beams = {r["part_id"] for r in parts if r.get("kind") == "beam"}
     passes = [replace(p, part=p.part.split("#")[0], through=p.through.split("#")[0])
+              if "#" in p.part or "#" in p.through else p
               for p in sweep_passes(order, bodies, {name: HAND_APPROACH_MM for name, _, _ in order
                                                     if kind_of.get(name.split("#")[0]) in BY_HAND})]
     deep = [p for p in passes if p.excess > TOLERANCE]
