@@ -326,7 +326,6 @@ def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarr
     circle)."""
     from ._step_text_read import ShellCode
 
-    ents = tables.ents
     wanted = np.array(sorted(set(breps)), dtype=np.int64)
     nb = len(wanted)
     shells = tables.table("brep").ints[tables.follow(wanted, "brep"), 0]
@@ -352,67 +351,22 @@ def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarr
     edges = tables.table("edge").ints[tables.follow(edge_ids, "edge")]
     step_loop = np.repeat(np.arange(len(l_rows)), per_loop)
     step_brep = face_brep[loop_face[step_loop]]
-    # vertices: numbered per B-rep in the order the loops first reach them
-    visits = edges[:, 0:2].ravel()
-    visit_brep = np.repeat(step_brep, 2)
-    key = visit_brep * (int(visits.max(initial=0)) + 1) + visits
-    unique, first_at, inverse = np.unique(key, return_index=True, return_inverse=True)
-    u_brep = visit_brep[first_at]
-    order = np.lexsort((first_at, u_brep))
-    per_brep = np.bincount(u_brep, minlength=nb)
-    start = np.concatenate([[0], np.cumsum(per_brep)])
-    rank = np.empty(len(unique), dtype=np.int64)
-    rank[order] = np.arange(len(unique)) - start[u_brep[order]]
-    local = rank[inverse.ravel()].reshape(-1, 2)
-    point_refs = tables.table("vertex").ints[tables.follow(visits[first_at[order]], "vertex"), 0]
-    coords = tables.points(point_refs)
+    local, start, coords = _vertices(tables, edges[:, 0:2], step_brep, nb)
     # loops run backwards where their bound says so: edges reversed, each one's sense turned
     loop_first = np.concatenate([[0], np.cumsum(per_loop)])
-    offset = np.arange(len(step_loop)) - loop_first[step_loop]
-    back = backwards[step_loop]
-    source = np.where(back, loop_first[step_loop] + per_loop[step_loop] - 1 - offset, np.arange(len(step_loop)))
-    forward = (oriented[source, 1] == 1) ^ back
+    source = _reversed(loop_first, per_loop, step_loop, backwards)
+    forward = (oriented[source, 1] == 1) ^ backwards[step_loop]
+    del oriented
     local, edges, edge_ids = local[source], edges[source], edge_ids[source]
+    del source
     begin = np.where(forward, local[:, 0], local[:, 1])
     end = np.where(forward, local[:, 1], local[:, 0])
-    # arcs
-    curves, is_arc = _curves(tables, edges[:, 2])
-    arc_steps = np.flatnonzero(is_arc)
-    round_t = tables.table("round")
-    circle_rows = tables.follow(curves[arc_steps], "round", ("CIRCLE",))
-    circles, radius = round_t.ints[circle_rows, 0], round_t.reals[circle_rows, 0]
-    c_origin, c_z, _ = tables.frames(circles)
-    axis = np.where(((forward == (edges[:, 3] == 1))[arc_steps])[:, None], c_z, -c_z)
-    arc_brep = step_brep[arc_steps]
-    p_begin = coords[start[arc_brep] + begin[arc_steps]] - c_origin
-    p_end = coords[start[arc_brep] + end[arc_steps]] - c_origin
-    turn = np.einsum("ij,ij->i", np.cross(p_begin, p_end), axis)
-    sweep = np.mod(np.arctan2(turn, np.einsum("ij,ij->i", p_begin, p_end)), 2.0 * math.pi)
-    sweep = np.where(begin[arc_steps] == end[arc_steps], 2.0 * math.pi, sweep)
-    arcs = np.concatenate([c_origin, axis, radius[:, None], sweep[:, None]], axis=1).reshape(-1, 8)
-    arc_first = np.concatenate([[0], np.cumsum(np.bincount(arc_brep, minlength=nb))])
-    which = np.full(len(step_loop), -1, dtype=np.int64)
-    which[arc_steps] = np.arange(len(arc_steps)) - arc_first[arc_brep]
+    del local
+    arcs, which, arc_first = _arcs(tables, edges, forward, begin, end, step_brep, coords, start, nb)
+    del edges, end
     steps = np.stack([begin, edge_ids, forward.astype(np.int64), which], axis=1).reshape(-1, 4)
-    # surfaces
-    kinds = tables.kinds_of(surfaces)
-    plane, cylinder = ents.code("PLANE"), ents.code("CYLINDRICAL_SURFACE")
-    ok = (kinds == plane) | (kinds == cylinder)
-    if not ok.all():
-        bad = int(surfaces[~ok][0])
-        raise StepTextError(f"#{bad} is a {ents.kind(bad)}: planes and cylinders only (ppfab verify --kernel reads "
-                            "any STEP file)")
-    is_cyl = kinds == cylinder
-    placement = np.zeros(len(surfaces), dtype=np.int64)
-    radii = np.zeros(len(surfaces))
-    at_plane, at_cyl = np.flatnonzero(~is_cyl), np.flatnonzero(is_cyl)
-    placement[at_plane] = tables.table("plane").ints[tables.follow(surfaces[at_plane], "plane"), 0]
-    cyl_rows = tables.follow(surfaces[at_cyl], "round", ("CYLINDRICAL_SURFACE",))
-    placement[at_cyl], radii[at_cyl] = round_t.ints[cyl_rows, 0], round_t.reals[cyl_rows, 0]
-    s_origin, s_z, s_x = tables.frames(placement)
-    normal = np.where((is_cyl | same)[:, None], s_z, -s_z)
-    planes = np.concatenate([s_origin, normal, s_x, radii[:, None]], axis=1).reshape(-1, 10)
-    face_kinds = np.stack([is_cyl, same], axis=1).reshape(-1, 2)
+    del begin, edge_ids, forward, which
+    planes, face_kinds = _surfaces(tables, surfaces, same)
     for array in (coords, planes, face_kinds, steps, arcs):
         array.flags.writeable = False                   # shared by every solid placing a B-rep
     # per B-rep: its slices
@@ -432,3 +386,87 @@ def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarr
                          arcs[arc_first_l[b]:arc_first_l[b + 1]])
         out[brep] = (coords[start_l[b]:start_l[b + 1]], code)
     return out
+
+
+def _vertices(tables: Tables, visits: np.ndarray, step_brep: np.ndarray, nb: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vertices of ``nb`` B-reps numbered per B-rep in the order the loops first reach them: ``visits
+    (S, 2)`` each edge's start and end VERTEX_POINT in the loops' order, ``step_brep (S,)`` its B-rep.  Returns
+    ``(S, 2)`` the two ends' numbers in their B-rep, ``(nb + 1,)`` where each B-rep's vertices start in
+    ``(V, 3)`` their coordinates."""
+    flat = visits.ravel()
+    visit_brep = np.repeat(step_brep, 2)
+    key = visit_brep * (int(flat.max(initial=0)) + 1) + flat
+    _, first_at, inverse = np.unique(key, return_index=True, return_inverse=True)
+    del key
+    u_brep = visit_brep[first_at]
+    order = np.lexsort((first_at, u_brep))
+    start = np.concatenate([[0], np.cumsum(np.bincount(u_brep, minlength=nb))]).astype(np.int64)
+    rank = np.empty(len(first_at), dtype=np.int64)
+    rank[order] = np.arange(len(first_at)) - start[u_brep[order]]
+    local = rank[inverse.ravel()].reshape(-1, 2)
+    point_refs = tables.table("vertex").ints[tables.follow(flat[first_at[order]], "vertex"), 0]
+    return local, start, tables.points(point_refs)
+
+
+def _reversed(loop_first: np.ndarray, per_loop: np.ndarray, step_loop: np.ndarray, backwards: np.ndarray
+              ) -> np.ndarray:
+    """``(S,)`` where each step of the loops is taken from: its own place, or in a loop that runs backwards the
+    mirror place in its loop."""
+    offset = np.arange(len(step_loop)) - loop_first[step_loop]
+    return np.where(backwards[step_loop], loop_first[step_loop] + per_loop[step_loop] - 1 - offset,
+                    np.arange(len(step_loop)))
+
+
+def _arcs(tables: Tables, edges: np.ndarray, forward: np.ndarray, begin: np.ndarray, end: np.ndarray,
+          step_brep: np.ndarray, coords: np.ndarray, start: np.ndarray, nb: int
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The circular edges among the steps (``edges (S, 4)`` the EDGE_CURVEs' start, end, curve and sense; the
+    steps' sense along them and their start and end vertices in their B-rep): ``(A, 8)`` their centres, axes,
+    radii and sweeps (:class:`~._step_text_read.Arc`), ``(S,)`` each step's arc in its B-rep's (-1 for a
+    straight edge), and ``(nb + 1,)`` where each B-rep's arcs start."""
+    curves, is_arc = _curves(tables, edges[:, 2])
+    arc_steps = np.flatnonzero(is_arc)
+    round_t = tables.table("round")
+    circle_rows = tables.follow(curves[arc_steps], "round", ("CIRCLE",))
+    circles, radius = round_t.ints[circle_rows, 0], round_t.reals[circle_rows, 0]
+    c_origin, c_z, _ = tables.frames(circles)
+    axis = np.where(((forward == (edges[:, 3] == 1))[arc_steps])[:, None], c_z, -c_z)
+    arc_brep = step_brep[arc_steps]
+    p_begin = coords[start[arc_brep] + begin[arc_steps]] - c_origin
+    p_end = coords[start[arc_brep] + end[arc_steps]] - c_origin
+    turn = np.einsum("ij,ij->i", np.cross(p_begin, p_end), axis)
+    sweep = np.mod(np.arctan2(turn, np.einsum("ij,ij->i", p_begin, p_end)), 2.0 * math.pi)
+    sweep = np.where(begin[arc_steps] == end[arc_steps], 2.0 * math.pi, sweep)
+    arcs = np.concatenate([c_origin, axis, radius[:, None], sweep[:, None]], axis=1).reshape(-1, 8)
+    arc_first = np.concatenate([[0], np.cumsum(np.bincount(arc_brep, minlength=nb))]).astype(np.int64)
+    which = np.full(len(edges), -1, dtype=np.int64)
+    which[arc_steps] = np.arange(len(arc_steps)) - arc_first[arc_brep]
+    return arcs, which, arc_first
+
+
+def _surfaces(tables: Tables, surfaces: np.ndarray, same: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The faces' surfaces ``surfaces`` (ids) with their ``same_sense`` flags: ``(F, 10)`` origin, outward normal
+    (a cylinder's axis), reference direction and radius (0 for a plane), and ``(F, 2)`` whether each is a
+    cylinder and whether its normal is the surface's (:class:`~._step_text_read.ShellCode`); a surface other
+    than a plane or a cylinder is refused by name."""
+    ents = tables.ents
+    kinds = tables.kinds_of(surfaces)
+    plane, cylinder = ents.code("PLANE"), ents.code("CYLINDRICAL_SURFACE")
+    ok = (kinds == plane) | (kinds == cylinder)
+    if not ok.all():
+        bad = int(surfaces[~ok][0])
+        raise StepTextError(f"#{bad} is a {ents.kind(bad)}: planes and cylinders only (ppfab verify --kernel reads "
+                            "any STEP file)")
+    is_cyl = kinds == cylinder
+    placement = np.zeros(len(surfaces), dtype=np.int64)
+    radii = np.zeros(len(surfaces))
+    at_plane, at_cyl = np.flatnonzero(~is_cyl), np.flatnonzero(is_cyl)
+    placement[at_plane] = tables.table("plane").ints[tables.follow(surfaces[at_plane], "plane"), 0]
+    round_t = tables.table("round")
+    cyl_rows = tables.follow(surfaces[at_cyl], "round", ("CYLINDRICAL_SURFACE",))
+    placement[at_cyl], radii[at_cyl] = round_t.ints[cyl_rows, 0], round_t.reals[cyl_rows, 0]
+    s_origin, s_z, s_x = tables.frames(placement)
+    normal = np.where((is_cyl | same)[:, None], s_z, -s_z)
+    planes = np.concatenate([s_origin, normal, s_x, radii[:, None]], axis=1).reshape(-1, 10)
+    return planes, np.stack([is_cyl, same], axis=1).reshape(-1, 2)
