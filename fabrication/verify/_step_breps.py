@@ -86,13 +86,13 @@ CHUNK = 50_000
 
 @dataclass(frozen=True)
 class Table:
-    """The records of one :class:`Layout`, in file order: ``ids (m,)``, ``types (m,)`` the index of each record's
-    type in the layout's, ``ints (m, i)`` its references (-1 for ``$``) and booleans (0/1) in the order of the
-    layout's fields, ``reals (m, r)`` its reals (a 2D point's three are NaN), and its list of references, if
-    the layout has one, as ``first (m + 1,)`` offsets into ``items``."""
+    """The records of one :class:`Layout`, in file order: ``rows (m,)`` where each stands among the file's
+    entities (:attr:`Entities.ids`), ``ints (m, i)`` its references (-1 for ``$``) and booleans (0/1) in the order
+    of the layout's fields, ``reals (m, r)`` its reals (a 2D point's three are NaN), and its list of references,
+    if the layout has one, as ``first (m + 1,)`` offsets into ``items``.  Integers are 32-bit: a file's ids are
+    numbered from 1 (a million entities is a large file)."""
 
-    ids: np.ndarray
-    types: np.ndarray
+    rows: np.ndarray
     ints: np.ndarray
     reals: np.ndarray
     first: np.ndarray
@@ -165,12 +165,11 @@ def parse_table(ents: Entities, layout: Layout) -> Table:
         reals.append(chunk_reals.reshape(len(chunk), -1))
     n_ints = sum(f in ("ref", "ref?", "bool") for f in layout.fields)
     n_reals = sum(1 if f == "real" else 3 if f == "xyz" else 0 for f in layout.fields)
-    return Table(ents.ids[rows], _type_index(codes, ents.kinds[rows]),
-                 np.concatenate(ints) if ints else np.zeros((0, n_ints), dtype=np.int64),
+    return Table(rows, np.concatenate(ints) if ints else np.zeros((0, n_ints), dtype=np.int32),
                  np.concatenate(reals) if reals else np.zeros((0, n_reals)),
                  np.concatenate([[0], np.cumsum(np.concatenate(counts))]).astype(np.int64) if counts
                  else np.zeros(1, dtype=np.int64),
-                 np.concatenate(items) if items else np.zeros(0, dtype=np.int64))
+                 np.concatenate(items) if items else np.zeros(0, dtype=np.int32))
 
 
 def _columns(layout: Layout, columns: list, counts: list[np.ndarray], items: list[np.ndarray]
@@ -183,28 +182,21 @@ def _columns(layout: Layout, columns: list, counts: list[np.ndarray], items: lis
     for field in layout.fields:
         if field in ("ref", "ref?"):
             col = columns[j] if field == "ref" else [x or b"-1" for x in columns[j]]
-            ints.append(np.array(col, dtype=bytes).astype(np.int64))
+            ints.append(np.array(col, dtype=bytes).astype(np.int32))
         elif field == "bool":
-            ints.append(np.array([x == b"T" for x in columns[j]], dtype=np.int64))
+            ints.append(np.array([x == b"T" for x in columns[j]], dtype=np.int32))
         elif field == "real":
             reals.append(np.array(columns[j], dtype=bytes).astype(np.float64))
         elif field == "refs":
             counts.append(np.array([x.count(b"#") for x in columns[j]], dtype=np.int64))
             refs = re.findall(rb"#(\d+)", b",".join(columns[j]))
-            items.append(np.array(refs, dtype=bytes).astype(np.int64) if refs else np.zeros(0, dtype=np.int64))
+            items.append(np.array(refs, dtype=bytes).astype(np.int32) if refs else np.zeros(0, dtype=np.int32))
         elif field == "xyz":
             reals.extend(np.array(columns[j + c], dtype=bytes).astype(np.float64) for c in range(3))
         j += _FIELDS[field][1]
     m = len(columns[0]) if columns else 0
-    return (np.stack(ints, axis=1) if ints else np.zeros((m, 0), dtype=np.int64),
+    return (np.stack(ints, axis=1) if ints else np.zeros((m, 0), dtype=np.int32),
             np.stack(reals, axis=1) if reals else np.zeros((m, 0)))
-
-
-def _type_index(codes: list[int], kinds: np.ndarray) -> np.ndarray:
-    out = np.zeros(len(kinds), dtype=np.int64)
-    for k, c in enumerate(codes):
-        out[kinds == c] = k
-    return out
 
 
 def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -221,14 +213,14 @@ class Tables:
     def __init__(self, ents: Entities):
         self.ents = ents
         self._tables: dict[str, Table] = {}
-        self._place = np.full(len(ents), -1, dtype=np.int64)
+        self._place = np.full(len(ents), -1, dtype=np.int32)
         """Each entity's row in the table of its type (a type is in one layout only), -1 before it is read."""
 
     def table(self, name: str) -> Table:
         got = self._tables.get(name)
         if got is None:
             got = self._tables[name] = parse_table(self.ents, LAYOUTS[name])
-            self._place[self.ents.rows(got.ids)] = np.arange(len(got.ids))
+            self._place[got.rows] = np.arange(len(got.rows), dtype=np.int32)
         return got
 
     def follow(self, refs: np.ndarray, name: str, types: Sequence[str] | None = None) -> np.ndarray:
