@@ -341,3 +341,17 @@ def test_each_type_is_read_into_one_table():
 
     types = [t for layout in LAYOUTS.values() for t in layout.types]
     assert len(types) == len(set(types))
+
+
+def test_a_file_numbered_past_two_to_the_31_reads_the_same(built, tmp_path):
+    """Another writer's numbering: every id of splices.step moved past 2³¹ (the tables keep references 32-bit only
+    where they fit) gives the same solids."""
+    data = (built / "splices.step").read_bytes()
+    head, body = data.split(b"DATA;", 1)
+    moved = re.sub(rb"#(\d+)", lambda m: b"#%d" % (int(m.group(1)) + 3_000_000_000), body)
+    (tmp_path / "splices.step").write_bytes(head + b"DATA;" + moved)
+    before, after = read_text_solids(built / "splices.step"), read_text_solids(tmp_path / "splices.step")
+    assert [s.name for s in after] == [s.name for s in before] and len(after) > 0
+    for a, b in zip(before, after):
+        assert b.brep == a.brep + 3_000_000_000
+        assert np.array_equal(a.points, b.points) and b.volume == pytest.approx(a.volume, rel=1e-12)
