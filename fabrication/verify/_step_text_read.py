@@ -11,6 +11,9 @@ colours (STYLED_ITEM → … → COLOUR_RGB), and returns one light :class:`Text
 assembly path, colour, placed vertices and faces.  Volume (divergence theorem, exact for circular arcs and
 cylinder bands), face areas and a topological validity check are computed with numpy.
 
+The B-reps are read all at once, type by type into tables (:mod:`._step_breps`), and measured all at once
+(:mod:`._step_brep_facts`); this module walks the product tree and the styles, record by record.
+
 Anything else in a B-rep (a B-spline surface, an ellipse) is refused with :class:`StepTextError` naming the
 entity; ``ppfab verify --kernel`` reads such a file with the CAD kernel.
 
