@@ -1,5 +1,5 @@
 """What a rigid motion does not change of a B-rep read at the text level (:class:`BrepFacts`), worked out for
-many B-reps at once from their packed faces (:class:`~._step_text_read.ShellCode`): whether the shell is
+many B-reps at once from their packed faces (:class:`~._step_shell.ShellCode`): whether the shell is
 closed and oriented, how far a vertex is off its surface, the volume, and the faces' and loops' areas.
 
 Volume by the divergence theorem, ``V = ⅓ Σ_faces ∫ (x − c)·n dA`` with ``c`` the B-rep's vertex centroid (no
@@ -19,12 +19,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from ._step_text_read import ShellCode
+from ._step_shell import ShellCode
+
 
 
 @dataclass(frozen=True)
@@ -65,7 +64,7 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", a, b)
 
 
-def facts_of(shapes: Sequence[tuple[np.ndarray, "ShellCode"]]) -> list[BrepFacts]:
+def facts_of(shapes: Sequence[tuple[np.ndarray, ShellCode]]) -> list[BrepFacts]:
     """:class:`BrepFacts` of each B-rep given as its vertices ``(n, 3)`` and packed faces, all at once: the
     B-reps' tables are put end to end and every sum is grouped by face, loop or B-rep."""
     nb = len(shapes)

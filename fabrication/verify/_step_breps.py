@@ -1,6 +1,6 @@
 """Every B-rep of a STEP file read at once: the topology entities parsed into one table per type, the shells,
 faces, loops and edges of all B-reps followed by array indexing, and each B-rep's faces packed
-(:class:`~._step_text_read.ShellCode`).
+(:class:`~._step_shell.ShellCode`).
 
 The B-rep entities of a file come in fixed layouts (``#7 = EDGE_CURVE('',#3,#4,#5,.T.);``), a million of
 them in glazing.step at 44 × 30 faces.  Parsing them one by one (a Python call per entity, a few per reference
@@ -25,14 +25,12 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._step_part21 import Entities, Ref, StepTextError, parse_params
+from ._step_shell import ShellCode
 
-if TYPE_CHECKING:
-    from ._step_text_read import ShellCode
 
 _NAME = rb"\s*'(?:[^']|'')*'\s*"
 _REAL = rb"\s*([-+0-9.][0-9.Ee+-]*)\s*"
@@ -312,7 +310,7 @@ def _curves(tables: Tables, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return curves, kinds == circle
 
 
-def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarray, "ShellCode"]]:
+def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarray, ShellCode]]:
     """Each MANIFOLD_SOLID_BREP ``breps`` → its vertices ``(n, 3)`` in its own coordinates (in the order its loops
     first reach them, each EDGE_CURVE's start before its end) and its faces packed (:class:`ShellCode`).
 
@@ -321,8 +319,6 @@ def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarr
     are reversed and each one's sense with it.  An arc's axis is its circle's z, turned when the loop runs
     against the circle; its sweep runs from its start to its end vertex about that axis (2π for a closed
     circle)."""
-    from ._step_text_read import ShellCode
-
     wanted = np.array(sorted(set(breps)), dtype=np.int64)
     nb = len(wanted)
     shells = tables.table("brep").ints[tables.follow(wanted, "brep"), 0]
@@ -420,7 +416,7 @@ def _arcs(tables: Tables, edges: np.ndarray, forward: np.ndarray, begin: np.ndar
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The circular edges among the steps (``edges (S, 4)`` the EDGE_CURVEs' start, end, curve and sense; the
     steps' sense along them and their start and end vertices in their B-rep): ``(A, 8)`` their centres, axes,
-    radii and sweeps (:class:`~._step_text_read.Arc`), ``(S,)`` each step's arc in its B-rep's (-1 for a
+    radii and sweeps (:class:`~._step_shell.Arc`), ``(S,)`` each step's arc in its B-rep's (-1 for a
     straight edge), and ``(nb + 1,)`` where each B-rep's arcs start."""
     curves, is_arc = _curves(tables, edges[:, 2])
     arc_steps = np.flatnonzero(is_arc)
@@ -445,7 +441,7 @@ def _arcs(tables: Tables, edges: np.ndarray, forward: np.ndarray, begin: np.ndar
 def _surfaces(tables: Tables, surfaces: np.ndarray, same: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The faces' surfaces ``surfaces`` (ids) with their ``same_sense`` flags: ``(F, 10)`` origin, outward normal
     (a cylinder's axis), reference direction and radius (0 for a plane), and ``(F, 2)`` whether each is a
-    cylinder and whether its normal is the surface's (:class:`~._step_text_read.ShellCode`); a surface other
+    cylinder and whether its normal is the surface's (:class:`~._step_shell.ShellCode`); a surface other
     than a plane or a cylinder is refused by name."""
     ents = tables.ents
     kinds = tables.kinds_of(surfaces)
