@@ -286,6 +286,16 @@ class Tables:
         return m
 
 
+def _only(tables: Tables, refs: np.ndarray, kinds: np.ndarray, allowed: tuple[str, ...], what: str) -> None:
+    """:class:`StepTextError` naming the first of ``refs`` (their type codes ``kinds``) of none of the types
+    ``allowed`` — ``what`` the reader reads instead."""
+    ok = np.isin(kinds, [tables.ents.code(t) for t in allowed])
+    if not ok.all():
+        bad = int(refs[~ok][0])
+        raise StepTextError(f"#{bad} is a {tables.ents.kind(bad)}: {what} (ppfab verify --kernel reads any STEP "
+                            "file)")
+
+
 def _curves(tables: Tables, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The 3D curves of edges ``refs`` (a SURFACE_CURVE's or SEAM_CURVE's first curve, followed) and whether
     each is a CIRCLE (else a LINE); :class:`StepTextError` for any other curve."""
@@ -301,13 +311,8 @@ def _curves(tables: Tables, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 raise StepTextError(f"#{int(curves[k])} {ents.kind(int(curves[k]))} has no 3D curve")
             curves[k] = first.id
         kinds = tables.kinds_of(curves)
-    line, circle = ents.code("LINE"), ents.code("CIRCLE")
-    ok = (kinds == line) | (kinds == circle)
-    if not ok.all():
-        bad = int(curves[~ok][0])
-        raise StepTextError(f"#{bad} is a {ents.kind(bad)}: edges on lines and circles only (ppfab verify --kernel "
-                            "reads any STEP file)")
-    return curves, kinds == circle
+    _only(tables, curves, kinds, ("LINE", "CIRCLE"), "edges on lines and circles only")
+    return curves, kinds == ents.code("CIRCLE")
 
 
 def read_breps(tables: Tables, breps: Sequence[int]) -> dict[int, tuple[np.ndarray, ShellCode]]:
@@ -445,13 +450,8 @@ def _surfaces(tables: Tables, surfaces: np.ndarray, same: np.ndarray) -> tuple[n
     than a plane or a cylinder is refused by name."""
     ents = tables.ents
     kinds = tables.kinds_of(surfaces)
-    plane, cylinder = ents.code("PLANE"), ents.code("CYLINDRICAL_SURFACE")
-    ok = (kinds == plane) | (kinds == cylinder)
-    if not ok.all():
-        bad = int(surfaces[~ok][0])
-        raise StepTextError(f"#{bad} is a {ents.kind(bad)}: planes and cylinders only (ppfab verify --kernel reads "
-                            "any STEP file)")
-    is_cyl = kinds == cylinder
+    _only(tables, surfaces, kinds, ("PLANE", "CYLINDRICAL_SURFACE"), "planes and cylinders only")
+    is_cyl = kinds == ents.code("CYLINDRICAL_SURFACE")
     placement = np.zeros(len(surfaces), dtype=np.int64)
     radii = np.zeros(len(surfaces))
     at_plane, at_cyl = np.flatnonzero(~is_cyl), np.flatnonzero(is_cyl)

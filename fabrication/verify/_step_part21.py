@@ -170,8 +170,7 @@ class Entities(Mapping[int, tuple[str, str]]):
     def joined(self, rows: np.ndarray, sep: bytes) -> bytes:
         """The parameter texts of the entities at ``rows`` joined by ``sep`` (each slice a small copy: four times
         cheaper to make than a memoryview of it)."""
-        data = self._data
-        return sep.join([data[a:b] for a, b in zip(self._starts[rows].tolist(), self._stops[rows].tolist())])
+        return sep.join(self.texts(rows))
 
     @property
     def has_nul(self) -> bool:
