@@ -251,20 +251,25 @@ def _apart(a, d, far, b, gap: float = 1e-6) -> bool:
     """One pair, axis by axis, written apart from ``Body.apart_from``: the sweep of ``a`` along ``[−far·d, 0]`` and
     ``b`` projected on each body's frame axes and on each normal crossed with ``d``; separated where on one axis
     the two intervals are more than ``gap`` apart."""
+    for _, lo, hi, t_lo, t_hi in _axis_intervals(a, d, far, b):
+        if lo > t_hi + gap or t_lo > hi + gap:
+            return True
+    return False
+
+
+def _axis_intervals(a, d, far, b):
+    """Per usable candidate axis (each body's frame axes, each normal crossed with ``d``): the unit axis, the
+    interval of ``a`` swept along ``[−far·d, 0]`` and that of ``b`` on it."""
     import numpy as np
 
-    axes = [a.n, a.ex, a.ey, b.n, b.ex, b.ey, np.cross(a.n, d), np.cross(b.n, d)]
-    for axis in axes:
+    for axis in [a.n, a.ex, a.ey, b.n, b.ex, b.ey, np.cross(a.n, d), np.cross(b.n, d)]:
         length = float(np.linalg.norm(axis))
         if length <= 1e-9:
             continue
         u = axis / length
         mine, theirs = a.corners @ u, b.corners @ u
         shift = -far * float(u @ d)
-        lo, hi = mine.min() + min(shift, 0.0), mine.max() + max(shift, 0.0)
-        if lo > theirs.max() + gap or theirs.min() > hi + gap:
-            return True
-    return False
+        yield u, mine.min() + min(shift, 0.0), mine.max() + max(shift, 0.0), theirs.min(), theirs.max()
 
 
 @pytest.mark.parametrize("convex", [True, False])
@@ -328,15 +333,8 @@ def test_a_move_of_the_least_overlap_along_its_axis_pulls_the_sweep_and_the_part
         far = float(rng.uniform(0, 300))
         least = float(a.overlaps(d, far, [b])[0])
         best = (np.inf, None, 0.0)
-        for axis in [a.n, a.ex, a.ey, b.n, b.ex, b.ey, np.cross(a.n, d), np.cross(b.n, d)]:
-            length = float(np.linalg.norm(axis))
-            if length <= 1e-9:
-                continue
-            u = axis / length
-            mine, theirs = a.corners @ u, b.corners @ u
-            shift = -far * float(u @ d)
-            lo, hi = mine.min() + min(shift, 0.0), mine.max() + max(shift, 0.0)
-            up, down = hi - theirs.min(), theirs.max() - lo          # move the other up past hi, or down past lo
+        for u, lo, hi, t_lo, t_hi in _axis_intervals(a, d, far, b):
+            up, down = hi - t_lo, t_hi - lo                          # move the other up past hi, or down past lo
             if min(up, down) < best[0]:
                 best = (min(up, down), u, up if up <= down else -down)
         assert least == pytest.approx(best[0], abs=1e-9)
