@@ -355,3 +355,19 @@ def test_a_file_numbered_past_two_to_the_31_reads_the_same(built, tmp_path):
     for a, b in zip(before, after):
         assert b.brep == a.brep + 3_000_000_000
         assert np.array_equal(a.points, b.points) and b.volume == pytest.approx(a.volume, rel=1e-12)
+
+
+def test_b_reps_measured_in_chunks_give_the_facts_measured_at_once(built, monkeypatch):
+    """The reader measures the B-reps a chunk at a time (``FACTS_CHUNK``, to bound its peak memory): in chunks of
+    a few B-reps, glazing.step's solids have exactly the volumes, face and loop areas and validity found with
+    all B-reps in one chunk, and each its own B-rep's facts."""
+    import fabrication.verify._step_text_read as reader
+
+    monkeypatch.setattr(reader, "FACTS_CHUNK", 10**9)
+    whole = read_text_solids(built / "glazing.step")
+    monkeypatch.setattr(reader, "FACTS_CHUNK", 7)
+    chunked = read_text_solids(built / "glazing.step")
+    assert len({s.brep for s in whole}) > 3 * 7 and [s.name for s in chunked] == [s.name for s in whole]
+    for a, b in zip(whole, chunked):
+        assert b.facts() == a.facts() and b.brep == a.brep
+    assert len({s.facts().volume for s in chunked}) > 7

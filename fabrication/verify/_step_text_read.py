@@ -255,6 +255,12 @@ def _colours(model: StepModel) -> dict[int, tuple[float, float, float, float]]:
     return out
 
 
+FACTS_CHUNK = 4096
+"""B-reps measured at a time (:func:`~._step_brep_facts.facts_of`, whose arrays are a few per edge of every B-rep
+given).  All at once, glazing.step's 37,068 distinct B-reps at 88 × 60 faces took its read's peak from 1,578 to
+1,891 MB; in chunks of this size the time is the same."""
+
+
 def read_text_solids(path: str | os.PathLike, data: bytes | None = None) -> list[TextSolid]:
     """Every solid of the STEP file ``path`` placed in its model space, depth first through the product tree
     (children in the order of their NEXT_ASSEMBLY_USAGE_OCCURRENCE), with names, assembly path and colour.
@@ -350,7 +356,9 @@ def solids_of(model: StepModel) -> list[TextSolid]:
     missing = sorted({b for b, *_ in placed} - model.breps.keys())
     if missing:
         model.breps.update(read_breps(model.tables, missing))
-        model.facts.update(zip(missing, facts_of([model.breps[b] for b in missing])))
+        for k in range(0, len(missing), FACTS_CHUNK):
+            chunk = missing[k:k + FACTS_CHUNK]
+            model.facts.update(zip(chunk, facts_of([model.breps[b] for b in chunk])))
     for b, transform, name, above in placed:
         local, code = model.breps[b]
         points = local @ transform[:3, :3].T + transform[:3, 3]
