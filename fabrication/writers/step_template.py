@@ -518,7 +518,8 @@ def _step_pieces(root: Assembly, file_name: str, description: str, instance: boo
         return pd, rep
 
     assembly(root)
-    _styles(data, styled, ctx)
+    del assembly            # a recursive closure is a reference cycle: it would hold the file's lines (``data``)
+    _styles(data, styled, ctx)                      # after the last piece, until the next collection
     head = ("ISO-10303-21;\nHEADER;\n" + step_header(file_name, description, PREPROCESSOR).decode("ascii")
             + f"FILE_SCHEMA(('{SCHEMA}'));\nENDSEC;\nDATA;\n")
     yield head
