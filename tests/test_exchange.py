@@ -890,3 +890,22 @@ def test_the_ifc_checks_placements_agree_with_ifcopenshells_and_project_the_refe
     got = axis2placement(p)
     assert np.abs(got - want).max() < 1e-12
     assert np.abs(got[:3, :3].T @ got[:3, :3] - np.eye(3)).max() < 1e-12
+
+
+def test_a_ring_is_opened_where_numpy_finds_its_ends_close():
+    """``open_ring`` drops a ring's closing point exactly where ``np.allclose`` finds its first and last points
+    close: rings closed, closed to within its tolerances, and open by just more than them, at sizes from 1 mm to
+    100 km."""
+    from fabrication.verify._shapes import open_ring
+
+    rng = np.random.default_rng(7)
+    dropped = 0
+    for _ in range(3000):
+        scale = 10.0 ** rng.uniform(0, 8)
+        ring = rng.normal(size=(5, 3)) * scale
+        ring[-1] = ring[0] + rng.choice([0.0, 1.0]) * (1e-8 + 1e-5 * np.abs(ring[0])) * rng.uniform(0.5, 1.5, 3)
+        got = open_ring(ring)
+        closed = np.allclose(ring[0], ring[-1])
+        dropped += closed
+        assert len(got) == (4 if closed else 5) and np.array_equal(got, ring[:len(got)])
+    assert 1000 < dropped < 2800

@@ -30,6 +30,17 @@ def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def open_ring(points: np.ndarray) -> np.ndarray:
+    """``(k, d)`` a ring's points without its closing point, when its last point repeats its first
+    (``np.allclose``'s test: each coordinate within 1e-8 + 1e-5 of its size; a twentieth of ``np.allclose``'s
+    time, which is most of reading a profile's few points)."""
+    if len(points) > 1:
+        a, b = points[0], points[-1]
+        if bool((np.abs(a - b) <= 1e-8 + 1e-5 * np.abs(b)).all()):
+            return points[:-1]
+    return points
+
+
 def number(text: Any, default: float = float("nan")) -> float:
     """A CSV cell as a float (``default`` when empty or not a number)."""
     try:

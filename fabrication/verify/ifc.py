@@ -13,7 +13,7 @@ from ppfab.metrics import polygon_area
 
 from ..contract import EXCHANGE_PROPERTIES, IFC_CLASSES, IFC_PSET, IFC_SCHEMA, csv_value
 from . import Verification, check
-from ._shapes import cross3, cross_rows
+from ._shapes import cross3, cross_rows, open_ring
 from ._solids import check_screw_points, check_names, check_part_solid, same_value
 from ._tolerance import type_tolerance
 
@@ -211,9 +211,7 @@ def _prism_of(s, reading: IfcReading) -> _Prism | None:
     curve = s.SweptArea.OuterCurve if s.SweptArea.is_a("IfcArbitraryClosedProfileDef") else None
     if curve is None or not curve.is_a("IfcPolyline"):
         return None
-    q = np.array([p.Coordinates for p in curve.Points], dtype=float)
-    if len(q) > 1 and np.allclose(q[0], q[-1]):
-        q = q[:-1]
+    q = open_ring(np.array([p.Coordinates for p in curve.Points], dtype=float))
     pos = reading.axis2placement(s.Position)
     direction = np.asarray(s.ExtrudedDirection.DirectionRatios, dtype=float)
     direction = direction / np.linalg.norm(direction)

@@ -13,13 +13,14 @@ import numpy as np
 
 from ..contract import EXCHANGE_PROPERTIES, RETENTION_KINDS, RHINO_LAYERS, csv_value
 from . import Verification, check, read_csv
+from ._shapes import open_ring
 from ._solids import check_names, check_screw_points, check_part_solid, polygon_area_3d
 
 
 def _points(curve) -> np.ndarray:
     """``(n, 3)`` a polyline curve's points, the closing point left out (one call into rhino3dm per point)."""
     pts = np.array([(p.X, p.Y, p.Z) for p in map(curve.Point, range(curve.PointCount))], dtype=float).reshape(-1, 3)
-    return pts[:-1] if len(pts) > 1 and np.allclose(pts[0], pts[-1]) else pts
+    return open_ring(pts)
 
 
 def _mesh_points(mesh) -> np.ndarray:
