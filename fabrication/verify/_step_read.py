@@ -23,7 +23,7 @@ import os
 import re
 import sys
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -113,7 +113,10 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: boo
 
     out: list[StepSolid] = []
 
-    def walk(parent: Any, loc: Any, above: tuple[str, ...]) -> None:
+    def walk(parent: Any, loc: Any, above: tuple[str, ...], again: Callable[..., None]) -> None:
+        """The components of ``parent`` (the free shapes at ``None``), depth first; ``again`` is ``walk`` itself,
+        passed in: a closure calling itself by name is a reference cycle, which held the document until the
+        next collection."""
         labels = Sequence_TDF_Label()
         if parent is None:
             shapes.GetFreeShapes(labels)
@@ -129,7 +132,7 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: boo
             here = loc.Multiplied(shapes.GetLocation_s(sub)) if parent is not None else loc
             name = name_of(ref)
             if shapes.IsAssembly_s(ref):
-                walk(ref, here, above + (name,))
+                again(ref, here, above + (name,), again)
                 continue
             name = (name_of(sub) if is_ref else "") or name    # the occurrence's name (an instanced shape)
             own = shapes.GetShape_s(ref)
@@ -148,8 +151,7 @@ def read_step_solids(path: str | os.PathLike, colours: bool = False, leaves: boo
                 out.append(StepSolid(name, above, Solid(TopoDS.Solid(found.Current())), colour))
                 found.Next()
 
-    walk(None, TopLoc_Location(), ())
-    del walk                # a recursive closure is a reference cycle: it would hold the document until a collection
+    walk(None, TopLoc_Location(), (), walk)
     return out
 
 

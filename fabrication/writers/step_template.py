@@ -35,7 +35,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterator, Sequence, Union
+from typing import Callable, Iterator, Sequence, Union
 
 import numpy as np
 
@@ -501,14 +501,17 @@ def _step_pieces(root: Assembly, file_name: str, description: str, instance: boo
             got = shapes[key] = (pd, rep)
         return got
 
-    def assembly(node: Assembly) -> tuple[int, int]:
+    def assembly(node: Assembly, again: Callable[..., tuple[int, int]]) -> tuple[int, int]:
+        """``node``'s product and representation, its children's first; ``again`` is ``assembly`` itself,
+        passed in: a closure calling itself by name is a reference cycle, which held the file's lines
+        (``data``) after the last piece until the next collection."""
         pd, pds = product(node.name)
         rep = data.add("")                                 # the items are known once the children are placed
         data.add(f"SHAPE_DEFINITION_REPRESENTATION(#{pds},#{rep})")
         items = [origin]
         for kid in node.children:
             if isinstance(kid, Assembly):
-                kpd, krep = assembly(kid)
+                kpd, krep = again(kid, again)
                 items.append(place(pd, rep, kpd, krep, kid.name, None))
             else:
                 spd, srep = shape_of(kid)                 # its B-rep starts at the shape's first vertex
@@ -517,9 +520,8 @@ def _step_pieces(root: Assembly, file_name: str, description: str, instance: boo
             + f"),#{ctx})"
         return pd, rep
 
-    assembly(root)
-    del assembly            # a recursive closure is a reference cycle: it would hold the file's lines (``data``)
-    _styles(data, styled, ctx)                      # after the last piece, until the next collection
+    assembly(root, assembly)
+    _styles(data, styled, ctx)
     head = ("ISO-10303-21;\nHEADER;\n" + step_header(file_name, description, PREPROCESSOR).decode("ascii")
             + f"FILE_SCHEMA(('{SCHEMA}'));\nENDSEC;\nDATA;\n")
     yield head
