@@ -109,7 +109,7 @@ class Entities(Mapping[int, tuple[str, str]]):
         top = int(ids.max()) if len(ids) else -1
         self._dense = top < 4 * len(ids) + 1024  # ids 1 … n, as every writer numbers them: an array lookup
         if self._dense:
-            self._row = np.full(top + 1, -1, dtype=np.int64)
+            self._row = np.full(top + 1, -1, dtype=np.int32 if len(ids) < 2**31 else np.int64)
             self._row[ids] = np.arange(len(ids))
         else:
             self._rows = {int(i): k for k, i in enumerate(ids.tolist())}
@@ -229,8 +229,17 @@ def read_entities(data: bytes) -> Entities:
         pos = m.end()
         if pos >= end:
             break
-    return Entities(data, np.frombuffer(ids, dtype=np.int64), np.frombuffer(kinds, dtype=np.int32),
-                    np.frombuffer(starts, dtype=np.int64), np.frombuffer(stops, dtype=np.int64), names)
+    offsets = np.uint32 if len(data) < 2**32 else np.int64
+    return Entities(data, _narrow(np.frombuffer(ids, dtype=np.int64)), np.frombuffer(kinds, dtype=np.int32),
+                    np.frombuffer(starts, dtype=np.int64).astype(offsets),
+                    np.frombuffer(stops, dtype=np.int64).astype(offsets), names)
+
+
+def _narrow(ids: np.ndarray) -> np.ndarray:
+    """Entity ids as 32-bit integers when they fit (a file numbered from 1), else as they are.  With the offsets
+    of a file under 4 GB 32-bit too, an entity takes 20 bytes of :class:`Entities` ' arrays, not 36: at 88 × 60
+    faces glazing.step has 5.9 million entities (about 95 MB less at its read's peak)."""
+    return ids.astype(np.int32) if not len(ids) or int(np.abs(ids).max()) < 2**31 else ids
 
 
 _FLAT_TOKEN = r"\s*(?:'[^',()]*'|#\d+|\$|\*|\.[A-Z_0-9]*\.|[-+0-9.][0-9.Ee+-]*)\s*"
