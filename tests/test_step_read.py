@@ -168,3 +168,23 @@ def test_the_kernel_floor_benchmark_reads_every_solid_and_touches_nothing(built)
         assert r["solids"] == r["ppfab_solids"] == len(read_step_solids(built / r["file"])) > 0, r
         assert r["read"] > 0 and r["write"] > 0 and r["ppfab"] > 0
     assert {n: hashlib.sha256((built / n).read_bytes()).hexdigest() for n in steps} == before
+
+
+def test_the_read_memory_benchmark_reads_every_solid_in_a_fresh_process(built):
+    """``benchmarks/step_read_memory.py`` measures verify's read of a file in a fresh process importing the tree
+    it is given: it must read every solid the reader reads here, with no finding, its peak at or above the
+    resident size before the read, and leave the file as it was."""
+    import hashlib
+    import importlib.util
+
+    from conftest import REPO
+    from fabrication.verify._step_text_read import read_text_solids
+
+    spec = importlib.util.spec_from_file_location("step_read_memory", REPO / "benchmarks" / "step_read_memory.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    before = hashlib.sha256((built / "splices.step").read_bytes()).hexdigest()
+    got = mod.measure(REPO, built, "splices.step")
+    assert got["solids"] == len(read_text_solids(built / "splices.step")) > 0 and got["findings"] == 0
+    assert got["peak"] >= got["before"] > 0 and got["cpu"] > 0
+    assert hashlib.sha256((built / "splices.step").read_bytes()).hexdigest() == before
