@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._step_part21 import Entities, Ref, StepTextError, parse_params
+from ._step_part21 import Entities, Ref, StepTextError, narrow_ids, parse_params
 from ._step_shell import ShellCode
 
 
@@ -180,7 +180,7 @@ def _columns(layout: Layout, columns: list, counts: list[np.ndarray], items: lis
     for field in layout.fields:
         if field in ("ref", "ref?"):
             col = columns[j] if field == "ref" else [x or b"-1" for x in columns[j]]
-            ints.append(_narrow(np.array(col, dtype=bytes).astype(np.int64)))
+            ints.append(narrow_ids(np.array(col, dtype=bytes).astype(np.int64)))
         elif field == "bool":
             ints.append(np.array([x == b"T" for x in columns[j]], dtype=np.int32))
         elif field == "real":
@@ -188,18 +188,14 @@ def _columns(layout: Layout, columns: list, counts: list[np.ndarray], items: lis
         elif field == "refs":
             counts.append(np.array([x.count(b"#") for x in columns[j]], dtype=np.int64))
             refs = re.findall(rb"#(\d+)", b",".join(columns[j]))
-            items.append(_narrow(np.array(refs, dtype=bytes).astype(np.int64)) if refs else np.zeros(0, dtype=np.int32))
+            items.append(narrow_ids(np.array(refs, dtype=bytes).astype(np.int64)) if refs
+                         else np.zeros(0, dtype=np.int32))
         elif field == "xyz":
             reals.extend(np.array(columns[j + c], dtype=bytes).astype(np.float64) for c in range(3))
         j += _FIELDS[field][1]
     m = len(columns[0]) if columns else 0
     return (np.stack(ints, axis=1) if ints else np.zeros((m, 0), dtype=np.int32),
             np.stack(reals, axis=1) if reals else np.zeros((m, 0)))
-
-
-def _narrow(ids: np.ndarray) -> np.ndarray:
-    """Entity ids as 32-bit integers when they fit (a file numbered from 1), else as they are."""
-    return ids.astype(np.int32) if not len(ids) or int(np.abs(ids).max()) < 2**31 else ids
 
 
 def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
