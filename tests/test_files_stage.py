@@ -61,7 +61,8 @@ def test_parallel_and_serial_writing_give_identical_files(tmp_path, small_build)
     assert any(k.startswith("splices/") for k in same) and "bites.csv" in same and "welds.csv" in same
 
 
-@pytest.mark.parametrize("writer, file, parallel", [("dxf_types", "types/T01.dxf", "1"), ("ifc", "model.ifc", "0")])
+@pytest.mark.parametrize("writer, file, parallel", [("dxf_types", "types/T01.dxf", "1"), ("ifc", "model.ifc", "0"),
+                                                   ("ifc", "model.ifc", "1")])
 def test_a_failing_forked_writer_raises_its_own_error(tmp_path, small_build, monkeypatch, writer, file, parallel):
     """A writer fails in a forked process (the per-type DXFs in the second process on two cores, the IFC file in
     its own on one); the build reruns it here, so the error is its own, and the temporary folder is gone."""
@@ -88,7 +89,8 @@ def test_a_failing_forked_writer_raises_its_own_error(tmp_path, small_build, mon
 
 
 def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
-    """Wrap the writers ``names`` so that each appends ``"<name> <pid>"`` to ``log`` as it runs (in any process)."""
+    """Wrap the writers ``names`` so that each appends ``"<name> <pid> <parent pid>"`` to ``log`` as it runs (in any
+    process)."""
     import dataclasses
     import os
 
@@ -100,7 +102,7 @@ def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
 
         def write(build, out, files, _name=name, _write=original.write):
             with open(log, "a") as f:
-                f.write(f"{_name} {os.getpid()}\n")
+                f.write(f"{_name} {os.getpid()} {os.getppid()}\n")
             return _write(build, out, files)
 
         monkeypatch.setitem(writers.WRITERS, name, dataclasses.replace(original, write=write))
@@ -108,9 +110,10 @@ def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
 
 def test_the_ifc_3dm_and_glb_files_are_written_in_processes_that_end(tmp_path, small_build, monkeypatch):
     """IfcOpenShell keeps every instance of a file it made until the process ends (and openNURBS its heap, and the
-    glTF writer's meshes their fragments), so writing on one core the IFC, 3dm and glTF writers each run in a
-    forked process of their own, and on two cores the IFC and 3dm writers in the second process and the glTF
-    writer in a process of its own: never in this one.  Without fork they run here and write the same bytes."""
+    glTF writer's meshes their fragments), so the IFC, 3dm and glTF writers each run in a forked process of their
+    own: on one core forked from this one, on two the IFC and 3dm writers forked from the second process (one
+    after the other, so the IFC writer's memory is not under the 3dm writer's), never in this one.  Without fork
+    they run here and write the same bytes."""
     import os
 
     from fabrication.progress import Progress
@@ -124,15 +127,20 @@ def test_the_ifc_3dm_and_glb_files_are_written_in_processes_that_end(tmp_path, s
         out.mkdir()
         write_all(small_build, out, Progress(quiet=True), parallel=parallel)
         runs = [line.split() for line in log.read_text().splitlines()]
-        assert sorted(name for name, _ in runs) == list(names)          # each ran once
-        return {name: int(pid) for name, pid in runs}
+        assert sorted(name for name, _, _ in runs) == list(names)          # each ran once
+        parents.update({name: int(ppid) for name, _, ppid in runs})
+        return {name: int(pid) for name, pid, _ in runs}
+
+    parents: dict[str, int] = {}
 
     _recording_pids(monkeypatch, tmp_path / "apart.pids", names)
     apart = written("apart", parallel=False)
     assert os.getpid() not in apart.values() and len(set(apart.values())) == 3
+    assert all(parents[n] == os.getpid() for n in names)
     _recording_pids(monkeypatch, tmp_path / "second.pids", names)
     second = written("second", parallel=True)
-    assert os.getpid() not in second.values() and second["ifc"] == second["rhino"] != second["glb"]
+    assert os.getpid() not in second.values() and len(set(second.values())) == 3
+    assert parents["glb"] == os.getpid() and parents["ifc"] == parents["rhino"] != os.getpid()  # the second's
 
     monkeypatch.setattr(_parallel, "fork_available", lambda: False)
     _recording_pids(monkeypatch, tmp_path / "here.pids", names)
