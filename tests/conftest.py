@@ -49,6 +49,22 @@ def wait_for(cond, timeout: float = 30.0, what: str = "condition", poll: float =
     raise AssertionError(f"timed out waiting for {what}")
 
 
+def left_for_the_collector(job) -> tuple[object, int]:
+    """``job()`` 's result and how many objects it left in reference cycles: run once to warm the caches, then
+    again with the cyclic collector off, which then collects what that run left (0 when it let go of all it
+    made on return)."""
+    import gc
+
+    job()
+    gc.collect()
+    gc.disable()
+    try:
+        got = job()
+        return got, gc.collect()
+    finally:
+        gc.enable()
+
+
 def smooth_face_image(m: int, n: int, seed: int = 0, amplitude: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
     """Generators ``g (m+2, 4)``, ``h (n+2, 4)`` of a fair PP face image: a dome-like patch with a
     seeded smooth perturbation (the face normals turn gently, no folds)."""

@@ -379,16 +379,11 @@ def test_a_read_leaves_no_reference_cycle_to_collect(built, reader):
     tables and parsed records; the kernel its document): with the cyclic collector off, nothing either made is
     left in a reference cycle, which would hold it until the next collection (at 88 × 60 faces the text read's
     cycle held glazing.step's text and tables through the kernel's read of its sample)."""
-    import gc
+    from conftest import left_for_the_collector
 
     def read():
         return read_text_solids(built / "splices.step") if reader == "text" else \
             read_step_solids(built / "splices.step", colours=True, leaves=True)
 
-    read()
-    gc.collect()
-    gc.disable()
-    try:
-        assert len(read()) > 0 and gc.collect() == 0
-    finally:
-        gc.enable()
+    solids, left = left_for_the_collector(read)
+    assert len(solids) > 0 and left == 0

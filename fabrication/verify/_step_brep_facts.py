@@ -25,7 +25,6 @@ import numpy as np
 from ._step_shell import ShellCode
 
 
-
 @dataclass(frozen=True)
 class BrepFacts:
     """What a rigid motion does not change of a solid, so one B-rep placed many times is measured once:

@@ -188,8 +188,8 @@ def in_own_process(job: Callable[[], Any], name: str) -> Any:
 
 
 def confined(w: Writer) -> Writer:
-    """``w`` writing in a forked process of its own, waited for (for the writers of :data:`CONFINED` when there is
-    no second process): what its library keeps goes when that process ends.  Without fork, or when no process can
+    """``w`` writing in a forked process of its own, waited for (the writers of :data:`CONFINED`, forked from this
+    process, or from the second when there is one): what its library keeps goes when that process ends.  Without fork, or when no process can
     be had, it writes here; when the process fails it writes again here, so the error raised is the writer's own.
     The file written is the same either way (like :func:`~fabrication.writers._failures.guarded`, a writer with
     another ``write``: :func:`~fabrication.writers.base.run_writer` shows and times it as any other)."""
