@@ -88,9 +88,8 @@ def add_analysis_model(model: "IfcModel", build: "BuildRecord") -> Any:
     plates = edge_plates(build)
     boundary = set(int(k) for k in np.flatnonzero(qm.topology.boundary_vertices))
 
-    body = model.body
     ref = f.create_entity("IfcGeometricRepresentationSubContext", ContextIdentifier="Reference",
-                          ContextType="Model", ParentContext=body.ParentContext, TargetView="GRAPH_VIEW")
+                          ContextType="Model", ParentContext=model.context, TargetView="GRAPH_VIEW")
     world = model.site_placement
     pinned = f.create_entity("IfcBoundaryNodeCondition", Name="pinned (ppfab default: change to the bearing)",
                              TranslationalStiffnessX=f.create_entity("IfcBoolean", True),
@@ -145,5 +144,5 @@ def add_analysis_model(model: "IfcModel", build: "BuildRecord") -> Any:
     f.create_entity("IfcRelAssignsToGroup", GlobalId=model.guid("analysis/group"),
                     RelatedObjects=members + connections, RelatingGroup=analysis)
     f.create_entity("IfcRelServicesBuildings", GlobalId=model.guid("analysis/building"), RelatingSystem=analysis,
-                    RelatedBuildings=list(f.by_type("IfcBuilding")))
+                    RelatedBuildings=[model.building])
     return analysis
