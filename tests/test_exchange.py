@@ -353,6 +353,63 @@ def test_a_prism_with_holes_is_a_closed_mesh_of_the_net_volume():
     assert np.allclose(v[:4], frame.to3d(outline) - 6.0 * frame.normal)
 
 
+def test_cap_triangles_tile_the_outline_counter_clockwise_on_its_own_corners():
+    """On 400 random star-shaped outlines (either orientation, a third with a hole): as many triangles as a
+    triangulation of the corners has, every one counter-clockwise, on the outline's corners only, their areas
+    adding up to shapely's area of the polygon."""
+    import shapely
+
+    from fabrication.writers._elements import cap_triangles
+
+    rng = np.random.default_rng(5)
+    checked = 0
+    for k in range(400):
+        n = int(rng.integers(3, 12))
+        angle = np.sort(rng.uniform(0.0, 2.0 * np.pi, n))
+        radius = rng.uniform(0.5, 1.0, n) * rng.uniform(10.0, 2000.0)
+        outline = np.c_[radius * np.cos(angle), radius * np.sin(angle)][:: 1 if k % 2 else -1]
+        holes = []
+        if k % 3 == 0:
+            t = -np.linspace(0.0, 2.0 * np.pi, int(rng.integers(6, 16)), endpoint=False)
+            holes = [0.1 * radius.min() * np.c_[np.cos(t), np.sin(t)]]
+        polygon = shapely.Polygon(outline, holes)
+        if not polygon.is_valid:
+            continue
+        tri = cap_triangles(outline, holes)
+        pts = np.concatenate([outline] + holes)
+        a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+        doubled = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        assert len(tri) == len(pts) + 2 * len(holes) - 2
+        assert (doubled >= 0).all() and tri.min() >= 0 and tri.max() < len(pts)
+        assert 0.5 * doubled.sum() == pytest.approx(polygon.area, rel=1e-9)
+        checked += 1
+    assert checked > 300
+
+
+def test_the_screws_of_a_plate_are_one_mesh_of_a_prism_per_screw():
+    """An element of copies (a plate's screws) meshes as each copy's own prism, one after the other: the same
+    vertices and faces as meshing each copy alone."""
+    from dataclasses import replace
+
+    import shapely
+    import trimesh
+
+    from fabrication.writers._elements import Element
+    from ppfab.frame import Frame
+
+    frame = Frame(np.array([10.0, 20.0, 30.0]), np.array([0.6, 0.8, 0.0]), np.array([0.0, 0.0, 1.0]))
+    t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    circle = 3.0 * np.c_[np.cos(t), np.sin(t)]
+    copies = np.array([[0.0, 0.0], [250.0, 0.0], [500.0, 40.0]])
+    el = Element("S-1", "screw", "retention", "", circle, frame, 0.0, 40.0, copies=copies)
+    v, f = el.prism_mesh()
+    alone = [replace(el, frame=fr, copies=None).prism_mesh() for fr in el.copy_frames()]
+    assert np.array_equal(v, np.concatenate([a for a, _ in alone]))
+    assert np.array_equal(f, np.concatenate([b + 24 * k for k, (_, b) in enumerate(alone)]))
+    for part in trimesh.Trimesh(v, f, process=False).split(only_watertight=False):
+        assert part.is_watertight and part.volume == pytest.approx(shapely.Polygon(circle).area * 40.0, rel=1e-9)
+
+
 # -- Rhino ------------------------------------------------------------------------------------------------
 
 def test_rhino_layers_names_user_text_and_objects(built, parts, mesh):

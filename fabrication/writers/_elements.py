@@ -131,21 +131,25 @@ class Element:
         corners, then each hole's — then the top rings in the same order) and faces oriented outwards (caps by a
         constrained Delaunay triangulation, a side quad per ring edge); with ``copies``, the meshes of every copy
         one after the other."""
-        if self.copies is not None:
-            meshes = [replace(self, frame=f, copies=None).prism_mesh() for f in self.copy_frames()]
+        rings = [np.asarray(self.outline, dtype=float)] + self.hole_rings()
+        tri = cap_triangles(self.outline, rings[1:])
+        top_tri = tri if self.outline_top is None else cap_triangles(self.top_outline(), rings[1:])
+        if self.copies is not None:              # every copy has the same caps: triangulated once
+            meshes = [replace(self, frame=f, copies=None)._mesh(rings, tri, top_tri) for f in self.copy_frames()]
             offsets = np.cumsum([0] + [len(v) for v, _ in meshes[:-1]])
             return (np.concatenate([v for v, _ in meshes]),
                     np.concatenate([f + o for (_, f), o in zip(meshes, offsets)]))
-        rings = [np.asarray(self.outline, dtype=float)] + self.hole_rings()
+        return self._mesh(rings, tri, top_tri)
+
+    def _mesh(self, rings: list[np.ndarray], tri: np.ndarray, top_tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The mesh of one prism in this element's frame, of its ``rings`` and its caps' triangles."""
         flat = np.concatenate(rings)
         n = len(flat)
-        tri = cap_triangles(self.outline, rings[1:])
         bottom = self.frame.to3d(flat) + self.z0 * self.frame.normal
         if self.outline_top is None:
-            top_tri, top = tri, bottom + self.height * self.frame.normal
+            top = bottom + self.height * self.frame.normal
         else:                                   # two faces: each cap triangulated on its own corners
             top_flat = np.concatenate([self.top_outline()] + rings[1:])
-            top_tri = cap_triangles(self.top_outline(), rings[1:])
             top = self.frame.to3d(top_flat) + (self.z0 + self.height) * self.frame.normal
         sides = []
         start = 0
@@ -161,23 +165,21 @@ class Element:
 def cap_triangles(outline: np.ndarray, holes: list[np.ndarray] | tuple = ()) -> np.ndarray:
     """``(k + Σ m_i + 2h − 2, 3)`` counter-clockwise triangles of a simple polygon ``(k, 2)`` with ``h`` holes
     ``(m_i, 2)`` on their own vertices, numbered outline first, then each hole (shapely's constrained Delaunay
-    triangulation, mapped back to vertex indices)."""
+    triangulation, its corners read at once and mapped back to vertex indices)."""
     import shapely
 
     rings = [np.asarray(outline, dtype=float)] + [np.asarray(h, dtype=float) for h in holes]
     pts = np.concatenate(rings)
-    index = {(float(x), float(y)): i for i, (x, y) in enumerate(pts)}
-    tris = []
-    for t in shapely.constrained_delaunay_triangles(shapely.Polygon(rings[0], rings[1:])).geoms:
-        try:
-            ids = [index[(float(x), float(y))] for x, y in list(t.exterior.coords)[:3]]
-        except KeyError:
-            raise FabricationError("a cap triangulation added a point to a part outline") from None
-        a, b, c = pts[ids]
-        if (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0:
-            ids = ids[::-1]
-        tris.append(ids)
-    out = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    index = {(x, y): i for i, (x, y) in enumerate(pts.tolist())}
+    triangles = shapely.constrained_delaunay_triangles(shapely.Polygon(rings[0], rings[1:]))
+    corners = shapely.get_coordinates(triangles).reshape(-1, 4, 2)[:, :3]      # each triangle's closed ring
+    try:
+        out = np.array([index[(x, y)] for x, y in corners.reshape(-1, 2).tolist()], dtype=np.int64).reshape(-1, 3)
+    except KeyError:
+        raise FabricationError("a cap triangulation added a point to a part outline") from None
+    a, b, c = pts[out[:, 0]], pts[out[:, 1]], pts[out[:, 2]]
+    clockwise = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
+    out[clockwise] = out[clockwise, ::-1]
     if len(out) != len(pts) + 2 * len(holes) - 2:
         raise FabricationError(f"triangulating a part outline of {len(pts)} corners gave {len(out)} triangles")
     return out

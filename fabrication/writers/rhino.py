@@ -215,8 +215,8 @@ class RhinoModel:
             raise FabricationError(f"{el.part_id}: Rhino cannot make a solid of its outline ({problem})") from None
         mesh = self.r.Mesh()
         mesh.Vertices.UseDoublePrecisionVertices = True
-        for p in v:
-            mesh.Vertices.Add(*map(float, p))
+        for x, y, z in v.tolist():
+            mesh.Vertices.Add(x, y, z)
         for a, b, c in faces.tolist():
             mesh.Faces.AddFace(int(a), int(b), int(c))
         mesh.Normals.ComputeNormals()
