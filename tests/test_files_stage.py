@@ -111,9 +111,9 @@ def _recording_pids(monkeypatch, log: Path, names: tuple[str, ...]) -> None:
 def test_the_ifc_3dm_and_glb_files_are_written_in_processes_that_end(tmp_path, small_build, monkeypatch):
     """IfcOpenShell keeps every instance of a file it made until the process ends (and openNURBS its heap, and the
     glTF writer's meshes their fragments), so the IFC, 3dm and glTF writers each run in a forked process of their
-    own: on one core forked from this one, on two the IFC and 3dm writers forked from the second process (one
-    after the other, so the IFC writer's memory is not under the 3dm writer's), never in this one.  Without fork
-    they run here and write the same bytes."""
+    own: on one core forked from this one, on two forked from the second process (one after the other, so one
+    writer's memory is not under the next one's), never in this one.  Without fork they run here and write the
+    same bytes."""
     import os
 
     from fabrication.progress import Progress
@@ -140,7 +140,7 @@ def test_the_ifc_3dm_and_glb_files_are_written_in_processes_that_end(tmp_path, s
     _recording_pids(monkeypatch, tmp_path / "second.pids", names)
     second = written("second", parallel=True)
     assert os.getpid() not in second.values() and len(set(second.values())) == 3
-    assert parents["glb"] == os.getpid() and parents["ifc"] == parents["rhino"] != os.getpid()  # the second's
+    assert parents["glb"] == parents["ifc"] == parents["rhino"] != os.getpid()        # the second process's
 
     monkeypatch.setattr(_parallel, "fork_available", lambda: False)
     _recording_pids(monkeypatch, tmp_path / "here.pids", names)

@@ -34,18 +34,19 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..records import BuildRecord
 
 CONFINED: tuple[str, ...] = ("ifc", "rhino", "glb")
-"""Writers whose libraries keep what they allocated after the file is written: IfcOpenShell never frees a
-file's instances (a ``file`` of 200,000 points deleted leaves its 28 MB resident, and a second one adds 28 MB
-more; IfcOpenShell issue 7185), and openNURBS's heap stays with the process.  At 44 × 30 faces the IFC writer
-left 370 MB and the 3dm writer 210 MB resident, under the whole self-check that follows; at 88 × 60 the glTF
-writer (trimesh's scene and the manifold meshes it is built from) left 355 MB.  Each runs in a forked process
-that ends when its file is written (:func:`confined`; the IFC and 3dm writers forked from the second process
-when there is one), so that memory goes back to the system.  Where fork is not available they run here."""
+"""Writers that run in a forked process that ends when their file is written (:func:`confined`; forked from the
+second process when there is one), so that what they allocated goes back to the system: openNURBS's heap stays
+with the process (at 44 × 30 faces the 3dm writer left 210 MB resident under the self-check that followed), and
+at 88 × 60 the glTF writer (trimesh's scene and the manifold meshes it is built from) left 355 MB.  The IFC
+writer left 370 MB at 44 × 30 while it filled IfcOpenShell's file, which never frees its instances
+(IfcOpenShell issue 7185); it now writes text (:mod:`fabrication.writers._ifc_text`) and stays confined for the
+elements and the type plan it builds.  Where fork is not available they run here."""
 
-SECOND_PROCESS: tuple[str, ...] = ("dxf_types", "ifc", "rhino")
-"""Writers that run in the second process: the per-type DXFs (one file per panel type) and the IFC and 3dm
-files, beside STEP, the sheets, tables, glTF, drawings and report (at 44 × 30 faces about 72 against 67 CPU s,
-one process)."""
+SECOND_PROCESS: tuple[str, ...] = ("dxf_types", "ifc", "rhino", "glb")
+"""Writers that run in the second process: the per-type DXFs (one file per panel type), the IFC, 3dm and glTF
+files, beside STEP, the sheets, tables, drawings and report.  The glTF writer moved here when the IFC writer
+stopped going through IfcOpenShell's object model (102 CPU s at 88 × 60 faces before); docs/performance.md gives
+the two processes' shares."""
 
 READS_EVERY_FILE: tuple[str, ...] = ("manifest",)
 """Writers that read the files of the second process's writers (the manifest digests every file): the second
