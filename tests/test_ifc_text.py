@@ -89,6 +89,8 @@ def test_an_entity_with_an_attribute_its_class_lacks_is_refused_and_not_written(
     f = IfcText("IFC4")
     with pytest.raises(ValueError, match="Colour"):
         f.create_entity("IfcMaterial", Name="glass", Colour="green")
+    with pytest.raises(ValueError, match="only 3 attributes"):
+        f.create_entity("IfcMaterial", "glass", None, None, "a fourth")
     with pytest.raises(ValueError, match="not a number"):
         f.create_entity("IfcCartesianPoint", Coordinates=(0.0, float("nan"), 0.0))
     f.create_entity("IfcMaterial", Name="glass")

@@ -12,8 +12,8 @@ few counts the writer reports (:meth:`IfcText.count`).
 The schema is IfcOpenShell's (``ifcopenshell_wrapper.schema_by_name``): the order of each class's attributes (its
 own after its supertypes'), which of them are derived (written ``*``), which are enumerations (written
 ``.VALUE.``) and which are real numbers (an integer given there is written as a real).  Values are written as
-IfcOpenShell writes them, so the file is the one IfcOpenShell would write given the same calls, byte for byte
-after the header (``tests/test_ifc_text.py`` builds the bundled default through both and compares):
+IfcOpenShell writes them, so the file is the one IfcOpenShell writes given the same calls, byte for byte
+(``tests/test_ifc_text.py`` writes the whole file of two builds through both and compares):
 
 * a real by :func:`real_text`: the shortest digits that read back as the same double, in plain or scientific
   notation, whichever is shorter (plain on a tie), with a decimal point always and a capital ``E``:
@@ -56,9 +56,6 @@ class Entity:
     def __init__(self, id: int, cls: str):
         self.id = id
         self.cls = cls
-
-    def is_a(self, cls: str | None = None) -> Any:
-        return self.cls if cls is None else self.cls.upper() == cls.upper()
 
     def __repr__(self) -> str:
         return f"#{self.id}={self.cls}(…)"
@@ -309,6 +306,9 @@ class IfcText:
         if len(args) == 1 and not attributes and (typed := _typed_kind(self.schema, cls)) is not None:
             return Typed(f"{typed[0]}({_value_text(args[0], typed[1])})")
         c = _class(self.schema, cls)
+        if len(args) > len(c.kinds):
+            raise ValueError(f"entity instance of type '{cls}' has only {len(c.kinds)} attributes but {len(args)} "
+                             "attributes were provided.")
         values: list[Any] = [None] * len(c.kinds)
         values[:len(args)] = args
         for name, value in attributes.items():
