@@ -1,8 +1,8 @@
 r"""An IFC file written as ISO 10303-21 text by ppfab: :class:`IfcText`, the file ``model.ifc`` is built in.
 
-IfcOpenShell's object model costs about 25 µs an entity to fill from Python (an instance made in its C++ file, then
-each attribute set through its Python wrapper, the file's transaction switched off and on around it), and its
-writer keeps every instance until the process ends; ``model.ifc`` of the bundled default at 44 × 30 faces has
+IfcOpenShell's object model costs about 20 µs an entity to fill from Python and write (an instance made in its C++
+file, then each attribute set through its Python wrapper, the file's transaction switched off and on around it),
+and its file keeps every instance until the process ends; ``model.ifc`` of the bundled default at 44 × 30 faces has
 about a million entities.  :class:`IfcText` takes the same calls the writer made of IfcOpenShell —
 ``create_entity(cls, **attributes)`` for an entity, ``create_entity(type, value)`` for a typed value, the header's
 fields, :meth:`IfcText.write` — and turns each entity into its line of text as it is made, in the order it is

@@ -123,8 +123,9 @@ class IfcModel:
             f.create_entity("IfcSIUnit", UnitType="VOLUMEUNIT", Name="CUBIC_METRE"),
             f.create_entity("IfcSIUnit", UnitType="MASSUNIT", Prefix="KILO", Name="GRAM"),
             f.create_entity("IfcSIUnit", UnitType="PLANEANGLEUNIT", Name="RADIAN")])
-        ctx = self.context = f.create_entity("IfcGeometricRepresentationContext", ContextType="Model", CoordinateSpaceDimension=3,
-                              Precision=1e-5, WorldCoordinateSystem=self.origin)
+        ctx = self.context = f.create_entity("IfcGeometricRepresentationContext", ContextType="Model",
+                                             CoordinateSpaceDimension=3, Precision=1e-5,
+                                             WorldCoordinateSystem=self.origin)
         self.body = f.create_entity("IfcGeometricRepresentationSubContext", ContextIdentifier="Body",
                                     ContextType="Model", ParentContext=ctx, TargetView="MODEL_VIEW")
         project = self.project = f.create_entity("IfcProject", GlobalId=self.guid("project"), Name=name,
