@@ -21,7 +21,6 @@ import resource
 import sys
 import tempfile
 import time
-import tomllib
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -36,15 +35,11 @@ def _resident_mb() -> float:
 
 
 def _build(size: str):
-    from fabrication import build, parse_design
-    from fabrication.design import DEFAULT_DESIGN
+    from _sized import sized_design
 
-    fu, fv = (int(x) for x in size.split("x"))
-    doc = tomllib.loads(DEFAULT_DESIGN.read_text(encoding="utf-8"))
-    doc["geometry"].setdefault("params", {}).update(faces_u=fu, faces_v=fv)
-    for section in ("nesting", "beam_nesting"):
-        doc.setdefault(section, {})["time_budget"] = 0.5
-    return build(parse_design(doc, str(DEFAULT_DESIGN), "", DEFAULT_DESIGN.parent), allow_large=True)
+    from fabrication import build
+
+    return build(sized_design(size, 0.5), allow_large=True)
 
 
 def _write_in_child(b, files, maker_name: str, path: Path) -> tuple[float, float, float]:

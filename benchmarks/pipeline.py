@@ -48,21 +48,12 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
     measured in this process after the build (so the build's peak memory is its own)."""
     import resource
     import tempfile
-    import tomllib
 
-    from fabrication import parse_design
-    from fabrication.design import DEFAULT_DESIGN
+    from _sized import sized_design
+
     from fabrication.progress import Progress
 
     fu, fv = (int(x) for x in size.split("x"))
-    path = Path(design_path) if design_path else DEFAULT_DESIGN
-    doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    doc["geometry"].setdefault("params", {}).update(faces_u=fu, faces_v=fv)
-    for section in ("nesting", "beam_nesting"):
-        doc.setdefault(section, {})["time_budget"] = budget
-    doc.setdefault("output", {})
-    if paper:
-        doc["output"]["paper"] = paper
     os.environ["PPFAB_PARALLEL_WRITERS"] = "1" if parallel else "0"
 
     def cpu() -> float:
@@ -89,7 +80,7 @@ def _child(size: str, budget: float, parallel: bool, design_path: str | None, fl
     import fabrication.writers as writers
 
     names = {w.name for w in writers.load_writers()}
-    design = parse_design(doc, str(path), "", path.resolve().parent)
+    design = sized_design(size, budget, Path(design_path) if design_path else None, paper)
     from fabrication import build
 
     prog = Timed()
@@ -144,22 +135,16 @@ def _per_file(size: str, budget: float) -> None:
     import io
     import pickle
     import tempfile
-    import tomllib
 
     import ezdxf
+    from _sized import sized_design
 
-    from fabrication import build, parse_design
-    from fabrication.design import DEFAULT_DESIGN
+    from fabrication import build
     from fabrication.writers._dxf_dimensions import add_pane_dimensions
     from fabrication.writers.dxf import CuttingSheet, _fixed_metadata, _new_doc
     from fabrication.writers.step import beam_assembly, build_solids, export_step
 
-    fu, fv = (int(x) for x in size.split("x"))
-    doc = tomllib.loads(DEFAULT_DESIGN.read_text(encoding="utf-8"))
-    doc["geometry"]["params"].update(faces_u=fu, faces_v=fv)
-    for section in ("nesting", "beam_nesting"):
-        doc[section]["time_budget"] = budget
-    b = build(parse_design(doc, str(DEFAULT_DESIGN), "", DEFAULT_DESIGN.parent), allow_large=True)
+    b = build(sized_design(size, budget), allow_large=True)
     tmp = Path(tempfile.mkdtemp())
     parts = list(b.nesting.glass_parts)[:200]
     t = dict.fromkeys(("document", "part", "dimensions", "save"), 0.0)
