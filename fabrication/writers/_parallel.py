@@ -160,8 +160,8 @@ def _side_writers(build: "BuildRecord", out: Path, writers: list[Writer], files:
                   ) -> list[tuple[str, str, float]]:
     """The second process's work: run ``writers``, those of :data:`CONFINED` each in a forked process of its own
     (:func:`confined`); their notes and times.  In the second process itself, the IFC writer's memory (which
-    IfcOpenShell keeps) lay under the 3dm writer's: at 44 × 30 faces it was the build's largest forked process,
-    920 MB (683 MB for the largest with the two forked apart)."""
+    IfcOpenShell kept, when the IFC writer filled its file) lay under the 3dm writer's: at 44 × 30 faces it was the
+    build's largest forked process, 920 MB (683 MB for the largest with the two forked apart)."""
     results = []
     for w in writers:
         t0 = time.perf_counter()
@@ -190,9 +190,9 @@ def in_own_process(job: Callable[[], Any], name: str) -> Any:
 
 def confined(w: Writer) -> Writer:
     """``w`` writing in a forked process of its own, waited for (the writers of :data:`CONFINED`, forked from this
-    process, or from the second when there is one): what its library keeps goes when that process ends.  Without fork, or when no process can
-    be had, it writes here; when the process fails it writes again here, so the error raised is the writer's own.
-    The file written is the same either way (like :func:`~fabrication.writers._failures.guarded`, a writer with
+    process, or from the second when there is one): what its library keeps goes when that process ends.  Without
+    fork, or when no process can be had, it writes here; when the process fails it writes again here, so the error
+    raised is the writer's own.  The file written is the same either way (like :func:`~fabrication.writers._failures.guarded`, a writer with
     another ``write``: :func:`~fabrication.writers.base.run_writer` shows and times it as any other)."""
     import dataclasses
 

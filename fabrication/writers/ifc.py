@@ -129,7 +129,8 @@ class IfcModel:
         self.body = f.create_entity("IfcGeometricRepresentationSubContext", ContextIdentifier="Body",
                                     ContextType="Model", ParentContext=ctx, TargetView="MODEL_VIEW")
         project = self.project = f.create_entity("IfcProject", GlobalId=self.guid("project"), Name=name,
-                                  Description=description or None, RepresentationContexts=[ctx], UnitsInContext=units)
+                                                 Description=description or None, RepresentationContexts=[ctx],
+                                                 UnitsInContext=units)
         world = f.create_entity("IfcLocalPlacement", RelativePlacement=self.origin)
         site = f.create_entity("IfcSite", GlobalId=self.guid("site"), Name="Site", ObjectPlacement=world,
                                CompositionType="ELEMENT")
